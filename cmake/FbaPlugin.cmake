@@ -1,0 +1,3 @@
+# fba_add_plugin(<name> SOURCES <files...> [LIBRARIES <targets...>])
+function(fba_add_plugin name)
+endfunction()
