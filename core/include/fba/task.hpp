@@ -1,0 +1,82 @@
+// Building and running a task: the runtime's entry point for fba-run, tests and embedding.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fba/packet.hpp"
+#include "fba/task_config.hpp"
+
+namespace fba {
+
+namespace detail {
+class Graph;
+}
+
+enum class Outcome { Success, Failure, ConfigError, RuntimeError, Interrupted };
+const char* to_string(Outcome o);
+// fba-run's exit status: 0 success, 1 failure event, 2 configuration error, 3 runtime error
+// (including a timeout or a stall), 130 interrupted.
+int exit_code(Outcome o);
+
+struct RunOptions {
+  std::optional<ExecutorKind> executor;  // overrides the task file
+  int threads = 0;                       // overrides the task file; 0 keeps it
+  std::filesystem::path output_dir;      // artefacts; empty for none
+  double timeout_s = 0;                  // 0: no limit
+};
+
+struct ComponentStats {
+  std::string name, type;
+  Kind kind = Kind::Filter;
+  std::uint64_t invocations = 0, samples_in = 0, samples_out = 0, errors = 0, restarts = 0;
+  std::string stage;
+};
+
+struct ConnectionStats {
+  std::string from, to;  // "component.port"
+  BufferPolicy policy = BufferPolicy::Lossless;
+  std::uint64_t delivered = 0, dropped = 0;
+};
+
+struct RunResult {
+  Outcome outcome = Outcome::Success;
+  std::string reason;
+  std::optional<Event> final_event;
+  double wall_s = 0;
+  std::vector<ComponentStats> components;
+  std::vector<ConnectionStats> connections;
+  std::vector<Event> events;  // every event emitted, in order (bounded: the first 10000)
+  int exit_code() const { return fba::exit_code(outcome); }
+};
+
+// summary.json: outcome, final event, wall time, per-component counts and rates.
+std::string summary_json(const RunResult& result, const TaskConfig& task);
+
+class Task {
+ public:
+  // Creates every component (their constructors run here, before any thread starts).
+  // Throws ConfigError when a component refuses its configuration.
+  explicit Task(const TaskConfig& config, RunOptions options = {});
+  ~Task();
+  Task(const Task&) = delete;
+  Task& operator=(const Task&) = delete;
+
+  // Records every sample leaving "component.output" without holding the producer back.
+  // Call before run(); read after.
+  const std::vector<Packet>& tap(const std::string& port);
+
+  // Runs to the end; the result says how it ended. May be called once.
+  RunResult run();
+  // From any thread (signal watcher, a test): stop in order with this outcome.
+  void request_stop(Outcome outcome, const std::string& reason);
+
+ private:
+  std::unique_ptr<detail::Graph> graph_;
+};
+
+}  // namespace fba

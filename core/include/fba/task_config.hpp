@@ -1,0 +1,117 @@
+// A task as loaded from YAML: flattened (composites expanded), fully checked, ready to build.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "fba/registry.hpp"
+#include "fba/spec.hpp"
+#include "fba/value.hpp"
+
+namespace fba {
+
+struct Location {
+  std::string file;  // as the user named it
+  int line = 0;      // 1-based; 0 when unknown
+  int column = 0;    // 1-based
+  std::string str() const;
+};
+
+struct Diagnostic {
+  Location where;
+  std::string message;
+  std::string str() const { return where.str() + ": error: " + message; }
+};
+
+// Everything wrong with a task file, each with file, line and column.
+class ConfigError : public std::runtime_error {
+ public:
+  explicit ConfigError(std::vector<Diagnostic> diagnostics);
+  const std::vector<Diagnostic>& diagnostics() const { return diagnostics_; }
+
+ private:
+  std::vector<Diagnostic> diagnostics_;
+};
+
+enum class BufferPolicy {
+  Latest,      // keep only the newest sample; never blocks the producer
+  Lossless,    // bounded queue; a full queue holds the producer back, nothing is dropped
+  DropOldest,  // bounded queue; when full the oldest sample is dropped (and counted)
+};
+const char* to_string(BufferPolicy p);
+
+enum class ErrorPolicy { Stop, Restart };
+enum class ExecutorKind { Threaded, Deterministic };
+const char* to_string(ExecutorKind k);
+
+struct ComponentConfig {
+  std::string name;          // "relay/first" inside composite instance "relay"
+  const TypeEntry* type = nullptr;
+  std::map<std::string, Value> params;  // complete: defaults filled in, paths resolved
+  Trigger trigger;
+  ErrorPolicy on_error = ErrorPolicy::Stop;
+  int max_restarts = 0;
+  bool dedicated_thread = false;
+  Location where;
+};
+
+struct ConnectionConfig {
+  std::string from, from_port, to, to_port;
+  const TypeInfo* type = nullptr;  // resolved
+  BufferPolicy policy = BufferPolicy::Lossless;
+  std::size_t capacity = 16;
+  bool feedback = false;  // an explicit back edge of a cycle
+  Location where;
+};
+
+enum class RuleAction { StopSuccess, StopFailure, Deliver };
+
+struct EventRule {
+  std::string source, event;     // component and event name
+  RuleAction action = RuleAction::StopSuccess;
+  std::string target, target_port;  // Deliver
+  Location where;
+};
+
+struct TaskConfig {
+  std::string name;
+  std::filesystem::path file;  // the task file
+  std::vector<ComponentConfig> components;
+  std::vector<ConnectionConfig> connections;
+  std::vector<EventRule> rules;
+  ExecutorKind executor = ExecutorKind::Threaded;
+  int threads = 0;  // 0: one per core (at least 2)
+
+  const ComponentConfig* find(std::string_view name) const;
+};
+
+// "component.param=value"; the value is read as YAML (so lists and numbers work).
+struct Override {
+  std::string text;
+};
+
+struct LoadOptions {
+  std::vector<Override> overrides;
+  bool require_inputs = true;  // the component harness feeds inputs itself
+};
+
+// Parses, expands composites and checks everything; throws ConfigError listing every problem.
+TaskConfig load_task(const std::filesystem::path& file, const Registry& registry, const LoadOptions& options = {});
+// The same from text; `name` stands for the file in messages, `dir` resolves relative paths.
+TaskConfig load_task_text(const std::string& text, const std::string& name, const std::filesystem::path& dir,
+                          const Registry& registry, const LoadOptions& options = {});
+
+// Reads a composite definition (a YAML file with a `composite:` key) and registers it.
+// Throws ConfigError.
+void register_composite_file(Registry& registry, const std::filesystem::path& file);
+
+// The task graph as Graphviz DOT: components by kind, ports, buffer policies, feedback edges
+// dashed, composites as clusters, event rules.
+std::string to_dot(const TaskConfig& task);
+
+}  // namespace fba

@@ -1,0 +1,310 @@
+// The two executors: threaded (a small pool of workers running nodes as strands, plus a thread
+// for each blocking node) and deterministic (one thread, FIFO order, virtual clock).
+#include <algorithm>
+#include <condition_variable>
+#include <cstdlib>
+#include <queue>
+#include <thread>
+
+#include "graph.hpp"
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define FBA_CPU_RELAX() _mm_pause()
+#else
+#define FBA_CPU_RELAX() std::this_thread::yield()
+#endif
+
+namespace fba::detail {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Timer {
+  std::int64_t deadline_ns;
+  std::size_t order;  // ties break by node order, so the deterministic executor stays deterministic
+  Node* node;
+  bool operator>(const Timer& o) const {
+    return deadline_ns != o.deadline_ns ? deadline_ns > o.deadline_ns : order > o.order;
+  }
+};
+using TimerQueue = std::priority_queue<Timer, std::vector<Timer>, std::greater<>>;
+
+std::int64_t period_ns(const Node& n) {
+  return std::max<std::int64_t>(1, static_cast<std::int64_t>(n.trigger.period_s * 1e9));
+}
+
+std::string stuck_components(const Graph& g) {
+  std::string s;
+  for (const auto& n : g.nodes)
+    if (n->in_process.load()) s += (s.empty() ? "" : ", ") + n->config.name;
+  return s.empty() ? "none" : s;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+class ThreadedExecutor final : public Executor {
+ public:
+  ThreadedExecutor(Graph& g, int threads) : g_(g) {
+    const int cores = static_cast<int>(std::max(2u, std::thread::hardware_concurrency()));
+    threads_ = threads > 0 ? threads : cores;
+    for (auto& n : g_.nodes)
+      if (n->config.dedicated_thread || n->spec.is_blocking()) dedicated_.push_back(std::make_unique<Dedicated>(n.get()));
+  }
+
+  void enqueue(Node* n) override {
+    for (auto& d : dedicated_)
+      if (d->node == n) {
+        d->signal.fetch_add(1, std::memory_order_seq_cst);
+        d->signal.notify_one();
+        return;
+      }
+    {
+      std::lock_guard lock(queue_mutex_);
+      queue_.push_back(n);
+      queued_.fetch_add(1, std::memory_order_seq_cst);
+    }
+    // A worker that is spinning picks it up by itself; only a sleeping one costs a wake-up.
+    if (sleepers_.load(std::memory_order_seq_cst) > 0) {
+      epoch_.fetch_add(1, std::memory_order_seq_cst);
+      epoch_.notify_one();
+    }
+  }
+
+  std::int64_t now_ns() const override {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - start_).count();
+  }
+
+  void wake_all() override {
+    epoch_.fetch_add(1);
+    epoch_.notify_all();
+    for (auto& d : dedicated_) {
+      d->signal.fetch_add(1);
+      d->signal.notify_one();
+    }
+    {
+      std::lock_guard lock(timer_mutex_);
+      timer_cv_.notify_all();
+    }
+    poke();
+  }
+
+  void poke() override {
+    std::lock_guard lock(main_mutex_);
+    poked_ = true;
+    main_cv_.notify_one();
+  }
+
+  void run() override {
+    for (auto& n : g_.nodes)
+      if (n->periodic()) timers_.push(Timer{0, timers_.size(), n.get()});
+    for (int i = 0; i < threads_; ++i) workers_.emplace_back([this] { worker(); });
+    for (auto& d : dedicated_) d->thread = std::thread([this, d = d.get()] { dedicated(*d); });
+    std::thread timer_thread([this] { timers(); });
+
+    const bool limited = g_.timeout_s > 0;
+    const auto deadline = g_.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(g_.timeout_s));
+    {
+      std::unique_lock lock(main_mutex_);
+      while (!g_.stopping()) {
+        auto woken = [this] { return poked_ || g_.stopping(); };
+        if (limited) {
+          if (!main_cv_.wait_until(lock, deadline, woken)) {
+            lock.unlock();
+            g_.request_stop(Outcome::RuntimeError, "timed out after " + std::to_string(g_.timeout_s) + " s");
+            lock.lock();
+            continue;
+          }
+        } else {
+          main_cv_.wait(lock, woken);
+        }
+        if (poked_ && !g_.stopping()) {
+          poked_ = false;
+          lock.unlock();
+          g_.check_idle();
+          lock.lock();
+        }
+      }
+    }
+    // Ask blocking components to return, then give everyone a bounded time to finish.
+    for (auto& n : g_.nodes)
+      if (n->in_process.load() && n->component) n->component->interrupt();
+    wait_for_threads(std::chrono::seconds(10));
+    for (auto& w : workers_) w.join();
+    for (auto& d : dedicated_) d->thread.join();
+    timer_thread.join();
+  }
+
+ private:
+  struct Dedicated {
+    explicit Dedicated(Node* n) : node(n) {}
+    Node* node;
+    std::atomic<std::uint32_t> signal{0};
+    std::thread thread;
+  };
+
+  Node* try_pop() {
+    if (queued_.load(std::memory_order_acquire) == 0) return nullptr;
+    std::lock_guard lock(queue_mutex_);
+    if (queue_.empty()) return nullptr;
+    Node* n = queue_.front();
+    queue_.pop_front();
+    queued_.fetch_sub(1, std::memory_order_seq_cst);
+    return n;
+  }
+
+  void worker() {
+    while (!g_.stopping()) {
+      if (Node* n = try_pop()) {
+        g_.run_strand(n);
+        continue;
+      }
+      // Spin a little before sleeping: a hop that arrives within microseconds costs no
+      // system call on either side.
+      bool found = false;
+      for (int i = 0; i < 4000 && !found && !g_.stopping(); ++i) {
+        found = queued_.load(std::memory_order_acquire) > 0;
+        FBA_CPU_RELAX();
+      }
+      if (found) continue;
+      sleepers_.fetch_add(1, std::memory_order_seq_cst);
+      const auto seen = epoch_.load(std::memory_order_seq_cst);
+      if (queued_.load(std::memory_order_seq_cst) == 0 && !g_.stopping()) epoch_.wait(seen);
+      sleepers_.fetch_sub(1, std::memory_order_seq_cst);
+    }
+    exited_.fetch_add(1);
+    exited_.notify_all();
+  }
+
+  void dedicated(Dedicated& d) {
+    std::uint32_t seen = 0;
+    while (!g_.stopping()) {
+      const auto now = d.signal.load();
+      if (now == seen) {
+        d.signal.wait(seen);
+        continue;
+      }
+      seen = now;
+      if (d.node->state.load() == Node::Queued) g_.run_strand(d.node);
+    }
+    exited_.fetch_add(1);
+    exited_.notify_all();
+  }
+
+  void timers() {
+    std::unique_lock lock(timer_mutex_);
+    while (!g_.stopping() && !timers_.empty()) {
+      const Timer t = timers_.top();
+      const auto due = start_ + std::chrono::nanoseconds(t.deadline_ns);
+      if (Clock::now() < due) {
+        timer_cv_.wait_until(lock, due, [this] { return g_.stopping(); });
+        continue;
+      }
+      timers_.pop();
+      if (t.node->finished.load()) continue;
+      t.node->tick_pending.store(true, std::memory_order_release);
+      g_.notify(t.node);
+      // Fixed rate; ticks that could not be served in time are skipped, not queued up.
+      std::int64_t next = t.deadline_ns + period_ns(*t.node);
+      if (next < now_ns()) next = now_ns() + period_ns(*t.node);
+      timers_.push(Timer{next, t.order, t.node});
+    }
+  }
+
+  void wait_for_threads(std::chrono::seconds grace) {
+    const std::uint32_t total = static_cast<std::uint32_t>(workers_.size() + dedicated_.size());
+    const auto until = Clock::now() + grace;
+    for (;;) {
+      auto n = exited_.load();
+      if (n >= total) return;
+      if (Clock::now() > until) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    // A component that never returns from process() would hang the process forever: report it
+    // and leave; a run must end.
+    fprintf(stderr, "fba: component(s) still inside process() %lld s after the stop: %s; exiting\n",
+            static_cast<long long>(grace.count()), stuck_components(g_).c_str());
+    std::_Exit(3);
+  }
+
+  Graph& g_;
+  int threads_ = 2;
+  const Clock::time_point start_ = Clock::now();
+  std::mutex queue_mutex_;
+  std::deque<Node*> queue_;
+  std::atomic<int> queued_{0};
+  std::atomic<int> sleepers_{0};
+  std::atomic<std::uint32_t> epoch_{0};
+  std::atomic<std::uint32_t> exited_{0};
+  std::vector<std::thread> workers_;
+  std::vector<std::unique_ptr<Dedicated>> dedicated_;
+  std::mutex timer_mutex_;
+  std::condition_variable timer_cv_;
+  TimerQueue timers_;
+  std::mutex main_mutex_;
+  std::condition_variable main_cv_;
+  bool poked_ = false;
+};
+
+// ---------------------------------------------------------------------------------------------
+
+class DeterministicExecutor final : public Executor {
+ public:
+  explicit DeterministicExecutor(Graph& g) : g_(g) {}
+
+  void enqueue(Node* n) override { queue_.push_back(n); }
+  std::int64_t now_ns() const override { return virtual_ns_; }
+  void wake_all() override {}
+  void poke() override {}
+
+  void run() override {
+    TimerQueue timers;
+    for (std::size_t i = 0; i < g_.nodes.size(); ++i)
+      if (g_.nodes[i]->periodic()) timers.push(Timer{0, i, g_.nodes[i].get()});
+    const auto wall_start = Clock::now();
+    std::uint64_t steps = 0;
+    while (!g_.stopping()) {
+      if (g_.timeout_s > 0 && (++steps & 255) == 0 &&
+          std::chrono::duration<double>(Clock::now() - wall_start).count() > g_.timeout_s) {
+        g_.request_stop(Outcome::RuntimeError, "timed out after " + std::to_string(g_.timeout_s) + " s");
+        break;
+      }
+      if (!queue_.empty()) {
+        Node* n = queue_.front();
+        queue_.pop_front();
+        g_.run_strand(n);
+        continue;
+      }
+      g_.check_idle();
+      if (g_.stopping()) break;
+      // Nothing to run: time jumps to the next tick.
+      while (!timers.empty() && timers.top().node->finished.load()) timers.pop();
+      if (timers.empty()) {
+        g_.request_stop(Outcome::RuntimeError, "stalled: no component can run and no timer is pending");
+        break;
+      }
+      const Timer t = timers.top();
+      timers.pop();
+      virtual_ns_ = std::max(virtual_ns_, t.deadline_ns);
+      t.node->tick_pending.store(true);
+      g_.notify(t.node);
+      timers.push(Timer{t.deadline_ns + period_ns(*t.node), t.order, t.node});
+    }
+  }
+
+ private:
+  Graph& g_;
+  std::deque<Node*> queue_;
+  std::int64_t virtual_ns_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Executor> make_threaded_executor(Graph& g, int threads) {
+  return std::make_unique<ThreadedExecutor>(g, threads);
+}
+std::unique_ptr<Executor> make_deterministic_executor(Graph& g) {
+  return std::make_unique<DeterministicExecutor>(g);
+}
+
+}  // namespace fba::detail

@@ -1,0 +1,173 @@
+#include "fba/spec.hpp"
+
+#include <set>
+#include <stdexcept>
+
+namespace fba {
+
+const char* to_string(Kind k) {
+  switch (k) {
+    case Kind::Sensor: return "sensor";
+    case Kind::Filter: return "filter";
+    case Kind::Actuator: return "actuator";
+    case Kind::Composite: return "composite";
+  }
+  return "?";
+}
+
+const char* to_string(TriggerPolicy p) {
+  switch (p) {
+    case TriggerPolicy::Any: return "any";
+    case TriggerPolicy::All: return "all";
+    case TriggerPolicy::Periodic: return "periodic";
+    case TriggerPolicy::Free: return "free";
+  }
+  return "?";
+}
+
+Spec::Spec(Kind kind, std::string type_name, std::string doc)
+    : kind_(kind), type_name_(std::move(type_name)), doc_(std::move(doc)) {
+  trigger_.policy = kind == Kind::Sensor ? TriggerPolicy::Free : TriggerPolicy::Any;
+}
+
+Spec& Spec::input(std::string name, const TypeInfo* type, std::string doc) {
+  inputs_.push_back(PortSpec{std::move(name), type, {}, true, std::move(doc)});
+  return *this;
+}
+
+Spec& Spec::output(std::string name, const TypeInfo* type, std::string doc) {
+  outputs_.push_back(PortSpec{std::move(name), type, {}, true, std::move(doc)});
+  return *this;
+}
+
+Spec& Spec::output_like(std::string name, std::string input_name, std::string doc) {
+  outputs_.push_back(PortSpec{std::move(name), any_type(), std::move(input_name), true, std::move(doc)});
+  return *this;
+}
+
+Spec& Spec::param(std::string name, ParamType type, std::optional<Value> default_value, std::string doc) {
+  ParamSpec p;
+  p.name = std::move(name);
+  p.type = type;
+  p.default_value = std::move(default_value);
+  p.doc = std::move(doc);
+  params_.push_back(std::move(p));
+  return *this;
+}
+
+Spec& Spec::path_param(std::string name, std::optional<std::string> default_value, std::string doc) {
+  std::optional<Value> v;
+  if (default_value) v = Value(*default_value);
+  return param(std::move(name), ParamType::Path, std::move(v), std::move(doc));
+}
+
+ParamSpec& Spec::last_param(const char* what) {
+  if (params_.empty()) throw std::logic_error(type_name_ + ": " + what + " given before any parameter");
+  return params_.back();
+}
+
+Spec& Spec::range(std::optional<double> min, std::optional<double> max) {
+  auto& p = last_param("range()");
+  p.min = min;
+  p.max = max;
+  return *this;
+}
+
+Spec& Spec::choices(std::vector<std::string> allowed) {
+  last_param("choices()").choices = std::move(allowed);
+  return *this;
+}
+
+Spec& Spec::event(std::string name, std::string doc) {
+  events_.push_back(EventSpec{std::move(name), std::move(doc)});
+  return *this;
+}
+
+Spec& Spec::stages(std::vector<std::string> names, std::vector<std::pair<std::string, std::string>> transitions) {
+  stage_names_ = std::move(names);
+  transitions_ = std::move(transitions);
+  return event("stage", "the component entered another stage; payload: the stage's name");
+}
+
+namespace {
+template <class V>
+const PortSpec* find_port(const V& v, std::string_view name) {
+  for (const auto& p : v)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+}  // namespace
+
+const PortSpec* Spec::find_input(std::string_view name) const { return find_port(inputs_, name); }
+const PortSpec* Spec::find_output(std::string_view name) const { return find_port(outputs_, name); }
+const ParamSpec* Spec::find_param(std::string_view name) const {
+  for (const auto& p : params_)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+const EventSpec* Spec::find_event(std::string_view name) const {
+  for (const auto& e : events_)
+    if (e.name == name) return &e;
+  return nullptr;
+}
+
+namespace {
+bool is_identifier(const std::string& s) {
+  if (s.empty()) return false;
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
+  return true;
+}
+}  // namespace
+
+void Spec::validate() const {
+  auto fail = [this](const std::string& what) { throw std::logic_error("type '" + type_name_ + "': " + what); };
+  if (type_name_.empty() || type_name_.find_first_of(" \t/") != std::string::npos) fail("a type name needs no spaces or '/'");
+  std::set<std::string> names;
+  for (const auto* list : {&inputs_, &outputs_})
+    for (const auto& p : *list) {
+      if (!is_identifier(p.name)) fail("port name '" + p.name + "' must be letters, digits and '_'");
+      if (!names.insert(p.name).second) fail("port '" + p.name + "' declared twice");
+      if (!p.type) fail("port '" + p.name + "' has no type");
+    }
+  for (const auto& p : outputs_) {
+    if (!p.same_as.empty() && !find_input(p.same_as))
+      fail("output '" + p.name + "' follows the type of input '" + p.same_as + "', which is not declared");
+    if (p.same_as.empty() && p.type == any_type()) fail("output '" + p.name + "' needs a type (or output_like)");
+  }
+  if (kind_ == Kind::Sensor)
+    for (const auto& p : inputs_)
+      if (p.required) fail("a sensor's inputs must be optional ('" + p.name + "' is required)");
+  if (kind_ == Kind::Sensor && outputs_.empty()) fail("a sensor needs at least one output");
+  if (kind_ == Kind::Filter && (inputs_.empty() || outputs_.empty())) fail("a filter needs inputs and outputs");
+  if (kind_ == Kind::Actuator && (!outputs_.empty() || inputs_.empty())) fail("an actuator has inputs and no outputs");
+  std::set<std::string> pnames;
+  for (const auto& p : params_) {
+    if (!is_identifier(p.name)) fail("parameter name '" + p.name + "' must be letters, digits and '_'");
+    if (!pnames.insert(p.name).second) fail("parameter '" + p.name + "' declared twice");
+    if (p.default_value) {
+      const Value& v = *p.default_value;
+      auto in_range = [&](double x) { return (!p.min || x >= *p.min) && (!p.max || x <= *p.max); };
+      if (auto* i = std::get_if<std::int64_t>(&v); i && !in_range(static_cast<double>(*i))) fail("default of '" + p.name + "' is out of its range");
+      if (auto* d = std::get_if<double>(&v); d && !in_range(*d)) fail("default of '" + p.name + "' is out of its range");
+      if (auto* s = std::get_if<std::string>(&v); s && !p.choices.empty()) {
+        bool ok = false;
+        for (auto& c : p.choices) ok |= c == *s;
+        if (!ok) fail("default of '" + p.name + "' is not one of its choices");
+      }
+    }
+  }
+  std::set<std::string> enames{"error", "finished"};
+  for (const auto& e : events_) {
+    if (!is_identifier(e.name)) fail("event name '" + e.name + "' must be letters, digits and '_'");
+    if (!enames.insert(e.name).second) fail("event '" + e.name + "' declared twice (or a built-in: error, finished)");
+  }
+  for (const auto& [a, b] : transitions_) {
+    bool fa = false, fb = false;
+    for (auto& s : stage_names_) { fa |= s == a; fb |= s == b; }
+    if (!fa || !fb) fail("transition " + a + " -> " + b + " names an undeclared stage");
+  }
+  if (trigger_.policy == TriggerPolicy::Periodic && !(trigger_.period_s > 0)) fail("a periodic trigger needs a period > 0");
+}
+
+}  // namespace fba

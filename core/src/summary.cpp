@@ -1,0 +1,69 @@
+// summary.json and the outcome names and exit codes.
+#include <nlohmann/json.hpp>
+
+#include "fba/task.hpp"
+
+namespace fba {
+
+const char* to_string(Outcome o) {
+  switch (o) {
+    case Outcome::Success: return "success";
+    case Outcome::Failure: return "failure";
+    case Outcome::ConfigError: return "configuration_error";
+    case Outcome::RuntimeError: return "runtime_error";
+    case Outcome::Interrupted: return "interrupted";
+  }
+  return "?";
+}
+
+int exit_code(Outcome o) {
+  switch (o) {
+    case Outcome::Success: return 0;
+    case Outcome::Failure: return 1;
+    case Outcome::ConfigError: return 2;
+    case Outcome::RuntimeError: return 3;
+    case Outcome::Interrupted: return 130;
+  }
+  return 3;
+}
+
+std::string summary_json(const RunResult& r, const TaskConfig& task) {
+  using nlohmann::json;
+  json j;
+  j["task"] = task.name;
+  j["task_file"] = task.file.string();
+  j["outcome"] = to_string(r.outcome);
+  j["exit_code"] = r.exit_code();
+  j["reason"] = r.reason;
+  j["wall_time_s"] = r.wall_s;
+  j["final_event"] = nullptr;
+  if (r.final_event)
+    j["final_event"] = {{"source", r.final_event->source}, {"name", r.final_event->name}, {"payload", r.final_event->payload},
+                        {"time_s", r.final_event->stamp_ns * 1e-9}};
+  json comps = json::object();
+  const double wall = r.wall_s > 0 ? r.wall_s : 1e-9;
+  for (const auto& c : r.components) {
+    json cj{{"type", c.type},
+            {"kind", to_string(c.kind)},
+            {"invocations", c.invocations},
+            {"samples_in", c.samples_in},
+            {"samples_out", c.samples_out},
+            {"invocations_per_s", c.invocations / wall},
+            {"samples_out_per_s", c.samples_out / wall},
+            {"errors", c.errors},
+            {"restarts", c.restarts}};
+    if (!c.stage.empty()) cj["stage"] = c.stage;
+    comps[c.name] = cj;
+  }
+  j["components"] = comps;
+  json conns = json::array();
+  for (const auto& c : r.connections)
+    conns.push_back({{"from", c.from}, {"to", c.to}, {"buffer", to_string(c.policy)}, {"delivered", c.delivered}, {"dropped", c.dropped}});
+  j["connections"] = conns;
+  json events = json::array();
+  for (const auto& e : r.events) events.push_back({{"source", e.source}, {"name", e.name}, {"payload", e.payload}, {"time_s", e.stamp_ns * 1e-9}});
+  j["events"] = events;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace fba

@@ -1,0 +1,1069 @@
+// Task files: YAML in, a flat checked TaskConfig out. Every problem becomes a Diagnostic with
+// file, line and column, and all of them are reported together.
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "fba/task_config.hpp"
+
+namespace fba {
+
+namespace fs = std::filesystem;
+
+struct CompositeDef {
+  fs::path file;       // absolute, for includes and relative paths inside
+  std::string shown;   // as messages name it
+  YAML::Node root;
+};
+
+std::string Location::str() const {
+  if (line <= 0) return file;
+  return file + ":" + std::to_string(line) + ":" + std::to_string(column);
+}
+
+namespace {
+std::string join_messages(const std::vector<Diagnostic>& ds) {
+  std::string s;
+  for (const auto& d : ds) s += (s.empty() ? "" : "\n") + d.str();
+  return s;
+}
+}  // namespace
+
+ConfigError::ConfigError(std::vector<Diagnostic> diagnostics)
+    : std::runtime_error(join_messages(diagnostics)), diagnostics_(std::move(diagnostics)) {}
+
+const char* to_string(BufferPolicy p) {
+  switch (p) {
+    case BufferPolicy::Latest: return "latest";
+    case BufferPolicy::Lossless: return "lossless";
+    case BufferPolicy::DropOldest: return "drop_oldest";
+  }
+  return "?";
+}
+
+const char* to_string(ExecutorKind k) { return k == ExecutorKind::Threaded ? "threaded" : "deterministic"; }
+
+const ComponentConfig* TaskConfig::find(std::string_view name) const {
+  for (const auto& c : components)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
+namespace {
+
+struct Source {
+  std::string shown;  // file name as the user gave it
+  fs::path dir;       // relative paths resolve here
+};
+
+Location at(const Source& src, const YAML::Node& n) {
+  const YAML::Mark m = n.Mark();
+  if (m.line < 0) return Location{src.shown, 0, 0};
+  return Location{src.shown, m.line + 1, m.column + 1};
+}
+
+std::string list_of(const std::vector<std::string>& v) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + v[i];
+  return s.empty() ? "(none)" : s;
+}
+
+template <class V>
+std::vector<std::string> names_of(const V& v) {
+  std::vector<std::string> out;
+  for (const auto& x : v) out.push_back(x.name);
+  return out;
+}
+
+bool is_identifier(const std::string& s) {
+  if (s.empty()) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+}
+
+const char* node_kind(const YAML::Node& n) {
+  switch (n.Type()) {
+    case YAML::NodeType::Null: return "nothing";
+    case YAML::NodeType::Scalar: return "a scalar";
+    case YAML::NodeType::Sequence: return "a list";
+    case YAML::NodeType::Map: return "a mapping";
+    default: return "an undefined node";
+  }
+}
+
+struct Endpoint {
+  std::string comp, port;
+};
+
+// What a composite instance exports, in terms of flattened inner names.
+struct Exports {
+  std::map<std::string, Endpoint> inputs, outputs, events;
+};
+
+using Bindings = std::map<std::string, Value>;
+
+class Loader {
+ public:
+  Loader(const Registry& registry, const LoadOptions& options) : registry_(registry), require_inputs_(options.require_inputs) {
+    for (const auto& o : options.overrides) parse_override(o);
+  }
+
+  TaskConfig load(const YAML::Node& root, const Source& src, const fs::path& file) {
+    TaskConfig task;
+    task.file = file;
+    if (!root.IsMap()) {
+      error(at(src, root), std::string("a task file is a mapping with the keys components, connections, on; found ") + node_kind(root));
+      throw ConfigError(diags_);
+    }
+    check_keys(root, src, {"task", "doc", "executor", "threads", "include", "components", "connections", "on"});
+    if (auto n = root["task"]) task.name = scalar(n, src, "the task's name");
+    if (auto n = root["executor"]) {
+      const std::string e = scalar(n, src, "the executor");
+      if (e == "threaded") task.executor = ExecutorKind::Threaded;
+      else if (e == "deterministic") task.executor = ExecutorKind::Deterministic;
+      else error(at(src, n), "executor '" + e + "' is not one of: threaded, deterministic");
+    }
+    if (auto n = root["threads"]) task.threads = static_cast<int>(integer(n, src, "threads", 0, 256));
+    std::set<std::string> include_stack;
+    load_includes(root, src, include_stack);
+    if (!root["components"]) error(at(src, root), "a task needs 'components:' (a mapping of name: {type: ..., params: ...})");
+    expand(root, src, "", {}, task, {});
+    for (const auto& [key, o] : overrides_)
+      if (!o.used) error(o.where, "--set " + key + ": the task has no component '" + o.comp + "' with a parameter '" + o.param + "'");
+    if (diags_.empty()) check_graph(task);
+    if (!diags_.empty()) throw ConfigError(diags_);
+    return task;
+  }
+
+  std::vector<Diagnostic>& diags() { return diags_; }
+
+  // Parses a composite file's interface into a Spec (used for registration and inspection).
+  static Spec composite_spec(const CompositeDef& def, const Registry& registry, std::vector<Diagnostic>& diags);
+
+ private:
+  struct OverrideEntry {
+    std::string comp, param;
+    YAML::Node value;
+    Location where;
+    bool used = false;
+  };
+
+  void error(Location where, std::string message) {
+    if (diags_.size() < 100) diags_.push_back(Diagnostic{std::move(where), std::move(message)});
+  }
+
+  void parse_override(const Override& o) {
+    Location where{"--set " + o.text, 0, 0};
+    const auto eq = o.text.find('=');
+    const auto dot = o.text.rfind('.', eq);
+    if (eq == std::string::npos || dot == std::string::npos || dot == 0 || dot + 1 >= eq) {
+      error(where, "expected component.parameter=value");
+      return;
+    }
+    OverrideEntry e;
+    e.comp = o.text.substr(0, dot);
+    e.param = o.text.substr(dot + 1, eq - dot - 1);
+    try {
+      e.value = YAML::Load(o.text.substr(eq + 1));
+    } catch (const YAML::Exception& ex) {
+      error(where, "the value is not valid YAML: " + ex.msg);
+      return;
+    }
+    e.where = where;
+    overrides_[e.comp + "." + e.param] = std::move(e);
+  }
+
+  void check_keys(const YAML::Node& map, const Source& src, const std::vector<std::string>& allowed) {
+    for (auto it = map.begin(); it != map.end(); ++it) {
+      if (!it->first.IsScalar()) {
+        error(at(src, it->first), "keys here are names; found " + std::string(node_kind(it->first)));
+        continue;
+      }
+      const std::string k = it->first.Scalar();
+      if (std::find(allowed.begin(), allowed.end(), k) == allowed.end())
+        error(at(src, it->first), "unknown key '" + k + "'; valid keys here: " + list_of(allowed));
+    }
+  }
+
+  std::string scalar(const YAML::Node& n, const Source& src, const std::string& what) {
+    if (!n.IsScalar()) {
+      error(at(src, n), what + " must be a scalar; found " + node_kind(n));
+      return {};
+    }
+    return n.Scalar();
+  }
+
+  std::int64_t integer(const YAML::Node& n, const Source& src, const std::string& what, std::int64_t lo, std::int64_t hi) {
+    const std::string s = scalar(n, src, what);
+    std::int64_t v = 0;
+    auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc() || p != s.data() + s.size()) {
+      error(at(src, n), what + " must be a whole number; found '" + s + "'");
+      return lo;
+    }
+    if (v < lo || v > hi) error(at(src, n), what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]; found " + s);
+    return v;
+  }
+
+  // --- types and composites --------------------------------------------------------------
+
+  const TypeEntry* find_type(const std::string& name) const {
+    if (auto it = local_types_.find(name); it != local_types_.end()) return &it->second;
+    return registry_.find(name);
+  }
+
+  std::vector<std::string> suggest(const std::string& name) const {
+    auto s = registry_.closest(name);
+    for (const auto& [n, _] : local_types_) s.push_back(n);
+    return s;
+  }
+
+  void load_includes(const YAML::Node& root, const Source& src, std::set<std::string>& stack) {
+    const YAML::Node inc = root["include"];
+    if (!inc) return;
+    std::vector<YAML::Node> items;
+    if (inc.IsScalar()) items.push_back(inc);
+    else if (inc.IsSequence()) for (const auto& i : inc) items.push_back(i);
+    else {
+      error(at(src, inc), std::string("include takes a file name or a list of them; found ") + node_kind(inc));
+      return;
+    }
+    for (const auto& item : items) {
+      const std::string rel = scalar(item, src, "an include");
+      if (rel.empty()) continue;
+      const fs::path path = (src.dir / rel).lexically_normal();
+      std::error_code ec;
+      if (!fs::is_regular_file(path, ec)) {
+        error(at(src, item), "included file '" + rel + "' does not exist (looked for " + path.string() + ")");
+        continue;
+      }
+      const std::string key = fs::weakly_canonical(path, ec).string();
+      if (stack.count(key)) {
+        error(at(src, item), "include cycle: '" + rel + "' includes itself, directly or through other files");
+        continue;
+      }
+      if (included_.count(key)) continue;
+      included_.insert(key);
+      YAML::Node doc;
+      const Source inner{(src.dir / rel).lexically_normal().string(), path.parent_path()};
+      try {
+        doc = YAML::LoadFile(path.string());
+      } catch (const YAML::ParserException& e) {
+        error(Location{inner.shown, e.mark.line + 1, e.mark.column + 1}, "YAML syntax: " + e.msg);
+        continue;
+      } catch (const YAML::Exception& e) {
+        error(at(src, item), "included file '" + rel + "' cannot be read: " + e.msg);
+        continue;
+      }
+      if (!doc.IsMap() || !doc["composite"]) {
+        error(at(src, item), "included file '" + rel + "' is not a composite definition (a mapping with 'composite: name')");
+        continue;
+      }
+      stack.insert(key);
+      load_includes(doc, inner, stack);
+      stack.erase(key);
+      auto def = std::make_shared<CompositeDef>(CompositeDef{path, inner.shown, doc});
+      const std::size_t before = diags_.size();
+      Spec spec = composite_spec_checked(*def);
+      if (diags_.size() != before) continue;
+      const std::string name = spec.type_name();
+      if (find_type(name)) {
+        const TypeEntry* other = find_type(name);
+        error(at(inner, doc["composite"]), "component type '" + name + "' is defined already by " + other->origin);
+        continue;
+      }
+      local_types_.emplace(name, TypeEntry{std::move(spec), nullptr, def, nullptr, inner.shown});
+    }
+  }
+
+  Spec composite_spec_checked(const CompositeDef& def) {
+    std::vector<Diagnostic> d;
+    Spec s = composite_spec_impl(def, d);
+    for (auto& x : d) error(x.where, x.message);
+    return s;
+  }
+
+  Spec composite_spec_impl(const CompositeDef& def, std::vector<Diagnostic>& d) {
+    const Source src{def.shown, def.file.parent_path()};
+    const YAML::Node& root = def.root;
+    auto err = [&](const YAML::Node& n, std::string m) { d.push_back(Diagnostic{at(src, n), std::move(m)}); };
+    const std::vector<std::string> keys{"composite", "doc", "include", "params", "inputs", "outputs", "events", "components", "connections", "on"};
+    for (auto it = root.begin(); it != root.end(); ++it)
+      if (!it->first.IsScalar() || std::find(keys.begin(), keys.end(), it->first.Scalar()) == keys.end())
+        err(it->first, "unknown key '" + (it->first.IsScalar() ? it->first.Scalar() : std::string("?")) + "' in a composite; valid keys: " + list_of(keys));
+    const YAML::Node name = root["composite"];
+    std::string type_name = name && name.IsScalar() ? name.Scalar() : "";
+    if (type_name.empty()) err(name ? name : root, "'composite:' needs the composite's type name");
+    Spec spec = Spec::composite(type_name.empty() ? "invalid" : type_name, root["doc"] && root["doc"].IsScalar() ? root["doc"].Scalar() : "");
+    if (const YAML::Node params = root["params"]) {
+      if (!params.IsMap()) err(params, "params of a composite: a mapping name: {type, default, doc}");
+      else
+        for (auto it = params.begin(); it != params.end(); ++it) {
+          const std::string pname = it->first.Scalar();
+          const YAML::Node p = it->second;
+          if (!is_identifier(pname)) err(it->first, "parameter name '" + pname + "' must be letters, digits and '_'");
+          if (!p.IsMap() || !p["type"] || !p["type"].IsScalar()) {
+            err(p, "parameter '" + pname + "' needs {type: bool|int|double|string|path|list, default: ..., doc: ...}");
+            continue;
+          }
+          static const std::map<std::string, ParamType> types{{"bool", ParamType::Bool}, {"int", ParamType::Int}, {"double", ParamType::Double},
+                                                              {"string", ParamType::String}, {"path", ParamType::Path}, {"list", ParamType::DoubleList}};
+          auto t = types.find(p["type"].Scalar());
+          if (t == types.end()) {
+            err(p["type"], "parameter type '" + p["type"].Scalar() + "' is not one of: bool, int, double, string, path, list");
+            continue;
+          }
+          ParamSpec ps;
+          ps.name = pname;
+          ps.type = t->second;
+          if (p["min"] && p["min"].IsScalar()) ps.min = std::strtod(p["min"].Scalar().c_str(), nullptr);
+          if (p["max"] && p["max"].IsScalar()) ps.max = std::strtod(p["max"].Scalar().c_str(), nullptr);
+          if (p["doc"] && p["doc"].IsScalar()) ps.doc = p["doc"].Scalar();
+          if (p["default"]) {
+            Loader probe(registry_, {});
+            auto v = probe.param_value(ps, p["default"], src, {});
+            for (auto& x : probe.diags()) d.push_back(x);
+            if (v) ps.default_value = *v;
+          }
+          spec.param(ps.name, ps.type, ps.default_value, ps.doc);
+          if (ps.min || ps.max) spec.range(ps.min, ps.max);
+        }
+    }
+    const YAML::Node comps = root["components"];
+    auto inner_port = [&](const YAML::Node& n, bool input) -> const PortSpec* {
+      const std::string target = n.Scalar();
+      const auto dot = target.find('.');
+      if (dot == std::string::npos) { err(n, "expected component.port, found '" + target + "'"); return nullptr; }
+      const std::string comp = target.substr(0, dot), port = target.substr(dot + 1);
+      if (!comps || !comps.IsMap() || !comps[comp]) { err(n, "the composite has no component '" + comp + "'"); return nullptr; }
+      const YAML::Node type = comps[comp]["type"];
+      const TypeEntry* te = type && type.IsScalar() ? find_type(type.Scalar()) : nullptr;
+      if (!te) { err(n, "component '" + comp + "' has an unknown type"); return nullptr; }
+      const PortSpec* ps = input ? te->spec.find_input(port) : te->spec.find_output(port);
+      if (!ps) err(n, "component '" + comp + "' (" + te->spec.type_name() + ") has no " + (input ? "input" : "output") + " '" + port +
+                          "'; it has: " + list_of(names_of(input ? te->spec.inputs() : te->spec.outputs())));
+      return ps;
+    };
+    for (const char* section : {"inputs", "outputs"}) {
+      const bool input = std::string(section) == "inputs";
+      const YAML::Node ports = root[section];
+      if (!ports) continue;
+      if (!ports.IsMap()) { err(ports, std::string(section) + " of a composite: a mapping name: inner_component.port"); continue; }
+      for (auto it = ports.begin(); it != ports.end(); ++it) {
+        const std::string pname = it->first.Scalar();
+        YAML::Node target;
+        target.reset(it->second);
+        std::string doc;
+        if (it->second.IsMap()) {
+          doc = it->second["doc"] && it->second["doc"].IsScalar() ? it->second["doc"].Scalar() : "";
+          target.reset(it->second[input ? "to" : "from"]);
+        }
+        if (!target || !target.IsScalar()) { err(it->second, "exported port '" + pname + "' needs inner_component.port"); continue; }
+        const PortSpec* ps = inner_port(target, input);
+        if (!ps) continue;
+        const TypeInfo* t = ps->same_as.empty() ? ps->type : any_type();
+        if (input) spec.input(pname, t, doc.empty() ? ps->doc : doc);
+        else spec.output(pname, t, doc.empty() ? ps->doc : doc);
+        if (input) {
+          // The composite's input is as optional as what it leads to.
+          const_cast<PortSpec&>(spec.inputs().back()).required = ps->required;
+        }
+      }
+    }
+    if (const YAML::Node events = root["events"]; events && events.IsMap())
+      for (auto it = events.begin(); it != events.end(); ++it) spec.event(it->first.Scalar(), "exported from " + (it->second.IsScalar() ? it->second.Scalar() : std::string("?")));
+    return spec;
+  }
+
+ public:
+  Spec composite_spec_public(const CompositeDef& def, std::vector<Diagnostic>& d) { return composite_spec_impl(def, d); }
+
+ private:
+  // --- parameters -------------------------------------------------------------------------
+
+  // Substitutes ${name} from a composite's bindings.
+  YAML::Node substitute(const YAML::Node& n, const Bindings& b, const Source& src, bool& whole, Value& whole_value) {
+    whole = false;
+    if (!n.IsScalar() || b.empty()) return n;
+    const std::string s = n.Scalar();
+    static const std::regex ref(R"(\$\{([A-Za-z0-9_]+)\})");
+    std::smatch m;
+    if (std::regex_match(s, m, ref)) {
+      auto it = b.find(m[1]);
+      if (it == b.end()) { error(at(src, n), "unknown composite parameter '${" + m[1].str() + "}'"); return n; }
+      whole = true;
+      whole_value = it->second;
+      return n;
+    }
+    std::string out;
+    auto begin = s.cbegin();
+    bool changed = false;
+    for (std::sregex_iterator i(s.begin(), s.end(), ref), e; i != e; ++i) {
+      out.append(begin, s.cbegin() + i->position());
+      auto it = b.find((*i)[1]);
+      if (it == b.end()) error(at(src, n), "unknown composite parameter '${" + (*i)[1].str() + "}'");
+      else out += to_string(it->second);
+      begin = s.cbegin() + i->position() + i->length();
+      changed = true;
+    }
+    if (!changed) return n;
+    out.append(begin, s.cend());
+    YAML::Node copy(out);
+    return copy;
+  }
+
+ public:
+  std::optional<Value> param_value(const ParamSpec& ps, const YAML::Node& raw, const Source& src, const Bindings& bindings) {
+    bool whole = false;
+    Value bound;
+    const YAML::Node n = substitute(raw, bindings, src, whole, bound);
+    const Location where = at(src, raw);
+    auto expected = [&](const std::string& what, const std::string& found) {
+      error(where, "parameter '" + ps.name + "' expects " + what + "; found " + found);
+      return std::nullopt;
+    };
+    std::optional<Value> v;
+    if (whole) {
+      // A composite parameter passed straight through keeps its type; ints widen to doubles.
+      if (ps.type == ParamType::Double && std::holds_alternative<std::int64_t>(bound)) bound = static_cast<double>(std::get<std::int64_t>(bound));
+      const bool ok = (ps.type == ParamType::Bool && std::holds_alternative<bool>(bound)) ||
+                      (ps.type == ParamType::Int && std::holds_alternative<std::int64_t>(bound)) ||
+                      (ps.type == ParamType::Double && std::holds_alternative<double>(bound)) ||
+                      ((ps.type == ParamType::String || ps.type == ParamType::Path) && std::holds_alternative<std::string>(bound)) ||
+                      (ps.type == ParamType::DoubleList && std::holds_alternative<std::vector<double>>(bound));
+      if (!ok) return expected(std::string("a ") + to_string(ps.type), "composite parameter of value '" + to_string(bound) + "'");
+      v = bound;
+      if (ps.type != ParamType::Path) return check_constraints(ps, *v, where);
+      return v;
+    }
+    if (ps.type == ParamType::DoubleList) {
+      if (!n.IsSequence()) return expected("a list of numbers like [1, 2.5]", node_kind(n));
+      std::vector<double> list;
+      for (const auto& e : n) {
+        double d = 0;
+        if (!e.IsScalar() || !parse_double(e.Scalar(), d)) return expected("a list of numbers", "an element '" + (e.IsScalar() ? e.Scalar() : std::string(node_kind(e))) + "'");
+        list.push_back(d);
+      }
+      return check_constraints(ps, Value(list), where);
+    }
+    if (!n.IsScalar()) return expected(std::string("a ") + to_string(ps.type), node_kind(n));
+    const std::string s = n.Scalar();
+    switch (ps.type) {
+      case ParamType::Bool:
+        if (s == "true" || s == "yes" || s == "on") return Value(true);
+        if (s == "false" || s == "no" || s == "off") return Value(false);
+        return expected("true or false", "'" + s + "'");
+      case ParamType::Int: {
+        std::int64_t i = 0;
+        auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), i);
+        if (ec != std::errc() || p != s.data() + s.size()) return expected("a whole number", "'" + s + "'");
+        return check_constraints(ps, Value(i), where);
+      }
+      case ParamType::Double: {
+        double d = 0;
+        if (!parse_double(s, d)) return expected("a number", "'" + s + "'");
+        return check_constraints(ps, Value(d), where);
+      }
+      case ParamType::String:
+        return check_constraints(ps, Value(s), where);
+      case ParamType::Path: {
+        if (s.empty()) return expected("a path", "an empty string");
+        fs::path p(s);
+        if (p.is_relative()) p = (src.dir / p).lexically_normal();
+        std::error_code ec;
+        if (!fs::exists(p, ec)) {
+          error(where, "parameter '" + ps.name + "': path '" + s + "' does not exist (resolved against the task file to " + p.string() + ")");
+          return std::nullopt;
+        }
+        return Value(p.string());
+      }
+      case ParamType::DoubleList:
+        break;
+    }
+    return std::nullopt;
+  }
+
+ private:
+  static bool parse_double(const std::string& s, double& out) {
+    if (s.empty()) return false;
+    char* end = nullptr;
+    out = std::strtod(s.c_str(), &end);
+    return end == s.c_str() + s.size() && std::isfinite(out);
+  }
+
+  std::optional<Value> check_constraints(const ParamSpec& ps, Value v, const Location& where) {
+    auto range_text = [&] {
+      return "[" + (ps.min ? fmt_num(*ps.min) : std::string("-inf")) + ", " + (ps.max ? fmt_num(*ps.max) : std::string("inf")) + "]";
+    };
+    auto in_range = [&](double x) { return (!ps.min || x >= *ps.min) && (!ps.max || x <= *ps.max); };
+    if (auto* i = std::get_if<std::int64_t>(&v); i && !in_range(static_cast<double>(*i))) {
+      error(where, "parameter '" + ps.name + "' must be in " + range_text() + "; found " + std::to_string(*i));
+      return std::nullopt;
+    }
+    if (auto* d = std::get_if<double>(&v); d && !in_range(*d)) {
+      error(where, "parameter '" + ps.name + "' must be in " + range_text() + "; found " + fmt_num(*d));
+      return std::nullopt;
+    }
+    if (auto* l = std::get_if<std::vector<double>>(&v))
+      for (double x : *l)
+        if (!in_range(x)) {
+          error(where, "every element of parameter '" + ps.name + "' must be in " + range_text() + "; found " + fmt_num(x));
+          return std::nullopt;
+        }
+    if (auto* s = std::get_if<std::string>(&v); s && !ps.choices.empty() &&
+                                                 std::find(ps.choices.begin(), ps.choices.end(), *s) == ps.choices.end()) {
+      error(where, "parameter '" + ps.name + "' must be one of: " + list_of(ps.choices) + "; found '" + *s + "'");
+      return std::nullopt;
+    }
+    return v;
+  }
+
+  static std::string fmt_num(double d) {
+    std::ostringstream o;
+    o << d;
+    return o.str();
+  }
+
+  // Reads a component's params against its spec; fills defaults; applies --set overrides.
+  std::map<std::string, Value> read_params(const std::string& full, const Spec& spec, const YAML::Node& params, const Source& src,
+                                           const Bindings& bindings, const Location& comp_where) {
+    std::map<std::string, Value> out;
+    std::set<std::string> given;
+    if (params && !params.IsMap() && !params.IsNull()) error(at(src, params), std::string("params: a mapping name: value; found ") + node_kind(params));
+    if (params && params.IsMap()) {
+      for (auto it = params.begin(); it != params.end(); ++it) {
+        const std::string name = it->first.IsScalar() ? it->first.Scalar() : "";
+        const ParamSpec* ps = spec.find_param(name);
+        if (!ps) {
+          error(at(src, it->first), "component '" + full + "' (" + spec.type_name() + ") has no parameter '" + name +
+                                        "'; its parameters: " + list_of(names_of(spec.params())));
+          continue;
+        }
+        if (!given.insert(name).second) { error(at(src, it->first), "parameter '" + name + "' given twice"); continue; }
+        if (auto v = param_value(*ps, it->second, src, bindings)) out[name] = *v;
+      }
+    }
+    for (const auto& ps : spec.params()) {
+      auto o = overrides_.find(full + "." + ps.name);
+      if (o != overrides_.end()) {
+        o->second.used = true;
+        const Source cli{o->second.where.file, fs::current_path()};
+        if (auto v = param_value(ps, o->second.value, cli, {})) out[ps.name] = *v;
+        given.insert(ps.name);
+      }
+      if (given.count(ps.name)) continue;
+      if (ps.default_value) out[ps.name] = *ps.default_value;
+      else error(comp_where, "component '" + full + "' (" + spec.type_name() + ") needs parameter '" + ps.name + "' (" + to_string(ps.type) + ": " + ps.doc + ")");
+    }
+    return out;
+  }
+
+  // --- expansion ---------------------------------------------------------------------------
+
+  Endpoint resolve(const Endpoint& e, bool input) const {
+    auto it = exports_.find(e.comp);
+    if (it == exports_.end()) return e;
+    const auto& m = input ? it->second.inputs : it->second.outputs;
+    auto p = m.find(e.port);
+    if (p == m.end()) return Endpoint{"", e.port};
+    return resolve(p->second, input);
+  }
+
+  std::optional<Endpoint> endpoint(const std::string& text, const YAML::Node& n, const Source& src, const std::string& prefix) {
+    const auto dot = text.rfind('.');
+    if (dot == std::string::npos || dot == 0 || dot + 1 == text.size()) {
+      error(at(src, n), "expected component.port; found '" + text + "'");
+      return std::nullopt;
+    }
+    return Endpoint{prefix + text.substr(0, dot), text.substr(dot + 1)};
+  }
+
+  // Checks a port exists on a component (or exported by a composite instance).
+  bool check_port(const Endpoint& e, bool input, const YAML::Node& n, const Source& src, const std::string& prefix) {
+    const std::string shown = e.comp.substr(prefix.size());
+    auto kind = kinds_.find(e.comp);
+    if (kind == kinds_.end()) {
+      std::vector<std::string> known;
+      for (const auto& [name, _] : kinds_)
+        if (name.rfind(prefix, 0) == 0 && name.find('/', prefix.size()) == std::string::npos) known.push_back(name.substr(prefix.size()));
+      error(at(src, n), "no component '" + shown + "'; components here: " + list_of(known));
+      return false;
+    }
+    const Spec& spec = *kind->second;
+    const PortSpec* ps = input ? spec.find_input(e.port) : spec.find_output(e.port);
+    if (!ps) {
+      error(at(src, n), "component '" + shown + "' (" + spec.type_name() + ") has no " + (input ? "input" : "output") + " '" + e.port +
+                            "'; its " + (input ? "inputs" : "outputs") + ": " + list_of(names_of(input ? spec.inputs() : spec.outputs())));
+      return false;
+    }
+    return true;
+  }
+
+  void expand(const YAML::Node& body, const Source& src, const std::string& prefix, const Bindings& bindings, TaskConfig& task,
+              std::vector<std::string> composite_stack) {
+    const YAML::Node comps = body["components"];
+    if (comps && !comps.IsMap()) {
+      error(at(src, comps), std::string("components: a mapping name: {type: ..., params: ...}; found ") + node_kind(comps));
+      return;
+    }
+    if (comps)
+      for (auto it = comps.begin(); it != comps.end(); ++it) {
+        const std::string name = it->first.IsScalar() ? it->first.Scalar() : "";
+        const Location where = at(src, it->first);
+        if (!is_identifier(name)) {
+          error(where, "component name '" + name + "' must be letters, digits and '_'");
+          continue;
+        }
+        const std::string full = prefix + name;
+        if (kinds_.count(full)) {
+          error(where, "component '" + name + "' is defined twice");
+          continue;
+        }
+        const YAML::Node c = it->second;
+        if (!c.IsMap()) {
+          error(at(src, c), "component '" + name + "': a mapping {type: ..., params: ...}; found " + node_kind(c));
+          continue;
+        }
+        check_keys(c, src, {"type", "params", "trigger", "on_error", "thread", "doc"});
+        const YAML::Node type = c["type"];
+        if (!type || !type.IsScalar()) {
+          error(where, "component '" + name + "' needs 'type:' (see fba-inspect for the types available)");
+          continue;
+        }
+        const TypeEntry* te = find_type(type.Scalar());
+        if (!te) {
+          const auto near = suggest(type.Scalar());
+          error(at(src, type), "unknown component type '" + type.Scalar() + "'" +
+                                   (near.empty() ? std::string("") : "; did you mean " + list_of(near) + "?") +
+                                   " (fba-inspect lists the types found; --plugin-path adds plugin folders)");
+          continue;
+        }
+        kinds_[full] = &te->spec;
+        if (te->composite) {
+          if (std::find(composite_stack.begin(), composite_stack.end(), te->spec.type_name()) != composite_stack.end()) {
+            error(at(src, type), "composite '" + te->spec.type_name() + "' contains itself");
+            continue;
+          }
+          for (const char* k : {"trigger", "on_error", "thread"})
+            if (c[k]) error(at(src, c[k]), std::string("'") + k + "' applies to the components inside a composite, not to the composite");
+          const auto& def = *te->composite;
+          const Source inner{def.shown, def.file.parent_path()};
+          Bindings b = [&] {
+            auto vals = read_params(full, te->spec, c["params"], src, bindings, where);
+            return Bindings(vals.begin(), vals.end());
+          }();
+          auto stack = composite_stack;
+          stack.push_back(te->spec.type_name());
+          expand(def.root, inner, full + "/", b, task, stack);
+          Exports ex;
+          for (const char* section : {"inputs", "outputs"}) {
+            const bool input = std::string(section) == "inputs";
+            const YAML::Node ports = def.root[section];
+            if (!ports || !ports.IsMap()) continue;
+            for (auto p = ports.begin(); p != ports.end(); ++p) {
+              YAML::Node t = p->second.IsMap() ? p->second[input ? "to" : "from"] : p->second;
+              if (!t || !t.IsScalar()) continue;
+              const std::string s = t.Scalar();
+              const auto dot = s.rfind('.');
+              if (dot == std::string::npos) continue;
+              (input ? ex.inputs : ex.outputs)[p->first.Scalar()] = Endpoint{full + "/" + s.substr(0, dot), s.substr(dot + 1)};
+            }
+          }
+          if (const YAML::Node evs = def.root["events"]; evs && evs.IsMap())
+            for (auto e = evs.begin(); e != evs.end(); ++e) {
+              if (!e->second.IsScalar()) continue;
+              const std::string s = e->second.Scalar();
+              const auto dot = s.rfind('.');
+              if (dot != std::string::npos) ex.events[e->first.Scalar()] = Endpoint{full + "/" + s.substr(0, dot), s.substr(dot + 1)};
+            }
+          exports_[full] = std::move(ex);
+          continue;
+        }
+        ComponentConfig cc;
+        cc.name = full;
+        cc.type = te;
+        cc.where = where;
+        cc.trigger = te->spec.default_trigger();
+        cc.params = read_params(full, te->spec, c["params"], src, bindings, where);
+        if (const YAML::Node t = c["trigger"]) read_trigger(t, src, cc);
+        if (const YAML::Node e = c["on_error"]) read_error_policy(e, src, cc);
+        if (const YAML::Node t = c["thread"]) {
+          const std::string s = scalar(t, src, "thread");
+          if (s == "dedicated") cc.dedicated_thread = true;
+          else if (s != "shared") error(at(src, t), "thread must be 'shared' (the worker pool, default) or 'dedicated'; found '" + s + "'");
+        }
+        task.components.push_back(std::move(cc));
+      }
+
+    // Connections.
+    if (const YAML::Node conns = body["connections"]) {
+      if (!conns.IsSequence()) error(at(src, conns), std::string("connections: a list of 'a.out -> b.in' (or {from, to, buffer, capacity, feedback}); found ") + node_kind(conns));
+      else
+        for (const auto& n : conns) read_connection(n, src, prefix, task);
+    }
+    // Event rules.
+    if (const YAML::Node on = body["on"]) {
+      if (!on.IsMap()) error(at(src, on), std::string("on: a mapping component.event: stop_success | stop_failure | {deliver: component.port}; found ") + node_kind(on));
+      else
+        for (auto it = on.begin(); it != on.end(); ++it) read_rule(it->first, it->second, src, prefix, task);
+    }
+  }
+
+  void read_trigger(const YAML::Node& t, const Source& src, ComponentConfig& cc) {
+    const std::string valid = "any, all, free, or {policy: periodic, period: SECONDS}";
+    std::string policy;
+    if (t.IsScalar()) policy = t.Scalar();
+    else if (t.IsMap()) {
+      check_keys(t, src, {"policy", "period"});
+      policy = t["policy"] && t["policy"].IsScalar() ? t["policy"].Scalar() : "";
+    } else {
+      error(at(src, t), "trigger: " + valid + "; found " + node_kind(t));
+      return;
+    }
+    if (policy == "any") cc.trigger = {TriggerPolicy::Any, 0};
+    else if (policy == "all") cc.trigger = {TriggerPolicy::All, 0};
+    else if (policy == "free") cc.trigger = {TriggerPolicy::Free, 0};
+    else if (policy == "periodic") {
+      double period = 0;
+      if (!t.IsMap() || !t["period"] || !t["period"].IsScalar() || !parse_double(t["period"].Scalar(), period) || !(period > 0)) {
+        error(at(src, t), "a periodic trigger needs period: SECONDS (> 0)");
+        return;
+      }
+      cc.trigger = {TriggerPolicy::Periodic, period};
+    } else {
+      error(at(src, t), "trigger '" + policy + "' is not one of: " + valid);
+      return;
+    }
+    if (cc.trigger.policy == TriggerPolicy::Free && cc.type->spec.kind() != Kind::Sensor)
+      error(at(src, t), "only sensors can be free-running; '" + cc.name + "' is a " + to_string(cc.type->spec.kind()));
+  }
+
+  void read_error_policy(const YAML::Node& e, const Source& src, ComponentConfig& cc) {
+    std::string policy = e.IsScalar() ? e.Scalar() : (e.IsMap() && e["policy"] && e["policy"].IsScalar() ? e["policy"].Scalar() : "");
+    if (e.IsMap()) check_keys(e, src, {"policy", "max_restarts"});
+    if (policy == "stop") cc.on_error = ErrorPolicy::Stop;
+    else if (policy == "restart") {
+      cc.on_error = ErrorPolicy::Restart;
+      cc.max_restarts = 3;
+      if (e.IsMap() && e["max_restarts"]) cc.max_restarts = static_cast<int>(integer(e["max_restarts"], src, "max_restarts", 0, 1000000));
+    } else {
+      error(at(src, e), "on_error: stop, restart, or {policy: restart, max_restarts: N}; found '" + (e.IsScalar() ? e.Scalar() : std::string(node_kind(e))) + "'");
+    }
+  }
+
+  void read_connection(const YAML::Node& n, const Source& src, const std::string& prefix, TaskConfig& task) {
+    ConnectionConfig c;
+    c.where = at(src, n);
+    std::string from, to;
+    // Node::operator= would write into the tree; reset() rebinds the handle.
+    YAML::Node from_node, to_node;
+    from_node.reset(n);
+    to_node.reset(n);
+    if (n.IsScalar()) {
+      const std::string s = n.Scalar();
+      const auto arrow = s.find("->");
+      if (arrow == std::string::npos) {
+        error(c.where, "a connection reads 'component.output -> component.input'; found '" + s + "'");
+        return;
+      }
+      auto trim = [](std::string x) {
+        x.erase(0, x.find_first_not_of(" \t"));
+        x.erase(x.find_last_not_of(" \t") + 1);
+        return x;
+      };
+      from = trim(s.substr(0, arrow));
+      to = trim(s.substr(arrow + 2));
+    } else if (n.IsMap()) {
+      check_keys(n, src, {"from", "to", "buffer", "capacity", "feedback"});
+      from_node.reset(n["from"]);
+      to_node.reset(n["to"]);
+      if (!from_node || !to_node) {
+        error(c.where, "a connection needs from: component.output and to: component.input");
+        return;
+      }
+      from = scalar(from_node, src, "from");
+      to = scalar(to_node, src, "to");
+      if (const YAML::Node b = n["buffer"]) {
+        const std::string p = scalar(b, src, "buffer");
+        if (p == "lossless") c.policy = BufferPolicy::Lossless;
+        else if (p == "drop_oldest") c.policy = BufferPolicy::DropOldest;
+        else if (p == "latest") c.policy = BufferPolicy::Latest;
+        else error(at(src, b), "buffer '" + p + "' is not one of: lossless (bounded queue, holds the producer back), drop_oldest, latest");
+      }
+      if (const YAML::Node cap = n["capacity"]) c.capacity = static_cast<std::size_t>(integer(cap, src, "capacity", 1, 1 << 24));
+      if (const YAML::Node fb = n["feedback"]) {
+        const std::string f = scalar(fb, src, "feedback");
+        if (f == "true") c.feedback = true;
+        else if (f != "false") error(at(src, fb), "feedback is true or false; found '" + f + "'");
+      }
+    } else {
+      error(c.where, std::string("a connection is 'a.out -> b.in' or {from, to, buffer, capacity, feedback}; found ") + node_kind(n));
+      return;
+    }
+    auto a = endpoint(from, from_node, src, prefix);
+    auto b = endpoint(to, to_node, src, prefix);
+    if (!a || !b) return;
+    if (!check_port(*a, false, from_node, src, prefix) || !check_port(*b, true, to_node, src, prefix)) return;
+    const Endpoint ra = resolve(*a, false), rb = resolve(*b, true);
+    if (ra.comp.empty() || rb.comp.empty()) {
+      error(c.where, "a composite's exported port leads nowhere; check its inputs/outputs section");
+      return;
+    }
+    c.from = ra.comp;
+    c.from_port = ra.port;
+    c.to = rb.comp;
+    c.to_port = rb.port;
+    task.connections.push_back(std::move(c));
+  }
+
+  void read_rule(const YAML::Node& key, const YAML::Node& value, const Source& src, const std::string& prefix, TaskConfig& task) {
+    EventRule r;
+    r.where = at(src, key);
+    const std::string k = key.IsScalar() ? key.Scalar() : "";
+    const auto dot = k.rfind('.');
+    if (dot == std::string::npos || dot == 0) {
+      error(r.where, "an event rule's key is component.event; found '" + k + "'");
+      return;
+    }
+    Endpoint src_ev{prefix + k.substr(0, dot), k.substr(dot + 1)};
+    // Events exported by composite instances resolve to the inner component.
+    for (int depth = 0; depth < 64; ++depth) {
+      auto it = exports_.find(src_ev.comp);
+      if (it == exports_.end()) break;
+      auto e = it->second.events.find(src_ev.port);
+      if (e == it->second.events.end()) {
+        error(r.where, "composite '" + k.substr(0, dot) + "' exports no event '" + src_ev.port + "'");
+        return;
+      }
+      src_ev = e->second;
+    }
+    auto kind = kinds_.find(src_ev.comp);
+    if (kind == kinds_.end()) {
+      error(r.where, "no component '" + k.substr(0, dot) + "' for event rule '" + k + "'");
+      return;
+    }
+    const Spec& spec = *kind->second;
+    if (!spec.find_event(src_ev.port) && src_ev.port != "error" && src_ev.port != "finished") {
+      std::vector<std::string> evs = names_of(spec.events());
+      evs.push_back("error");
+      evs.push_back("finished");
+      error(r.where, "component '" + k.substr(0, dot) + "' (" + spec.type_name() + ") emits no event '" + src_ev.port + "'; its events: " + list_of(evs));
+      return;
+    }
+    r.source = src_ev.comp;
+    r.event = src_ev.port;
+    const std::string actions = "stop_success, stop_failure, or {deliver: component.input}";
+    if (value.IsScalar()) {
+      if (value.Scalar() == "stop_success") r.action = RuleAction::StopSuccess;
+      else if (value.Scalar() == "stop_failure") r.action = RuleAction::StopFailure;
+      else {
+        error(at(src, value), "event action '" + value.Scalar() + "' is not one of: " + actions);
+        return;
+      }
+    } else if (value.IsMap() && value["deliver"] && value["deliver"].IsScalar()) {
+      check_keys(value, src, {"deliver"});
+      auto target = endpoint(value["deliver"].Scalar(), value["deliver"], src, prefix);
+      if (!target || !check_port(*target, true, value["deliver"], src, prefix)) return;
+      const Endpoint t = resolve(*target, true);
+      r.action = RuleAction::Deliver;
+      r.target = t.comp;
+      r.target_port = t.port;
+    } else {
+      error(at(src, value), "event action: " + actions);
+      return;
+    }
+    task.rules.push_back(std::move(r));
+  }
+
+  // --- whole-graph checks ------------------------------------------------------------------
+
+  void check_graph(TaskConfig& task) {
+    std::map<std::string, const ComponentConfig*> comps;
+    for (const auto& c : task.components) comps[c.name] = &c;
+    // One producer per input.
+    std::map<std::pair<std::string, std::string>, const Location*> fed;
+    for (const auto& c : task.connections) {
+      auto key = std::make_pair(c.to, c.to_port);
+      if (auto it = fed.find(key); it != fed.end())
+        error(c.where, "input '" + c.to + "." + c.to_port + "' is connected already (at " + it->second->str() + "); an input takes one connection");
+      else fed[key] = &c.where;
+    }
+    for (const auto& r : task.rules) {
+      if (r.action != RuleAction::Deliver) continue;
+      auto key = std::make_pair(r.target, r.target_port);
+      if (auto it = fed.find(key); it != fed.end() && !is_rule_location(task, it->second))
+        error(r.where, "input '" + r.target + "." + r.target_port + "' is fed by a connection (at " + it->second->str() + "); events need an input of their own");
+      fed.emplace(key, &r.where);
+      const PortSpec* ps = comps.at(r.target)->type->spec.find_input(r.target_port);
+      if (ps->type != type_of<Event>() && ps->type != any_type())
+        error(r.where, "events are delivered as 'fba.Event'; input '" + r.target + "." + r.target_port + "' takes '" + ps->type->name + "'");
+    }
+    // Required inputs.
+    for (const auto& c : task.components)
+      for (const auto& in : c.type->spec.inputs())
+        if (require_inputs_ && in.required && !fed.count({c.name, in.name}))
+          error(c.where, "input '" + in.name + "' of '" + c.name + "' (" + c.type->spec.type_name() + ", " + in.type->name +
+                             ") is required but not connected; add a connection 'producer.output -> " + c.name + "." + in.name + "'");
+    // Types: outputs typed like an input take that input's resolved type; iterate to a fixpoint.
+    std::map<std::pair<std::string, std::string>, const TypeInfo*> in_type, out_type;
+    for (const auto& c : task.components)
+      for (const auto& o : c.type->spec.outputs())
+        if (o.same_as.empty()) out_type[{c.name, o.name}] = o.type;
+    for (std::size_t pass = 0; pass <= task.components.size() + 1; ++pass) {
+      bool changed = false;
+      for (auto& c : task.connections) {
+        auto ot = out_type.find({c.from, c.from_port});
+        if (ot == out_type.end()) continue;
+        auto& it = in_type[{c.to, c.to_port}];
+        if (!it) { it = ot->second; changed = true; }
+        const ComponentConfig* dst = comps.at(c.to);
+        for (const auto& o : dst->type->spec.outputs())
+          if (o.same_as == c.to_port && !out_type.count({c.to, o.name})) { out_type[{c.to, o.name}] = ot->second; changed = true; }
+      }
+      if (!changed) break;
+    }
+    for (auto& c : task.connections) {
+      auto ot = out_type.find({c.from, c.from_port});
+      if (ot == out_type.end()) {
+        error(c.where, "the type of '" + c.from + "." + c.from_port + "' cannot be resolved: it follows an input that is not connected, or only through a cycle");
+        continue;
+      }
+      c.type = ot->second;
+      const PortSpec* in = comps.at(c.to)->type->spec.find_input(c.to_port);
+      if (in->type != any_type() && in->type != c.type)
+        error(c.where, "type mismatch: '" + c.from + "." + c.from_port + "' carries '" + c.type->name + "' but '" + c.to + "." + c.to_port +
+                           "' takes '" + in->type->name + "'");
+    }
+    // Cycles must be marked: a back edge says the loop is intended.
+    std::map<std::string, std::vector<const ConnectionConfig*>> out_edges;
+    for (const auto& c : task.connections)
+      if (!c.feedback) out_edges[c.from].push_back(&c);
+    std::map<std::string, int> color;  // 0 white, 1 grey, 2 black
+    std::vector<std::string> path;
+    std::function<bool(const std::string&)> dfs = [&](const std::string& n) {
+      color[n] = 1;
+      path.push_back(n);
+      for (const auto* e : out_edges[n]) {
+        if (color[e->to] == 1) {
+          std::string cycle;
+          auto start = std::find(path.begin(), path.end(), e->to);
+          for (auto i = start; i != path.end(); ++i) cycle += *i + " -> ";
+          cycle += e->to;
+          error(e->where, "cycle " + cycle + " is not marked; mark one of its connections as a back edge with 'feedback: true'");
+          return true;
+        }
+        if (color[e->to] == 0 && dfs(e->to)) return true;
+      }
+      path.pop_back();
+      color[n] = 2;
+      return false;
+    };
+    for (const auto& c : task.components)
+      if (color[c.name] == 0 && dfs(c.name)) break;
+  }
+
+  static bool is_rule_location(const TaskConfig& task, const Location* where) {
+    for (const auto& r : task.rules)
+      if (&r.where == where) return true;
+    return false;
+  }
+
+  const Registry& registry_;
+  bool require_inputs_ = true;
+  std::vector<Diagnostic> diags_;
+  std::map<std::string, OverrideEntry> overrides_;
+  std::map<std::string, TypeEntry, std::less<>> local_types_;
+  std::set<std::string> included_;
+  std::map<std::string, const Spec*> kinds_;  // every instance, composites included
+  std::map<std::string, Exports> exports_;
+};
+
+TaskConfig load_root(const std::string& text, const std::string& shown, const fs::path& dir, const fs::path& file,
+                     const Registry& registry, const LoadOptions& options) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError({Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, "YAML syntax: " + e.msg}});
+  } catch (const YAML::Exception& e) {
+    throw ConfigError({Diagnostic{Location{shown, 0, 0}, "YAML: " + e.msg}});
+  }
+  Loader loader(registry, options);
+  try {
+    return loader.load(root, Source{shown, dir}, file);
+  } catch (const ConfigError&) {
+    throw;
+  } catch (const YAML::Exception& e) {
+    auto d = loader.diags();
+    d.push_back(Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, "YAML: " + e.msg});
+    throw ConfigError(d);
+  }
+}
+
+// Guards the YAML parser's recursion: deeply nested flow collections would exhaust the stack.
+void check_nesting(const std::string& text, const std::string& shown) {
+  int depth = 0, line = 1, col = 0;
+  for (char ch : text) {
+    ++col;
+    if (ch == '\n') { ++line; col = 0; }
+    if (ch == '[' || ch == '{') {
+      if (++depth > 64) throw ConfigError({Diagnostic{Location{shown, line, col}, "nesting deeper than 64 levels"}});
+    } else if ((ch == ']' || ch == '}') && depth > 0) {
+      --depth;
+    }
+  }
+}
+
+}  // namespace
+
+TaskConfig load_task(const fs::path& file, const Registry& registry, const LoadOptions& options) {
+  std::ifstream in(file, std::ios::binary);
+  std::error_code ec;
+  if (!in || fs::is_directory(file, ec))
+    throw ConfigError({Diagnostic{Location{file.string(), 0, 0}, "cannot read the task file (does it exist?)"}});
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const fs::path abs = fs::absolute(file, ec);
+  check_nesting(ss.str(), file.string());
+  return load_root(ss.str(), file.string(), abs.parent_path(), abs, registry, options);
+}
+
+TaskConfig load_task_text(const std::string& text, const std::string& name, const fs::path& dir, const Registry& registry,
+                          const LoadOptions& options) {
+  check_nesting(text, name);
+  return load_root(text, name, dir, {}, registry, options);
+}
+
+void register_composite_file(Registry& registry, const fs::path& file) {
+  YAML::Node root;
+  const std::string shown = file.string();
+  try {
+    std::string text;
+    {
+      std::ifstream in(file, std::ios::binary);
+      std::stringstream ss;
+      ss << in.rdbuf();
+      text = ss.str();
+    }
+    check_nesting(text, shown);
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError({Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, "YAML syntax: " + e.msg}});
+  }
+  if (!root.IsMap() || !root["composite"]) throw ConfigError({Diagnostic{Location{shown, 0, 0}, "not a composite definition (no 'composite:' key)"}});
+  auto def = std::make_shared<CompositeDef>(CompositeDef{fs::absolute(file), shown, root});
+  Loader loader(registry, {});
+  std::vector<Diagnostic> d;
+  Spec spec = loader.composite_spec_public(*def, d);
+  if (!d.empty()) throw ConfigError(d);
+  registry.add_composite(std::move(spec), def, shown);
+}
+
+}  // namespace fba
