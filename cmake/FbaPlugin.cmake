@@ -33,3 +33,18 @@ function(fba_add_plugin name)
   endif()
   install(TARGETS ${target} LIBRARY DESTINATION ${FBA_PLUGIN_INSTALL_DIR})
 endfunction()
+
+# fba_add_composite(<file.yaml>...): ships composite definitions beside the plugins, where
+# fba-run and fba-inspect find them as component types.
+function(fba_add_composite)
+  if(NOT DEFINED FBA_PLUGIN_INSTALL_DIR)
+    include(GNUInstallDirs)
+    set(FBA_PLUGIN_INSTALL_DIR ${CMAKE_INSTALL_LIBDIR}/fba/plugins)
+  endif()
+  foreach(file ${ARGN})
+    if(DEFINED FBA_BUILD_PLUGIN_DIR)
+      configure_file(${file} ${FBA_BUILD_PLUGIN_DIR}/ COPYONLY)
+    endif()
+    install(FILES ${file} DESTINATION ${FBA_PLUGIN_INSTALL_DIR})
+  endforeach()
+endfunction()

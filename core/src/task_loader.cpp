@@ -706,7 +706,7 @@ class Loader {
     if (const YAML::Node conns = body["connections"]) {
       if (!conns.IsSequence()) error(at(src, conns), std::string("connections: a list of 'a.out -> b.in' (or {from, to, buffer, capacity, feedback}); found ") + node_kind(conns));
       else
-        for (const auto& n : conns) read_connection(n, src, prefix, task);
+        for (const auto& n : conns) read_connection(n, src, prefix, bindings, task);
     }
     // Event rules.
     if (const YAML::Node on = body["on"]) {
@@ -758,7 +758,7 @@ class Loader {
     }
   }
 
-  void read_connection(const YAML::Node& n, const Source& src, const std::string& prefix, TaskConfig& task) {
+  void read_connection(const YAML::Node& n, const Source& src, const std::string& prefix, const Bindings& bindings, TaskConfig& task) {
     ConnectionConfig c;
     c.where = at(src, n);
     std::string from, to;
@@ -797,7 +797,17 @@ class Loader {
         else if (p == "latest") c.policy = BufferPolicy::Latest;
         else error(at(src, b), "buffer '" + p + "' is not one of: lossless (bounded queue, holds the producer back), drop_oldest, latest");
       }
-      if (const YAML::Node cap = n["capacity"]) c.capacity = static_cast<std::size_t>(integer(cap, src, "capacity", 1, 1 << 24));
+      if (const YAML::Node cap = n["capacity"]) {
+        bool whole = false;
+        Value bound;
+        const YAML::Node v = substitute(cap, bindings, src, whole, bound);
+        if (whole && std::holds_alternative<std::int64_t>(bound) && std::get<std::int64_t>(bound) >= 1)
+          c.capacity = static_cast<std::size_t>(std::get<std::int64_t>(bound));
+        else if (whole)
+          error(at(src, cap), "capacity must be a whole number >= 1; the composite parameter gives '" + to_string(bound) + "'");
+        else
+          c.capacity = static_cast<std::size_t>(integer(v, src, "capacity", 1, 1 << 24));
+      }
       if (const YAML::Node fb = n["feedback"]) {
         const std::string f = scalar(fb, src, "feedback");
         if (f == "true") c.feedback = true;
