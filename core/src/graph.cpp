@@ -307,7 +307,9 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
     auto b = std::make_unique<Buffer>();
     b->policy = c.policy;
     b->capacity = std::max<std::size_t>(1, c.capacity);
-    b->gating = c.policy == BufferPolicy::Lossless;
+    // A back edge never holds its producer back: two full queues in a loop would otherwise
+    // wait on each other forever. Its queue grows instead, by what the loop amplifies.
+    b->gating = c.policy == BufferPolicy::Lossless && !c.feedback;
     b->feedback = c.feedback;
     b->producer = from;
     b->consumer = to;
@@ -319,8 +321,9 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
         out->type = c.type;
       }
     InputState* in = input_of(to, c.to_port);
+    // A feedback input closes like any other: a node in a cycle never sees the end of its
+    // stream while a sample may still come round, and the run ends when the graph is idle.
     in->buffer = b.get();
-    in->closes_node = !c.feedback;
     buffers.push_back(std::move(b));
   }
   // Outputs nobody listens to still need their declared type for the emit check.
@@ -432,6 +435,16 @@ void Graph::check_idle() {
     return;
   }
   if (live_periodic.load() > 0) return;  // a timer will bring more work
+  // A stall is only declared when no node could run; a ready node that nobody scheduled would
+  // be a lost wake-up, which is a bug: say so loudly and run it rather than end the task.
+  bool woke = false;
+  for (auto& n : nodes)
+    if (n->state.load() == Node::Idle && n->ready()) {
+      n->logger->warn("was ready but not scheduled (lost wake-up); scheduling it now");
+      notify(n.get());
+      woke = true;
+    }
+  if (woke) return;
   std::ostringstream why;
   why << "stalled: no component can run and the task has not ended";
   for (auto& n : nodes) {

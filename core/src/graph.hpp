@@ -51,7 +51,7 @@ struct Buffer {
 struct InputState {
   const PortSpec* spec = nullptr;
   Buffer* buffer = nullptr;
-  bool closes_node = true;  // false for feedback and event inputs: they never end a stream
+  bool closes_node = true;  // false for event inputs: events are not a stream that ends
   std::uint64_t received = 0;
   bool closed() const {
     return buffer == nullptr || (buffer->producer_done.load(std::memory_order_acquire) && buffer->empty());
@@ -101,7 +101,7 @@ class Node {
   std::atomic<bool> finished{false};
   std::atomic<bool> in_process{false};
   bool finish_requested = false;  // set by Context::finish, acted on after process()
-  bool eos_delivered = false;
+  std::atomic<bool> eos_delivered{false};
   bool constructing = false;
   std::map<std::string, std::vector<const EventRule*>, std::less<>> rules;
 

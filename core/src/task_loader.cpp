@@ -60,13 +60,14 @@ const ComponentConfig* TaskConfig::find(std::string_view name) const {
 namespace {
 
 struct Source {
-  std::string shown;  // file name as the user gave it
-  fs::path dir;       // relative paths resolve here
+  std::string shown;     // file name as the user gave it
+  fs::path dir;          // relative paths resolve here
+  bool has_lines = true; // false for --set values: the place is the option itself
 };
 
 Location at(const Source& src, const YAML::Node& n) {
   const YAML::Mark m = n.Mark();
-  if (m.line < 0) return Location{src.shown, 0, 0};
+  if (m.line < 0 || !src.has_lines) return Location{src.shown, 0, 0};
   return Location{src.shown, m.line + 1, m.column + 1};
 }
 
@@ -554,7 +555,7 @@ class Loader {
       auto o = overrides_.find(full + "." + ps.name);
       if (o != overrides_.end()) {
         o->second.used = true;
-        const Source cli{o->second.where.file, fs::current_path()};
+        const Source cli{o->second.where.file, fs::current_path(), false};
         if (auto v = param_value(ps, o->second.value, cli, {})) out[ps.name] = *v;
         given.insert(ps.name);
       }

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "fba/data_type.hpp"
+#include "fba/packet.hpp"  // the built-in data types ports may use
 #include "fba/value.hpp"
 
 namespace fba {

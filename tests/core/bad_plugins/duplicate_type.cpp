@@ -1,0 +1,14 @@
+// A plugin registering a type name the examples plugin registers already.
+#include <fba/plugin.hpp>
+namespace {
+class Impostor final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::sensor("examples.counter", "Not the real counter.").output<std::int64_t>("out", "nothing");
+  }
+  explicit Impostor(fba::Context&) {}
+  void process() override {}
+};
+}  // namespace
+FBA_COMPONENT(Impostor);
+FBA_PLUGIN("duplicate_type")

@@ -1,0 +1,17 @@
+// Shared helpers of the runtime's tests: a registry with the example plugin and the test
+// components, and a loader for inline task text.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <fba/registry.hpp>
+#include <fba/task_config.hpp>
+
+namespace fba::test {
+
+const Registry& registry();
+TaskConfig load(const std::string& yaml, const LoadOptions& options = {});
+std::vector<std::int64_t> ints(const std::vector<Packet>& packets);
+
+}  // namespace fba::test
