@@ -15,7 +15,7 @@ packages=(
   libyaml-cpp-dev libboost-program-options-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   libeigen3-dev libopencv-dev libassimp-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  gstreamer1.0-tools gstreamer1.0-plugins-base graphviz
+  gstreamer1.0-tools gstreamer1.0-plugins-base graphviz bc
 )
 
 install_packages() {

@@ -21,9 +21,12 @@ void check_type(const detail::OutputState& s, const Packet& p) {
     throw std::logic_error("output '" + s.producer + "' carries '" + s.type->name + "' but was given '" +
                            (p.type() ? p.type()->name : std::string("nothing")) + "'");
 }
-void deliver(detail::OutputState& s, const Packet& p) {
-  for (detail::Buffer* b : s.consumers) {
-    b->push(p);
+void deliver(detail::OutputState& s, Packet&& p) {
+  const std::size_t n = s.consumers.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    detail::Buffer* b = s.consumers[i];
+    if (i + 1 < n) b->push(Packet(p));
+    else b->push(std::move(p));  // the last consumer takes it over: no reference-count traffic
     if (b->consumer) s.node->graph.notify(b->consumer);
   }
 }
@@ -36,14 +39,16 @@ void Output::send(Packet p, std::int64_t stamp_ns) {
   h.seq = s.next_seq++;
   h.stamp_ns = stamp_ns >= 0 ? stamp_ns : s.node->graph.now_ns();
   h.producer = &s.producer;
-  deliver(s, p);
+  deliver(s, std::move(p));
 }
 
-void Output::forward(const Packet& p) {
+void Output::forward(const Packet& p) { forward(Packet(p)); }
+
+void Output::forward(Packet&& p) {
   auto& s = *state_;
   check_type(s, p);
   ++s.next_seq;
-  deliver(s, p);
+  deliver(s, std::move(p));
 }
 
 const std::string& Context::name() const { return node_.config.name; }

@@ -10,17 +10,17 @@ namespace fba::detail {
 // ---------------------------------------------------------------------------------------------
 // Buffer
 
-void Buffer::push(const Packet& p) {
+void Buffer::push(Packet&& p) {
   std::lock_guard lock(mutex);
   ++delivered;
   if (tap) {
-    tap->push_back(p);
+    tap->push_back(std::move(p));
     return;
   }
   switch (policy) {
     case BufferPolicy::Latest:
       if (latest) ++dropped;  // superseded before anyone read it
-      latest = p;
+      latest = std::move(p);
       size.store(1, std::memory_order_release);
       return;
     case BufferPolicy::DropOldest:
@@ -30,7 +30,7 @@ void Buffer::push(const Packet& p) {
       }
       [[fallthrough]];
     case BufferPolicy::Lossless:
-      queue.push_back(p);
+      queue.push_back(std::move(p));
       size.store(queue.size(), std::memory_order_release);
       return;
   }
@@ -143,7 +143,6 @@ bool Node::take_inputs() {
     Input& in = inputs[i];
     if (b && b->pop(in.current_, was_full)) {
       in.has_ = true;
-      in.latest_ = in.current_;
       ++input_states[i]->received;
       if (was_full && b->producer) graph.notify(b->producer);
       return true;

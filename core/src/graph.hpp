@@ -10,6 +10,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "fba/component.hpp"
@@ -21,6 +22,23 @@ namespace fba::detail {
 class Node;
 class Graph;
 
+// A lock for critical sections of a few instructions (a queue push or pop), where a mutex's
+// sleep and wake would cost more than the work; it yields if the holder was preempted.
+class SpinLock {
+ public:
+  void lock() {
+    for (int spins = 0; flag_.exchange(true, std::memory_order_acquire); ++spins) {
+      while (flag_.load(std::memory_order_relaxed)) {
+        if (++spins > 64) std::this_thread::yield();
+      }
+    }
+  }
+  void unlock() { flag_.store(false, std::memory_order_release); }
+
+ private:
+  std::atomic<bool> flag_{false};
+};
+
 // One connection's storage, in front of one input.
 struct Buffer {
   BufferPolicy policy = BufferPolicy::Lossless;
@@ -31,7 +49,7 @@ struct Buffer {
   Node* consumer = nullptr;  // null for taps
   std::string from, to;      // "component.port", for messages and statistics
 
-  std::mutex mutex;
+  SpinLock mutex;
   std::deque<Packet> queue;  // Lossless and DropOldest
   Packet latest;             // Latest
   std::atomic<std::size_t> size{0};  // readable without the lock, for scheduling decisions
@@ -39,7 +57,7 @@ struct Buffer {
   std::uint64_t delivered = 0, dropped = 0;
   std::vector<Packet>* tap = nullptr;  // set for taps: every packet is appended
 
-  void push(const Packet& p);
+  void push(Packet&& p);
   // Pops the head; `was_full` tells the caller to wake a producer held back by this buffer.
   bool pop(Packet& out, bool& was_full);
   bool full() const { return gating && size.load(std::memory_order_acquire) >= capacity; }

@@ -120,7 +120,9 @@ class Loader {
     TaskConfig task;
     task.file = file;
     if (!root.IsMap()) {
-      error(at(src, root), std::string("a task file is a mapping with the keys components, connections, on; found ") + node_kind(root));
+      // An empty file has no position; its first line is the place to look.
+      const Location where = root.Mark().line < 0 ? Location{src.shown, 1, 1} : at(src, root);
+      error(where, std::string("a task file is a mapping with the keys components, connections, on; found ") + node_kind(root));
       throw ConfigError(diags_);
     }
     check_keys(root, src, {"task", "doc", "executor", "threads", "include", "components", "connections", "on"});
@@ -364,7 +366,9 @@ class Loader {
         std::string doc;
         if (it->second.IsMap()) {
           doc = it->second["doc"] && it->second["doc"].IsScalar() ? it->second["doc"].Scalar() : "";
-          target.reset(it->second[input ? "to" : "from"]);
+          // reset() throws on a missing key; a null target is reported below.
+          const YAML::Node inner = it->second[input ? "to" : "from"];
+          target.reset(inner ? inner : YAML::Node());
         }
         if (!target || !target.IsScalar()) { err(it->second, "exported port '" + pname + "' needs inner_component.port"); continue; }
         const PortSpec* ps = inner_port(target, input);
@@ -656,10 +660,11 @@ class Loader {
             if (c[k]) error(at(src, c[k]), std::string("'") + k + "' applies to the components inside a composite, not to the composite");
           const auto& def = *te->composite;
           const Source inner{def.shown, def.file.parent_path()};
-          Bindings b = [&] {
-            auto vals = read_params(full, te->spec, c["params"], src, bindings, where);
-            return Bindings(vals.begin(), vals.end());
-          }();
+          const auto vals = read_params(full, te->spec, c["params"], src, bindings, where);
+          // A parameter missing or invalid is reported already; expanding the body would only
+          // report each use of it as an unknown '${name}'.
+          if (vals.size() != te->spec.params().size()) continue;
+          const Bindings b(vals.begin(), vals.end());
           auto stack = composite_stack;
           stack.push_back(te->spec.type_name());
           expand(def.root, inner, full + "/", b, task, stack);
@@ -783,12 +788,13 @@ class Loader {
       to = trim(s.substr(arrow + 2));
     } else if (n.IsMap()) {
       check_keys(n, src, {"from", "to", "buffer", "capacity", "feedback"});
-      from_node.reset(n["from"]);
-      to_node.reset(n["to"]);
-      if (!from_node || !to_node) {
+      // Checked before reset(), which throws on a missing key.
+      if (!n["from"] || !n["to"]) {
         error(c.where, "a connection needs from: component.output and to: component.input");
         return;
       }
+      from_node.reset(n["from"]);
+      to_node.reset(n["to"]);
       from = scalar(from_node, src, "from");
       to = scalar(to_node, src, "to");
       if (const YAML::Node b = n["buffer"]) {

@@ -51,7 +51,7 @@ void ComponentHarness::push_packet(const std::string& input, Packet p) {
     for (auto& out : node.output_states)  // outputs typed like this input follow the pushed type
       if (out->spec->same_as == input) out->type = p.type();
   }
-  it->second->push(p);
+  it->second->push(std::move(p));
 }
 
 void ComponentHarness::close(const std::string& input) {

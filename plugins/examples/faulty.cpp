@@ -19,7 +19,7 @@ class Faulty final : public fba::Component {
 
   void process() override {
     if (forwarded_ == fail_after_) throw std::runtime_error(message_);
-    out_.forward(in_.packet());
+    out_.forward(in_.take());
     ++forwarded_;
   }
 

@@ -13,7 +13,7 @@ class Passthrough final : public fba::Component {
 
   explicit Passthrough(fba::Context& ctx) : in_(ctx.input("in")), out_(ctx.output("out")) {}
 
-  void process() override { out_.forward(in_.packet()); }
+  void process() override { out_.forward(in_.take()); }
 
  private:
   fba::Input& in_;

@@ -67,16 +67,23 @@ class Input {
   const T& get() const { return packet().get<T>(); }
   template <class T>
   std::shared_ptr<const T> share() const { return packet().share<T>(); }
-  // The newest sample ever received here, even from an earlier invocation (nullptr if none).
-  const Packet* latest() const { return latest_ ? &latest_ : nullptr; }
+  // Hands this invocation's sample over (to Output::forward, without touching its reference
+  // count); latest() no longer holds it afterwards.
+  Packet take() {
+    packet();
+    has_ = false;
+    return std::move(current_);
+  }
+  // The newest sample received here, even in an earlier invocation (nullptr if none, or if it
+  // was taken).
+  const Packet* latest() const { return current_ ? &current_ : nullptr; }
   // The producers finished and the buffer is empty.
   bool closed() const;
 
  private:
   friend class detail::Node;
   detail::InputState* state_ = nullptr;
-  Packet current_;
-  Packet latest_;
+  Packet current_;  // this invocation's sample when has_, else the newest one before it
   bool has_ = false;
 };
 
@@ -91,8 +98,10 @@ class Output {
   void emit(T value, std::int64_t stamp_ns = -1) {
     emit(std::shared_ptr<const T>(std::make_shared<T>(std::move(value))), stamp_ns);
   }
-  // Sends a received sample on unchanged: same data, same header (no copy).
+  // Sends a received sample on unchanged: same data, same header, no copy of the data.
   void forward(const Packet& p);
+  // The same, handing the sample over: the cheapest hop (see Input::take).
+  void forward(Packet&& p);
   // Stamps the packet as this output's next sample (seq, time, producer) and sends it.
   void send(Packet p, std::int64_t stamp_ns = -1);
   std::uint64_t count() const;
