@@ -4,6 +4,7 @@
 # components with FBA_COMPONENT), with the ABI entry point generated here. In the fba tree it
 # lands where fba-run finds it; out of the tree it lands in the build folder (load it with
 # --plugin-path or FBA_PLUGIN_PATH) and installs to <prefix>/<libdir>/fba/plugins.
+# The CMake target is fba_plugin_<name> (for $<TARGET_FILE:fba_plugin_<name>> in tests).
 function(fba_add_plugin name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBRARIES" ${ARGN})
   set(sources ${ARG_SOURCES} ${ARG_UNPARSED_ARGUMENTS})
@@ -29,22 +30,33 @@ function(fba_add_plugin name)
   endif()
   if(DEFINED FBA_BUILD_PLUGIN_DIR)
     set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${FBA_BUILD_PLUGIN_DIR})
-    set_target_properties(${target} PROPERTIES INSTALL_RPATH "$ORIGIN/../..")
   endif()
+  # Installed to <libdir>/fba/plugins, it finds libfba and the other fba libraries in <libdir>.
+  set_target_properties(${target} PROPERTIES INSTALL_RPATH "$ORIGIN/../..")
   install(TARGETS ${target} LIBRARY DESTINATION ${FBA_PLUGIN_INSTALL_DIR})
 endfunction()
 
 # fba_add_composite(<file.yaml>...): ships composite definitions beside the plugins, where
-# fba-run and fba-inspect find them as component types.
+# fba-run and fba-inspect find them as component types. In the build they are copied where
+# this project's plugins land (out of the tree: the current build folder), so the same
+# --plugin-path finds both.
 function(fba_add_composite)
   if(NOT DEFINED FBA_PLUGIN_INSTALL_DIR)
     include(GNUInstallDirs)
     set(FBA_PLUGIN_INSTALL_DIR ${CMAKE_INSTALL_LIBDIR}/fba/plugins)
   endif()
+  if(DEFINED FBA_BUILD_PLUGIN_DIR)
+    set(build_dir ${FBA_BUILD_PLUGIN_DIR})
+  elseif(CMAKE_LIBRARY_OUTPUT_DIRECTORY)
+    set(build_dir ${CMAKE_LIBRARY_OUTPUT_DIRECTORY})
+  else()
+    set(build_dir ${CMAKE_CURRENT_BINARY_DIR})
+  endif()
   foreach(file ${ARGN})
-    if(DEFINED FBA_BUILD_PLUGIN_DIR)
-      configure_file(${file} ${FBA_BUILD_PLUGIN_DIR}/ COPYONLY)
-    endif()
+    get_filename_component(file_name ${file} NAME)
+    # The full output name: "<dir>/" would become a file named <dir> when the folder does not
+    # exist yet (a fresh build tree), and the plugins could then not be linked there.
+    configure_file(${file} ${build_dir}/${file_name} COPYONLY)
     install(FILES ${file} DESTINATION ${FBA_PLUGIN_INSTALL_DIR})
   endforeach()
 endfunction()

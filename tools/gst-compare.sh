@@ -12,7 +12,8 @@ command -v gst-launch-1.0 >/dev/null || { echo "gst-launch-1.0 missing: apt-get 
 
 # seconds for one gst-launch run; best of 3
 gst_time() {
-  local k=$1 n=$2 element=$3 pipeline="fakesrc num-buffers=$n" best=""
+  local k=$1 n=$2 element=$3 best=""
+  local pipeline="fakesrc num-buffers=$n"
   for ((i = 0; i < k; i++)); do pipeline+=" ! $element"; done
   pipeline+=" ! fakesink"
   for rep in 1 2 3; do

@@ -63,6 +63,7 @@ struct Source {
   std::string shown;     // file name as the user gave it
   fs::path dir;          // relative paths resolve here
   bool has_lines = true; // false for --set values: the place is the option itself
+  const char* base = "the task file";  // what relative paths are relative to, for messages
 };
 
 Location at(const Source& src, const YAML::Node& n) {
@@ -275,7 +276,10 @@ class Loader {
       auto def = std::make_shared<CompositeDef>(CompositeDef{path, inner.shown, doc});
       const std::size_t before = diags_.size();
       Spec spec = composite_spec_checked(*def);
-      if (diags_.size() != before) continue;
+      if (diags_.size() != before) {
+        broken_types_.insert(spec.type_name());
+        continue;
+      }
       const std::string name = spec.type_name();
       if (find_type(name)) {
         const TypeEntry* other = find_type(name);
@@ -393,8 +397,9 @@ class Loader {
  private:
   // --- parameters -------------------------------------------------------------------------
 
-  // Substitutes ${name} from a composite's bindings.
-  YAML::Node substitute(const YAML::Node& n, const Bindings& b, const Source& src, bool& whole, Value& whole_value) {
+  // Substitutes ${name} from a composite's bindings; nullopt when a name is unknown (reported
+  // here, so that the caller does not report the unsubstituted text as a bad value as well).
+  std::optional<YAML::Node> substitute(const YAML::Node& n, const Bindings& b, const Source& src, bool& whole, Value& whole_value) {
     whole = false;
     if (!n.IsScalar() || b.empty()) return n;
     const std::string s = n.Scalar();
@@ -402,22 +407,27 @@ class Loader {
     std::smatch m;
     if (std::regex_match(s, m, ref)) {
       auto it = b.find(m[1]);
-      if (it == b.end()) { error(at(src, n), "unknown composite parameter '${" + m[1].str() + "}'"); return n; }
+      if (it == b.end()) { error(at(src, n), "unknown composite parameter '${" + m[1].str() + "}'"); return std::nullopt; }
       whole = true;
       whole_value = it->second;
       return n;
     }
     std::string out;
     auto begin = s.cbegin();
-    bool changed = false;
+    bool changed = false, unknown = false;
     for (std::sregex_iterator i(s.begin(), s.end(), ref), e; i != e; ++i) {
       out.append(begin, s.cbegin() + i->position());
       auto it = b.find((*i)[1]);
-      if (it == b.end()) error(at(src, n), "unknown composite parameter '${" + (*i)[1].str() + "}'");
-      else out += to_string(it->second);
+      if (it == b.end()) {
+        error(at(src, n), "unknown composite parameter '${" + (*i)[1].str() + "}'");
+        unknown = true;
+      } else {
+        out += to_string(it->second);
+      }
       begin = s.cbegin() + i->position() + i->length();
       changed = true;
     }
+    if (unknown) return std::nullopt;
     if (!changed) return n;
     out.append(begin, s.cend());
     YAML::Node copy(out);
@@ -428,7 +438,9 @@ class Loader {
   std::optional<Value> param_value(const ParamSpec& ps, const YAML::Node& raw, const Source& src, const Bindings& bindings) {
     bool whole = false;
     Value bound;
-    const YAML::Node n = substitute(raw, bindings, src, whole, bound);
+    const auto substituted = substitute(raw, bindings, src, whole, bound);
+    if (!substituted) return std::nullopt;
+    const YAML::Node& n = *substituted;
     const Location where = at(src, raw);
     auto expected = [&](const std::string& what, const std::string& found) {
       error(where, "parameter '" + ps.name + "' expects " + what + "; found " + found);
@@ -484,7 +496,7 @@ class Loader {
         if (p.is_relative()) p = (src.dir / p).lexically_normal();
         std::error_code ec;
         if (!fs::exists(p, ec)) {
-          error(where, "parameter '" + ps.name + "': path '" + s + "' does not exist (resolved against the task file to " + p.string() + ")");
+          error(where, "parameter '" + ps.name + "': path '" + s + "' does not exist (relative to " + src.base + ": " + p.string() + ")");
           return std::nullopt;
         }
         return Value(p.string());
@@ -559,7 +571,8 @@ class Loader {
       auto o = overrides_.find(full + "." + ps.name);
       if (o != overrides_.end()) {
         o->second.used = true;
-        const Source cli{o->second.where.file, fs::current_path(), false};
+        // On the command line a relative path means what the shell means: the working folder.
+        const Source cli{o->second.where.file, fs::current_path(), false, "the working folder"};
         if (auto v = param_value(ps, o->second.value, cli, {})) out[ps.name] = *v;
         given.insert(ps.name);
       }
@@ -601,6 +614,7 @@ class Loader {
       error(at(src, n), "no component '" + shown + "'; components here: " + list_of(known));
       return false;
     }
+    if (!kind->second) return false;  // a component that could not be read; its error is reported
     const Spec& spec = *kind->second;
     const PortSpec* ps = input ? spec.find_input(e.port) : spec.find_output(e.port);
     if (!ps) {
@@ -622,32 +636,42 @@ class Loader {
       for (auto it = comps.begin(); it != comps.end(); ++it) {
         const std::string name = it->first.IsScalar() ? it->first.Scalar() : "";
         const Location where = at(src, it->first);
-        if (!is_identifier(name)) {
-          error(where, "component name '" + name + "' must be letters, digits and '_'");
-          continue;
-        }
         const std::string full = prefix + name;
         if (kinds_.count(full)) {
           error(where, "component '" + name + "' is defined twice");
           continue;
         }
+        // A component that cannot be read is still known by name (with no spec), so that the
+        // connections and rules naming it do not add a 'no component' error to its own.
+        auto reject = [&](const Location& place, const std::string& message) {
+          error(place, message);
+          kinds_[full] = nullptr;
+        };
+        if (!is_identifier(name)) {
+          reject(where, "component name '" + name + "' must be letters, digits and '_'");
+          continue;
+        }
         const YAML::Node c = it->second;
         if (!c.IsMap()) {
-          error(at(src, c), "component '" + name + "': a mapping {type: ..., params: ...}; found " + node_kind(c));
+          reject(at(src, c), "component '" + name + "': a mapping {type: ..., params: ...}; found " + node_kind(c));
           continue;
         }
         check_keys(c, src, {"type", "params", "trigger", "on_error", "thread", "doc"});
         const YAML::Node type = c["type"];
         if (!type || !type.IsScalar()) {
-          error(where, "component '" + name + "' needs 'type:' (see fba-inspect for the types available)");
+          reject(where, "component '" + name + "' needs 'type:' (see fba-inspect for the types available)");
           continue;
         }
         const TypeEntry* te = find_type(type.Scalar());
+        if (!te && broken_types_.count(type.Scalar())) {
+          kinds_[full] = nullptr;  // the composite's definition has its errors reported
+          continue;
+        }
         if (!te) {
           const auto near = suggest(type.Scalar());
-          error(at(src, type), "unknown component type '" + type.Scalar() + "'" +
-                                   (near.empty() ? std::string("") : "; did you mean " + list_of(near) + "?") +
-                                   " (fba-inspect lists the types found; --plugin-path adds plugin folders)");
+          reject(at(src, type), "unknown component type '" + type.Scalar() + "'" +
+                                    (near.empty() ? std::string("") : "; did you mean " + list_of(near) + "?") +
+                                    " (fba-inspect lists the types found; --plugin-path adds plugin folders)");
           continue;
         }
         kinds_[full] = &te->spec;
@@ -807,13 +831,14 @@ class Loader {
       if (const YAML::Node cap = n["capacity"]) {
         bool whole = false;
         Value bound;
-        const YAML::Node v = substitute(cap, bindings, src, whole, bound);
-        if (whole && std::holds_alternative<std::int64_t>(bound) && std::get<std::int64_t>(bound) >= 1)
-          c.capacity = static_cast<std::size_t>(std::get<std::int64_t>(bound));
-        else if (whole)
-          error(at(src, cap), "capacity must be a whole number >= 1; the composite parameter gives '" + to_string(bound) + "'");
-        else
-          c.capacity = static_cast<std::size_t>(integer(v, src, "capacity", 1, 1 << 24));
+        if (const auto v = substitute(cap, bindings, src, whole, bound)) {
+          if (whole && std::holds_alternative<std::int64_t>(bound) && std::get<std::int64_t>(bound) >= 1)
+            c.capacity = static_cast<std::size_t>(std::get<std::int64_t>(bound));
+          else if (whole)
+            error(at(src, cap), "capacity must be a whole number >= 1; the composite parameter gives '" + to_string(bound) + "'");
+          else
+            c.capacity = static_cast<std::size_t>(integer(*v, src, "capacity", 1, 1 << 24));
+        }
       }
       if (const YAML::Node fb = n["feedback"]) {
         const std::string f = scalar(fb, src, "feedback");
@@ -866,6 +891,7 @@ class Loader {
       error(r.where, "no component '" + k.substr(0, dot) + "' for event rule '" + k + "'");
       return;
     }
+    if (!kind->second) return;  // a component that could not be read; its error is reported
     const Spec& spec = *kind->second;
     if (!spec.find_event(src_ev.port) && src_ev.port != "error" && src_ev.port != "finished") {
       std::vector<std::string> evs = names_of(spec.events());
@@ -928,6 +954,33 @@ class Loader {
         if (require_inputs_ && in.required && !fed.count({c.name, in.name}))
           error(c.where, "input '" + in.name + "' of '" + c.name + "' (" + c.type->spec.type_name() + ", " + in.type->name +
                              ") is required but not connected; add a connection 'producer.output -> " + c.name + "." + in.name + "'");
+    // Cycles must be marked: a back edge says the loop is intended. Checked before the types,
+    // which cannot resolve along an unmarked cycle: one error says why.
+    std::map<std::string, std::vector<const ConnectionConfig*>> out_edges;
+    for (const auto& c : task.connections)
+      if (!c.feedback) out_edges[c.from].push_back(&c);
+    std::map<std::string, int> color;  // 0 white, 1 grey, 2 black
+    std::vector<std::string> path;
+    std::function<bool(const std::string&)> dfs = [&](const std::string& n) {
+      color[n] = 1;
+      path.push_back(n);
+      for (const auto* e : out_edges[n]) {
+        if (color[e->to] == 1) {
+          std::string cycle;
+          auto start = std::find(path.begin(), path.end(), e->to);
+          for (auto i = start; i != path.end(); ++i) cycle += *i + " -> ";
+          cycle += e->to;
+          error(e->where, "cycle " + cycle + " is not marked; mark one of its connections as a back edge with 'feedback: true'");
+          return true;
+        }
+        if (color[e->to] == 0 && dfs(e->to)) return true;
+      }
+      path.pop_back();
+      color[n] = 2;
+      return false;
+    };
+    for (const auto& c : task.components)
+      if (color[c.name] == 0 && dfs(c.name)) return;
     // Types: outputs typed like an input take that input's resolved type; iterate to a fixpoint.
     std::map<std::pair<std::string, std::string>, const TypeInfo*> in_type, out_type;
     for (const auto& c : task.components)
@@ -958,32 +1011,6 @@ class Loader {
         error(c.where, "type mismatch: '" + c.from + "." + c.from_port + "' carries '" + c.type->name + "' but '" + c.to + "." + c.to_port +
                            "' takes '" + in->type->name + "'");
     }
-    // Cycles must be marked: a back edge says the loop is intended.
-    std::map<std::string, std::vector<const ConnectionConfig*>> out_edges;
-    for (const auto& c : task.connections)
-      if (!c.feedback) out_edges[c.from].push_back(&c);
-    std::map<std::string, int> color;  // 0 white, 1 grey, 2 black
-    std::vector<std::string> path;
-    std::function<bool(const std::string&)> dfs = [&](const std::string& n) {
-      color[n] = 1;
-      path.push_back(n);
-      for (const auto* e : out_edges[n]) {
-        if (color[e->to] == 1) {
-          std::string cycle;
-          auto start = std::find(path.begin(), path.end(), e->to);
-          for (auto i = start; i != path.end(); ++i) cycle += *i + " -> ";
-          cycle += e->to;
-          error(e->where, "cycle " + cycle + " is not marked; mark one of its connections as a back edge with 'feedback: true'");
-          return true;
-        }
-        if (color[e->to] == 0 && dfs(e->to)) return true;
-      }
-      path.pop_back();
-      color[n] = 2;
-      return false;
-    };
-    for (const auto& c : task.components)
-      if (color[c.name] == 0 && dfs(c.name)) break;
   }
 
   static bool is_rule_location(const TaskConfig& task, const Location* where) {
@@ -998,7 +1025,8 @@ class Loader {
   std::map<std::string, OverrideEntry> overrides_;
   std::map<std::string, TypeEntry, std::less<>> local_types_;
   std::set<std::string> included_;
-  std::map<std::string, const Spec*> kinds_;  // every instance, composites included
+  std::set<std::string> broken_types_;  // composites whose definition has errors (reported)
+  std::map<std::string, const Spec*> kinds_;  // every instance, composites included; null: could not be read
   std::map<std::string, Exports> exports_;
 };
 
