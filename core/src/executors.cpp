@@ -202,7 +202,7 @@ class ThreadedExecutor final : public Executor {
       }
       timers_.pop();
       if (t.node->finished.load()) continue;
-      t.node->tick_pending.store(true, std::memory_order_release);
+      t.node->tick_pending.store(true, std::memory_order_seq_cst);  // before notify's state load
       g_.notify(t.node);
       // Fixed rate; ticks that could not be served in time are skipped, not queued up.
       std::int64_t next = t.deadline_ns + period_ns(*t.node);

@@ -21,7 +21,7 @@ void Buffer::push(Packet&& p) {
     case BufferPolicy::Latest:
       if (latest) ++dropped;  // superseded before anyone read it
       latest = std::move(p);
-      size.store(1, std::memory_order_release);
+      size.store(1, std::memory_order_seq_cst);
       return;
     case BufferPolicy::DropOldest:
       if (queue.size() >= capacity) {
@@ -31,7 +31,7 @@ void Buffer::push(Packet&& p) {
       [[fallthrough]];
     case BufferPolicy::Lossless:
       queue.push_back(std::move(p));
-      size.store(queue.size(), std::memory_order_release);
+      size.store(queue.size(), std::memory_order_seq_cst);
       return;
   }
 }
@@ -43,14 +43,14 @@ bool Buffer::pop(Packet& out, bool& was_full) {
     if (!latest) return false;
     out = std::move(latest);
     latest = Packet();
-    size.store(0, std::memory_order_release);
+    size.store(0, std::memory_order_seq_cst);
     return true;
   }
   if (queue.empty()) return false;
   was_full = gating && queue.size() >= capacity;
   out = std::move(queue.front());
   queue.pop_front();
-  size.store(queue.size(), std::memory_order_release);
+  size.store(queue.size(), std::memory_order_seq_cst);
   return true;
 }
 
@@ -116,7 +116,7 @@ bool Node::ready() const {
     case TriggerPolicy::Free:
       return true;
     case TriggerPolicy::Periodic:
-      if (tick_pending.load(std::memory_order_acquire)) return true;
+      if (tick_pending.load(std::memory_order_seq_cst)) return true;
       break;
     case TriggerPolicy::Any:
       for (const auto& in : input_states)
@@ -280,7 +280,7 @@ void Node::on_finish() {
   emit_event("finished", {});
   for (const auto& out : output_states)
     for (Buffer* b : out->consumers) {
-      b->producer_done.store(true, std::memory_order_release);
+      b->producer_done.store(true, std::memory_order_seq_cst);
       if (b->consumer) graph.notify(b->consumer);
     }
 }
@@ -381,11 +381,12 @@ Node& Graph::node(const std::string& name) {
 }
 
 void Graph::notify(Node* n) {
-  int s = n->state.load(std::memory_order_acquire);
+  int s = n->state.load(std::memory_order_seq_cst);  // after the caller's seq_cst store (see run_strand)
   for (;;) {
     if (s == Node::Idle) {
       if (n->state.compare_exchange_weak(s, Node::Queued, std::memory_order_acq_rel)) {
         active.fetch_add(1, std::memory_order_acq_rel);
+        notifications.fetch_add(1, std::memory_order_acq_rel);
         executor_->enqueue(n);
         return;
       }
@@ -399,8 +400,14 @@ void Graph::notify(Node* n) {
 
 void Graph::run_strand(Node* n) {
   // A node's invocations never overlap: only the thread that moved it to Running runs it.
+  //
+  // Wake-ups follow Dekker's pattern: a producer stores to a buffer and then reads the
+  // consumer's state; the consumer stores its state and then reads its buffers. Either may
+  // otherwise see the other's old value (a store may pass a later load, even on x86), and a
+  // sample would sit in an idle node's queue. So the buffer sizes, tick and end flags, and the
+  // state written here are all sequentially consistent.
   constexpr int kBatch = 64;  // invocations before giving others a turn
-  n->state.store(Node::Running, std::memory_order_release);
+  n->state.store(Node::Running, std::memory_order_seq_cst);
   for (;;) {
     int count = 0;
     while (count < kBatch && !stopping() && n->ready()) {
@@ -408,21 +415,26 @@ void Graph::run_strand(Node* n) {
       ++count;
     }
     if (!stopping() && count == kBatch && n->ready()) {
-      n->state.store(Node::Queued, std::memory_order_release);
+      n->state.store(Node::Queued, std::memory_order_seq_cst);
       executor_->enqueue(n);
       return;
     }
     int expected = Node::Running;
-    if (n->state.compare_exchange_strong(expected, Node::Idle, std::memory_order_acq_rel)) {
+    if (n->state.compare_exchange_strong(expected, Node::Idle, std::memory_order_seq_cst)) {
       if (active.fetch_sub(1, std::memory_order_acq_rel) == 1) executor_->poke();
       return;
     }
-    n->state.store(Node::Running, std::memory_order_release);  // notified meanwhile: look again
+    n->state.store(Node::Running, std::memory_order_seq_cst);  // notified meanwhile: look again
   }
 }
 
 void Graph::check_idle() {
+  // Timers (and a heal below) wake nodes from outside any running node, so "nothing runs" can
+  // stop being true while this looks: every conclusion is re-checked against the count of
+  // notifications taken at the start, and dropped if anything woke meanwhile.
+  const auto seen = notifications.load(std::memory_order_acquire);
   if (stopping() || active.load(std::memory_order_acquire) != 0) return;
+  auto quiet = [&] { return notifications.load(std::memory_order_acquire) == seen && active.load(std::memory_order_acquire) == 0; };
   bool has_sensor = false, sensors_done = true;
   for (auto& n : nodes)
     if (n->is_sensor) {
@@ -434,16 +446,18 @@ void Graph::check_idle() {
     return;
   }
   if (live_periodic.load() > 0) return;  // a timer will bring more work
-  // A stall is only declared when no node could run; a ready node that nobody scheduled would
-  // be a lost wake-up, which is a bug: say so loudly and run it rather than end the task.
-  bool woke = false;
+  // A node that is ready but idle while nothing else runs would be a lost wake-up, which is a
+  // bug: say so loudly and run it rather than end the task.
+  std::vector<Node*> ready_idle;
   for (auto& n : nodes)
-    if (n->state.load() == Node::Idle && n->ready()) {
-      n->logger->warn("was ready but not scheduled (lost wake-up); scheduling it now");
-      notify(n.get());
-      woke = true;
-    }
-  if (woke) return;
+    if (n->state.load() == Node::Idle && n->ready()) ready_idle.push_back(n.get());
+  if (!quiet()) return;
+  for (Node* n : ready_idle) {
+    n->logger->warn("was ready but not scheduled (lost wake-up); scheduling it now");
+    record_event(Event{n->config.name, "lost_wakeup", "a runtime bug: please report it", now_ns()});
+    notify(n);
+  }
+  if (!ready_idle.empty()) return;
   std::ostringstream why;
   why << "stalled: no component can run and the task has not ended";
   for (auto& n : nodes) {
@@ -457,7 +471,7 @@ void Graph::check_idle() {
         if (in->buffer && in->buffer->empty() && !in->closed()) waits.push_back("waiting on input '" + in->spec->name + "'");
     if (!waits.empty()) why << "; " << n->config.name << ": " << waits.front();
   }
-  request_stop(Outcome::RuntimeError, why.str());
+  if (quiet()) request_stop(Outcome::RuntimeError, why.str());
 }
 
 void Graph::request_stop(Outcome outcome, const std::string& reason, std::optional<Event> event) {

@@ -60,8 +60,8 @@ struct Buffer {
   void push(Packet&& p);
   // Pops the head; `was_full` tells the caller to wake a producer held back by this buffer.
   bool pop(Packet& out, bool& was_full);
-  bool full() const { return gating && size.load(std::memory_order_acquire) >= capacity; }
-  bool empty() const { return size.load(std::memory_order_acquire) == 0; }
+  bool full() const { return gating && size.load(std::memory_order_seq_cst) >= capacity; }
+  bool empty() const { return size.load(std::memory_order_seq_cst) == 0; }
   // Peeks at the head's stamp (All trigger matching); requires non-empty.
   std::int64_t head_stamp();
 };
@@ -72,7 +72,7 @@ struct InputState {
   bool closes_node = true;  // false for event inputs: events are not a stream that ends
   std::uint64_t received = 0;
   bool closed() const {
-    return buffer == nullptr || (buffer->producer_done.load(std::memory_order_acquire) && buffer->empty());
+    return buffer == nullptr || (buffer->producer_done.load(std::memory_order_seq_cst) && buffer->empty());
   }
 };
 
@@ -180,6 +180,7 @@ class Graph {
   std::deque<std::vector<Packet>> taps;
   std::unique_ptr<Executor> executor_;
   std::atomic<int> active{0};  // nodes queued or running
+  std::atomic<std::uint64_t> notifications{0};  // Idle -> Queued transitions, for check_idle
   std::atomic<int> live_periodic{0};
   std::chrono::steady_clock::time_point started;
   double timeout_s = 0;

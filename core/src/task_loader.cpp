@@ -1,5 +1,6 @@
 // Task files: YAML in, a flat checked TaskConfig out. Every problem becomes a Diagnostic with
 // file, line and column, and all of them are reported together.
+#include <yaml-cpp/depthguard.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -70,6 +71,12 @@ Location at(const Source& src, const YAML::Node& n) {
   const YAML::Mark m = n.Mark();
   if (m.line < 0 || !src.has_lines) return Location{src.shown, 0, 0};
   return Location{src.shown, m.line + 1, m.column + 1};
+}
+
+// yaml-cpp reports reaching its nesting limit as "bad file", which says nothing useful.
+std::string syntax_message(const YAML::ParserException& e) {
+  if (dynamic_cast<const YAML::DeepRecursion*>(&e)) return "YAML syntax: nested too deeply for the YAML parser";
+  return "YAML syntax: " + e.msg;
 }
 
 std::string list_of(const std::vector<std::string>& v) {
@@ -260,7 +267,7 @@ class Loader {
       try {
         doc = YAML::LoadFile(path.string());
       } catch (const YAML::ParserException& e) {
-        error(Location{inner.shown, e.mark.line + 1, e.mark.column + 1}, "YAML syntax: " + e.msg);
+        error(Location{inner.shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e));
         continue;
       } catch (const YAML::Exception& e) {
         error(at(src, item), "included file '" + rel + "' cannot be read: " + e.msg);
@@ -1036,7 +1043,7 @@ TaskConfig load_root(const std::string& text, const std::string& shown, const fs
   try {
     root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
-    throw ConfigError({Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, "YAML syntax: " + e.msg}});
+    throw ConfigError({Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e)}});
   } catch (const YAML::Exception& e) {
     throw ConfigError({Diagnostic{Location{shown, 0, 0}, "YAML: " + e.msg}});
   }
@@ -1100,7 +1107,7 @@ void register_composite_file(Registry& registry, const fs::path& file) {
     check_nesting(text, shown);
     root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
-    throw ConfigError({Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, "YAML syntax: " + e.msg}});
+    throw ConfigError({Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e)}});
   }
   if (!root.IsMap() || !root["composite"]) throw ConfigError({Diagnostic{Location{shown, 0, 0}, "not a composite definition (no 'composite:' key)"}});
   auto def = std::make_shared<CompositeDef>(CompositeDef{fs::absolute(file), shown, root});

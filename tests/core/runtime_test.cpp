@@ -215,6 +215,32 @@ TEST(Runtime, PeriodicTriggerKeepsItsRateWhenThreaded) {
   EXPECT_GT(r.wall_s, 0.09);  // 20 samples at 200 Hz: 95 ms from the first to the last
 }
 
+// Small queues, fan-out and fan-in make producers and consumers hand over control constantly:
+// a lost wake-up (a sample left in an idle node's queue) would show as a 'lost_wakeup' event.
+TEST(Runtime, NoWakeUpIsLostUnderContention) {
+  const char* yaml = R"(
+components:
+  src: { type: examples.counter, params: { count: 20000 } }
+  a: { type: examples.passthrough }
+  b: { type: examples.relay }
+  pair: { type: test.pair }
+  sink: { type: examples.sink, params: { expected: 20000 } }
+connections:
+  - { from: src.out, to: a.in, capacity: 1 }
+  - { from: src.out, to: b.in, capacity: 2 }
+  - { from: a.out, to: pair.a, capacity: 1 }
+  - { from: b.out, to: pair.b, capacity: 1 }
+  - { from: pair.sum, to: sink.in, capacity: 1 }
+on: { sink.done: stop_success }
+)";
+  for (int run = 0; run < 20; ++run) {
+    fba::Task task(load(yaml), with(ExecutorKind::Threaded, 60));
+    const auto r = task.run();
+    ASSERT_EQ(r.outcome, Outcome::Success) << "run " << run << ": " << r.reason;
+    for (const auto& e : r.events) ASSERT_NE(e.name, "lost_wakeup") << "run " << run << ": " << e.source;
+  }
+}
+
 TEST_P(RuntimeBoth, FailureEventStopsWithFailure) {
   fba::Task task(load(chain(100, 1) + "  src.finished: stop_failure\n"), with(GetParam()));
   const auto r = task.run();
