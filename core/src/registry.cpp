@@ -26,15 +26,15 @@ void Registry::add(Spec spec, Factory make, std::string origin, std::shared_ptr<
   spec.validate();
   const std::string name = spec.type_name();
   if (auto it = types_.find(name); it != types_.end())
-    throw std::logic_error("component type '" + name + "' is registered twice: by " + it->second.origin + " and by " + origin);
-  types_.emplace(name, TypeEntry{std::move(spec), make, nullptr, std::move(library), std::move(origin)});
+    throw std::logic_error("component type '" + name + "' is registered twice: by " + it->second->origin + " and by " + origin);
+  types_.emplace(name, std::make_shared<const TypeEntry>(TypeEntry{std::move(spec), make, nullptr, std::move(library), std::move(origin)}));
 }
 
 void Registry::add_composite(Spec spec, std::shared_ptr<const CompositeDef> def, std::string origin) {
   const std::string name = spec.type_name();
   if (auto it = types_.find(name); it != types_.end())
-    throw std::logic_error("component type '" + name + "' is registered twice: by " + it->second.origin + " and by " + origin);
-  types_.emplace(name, TypeEntry{std::move(spec), nullptr, std::move(def), nullptr, std::move(origin)});
+    throw std::logic_error("component type '" + name + "' is registered twice: by " + it->second->origin + " and by " + origin);
+  types_.emplace(name, std::make_shared<const TypeEntry>(TypeEntry{std::move(spec), nullptr, std::move(def), nullptr, std::move(origin)}));
 }
 
 void Registry::add_builtin(const std::vector<detail::ComponentEntry>& entries, const std::string& origin) {
@@ -83,7 +83,7 @@ void Registry::load_plugin(const fs::path& file) {
     }
     const std::string& name = specs.back().type_name();
     if (auto it = types_.find(name); it != types_.end())
-      throw PluginError(f, "registers component type '" + name + "', which " + it->second.origin + " registered already");
+      throw PluginError(f, "registers component type '" + name + "', which " + it->second->origin + " registered already");
     for (std::size_t i = 0; i + 1 < specs.size(); ++i)
       if (specs[i].type_name() == name) throw PluginError(f, "registers component type '" + name + "' twice");
   }
@@ -139,14 +139,14 @@ std::vector<PluginError> Registry::load_path(const std::vector<fs::path>& dirs) 
   return errors;
 }
 
-const TypeEntry* Registry::find(std::string_view type_name) const {
+std::shared_ptr<const TypeEntry> Registry::find(std::string_view type_name) const {
   auto it = types_.find(type_name);
-  return it == types_.end() ? nullptr : &it->second;
+  return it == types_.end() ? nullptr : it->second;
 }
 
 std::vector<const TypeEntry*> Registry::types() const {
   std::vector<const TypeEntry*> out;
-  for (const auto& [_, t] : types_) out.push_back(&t);
+  for (const auto& [_, t] : types_) out.push_back(t.get());
   return out;
 }
 

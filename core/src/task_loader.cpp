@@ -225,8 +225,8 @@ class Loader {
 
   // --- types and composites --------------------------------------------------------------
 
-  const TypeEntry* find_type(const std::string& name) const {
-    if (auto it = local_types_.find(name); it != local_types_.end()) return &it->second;
+  std::shared_ptr<const TypeEntry> find_type(const std::string& name) const {
+    if (auto it = local_types_.find(name); it != local_types_.end()) return it->second;
     return registry_.find(name);
   }
 
@@ -289,11 +289,11 @@ class Loader {
       }
       const std::string name = spec.type_name();
       if (find_type(name)) {
-        const TypeEntry* other = find_type(name);
+        const auto other = find_type(name);
         error(at(inner, doc["composite"]), "component type '" + name + "' is defined already by " + other->origin);
         continue;
       }
-      local_types_.emplace(name, TypeEntry{std::move(spec), nullptr, def, nullptr, inner.shown});
+      local_types_.emplace(name, std::make_shared<const TypeEntry>(TypeEntry{std::move(spec), nullptr, def, nullptr, inner.shown}));
     }
   }
 
@@ -358,7 +358,7 @@ class Loader {
       const std::string comp = target.substr(0, dot), port = target.substr(dot + 1);
       if (!comps || !comps.IsMap() || !comps[comp]) { err(n, "the composite has no component '" + comp + "'"); return nullptr; }
       const YAML::Node type = comps[comp]["type"];
-      const TypeEntry* te = type && type.IsScalar() ? find_type(type.Scalar()) : nullptr;
+      const auto te = type && type.IsScalar() ? find_type(type.Scalar()) : nullptr;
       if (!te) { err(n, "component '" + comp + "' has an unknown type"); return nullptr; }
       const PortSpec* ps = input ? te->spec.find_input(port) : te->spec.find_output(port);
       if (!ps) err(n, "component '" + comp + "' (" + te->spec.type_name() + ") has no " + (input ? "input" : "output") + " '" + port +
@@ -669,7 +669,7 @@ class Loader {
           reject(where, "component '" + name + "' needs 'type:' (see fba-inspect for the types available)");
           continue;
         }
-        const TypeEntry* te = find_type(type.Scalar());
+        const auto te = find_type(type.Scalar());
         if (!te && broken_types_.count(type.Scalar())) {
           kinds_[full] = nullptr;  // the composite's definition has its errors reported
           continue;
@@ -1030,7 +1030,7 @@ class Loader {
   bool require_inputs_ = true;
   std::vector<Diagnostic> diags_;
   std::map<std::string, OverrideEntry> overrides_;
-  std::map<std::string, TypeEntry, std::less<>> local_types_;
+  std::map<std::string, std::shared_ptr<const TypeEntry>, std::less<>> local_types_;
   std::set<std::string> included_;
   std::set<std::string> broken_types_;  // composites whose definition has errors (reported)
   std::map<std::string, const Spec*> kinds_;  // every instance, composites included; null: could not be read

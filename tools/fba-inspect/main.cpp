@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
 
   if (vm.count("type")) {
     const std::string name = vm["type"].as<std::string>();
-    const fba::TypeEntry* t = registry.find(name);
+    const auto t = registry.find(name);
     if (!t) {
       std::cerr << "fba-inspect: no component type '" << name << "'";
       const auto near = registry.closest(name);

@@ -74,14 +74,16 @@ class Registry {
   // failures instead of stopping at the first, so a user sees all of them.
   std::vector<PluginError> load_path(const std::vector<std::filesystem::path>& dirs);
 
-  const TypeEntry* find(std::string_view type_name) const;
+  // Tasks hold their types (specs, factories, libraries) themselves: a task outlives the
+  // registry it was loaded from.
+  std::shared_ptr<const TypeEntry> find(std::string_view type_name) const;
   std::vector<const TypeEntry*> types() const;
   const std::vector<PluginRecord>& plugins() const { return plugins_; }
   // Known type names closest to a misspelt one, for "did you mean".
   std::vector<std::string> closest(std::string_view type_name, std::size_t n = 3) const;
 
  private:
-  std::map<std::string, TypeEntry, std::less<>> types_;
+  std::map<std::string, std::shared_ptr<const TypeEntry>, std::less<>> types_;
   std::vector<PluginRecord> plugins_;
 };
 

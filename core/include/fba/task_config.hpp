@@ -51,7 +51,7 @@ const char* to_string(ExecutorKind k);
 
 struct ComponentConfig {
   std::string name;          // "relay/first" inside composite instance "relay"
-  const TypeEntry* type = nullptr;
+  std::shared_ptr<const TypeEntry> type;
   std::map<std::string, Value> params;  // complete: defaults filled in, paths resolved
   Trigger trigger;
   ErrorPolicy on_error = ErrorPolicy::Stop;
