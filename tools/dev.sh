@@ -76,13 +76,14 @@ case "$cmd" in
 
     echo "== ThreadSanitizer: the runtime's concurrency tests"
     configure tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFBA_SANITIZE=thread -DFBA_BUILD_VISION=OFF -DFBA_BUILD_BENCHMARKS=OFF
-    build tsan --target fba_core_tests
-    TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 run_tests tsan -L core
+    build tsan --target fba_core_tests fba_task_tests
+    TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 run_tests tsan -L "core|tasks"
 
     if [ -f tests/fuzz/run.sh ]; then
       echo "== fuzzing the task loader"
       CC=clang CXX=clang++ configure fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_VISION=OFF \
-        -DFBA_BUILD_TESTS=OFF -DFBA_BUILD_BENCHMARKS=OFF
+        -DFBA_SANITIZE=fuzzer-no-link,address,undefined \
+        -DFBA_BUILD_BENCHMARKS=OFF
       build fuzz --target fuzz_task_loader
       bash tests/fuzz/run.sh build/fuzz "${FBA_FUZZ_SECONDS:-60}"
     fi

@@ -212,14 +212,20 @@ class Loader {
   }
 
   std::int64_t integer(const YAML::Node& n, const Source& src, const std::string& what, std::int64_t lo, std::int64_t hi) {
+    return integer(n, n, src, what, lo, hi);
+  }
+
+  // Errors point at `place`: a value made by substituting composite parameters has no position.
+  std::int64_t integer(const YAML::Node& n, const YAML::Node& place, const Source& src, const std::string& what, std::int64_t lo,
+                       std::int64_t hi) {
     const std::string s = scalar(n, src, what);
     std::int64_t v = 0;
     auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
     if (ec != std::errc() || p != s.data() + s.size()) {
-      error(at(src, n), what + " must be a whole number; found '" + s + "'");
+      error(at(src, place), what + " must be a whole number; found '" + s + "'");
       return lo;
     }
-    if (v < lo || v > hi) error(at(src, n), what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]; found " + s);
+    if (v < lo || v > hi) error(at(src, place), what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]; found " + s);
     return v;
   }
 
@@ -844,7 +850,7 @@ class Loader {
           else if (whole)
             error(at(src, cap), "capacity must be a whole number >= 1; the composite parameter gives '" + to_string(bound) + "'");
           else
-            c.capacity = static_cast<std::size_t>(integer(*v, src, "capacity", 1, 1 << 24));
+            c.capacity = static_cast<std::size_t>(integer(*v, cap, src, "capacity", 1, 1 << 24));
         }
       }
       if (const YAML::Node fb = n["feedback"]) {

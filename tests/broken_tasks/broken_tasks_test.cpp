@@ -1,0 +1,126 @@
+// Runs `fba-run --check` on every broken task file in this folder and on every example task.
+// A broken file starts with comment lines that say what the check must report:
+//   # expect-file: includes/x.yaml   (optional: the error is in this file, not the broken one)
+//   # expect-line: N                 (the line the message points to)
+//   # expect: text                   (a substring of the message)
+//   # why: the mistake it plays
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kBrokenDir = FBA_BROKEN_TASKS_DIR;
+const fs::path kExampleDir = FBA_EXAMPLE_TASKS_DIR;
+
+struct Outcome {
+  int wait_status = 0;
+  std::string err;
+};
+
+// fba-run --check FILE, with stderr captured and stdout discarded.
+Outcome check(const fs::path& file) {
+  int pipe_fds[2];
+  if (pipe(pipe_fds) != 0) throw std::runtime_error("pipe failed");
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDERR_FILENO);
+  posix_spawn_file_actions_addclose(&actions, pipe_fds[0]);
+  posix_spawn_file_actions_addclose(&actions, pipe_fds[1]);
+  std::string exe = FBA_RUN, flag = "--check", task = file.string();
+  char* argv[] = {exe.data(), flag.data(), task.data(), nullptr};
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  close(pipe_fds[1]);
+  Outcome run;
+  if (rc == 0) {
+    char buf[4096];
+    for (ssize_t n; (n = read(pipe_fds[0], buf, sizeof buf)) > 0;) run.err.append(buf, static_cast<std::size_t>(n));
+    waitpid(pid, &run.wait_status, 0);
+  }
+  close(pipe_fds[0]);
+  if (rc != 0) throw std::runtime_error("cannot start " + exe);
+  return run;
+}
+
+std::vector<fs::path> yaml_files(const fs::path& dir) {
+  std::vector<fs::path> out;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.is_regular_file() && e.path().extension() == ".yaml") out.push_back(e.path());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// A test name from a file name: gtest allows only letters, digits and '_'.
+std::string case_name(const testing::TestParamInfo<fs::path>& info) {
+  std::string s = info.param.stem().string();
+  std::replace_if(s.begin(), s.end(), [](char c) { return !std::isalnum(static_cast<unsigned char>(c)); }, '_');
+  return s;
+}
+
+struct Expectation {
+  fs::path file;
+  int line = 0;
+  std::string text, why;
+};
+
+Expectation read_header(const fs::path& broken) {
+  Expectation x;
+  x.file = broken;
+  std::ifstream in(broken);
+  const auto value = [](const std::string& l, const std::string& key) { return l.rfind(key, 0) == 0 ? l.substr(key.size()) : ""; };
+  for (std::string l; std::getline(in, l) && l.rfind('#', 0) == 0;) {
+    if (auto v = value(l, "# expect-file: "); !v.empty()) x.file = (broken.parent_path() / v).lexically_normal();
+    if (auto v = value(l, "# expect-line: "); !v.empty()) x.line = std::stoi(v);
+    if (auto v = value(l, "# expect: "); !v.empty()) x.text = v;
+    if (auto v = value(l, "# why: "); !v.empty()) x.why = v;
+  }
+  return x;
+}
+
+class BrokenTask : public testing::TestWithParam<fs::path> {};
+
+TEST_P(BrokenTask, FailsTheCheckAtTheExpectedLine) {
+  const Expectation x = read_header(GetParam());
+  ASSERT_GT(x.line, 0) << "header needs '# expect-line: N'";
+  ASSERT_FALSE(x.text.empty()) << "header needs '# expect: text'";
+  ASSERT_FALSE(x.why.empty()) << "header needs '# why: ...'";
+  const Outcome run = check(GetParam());
+  ASSERT_FALSE(WIFSIGNALED(run.wait_status)) << "fba-run died of signal " << WTERMSIG(run.wait_status) << "\n" << run.err;
+  ASSERT_TRUE(WIFEXITED(run.wait_status));
+  EXPECT_EQ(WEXITSTATUS(run.wait_status), 2) << run.err;
+  const std::string place = x.file.string() + ":" + std::to_string(x.line) + ":";
+  EXPECT_NE(run.err.find(place), std::string::npos) << "expected an error at " << place << "\n" << run.err;
+  EXPECT_NE(run.err.find(x.text), std::string::npos) << "expected '" << x.text << "'\n" << run.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(Corpus, BrokenTask, testing::ValuesIn(yaml_files(kBrokenDir)), case_name);
+
+TEST(BrokenTaskCorpus, HasAtLeast40Cases) { EXPECT_GE(yaml_files(kBrokenDir).size(), 40u); }
+
+class ExampleTask : public testing::TestWithParam<fs::path> {};
+
+TEST_P(ExampleTask, PassesTheCheck) {
+  const Outcome run = check(GetParam());
+  ASSERT_TRUE(WIFEXITED(run.wait_status)) << run.err;
+  EXPECT_EQ(WEXITSTATUS(run.wait_status), 0) << run.err;
+}
+
+// The task files only; composites/ holds what they include.
+INSTANTIATE_TEST_SUITE_P(Examples, ExampleTask, testing::ValuesIn(yaml_files(kExampleDir)), case_name);
+
+}  // namespace

@@ -1,0 +1,24 @@
+#!/bin/sh
+# Usage: run.sh BUILD_DIR SECONDS
+# Fuzzes the task loader for SECONDS on a scratch copy of the seed corpus (the seeds in git stay
+# as they are). Exits non-zero on a finding; libFuzzer writes its input to BUILD_DIR/fuzz-findings/.
+set -eu
+if [ $# -ne 2 ]; then
+  echo "usage: $0 BUILD_DIR SECONDS" >&2
+  exit 2
+fi
+build=$1
+seconds=$2
+here=$(cd "$(dirname "$0")" && pwd)
+fuzzer=$build/bin/fuzz_task_loader
+if [ ! -x "$fuzzer" ]; then
+  echo "$0: no $fuzzer; build the target fuzz_task_loader with FBA_BUILD_FUZZERS=ON (see tests/fuzz/CMakeLists.txt)" >&2
+  exit 2
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cp "$here"/corpus/* "$work"/
+mkdir -p "$build/fuzz-findings"
+# -timeout: an input that takes 10 s is a hang, and a finding too.
+"$fuzzer" -max_total_time="$seconds" -timeout=10 -dict="$here/yaml.dict" -print_final_stats=1 \
+  -artifact_prefix="$build/fuzz-findings/" "$work"
