@@ -1,0 +1,95 @@
+// vision.contour_extraction: from a camera frame to the target's silhouette (mask, contour,
+// curvature). A frame with no usable target is an event, not a failure: exploration goes on.
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <fba/component.hpp>
+#include <fba/types/frame.hpp>
+#include <fba/types/silhouette.hpp>
+
+#include "fba/vision/contour_extraction.hpp"
+
+namespace {
+
+class ContourExtraction final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::filter("vision.contour_extraction",
+                             "Binarises a frame, cleans it up, selects the target's contour and describes its outline.")
+        .input<fba::Frame>("frame", "a camera frame")
+        .output<fba::Silhouette>("silhouette", "the target's mask, contour and per-point curvature")
+        .param("method", "fixed", "binarisation").choices({"fixed", "otsu"})
+        .param("threshold", 0.19, "fixed: foreground above this share of full scale").range(0, 1)
+        .param("dark_object", false, "the object is darker than the background")
+        .param("dilate", 10, "pixels of dilation after thresholding (closes shadow gaps)").range(0, 100)
+        .param("erode", 7, "pixels of erosion after dilation").range(0, 100)
+        .param("open", 0, "pixels of morphological opening (removes specks)").range(0, 100)
+        .param("close", 0, "pixels of morphological closing (fills cracks)").range(0, 100)
+        .param("min_area", 200.0, "smallest target area, pixels").range(0, std::nullopt)
+        .param("max_area_fraction", 0.95, "largest target area as a share of the image (larger is background)").range(0, 1)
+        .param("curvature_window", 10, "contour points on each side used for curvature").range(1, 1000)
+        .event("no_target", "no contour passed the selection, or the image was empty or unreadable; payload: why")
+        .event("leaves_frame", "the target touches the image border on this view; payload: the frame's source and index");
+  }
+
+  explicit ContourExtraction(fba::Context& ctx) : ctx_(ctx), in_(ctx.input("frame")), out_(ctx.output("silhouette")) {
+    auto& b = params_.binarise;
+    b.method = ctx.param<std::string>("method") == "otsu" ? fba::vision::BinariseParams::Method::Otsu
+                                                           : fba::vision::BinariseParams::Method::Fixed;
+    b.threshold = ctx.param<double>("threshold");
+    b.dark_object = ctx.param<bool>("dark_object");
+    b.dilate_px = ctx.param<int>("dilate");
+    b.erode_px = ctx.param<int>("erode");
+    b.open_px = ctx.param<int>("open");
+    b.close_px = ctx.param<int>("close");
+    auto& s = params_.selection;
+    s.min_area_px = ctx.param<double>("min_area");
+    s.max_area_fraction = ctx.param<double>("max_area_fraction");
+    s.curvature_window = ctx.param<int>("curvature_window");
+    if (!ctx.output_dir().empty()) {
+      overlay_dir_ = ctx.output_dir() / "contours";
+      std::filesystem::create_directories(overlay_dir_);
+    }
+  }
+
+  void process() override {
+    const auto frame = in_.share<fba::Frame>();
+    auto result = fba::vision::extract_silhouette(frame, params_);
+    const std::string name = view_name(*frame);
+    if (!result.ok()) {
+      ctx_.log().warn("{}: {}", name, result.error);
+      ctx_.emit_event("no_target", name + ": " + result.error);
+      return;
+    }
+    if (result.silhouette->touches_border) ctx_.emit_event("leaves_frame", name);
+    if (!overlay_dir_.empty()) write_overlay(*result.silhouette, name);
+    out_.emit(std::make_shared<const fba::Silhouette>(std::move(*result.silhouette)));
+  }
+
+ private:
+  static std::string view_name(const fba::Frame& f) {
+    std::string source = std::filesystem::path(f.source).stem().string();
+    if (source.empty()) source = "frame";
+    return f.index >= 0 ? source + "_" + std::to_string(f.index) : source;
+  }
+
+  // The contour drawn on the image: what a person checks first when carving goes wrong.
+  void write_overlay(const fba::Silhouette& s, const std::string& name) {
+    cv::Mat image = s.frame->image.clone();
+    if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
+    if (image.depth() != CV_8U) image.convertTo(image, CV_8U, 1.0 / 256);
+    cv::polylines(image, std::vector<std::vector<cv::Point>>{s.contour}, true, cv::Scalar(0, 255, 0), 2, cv::LINE_AA);
+    const auto file = overlay_dir_ / (name + ".png");
+    if (!cv::imwrite(file.string(), image)) ctx_.log().error("could not write {}", file.string());
+  }
+
+  fba::Context& ctx_;
+  fba::Input& in_;
+  fba::Output& out_;
+  fba::vision::ExtractionParams params_;
+  std::filesystem::path overlay_dir_;
+};
+
+}  // namespace
+
+FBA_COMPONENT(ContourExtraction);

@@ -1,0 +1,136 @@
+// Octree carving from silhouettes (the paper's Algorithms 1 and 2), incremental and parallel.
+//
+// The node test, shared with reference_carve() so both classify every leaf identically. It is
+// conservative: given perfect silhouettes it never carves a voxel whose centre is inside the
+// object. A perfect (rendered) mask holds the pixels whose centre falls in the object's
+// continuous silhouette S, so a point of S near the outline may have no mask pixel under it.
+// Seeing each pixel as the closed unit square around its centre, and the mask as the union of
+// its silhouette squares, the test uses a tolerance tol = silhouette_tolerance (pixels): a
+// projection within tol of the mask counts as inside. The default sqrt(2)/2 is the least that
+// is safe for any S at least one pixel diagonal wide (each point p of S lies in a disc of radius
+// sqrt(2)/2 inside S): the pixel centre nearest to that disc's centre c is within sqrt(2)/2 of
+// c, so inside the disc, so in the mask, and its square contains c, which is within sqrt(2)/2
+// of p. (0 gives the plain voxel-centre test, which carves true voxels near the outline.)
+//  * the node's 8 corners are projected with P = K [R | t] (ideal pinhole: undistort first);
+//  * the test rectangle holds the pixels whose square comes within tol of the bounding box of
+//    the 8 projections (pixel centres at integer coordinates, so centres within tol + 1/2);
+//  * occupancy in a view = (silhouette pixels in the rectangle + rectangle pixels outside the
+//    image) / rectangle area, from an integral image in O(1). Pixels outside the image count as
+//    occupied because nothing is known there, so a node that is partly outside an image is never
+//    carved on that view's evidence; a node with a corner behind the camera has occupancy 1
+//    (unknown) in that view;
+//  * a node is Empty when some view gives occupancy 0, Full when every view gives 1, else
+//    Partial. Its stored occupancy is the lowest over the views (0 when Empty);
+//  * the leaf test: a Partial leaf at the resolution limit (max_depth or min_node_size) is Empty
+//    when, in some view whose rectangle is inside the image, no silhouette pixel's square lies
+//    within tol (Euclidean) of its centre's projection: the classic voxel-centre test made safe
+//    against the mask's discretisation, in O(1) (an integral-image window, at most 9 pixels
+//    looked at). The finest voxels are thus kept by where their centre projects, not by the
+//    whole voxel's projection, which padded the model by about a voxel all round;
+//  * a non-empty node is split when depth < max_depth, its edge > min_node_size, occupancy < 1
+//    (a wholly-inside node's children would all be Full), and either occupancy >
+//    occupancy_threshold (generic criterion) or a grasp criterion asks: the node intersects a
+//    region of interest, or in some view where it is not wholly inside, its rectangle holds a
+//    contour point whose curvature is below curvature_threshold (a region that may be grasped).
+//
+// The model is a function of (views, regions of interest, parameters): adding views one by one
+// gives exactly the batch result; nodes carved stay carved; set_regions_of_interest re-decides
+// refinement over the views already in (it refines new regions and collapses regions no longer
+// of interest, so memory follows the current interest).
+#pragma once
+
+#include <cstddef>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "fba/types/camera.hpp"
+#include "fba/types/mesh.hpp"
+#include "fba/types/octree.hpp"
+#include "fba/types/regions_of_interest.hpp"
+#include "fba/types/silhouette.hpp"
+
+namespace fba::vision {
+
+struct CarverParams {
+  int max_depth = 6;                 // root is depth 0; at most 19
+  double min_node_size = 0.0;        // metres: nodes with an edge <= this are not split
+  double occupancy_threshold = 0.0;  // generic criterion: split when occupancy > this and < 1
+  // Grasp criterion on the contour: split where a contour point with curvature (1/px) below
+  // this falls in the node's rectangle. -infinity (default) switches it off.
+  double curvature_threshold = -std::numeric_limits<double>::infinity();
+  // Pixels: how far from a projection a silhouette pixel's square still counts (see above).
+  // sqrt(2)/2 keeps the carve conservative for perfect masks of silhouettes at least one pixel
+  // diagonal wide; larger values allow for masks that are off by more (calibration, segmentation).
+  double silhouette_tolerance = std::numbers::sqrt2 / 2;
+  int threads = 0;                   // 0 = all cores
+};
+
+struct CarveStats {
+  std::size_t views = 0;
+  std::size_t nodes_visited = 0;  // node updates (a node tested against its pending views)
+  std::size_t nodes_refined = 0;  // splits
+  double seconds = 0;             // wall time spent carving, summed over calls
+};
+
+class OctreeCarver {
+ public:
+  explicit OctreeCarver(CarverParams p);
+  ~OctreeCarver();
+  OctreeCarver(const OctreeCarver&) = delete;
+  OctreeCarver& operator=(const OctreeCarver&) = delete;
+
+  // The root voxel: geometry::cube_around(box), the smallest cube with the box's centre that
+  // contains it. Resets the model (views already added are kept and re-applied).
+  void set_bounds(const Eigen::AlignedBox3d& box);
+  // A box holding the object, from the intersection of the viewing cones of the silhouettes'
+  // bounding rectangles (a linear programme); sides of a rectangle on the image border do not
+  // constrain. Needs >= 2 silhouettes with frames; throws std::invalid_argument when the cones
+  // do not bound a finite region. Grown by `margin` (fraction of the size) on every side.
+  static Eigen::AlignedBox3d estimate_bounds(const std::vector<fba::Silhouette>& views, double margin = 0.05);
+
+  // Refines the model with this view: existing nodes are tested against it, new nodes against
+  // every view so far. Needs s.frame (the camera) and an 8-bit mask of the camera's size; throws
+  // std::invalid_argument otherwise. Before set_bounds the view is only stored.
+  void add_view(const fba::Silhouette& s);
+  // Several views at once: the same model as adding them one by one, in one pass over the tree.
+  void add_views(const std::vector<fba::Silhouette>& views);
+  void set_regions_of_interest(const fba::RegionsOfInterest& roi);
+
+  std::shared_ptr<const fba::Octree> snapshot() const;  // immutable; cached until the next change
+  CarveStats stats() const;
+  const CarverParams& params() const { return params_; }
+
+ private:
+  struct Impl;
+  CarverParams params_;
+  std::unique_ptr<Impl> impl_;
+  mutable std::mutex mutex_;  // snapshot() and stats() may be called from another thread
+};
+
+// Leaves that are Full or Partial, as boxes.
+std::vector<Eigen::AlignedBox3d> occupied_leaves(const fba::Octree&);
+// The surface of the occupied space (Full and Partial leaves): exactly the squares between an
+// occupied leaf and a non-occupied one or the outside of the root, two triangles each, wound
+// outward, with shared corners welded. Where a large occupied leaf meets smaller leaves, only the
+// parts against non-occupied ones are emitted, so no face lies inside the model.
+fba::TriangleMesh occupied_surface_mesh(const fba::Octree&);
+// The one way to save an octree: occupied_surface_mesh written by geometry::write_ply (binary
+// PLY, opens in MeshLab). Throws std::runtime_error on I/O error.
+void write_ply(const fba::Octree&, const std::string& path);
+// The occupied space seen by the camera (ideal pinhole, 8U 0/255, camera size): a pixel is in
+// when its centre sees the model, as geometry::render samples it.
+cv::Mat reproject_mask(const fba::Octree&, const fba::CameraModel&);
+// Intersection over union of two masks (non-zero = in); 1 when both are empty.
+double mask_iou(const cv::Mat& a, const cv::Mat& b);
+// Walks both trees together: the number of leaves of `a` whose region is not a leaf of `b` with
+// the same state (0 when both classify every leaf identically).
+std::size_t count_leaf_mismatches(const fba::Octree& a, const fba::Octree& b);
+
+}  // namespace fba::vision

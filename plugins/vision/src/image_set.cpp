@@ -1,0 +1,407 @@
+#include "fba/vision/image_set.hpp"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <opencv2/core/persistence.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+namespace fba::vision {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string where(const std::string& file, int line) {
+  return line > 0 ? file + ":" + std::to_string(line) : file;
+}
+
+std::vector<std::string> split_ws(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> out;
+  for (std::string tok; in >> tok;) out.push_back(tok);
+  return out;
+}
+
+bool blank(const std::string& line) {
+  return line.find_first_not_of(" \t\r\n") == std::string::npos;
+}
+
+double parse_double(const std::string& tok, const std::string& file, int line, const std::string& what) {
+  double v = 0;
+  const char* end = tok.data() + tok.size();
+  auto [p, ec] = std::from_chars(tok.data(), end, v);
+  if (ec != std::errc() || p != end || !std::isfinite(v))
+    throw FormatError(file, line, "expected a number for " + what + ", found '" + tok + "'");
+  return v;
+}
+
+// A rotation must be orthonormal with determinant +1; a typo in a calibration file usually
+// shows up here first.
+void check_rotation(const Eigen::Matrix3d& R, const std::string& file, int line, const std::string& what) {
+  const double err = (R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (err > 1e-3 || R.determinant() < 0) {
+    std::ostringstream msg;
+    msg << "expected " << what << " to be a rotation matrix (orthonormal, det +1), found one with "
+        << "|R R^T - I| = " << err << " and det " << R.determinant();
+    throw FormatError(file, line, msg.str());
+  }
+}
+
+std::string resolve(const std::string& base_file, const std::string& name) {
+  fs::path p(name);
+  if (p.is_absolute()) return p.lexically_normal().string();
+  return (fs::path(base_file).parent_path() / p).lexically_normal().string();
+}
+
+// Numbers from a YAML node that is either a flow/block sequence or an !!opencv-matrix.
+std::vector<double> read_numbers(const cv::FileNode& node, const std::string& file, const std::string& what,
+                                 std::size_t expected) {
+  if (node.empty() || node.isNone())
+    throw FormatError(file, 0, "expected '" + what + "' (" + std::to_string(expected) + " numbers), found nothing");
+  std::vector<double> v;
+  if (node.isSeq()) {
+    for (const auto& n : node) {
+      if (!n.isReal() && !n.isInt())
+        throw FormatError(file, 0, "expected numbers in '" + what + "', found a non-number element");
+      v.push_back(static_cast<double>(n));
+    }
+  } else if (node.isMap()) {
+    cv::Mat m;
+    try {
+      node >> m;
+    } catch (const cv::Exception& e) {
+      throw FormatError(file, 0, "expected '" + what + "' as a sequence or an opencv-matrix, found a map that is neither");
+    }
+    if (m.empty()) throw FormatError(file, 0, "expected '" + what + "' as a sequence or an opencv-matrix, found an empty map");
+    m.convertTo(m, CV_64F);
+    m = m.reshape(1, 1);
+    v.assign(m.begin<double>(), m.end<double>());
+  } else {
+    throw FormatError(file, 0, "expected '" + what + "' as a sequence of numbers, found a scalar");
+  }
+  if (expected != 0 && v.size() != expected)
+    throw FormatError(file, 0, "expected " + std::to_string(expected) + " numbers in '" + what + "', found " +
+                                   std::to_string(v.size()));
+  for (double x : v)
+    if (!std::isfinite(x)) throw FormatError(file, 0, "expected finite numbers in '" + what + "', found a non-finite one");
+  return v;
+}
+
+Eigen::Matrix3d matrix3(const std::vector<double>& v) {
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = v[static_cast<std::size_t>(3 * r + c)];
+  return m;
+}
+
+void check_intrinsics(const Eigen::Matrix3d& K, const std::string& file, int line) {
+  if (!(K(0, 0) > 0 && K(1, 1) > 0 && K(2, 2) == 1 && K(1, 0) == 0 && K(2, 0) == 0 && K(2, 1) == 0)) {
+    std::ostringstream msg;
+    msg << "expected an upper-triangular camera matrix K with positive focal lengths and K33 = 1, found ["
+        << K.row(0) << "; " << K.row(1) << "; " << K.row(2) << "]";
+    throw FormatError(file, line, msg.str());
+  }
+}
+
+cv::Mat distortion_mat(const std::vector<double>& d) {
+  if (d.empty()) return {};
+  return cv::Mat(d, true).reshape(1, 1);
+}
+
+}  // namespace
+
+FormatError::FormatError(std::string file, int line, const std::string& what)
+    : std::runtime_error(where(file, line) + ": " + what), file_(std::move(file)), line_(line) {}
+
+cv::Size image_file_size(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FormatError(path, 0, "expected a readable image file, found none (missing or no permission)");
+  std::array<unsigned char, 24> h{};
+  in.read(reinterpret_cast<char*>(h.data()), h.size());
+  static constexpr std::array<unsigned char, 8> png_sig{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (in.gcount() == 24 && std::equal(png_sig.begin(), png_sig.end(), h.begin()) && h[12] == 'I' && h[13] == 'H' &&
+      h[14] == 'D' && h[15] == 'R') {
+    auto be32 = [&](int o) {
+      return static_cast<int>((std::uint32_t(h[o]) << 24) | (std::uint32_t(h[o + 1]) << 16) |
+                              (std::uint32_t(h[o + 2]) << 8) | std::uint32_t(h[o + 3]));
+    };
+    const cv::Size s(be32(16), be32(20));
+    if (s.width > 0 && s.height > 0) return s;
+  }
+  const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (img.empty()) throw FormatError(path, 0, "expected an image OpenCV can decode, found undecodable data");
+  return img.size();
+}
+
+ImageSet ImageSet::load_middlebury(const std::string& par_file, const std::string& good_list) {
+  std::ifstream in(par_file);
+  if (!in) throw FormatError(par_file, 0, "expected a readable Middlebury parameter file, found none");
+  std::string line;
+  int line_no = 0;
+  // The count line.
+  long count = -1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (blank(line)) continue;
+    const auto toks = split_ws(line);
+    const char* end = toks[0].data() + toks[0].size();
+    auto [p, ec] = std::from_chars(toks[0].data(), end, count);
+    if (toks.size() != 1 || ec != std::errc() || p != end || count < 0)
+      throw FormatError(par_file, line_no, "expected the number of images alone on the first line, found '" + line + "'");
+    break;
+  }
+  if (count < 0) throw FormatError(par_file, line_no, "expected the number of images on the first line, found an empty file");
+
+  std::vector<ViewDescriptor> views;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (blank(line)) continue;
+    const auto toks = split_ws(line);
+    if (toks.size() != 22)
+      throw FormatError(par_file, line_no,
+                        "expected 22 fields 'name k11..k33 r11..r33 t1 t2 t3', found " + std::to_string(toks.size()));
+    std::vector<double> v(21);
+    static const char* names[] = {"k11", "k12", "k13", "k21", "k22", "k23", "k31", "k32", "k33", "r11", "r12",
+                                  "r13", "r21", "r22", "r23", "r31", "r32", "r33", "t1",  "t2",  "t3"};
+    for (int i = 0; i < 21; ++i) v[static_cast<std::size_t>(i)] = parse_double(toks[static_cast<std::size_t>(i + 1)], par_file, line_no, names[i]);
+    ViewDescriptor d;
+    d.name = toks[0];
+    d.path = resolve(par_file, d.name);
+    d.index = static_cast<int>(views.size()) + 1;
+    d.camera.K = matrix3({v.begin(), v.begin() + 9});
+    check_intrinsics(d.camera.K, par_file, line_no);
+    const Eigen::Matrix3d R = matrix3({v.begin() + 9, v.begin() + 18});
+    check_rotation(R, par_file, line_no, "r11..r33");
+    d.camera.camera_from_world.linear() = R;
+    d.camera.camera_from_world.translation() = Eigen::Vector3d(v[18], v[19], v[20]);
+    views.push_back(std::move(d));
+  }
+  if (static_cast<long>(views.size()) != count)
+    throw FormatError(par_file, 1, "expected " + std::to_string(count) + " image lines as the count line says, found " +
+                                       std::to_string(views.size()));
+
+  if (!good_list.empty()) {
+    std::ifstream gin(good_list);
+    if (!gin) throw FormatError(good_list, 0, "expected a readable list of good images, found none");
+    std::vector<ViewDescriptor> kept;
+    int gline = 0;
+    while (std::getline(gin, line)) {
+      ++gline;
+      if (blank(line)) continue;
+      const auto toks = split_ws(line);
+      if (toks.size() != 1)
+        throw FormatError(good_list, gline, "expected one image name per line, found '" + line + "'");
+      auto it = std::find_if(views.begin(), views.end(), [&](const ViewDescriptor& d) { return d.name == toks[0]; });
+      if (it == views.end())
+        throw FormatError(good_list, gline, "expected an image named in " + par_file + ", found '" + toks[0] + "'");
+      kept.push_back(*it);
+    }
+    views = std::move(kept);
+  }
+  for (auto& d : views) {
+    const cv::Size s = image_file_size(d.path);
+    d.camera.width = s.width;
+    d.camera.height = s.height;
+  }
+  return ImageSet(std::move(views));
+}
+
+ImageSet ImageSet::load_yaml(const std::string& file) {
+  cv::FileStorage fsr;
+  try {
+    if (!fsr.open(file, cv::FileStorage::READ | cv::FileStorage::FORMAT_AUTO))
+      throw FormatError(file, 0, "expected a readable fba image-set YAML file, found none");
+  } catch (const cv::Exception& e) {
+    // OpenCV's parser reports the line in its message; keep it.
+    throw FormatError(file, 0, "expected well-formed YAML, found a parse error: " + e.msg);
+  }
+  const cv::FileNode root = fsr.root();
+  const cv::FileNode images = root["images"];
+  if (images.empty() || !images.isSeq())
+    throw FormatError(file, 0, "expected a sequence 'images', found " + std::string(images.empty() ? "none" : "another node type"));
+  std::vector<double> default_K, default_dist;
+  if (!root["K"].empty()) default_K = read_numbers(root["K"], file, "K", 9);
+  if (!root["distortion"].empty()) default_dist = read_numbers(root["distortion"], file, "distortion", 0);
+
+  std::vector<ViewDescriptor> views;
+  int i = 0;
+  for (const auto& img : images) {
+    const std::string ctx = "images[" + std::to_string(i) + "]";
+    if (!img.isMap()) throw FormatError(file, 0, "expected " + ctx + " to be a map, found another node type");
+    ViewDescriptor d;
+    d.index = i + 1;
+    if (!img["path"].isString()) throw FormatError(file, 0, "expected a string " + ctx + ".path, found none");
+    d.name = static_cast<std::string>(img["path"]);
+    d.path = resolve(file, d.name);
+    std::vector<double> K = img["K"].empty() ? default_K : read_numbers(img["K"], file, ctx + ".K", 9);
+    if (K.empty()) throw FormatError(file, 0, "expected K in " + ctx + " or at the top level, found none");
+    d.camera.K = matrix3(K);
+    check_intrinsics(d.camera.K, file, 0);
+    d.camera.distortion = distortion_mat(img["distortion"].empty() ? default_dist
+                                                                    : read_numbers(img["distortion"], file, ctx + ".distortion", 0));
+    if (!d.camera.distortion.empty() && d.camera.distortion.total() != 4 && d.camera.distortion.total() != 5 &&
+        d.camera.distortion.total() != 8 && d.camera.distortion.total() != 12 && d.camera.distortion.total() != 14)
+      throw FormatError(file, 0, "expected 4, 5, 8, 12 or 14 distortion coefficients in " + ctx + ", found " +
+                                     std::to_string(d.camera.distortion.total()));
+    const bool has_rt = !img["R"].empty() || !img["t"].empty();
+    const bool has_pose = !img["world_from_camera"].empty();
+    if (has_rt == has_pose)
+      throw FormatError(file, 0, "expected either R and t or world_from_camera in " + ctx + ", found " +
+                                     (has_rt ? "both" : "neither"));
+    if (has_rt) {
+      const Eigen::Matrix3d R = matrix3(read_numbers(img["R"], file, ctx + ".R", 9));
+      check_rotation(R, file, 0, ctx + ".R");
+      const auto t = read_numbers(img["t"], file, ctx + ".t", 3);
+      d.camera.camera_from_world.linear() = R;
+      d.camera.camera_from_world.translation() = Eigen::Vector3d(t[0], t[1], t[2]);
+    } else {
+      const auto m = read_numbers(img["world_from_camera"], file, ctx + ".world_from_camera", 16);
+      Eigen::Matrix4d T;
+      for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) T(r, c) = m[static_cast<std::size_t>(4 * r + c)];
+      if (T.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
+        throw FormatError(file, 0, "expected the last row of " + ctx + ".world_from_camera to be 0 0 0 1");
+      check_rotation(T.topLeftCorner<3, 3>(), file, 0, ctx + ".world_from_camera rotation");
+      Eigen::Isometry3d w;
+      w.matrix() = T;
+      d.camera.camera_from_world = w.inverse();
+    }
+    if (!img["width"].empty() && !img["height"].empty()) {
+      d.camera.width = static_cast<int>(img["width"]);
+      d.camera.height = static_cast<int>(img["height"]);
+      if (d.camera.width <= 0 || d.camera.height <= 0)
+        throw FormatError(file, 0, "expected positive width and height in " + ctx);
+    } else {
+      const cv::Size s = image_file_size(d.path);
+      d.camera.width = s.width;
+      d.camera.height = s.height;
+    }
+    views.push_back(std::move(d));
+    ++i;
+  }
+  return ImageSet(std::move(views));
+}
+
+ImageSet ImageSet::load(const std::string& file, bool use_good_list) {
+  const fs::path p(file);
+  const std::string name = p.filename().string();
+  const std::string suffix = "_par.txt";
+  if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0) {
+    const std::string stem = name.substr(0, name.size() - suffix.size());
+    const fs::path good = p.parent_path() / (stem + "_good_silhouette_images.txt");
+    return load_middlebury(file, use_good_list && fs::exists(good) ? good.string() : std::string());
+  }
+  return load_yaml(file);
+}
+
+void ImageSet::save_yaml(const std::string& file) const {
+  cv::FileStorage out(file, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+  if (!out.isOpened()) throw FormatError(file, 0, "expected a writable file, found none");
+  const fs::path dir = fs::absolute(fs::path(file)).parent_path();
+  out << "images" << "[";
+  for (const auto& d : views_) {
+    out << "{";
+    out << "path" << fs::relative(fs::absolute(d.path), dir).generic_string();
+    out << "width" << d.camera.width << "height" << d.camera.height;
+    out << "K" << "[:";
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) out << d.camera.K(r, c);
+    out << "]";
+    out << "distortion" << "[:";
+    if (!d.camera.distortion.empty()) {
+      cv::Mat dist;
+      d.camera.distortion.convertTo(dist, CV_64F);
+      for (auto it = dist.begin<double>(); it != dist.end<double>(); ++it) out << *it;
+    }
+    out << "]";
+    out << "R" << "[:";
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) out << d.camera.camera_from_world.linear()(r, c);
+    out << "]";
+    out << "t" << "[:";
+    for (int r = 0; r < 3; ++r) out << d.camera.camera_from_world.translation()(r);
+    out << "]";
+    out << "}";
+  }
+  out << "]";
+}
+
+Frame ImageSet::load_frame(std::size_t i) const {
+  const ViewDescriptor& d = views_.at(i);
+  Frame f;
+  f.image = cv::imread(d.path, cv::IMREAD_ANYCOLOR);
+  if (f.image.empty()) throw FormatError(d.path, 0, "expected an image OpenCV can decode, found a missing or undecodable file");
+  if (f.image.cols != d.camera.width || f.image.rows != d.camera.height)
+    throw FormatError(d.path, 0,
+                      "expected a " + std::to_string(d.camera.width) + "x" + std::to_string(d.camera.height) +
+                          " image as when the set was loaded, found " + std::to_string(f.image.cols) + "x" +
+                          std::to_string(f.image.rows));
+  f.camera = d.camera;
+  f.has_pose = true;
+  f.source = d.path;
+  f.index = d.index;
+  return f;
+}
+
+std::optional<std::size_t> ImageSet::nearest_unserved_view(const Eigen::Isometry3d& requested,
+                                                           const std::set<std::size_t>& served,
+                                                           double angle_weight) const {
+  std::optional<std::size_t> best;
+  double best_cost = std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d axis = requested.linear().col(2);  // the optical axis (camera z) in world
+  for (std::size_t i = 0; i < views_.size(); ++i) {
+    if (served.count(i)) continue;
+    const Eigen::Isometry3d w = views_[i].camera.camera_from_world.inverse();
+    const double d = (w.translation() - requested.translation()).norm();
+    const double a = std::acos(std::clamp(w.linear().col(2).dot(axis), -1.0, 1.0));
+    const double cost = d + angle_weight * a;
+    if (cost < best_cost) best_cost = cost, best = i;
+  }
+  return best;
+}
+
+std::optional<std::size_t> ImageSet::nearest_unserved_view(const Eigen::Vector3d& centre,
+                                                           const std::set<std::size_t>& served) const {
+  std::optional<std::size_t> best;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < views_.size(); ++i) {
+    if (served.count(i)) continue;
+    const double d = (views_[i].camera.centre_in_world() - centre).norm();
+    if (d < best_d) best_d = d, best = i;
+  }
+  return best;
+}
+
+CameraModel load_opencv_calibration(const std::string& file) {
+  cv::FileStorage in;
+  try {
+    if (!in.open(file, cv::FileStorage::READ | cv::FileStorage::FORMAT_AUTO))
+      throw FormatError(file, 0, "expected a readable OpenCV calibration file, found none");
+  } catch (const cv::Exception& e) {
+    throw FormatError(file, 0, "expected well-formed YAML/XML, found a parse error: " + e.msg);
+  }
+  CameraModel cam;
+  const auto K = read_numbers(in["camera_matrix"], file, "camera_matrix", 9);
+  cam.K = matrix3(K);
+  check_intrinsics(cam.K, file, 0);
+  cam.distortion = distortion_mat(read_numbers(in["distortion_coefficients"], file, "distortion_coefficients", 0));
+  const cv::FileNode w = in["image_width"], h = in["image_height"];
+  if (!w.isInt() || !h.isInt())
+    throw FormatError(file, 0, "expected integers image_width and image_height, found " +
+                                   std::string(w.empty() || h.empty() ? "none" : "non-integers"));
+  cam.width = static_cast<int>(w);
+  cam.height = static_cast<int>(h);
+  if (cam.width <= 0 || cam.height <= 0)
+    throw FormatError(file, 0, "expected positive image_width and image_height, found " + std::to_string(cam.width) +
+                                   "x" + std::to_string(cam.height));
+  return cam;
+}
+
+}  // namespace fba::vision

@@ -1,0 +1,191 @@
+// vision.* and sim.camera through the component harness, on the real data.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <fba/testing.hpp>
+#include <fba/types/frame.hpp>
+#include <fba/types/pose.hpp>
+#include <fba/types/silhouette.hpp>
+
+namespace fs = std::filesystem;
+using fba::testing::ComponentHarness;
+
+namespace {
+
+const fba::Registry& registry() {
+  static const fba::Registry r = [] {
+    fba::Registry reg;
+    for (const auto& e : reg.load_path({FBA_TEST_PLUGIN_DIR})) ADD_FAILURE() << e.what();
+    return reg;
+  }();
+  return r;
+}
+
+const std::string kData = FBA_SHARED_DATA_DIR;
+const std::string kDinoPar = kData + "/middlebury-dino/dinoSR_par.txt";
+
+std::string quoted(const std::string& s) { return "\"" + s + "\""; }
+
+bool has_event(const std::vector<fba::Event>& events, const std::string& name) {
+  for (const auto& e : events)
+    if (e.name == name) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST(ImageSet, ServesTheGoodViewsInOrderWithTheirCalibration) {
+  ComponentHarness h(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}});
+  EXPECT_EQ(h.run(), 15);
+  EXPECT_TRUE(h.finished());
+  const auto& frames = h.packets("frame");
+  ASSERT_EQ(frames.size(), 15u);
+  const auto& first = frames[0].get<fba::Frame>();
+  EXPECT_EQ(first.image.cols, 640);
+  EXPECT_NEAR(first.camera.K(0, 0), 3310.4, 1e-9);
+  EXPECT_NEAR(first.camera.camera_from_world.translation().z(), 0.673097816109, 1e-12);
+  for (const auto& p : frames) EXPECT_NE(fs::path(p.get<fba::Frame>().source).filename(), "dinoSR0006.png");
+}
+
+TEST(ImageSet, OnRequestServesTheNearestUnservedView) {
+  ComponentHarness h(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}, {"good_only", "false"}});
+  EXPECT_EQ(h.run(), 0);  // nothing is served until asked
+  ComponentHarness reference(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}, {"good_only", "false"}});
+  reference.run();
+  const auto& all = reference.packets("frame");
+  // Ask for exactly where view 9 was taken from, twice: view 9, then its nearest neighbour.
+  const auto& nine = all[8].get<fba::Frame>();
+  fba::Pose want;
+  want.world_from_frame = nine.camera.camera_from_world.inverse();
+  h.push<fba::Pose>("request", want);
+  h.push<fba::Pose>("request", want);
+  EXPECT_EQ(h.run(), 2);
+  const auto& served = h.packets("frame");
+  ASSERT_EQ(served.size(), 2u);
+  EXPECT_EQ(served[0].get<fba::Frame>().index, 9);
+  EXPECT_TRUE(served[1].get<fba::Frame>().index == 8 || served[1].get<fba::Frame>().index == 10)
+      << served[1].get<fba::Frame>().index;
+}
+
+TEST(ImageSet, AMissingFileIsAConfigurationError) {
+  EXPECT_THROW(ComponentHarness(registry(), "vision.image_set", {{"file", quoted("/nonexistent/set.txt")}}), fba::ConfigError);
+}
+
+// A real video file through OpenCV's VideoCapture, with a calibration file in OpenCV's own
+// format and a pose input: every frame carries intrinsics, distortion and the pose.
+TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
+  const fs::path dir = fs::path(testing::TempDir()) / "camera_test";
+  fs::create_directories(dir);
+  const std::string video = (dir / "dino.avi").string();
+  {
+    cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 5, cv::Size(640, 480));
+    ASSERT_TRUE(writer.isOpened());
+    for (int i = 1; i <= 4; ++i) writer.write(cv::imread(kData + "/middlebury-dino/dinoSR000" + std::to_string(i) + ".png"));
+  }
+  const std::string calibration = (dir / "calibration.yaml").string();
+  {
+    cv::FileStorage fsw(calibration, cv::FileStorage::WRITE);
+    fsw << "image_width" << 640 << "image_height" << 480;
+    fsw << "camera_matrix" << (cv::Mat_<double>(3, 3) << 3310.4, 0, 316.73, 0, 3325.5, 200.55, 0, 0, 1);
+    fsw << "distortion_coefficients" << (cv::Mat_<double>(1, 5) << 0.01, -0.002, 0, 0, 0);
+  }
+  ComponentHarness h(registry(), "vision.camera", {{"source", quoted(video)}, {"calibration", quoted(calibration)}});
+  fba::Pose pose;
+  pose.world_from_frame.translation() << 0.1, 0.2, 0.3;
+  h.push<fba::Pose>("pose", pose);
+  EXPECT_EQ(h.run(), 5);  // four frames, then the end of the file
+  const auto& frames = h.packets("frame");
+  ASSERT_EQ(frames.size(), 4u);
+  for (const auto& p : frames) {
+    const auto& f = p.get<fba::Frame>();
+    EXPECT_EQ(f.image.size(), cv::Size(640, 480));
+    EXPECT_NEAR(f.camera.K(1, 1), 3325.5, 1e-9);
+    EXPECT_NEAR(f.camera.distortion.at<double>(0), 0.01, 1e-12);
+    EXPECT_TRUE(f.has_pose);
+    EXPECT_NEAR(f.camera.centre_in_world().y(), 0.2, 1e-12);
+  }
+  EXPECT_TRUE(h.finished());
+  EXPECT_TRUE(has_event(h.events(), "lost"));
+}
+
+TEST(Camera, AnUnopenableSourceIsAConfigurationError) {
+  EXPECT_THROW(ComponentHarness(registry(), "vision.camera", {{"source", quoted("/nonexistent/video.avi")}}), fba::ConfigError);
+}
+
+TEST(ContourExtraction, ExtractsTheDinoAndWritesTheOverlay) {
+  ComponentHarness views(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}, {"limit", "2"}});
+  views.run();
+  ComponentHarness h(registry(), "vision.contour_extraction");
+  for (const auto& p : views.packets("frame")) h.push_packet("frame", p);
+  EXPECT_EQ(h.run(), 2);
+  const auto& out = h.packets("silhouette");
+  ASSERT_EQ(out.size(), 2u);
+  const auto& s = out[0].get<fba::Silhouette>();
+  const double area = cv::countNonZero(s.mask);
+  EXPECT_GT(area, 0.1 * 640 * 480);
+  EXPECT_LT(area, 0.6 * 640 * 480);
+  EXPECT_EQ(s.contour.size(), s.curvature.size());
+  EXPECT_EQ(s.frame->index, 1);
+}
+
+TEST(ContourExtraction, AnEmptyImageIsAnEventNotAFailure) {
+  ComponentHarness h(registry(), "vision.contour_extraction");
+  fba::Frame black;
+  black.image = cv::Mat::zeros(480, 640, CV_8UC3);
+  h.push<fba::Frame>("frame", black);
+  fba::Frame nothing;  // no pixels at all
+  h.push<fba::Frame>("frame", nothing);
+  EXPECT_EQ(h.run(), 2);
+  EXPECT_TRUE(h.packets("silhouette").empty());
+  int no_target = 0;
+  for (const auto& e : h.events()) no_target += e.name == "no_target";
+  EXPECT_EQ(no_target, 2);
+  EXPECT_EQ(h.failure(), "");
+}
+
+TEST(SimCamera, RendersTheMeshFromEveryViewpoint) {
+  ComponentHarness h(registry(), "sim.camera",
+                     {{"mesh", quoted(kData + "/ycb/YcbMustardBottle/model.obj")}, {"views", "4"}, {"noise", "2"}});
+  EXPECT_EQ(h.run(), 4);
+  EXPECT_TRUE(h.finished());
+  for (const auto& p : h.packets("frame")) {
+    const auto& f = p.get<fba::Frame>();
+    cv::Mat grey;
+    cv::cvtColor(f.image, grey, cv::COLOR_BGR2GRAY);
+    const double object = cv::countNonZero(grey > 60);
+    EXPECT_GT(object, 2000) << "view " << f.index;  // the object is in the picture
+    EXPECT_LT(object, 0.5 * 640 * 480);
+    EXPECT_TRUE(f.has_pose);
+  }
+}
+
+TEST(SimCamera, RendersFromAPoseItIsGiven) {
+  ComponentHarness h(registry(), "sim.camera", {{"mesh", quoted(kData + "/ycb/YcbMasterChefCan/model.obj")}});
+  fba::Pose far;  // looking along +z from far below the object: nothing in view
+  far.world_from_frame.translation() << 0, 0, -50;
+  h.push<fba::Pose>("pose", far);
+  EXPECT_EQ(h.run(), 1);
+  const auto& f = h.packets("frame")[0].get<fba::Frame>();
+  EXPECT_NEAR(f.camera.centre_in_world().z(), -50, 1e-9);
+}
+
+// A task swaps the real camera for its simulated twin by changing the type alone: the two
+// must declare the same ports with the same types.
+TEST(SimCamera, IsATwinOfTheRealCamera) {
+  const auto real = registry().find("vision.camera");
+  const auto twin = registry().find("sim.camera");
+  ASSERT_TRUE(real && twin);
+  auto ports = [](const std::vector<fba::PortSpec>& v) {
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const auto& p : v) out.emplace_back(p.name, p.type->name);
+    return out;
+  };
+  EXPECT_EQ(ports(real->spec.inputs()), ports(twin->spec.inputs()));
+  EXPECT_EQ(ports(real->spec.outputs()), ports(twin->spec.outputs()));
+  EXPECT_EQ(real->spec.kind(), twin->spec.kind());
+}
