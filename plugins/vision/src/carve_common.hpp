@@ -239,11 +239,15 @@ inline bool wants_leaf_test(const CarverParams& p, const Lattice& L, int depth, 
 
 enum class Split { No, Generic, Grasp };
 
-// Algorithm 2's decision for a node that is not Empty, given its lowest occupancy.
-inline Split split_decision(const CarverParams& p, const Lattice& L, int depth, double min_occ, bool roi_hit,
-                            bool curvature_hit) {
+// Algorithm 2's decision for a node that is not Empty, given its lowest and highest occupancy
+// over the views. The generic criterion asks when some view sees the node occupied above the
+// threshold, as the paper applies it view by view. Both quantities only move one way as views
+// come in (the lowest falls, the highest rises), so a split once made is never withdrawn by a
+// later view: carved space stays carved, and the model still depends only on its inputs.
+inline Split split_decision(const CarverParams& p, const Lattice& L, int depth, double min_occ, double max_occ,
+                            bool roi_hit, bool curvature_hit) {
   if (min_occ <= 0 || min_occ >= 1 || at_resolution_limit(p, L, depth)) return Split::No;
-  if (min_occ > p.occupancy_threshold) return Split::Generic;
+  if (max_occ > p.occupancy_threshold) return Split::Generic;
   if (roi_hit || curvature_hit) return Split::Grasp;
   return Split::No;
 }

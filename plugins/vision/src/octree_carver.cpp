@@ -63,6 +63,7 @@ namespace {
 
 struct FastNode {
   double min_occ = 1;              // lowest occupancy over the views tested
+  double max_occ = 0;              // highest occupancy (1 when wholly inside some view)
   std::uint64_t full_views = 0;    // bit v: wholly inside silhouette v (views 0..63)
   bool empty = false;
   bool curvature_hit = false;
@@ -118,6 +119,7 @@ struct OctreeCarver::Impl {
       if (o.empty()) return false;
       const double val = o.value();
       n.min_occ = std::min(n.min_occ, val);
+      n.max_occ = std::max(n.max_occ, val);
       if (val < lowest) lowest = val, argmin = v;
       if (o.full()) {
         if (v < 64) n.full_views |= std::uint64_t(1) << v;
@@ -135,7 +137,7 @@ struct OctreeCarver::Impl {
       n.children.reset();
       return;
     }
-    n.split = split_decision(params, lattice, k.depth, n.min_occ, intersects_roi(roi, lattice, k), n.curvature_hit);
+    n.split = split_decision(params, lattice, k.depth, n.min_occ, n.max_occ, intersects_roi(roi, lattice, k), n.curvature_hit);
     // Views in which the node is wholly inside cannot carve it by the leaf test either.
     bool leaf_carved = false;
     if (n.split == Split::No && wants_leaf_test(params, lattice, k.depth, n.min_occ))
@@ -159,7 +161,10 @@ struct OctreeCarver::Impl {
     int child_from = from_view;
     if (!n.children) {
       n.children = std::make_unique<FastNode[]>(8);
-      for (int c = 0; c < 8; ++c) n.children[c].full_views = n.full_views;
+      for (int c = 0; c < 8; ++c) {
+        n.children[c].full_views = n.full_views;  // those views are skipped: occupancy 1 there
+        n.children[c].max_occ = n.full_views ? 1 : 0;
+      }
       child_from = 0;
       ++ctx.refined;
     }

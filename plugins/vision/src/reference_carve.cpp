@@ -58,7 +58,7 @@ fba::Octree reference_carve(const std::vector<fba::Silhouette>& views, const Eig
   for (std::size_t begin = 0, end = 1; begin < end; begin = end, end = tree.nodes.size()) {
     for (std::size_t i = begin; i < end; ++i) {
       const NodeKey k = keys[i];
-      double min_occ = 1;
+      double min_occ = 1, max_occ = 0;
       bool empty = false, curvature_hit = false;
       std::vector<Rect> rects(vd.size());
       for (std::size_t vi = 0; vi < vd.size(); ++vi) {
@@ -67,11 +67,12 @@ fba::Octree reference_carve(const std::vector<fba::Silhouette>& views, const Eig
         const Occupancy o = occupancy(v, r);
         empty = empty || o.empty();
         min_occ = std::min(min_occ, o.value());
+        max_occ = std::max(max_occ, o.value());
         curvature_hit = curvature_hit || (!o.full() && graspable_contour_in(v, r));
       }
       fba::OctreeNode& n = tree.nodes[i];
       set_geometry(n, L, k);
-      const Split split = split_decision(params, L, k.depth, min_occ, intersects_roi(roi, L, k), curvature_hit);
+      const Split split = split_decision(params, L, k.depth, min_occ, max_occ, intersects_roi(roi, L, k), curvature_hit);
       if (!empty && split == Split::No && wants_leaf_test(params, L, k.depth, min_occ))
         for (std::size_t vi = 0; vi < vd.size(); ++vi)
           empty = empty || reference_leaf_carved_by(vd[vi], L, k, rects[vi], params.silhouette_tolerance);

@@ -28,8 +28,8 @@
 //    looked at). The finest voxels are thus kept by where their centre projects, not by the
 //    whole voxel's projection, which padded the model by about a voxel all round;
 //  * a non-empty node is split when depth < max_depth, its edge > min_node_size, occupancy < 1
-//    (a wholly-inside node's children would all be Full), and either occupancy >
-//    occupancy_threshold (generic criterion) or a grasp criterion asks: the node intersects a
+//    in some view (a wholly-inside node's children would all be Full), and either the occupancy
+//    in some view > occupancy_threshold (generic criterion) or a grasp criterion asks: the node intersects a
 //    region of interest, or in some view where it is not wholly inside, its rectangle holds a
 //    contour point whose curvature is below curvature_threshold (a region that may be grasped).
 //
