@@ -14,7 +14,8 @@ void Buffer::push(Packet&& p) {
   std::lock_guard lock(mutex);
   ++delivered;
   if (tap) {
-    tap->push_back(std::move(p));
+    if (tap->size() >= tap_keep && !tap->empty()) tap->erase(tap->begin());
+    if (tap_keep > 0) tap->push_back(std::move(p));
     return;
   }
   switch (policy) {
@@ -347,6 +348,14 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
       buffers.push_back(std::move(b));
     }
   }
+  const ExecutorKind kind = options.executor.value_or(config.executor);
+  const int threads = options.threads > 0 ? options.threads : config.threads;
+  executor_ = kind == ExecutorKind::Deterministic ? make_deterministic_executor(*this)
+                                                  : make_threaded_executor(*this, threads);
+  timeout_s = options.timeout_s;
+}
+
+void Graph::construct() {
   for (auto& n : nodes) {
     try {
       n->construct();
@@ -357,11 +366,6 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
                                                          n->spec.type_name() + ") refused its configuration: " + e.what()}});
     }
   }
-  const ExecutorKind kind = options.executor.value_or(config.executor);
-  const int threads = options.threads > 0 ? options.threads : config.threads;
-  executor_ = kind == ExecutorKind::Deterministic ? make_deterministic_executor(*this)
-                                                  : make_threaded_executor(*this, threads);
-  timeout_s = options.timeout_s;
 }
 
 Graph::~Graph() {
@@ -501,7 +505,7 @@ void Graph::deliver(const EventRule& rule, const Event& e) {
     }
 }
 
-std::vector<Packet>& Graph::tap(const std::string& port) {
+std::vector<Packet>& Graph::tap(const std::string& port, std::size_t keep) {
   const auto dot = port.rfind('.');
   if (dot == std::string::npos) throw std::invalid_argument("tap needs 'component.output', got '" + port + "'");
   Node& n = node(port.substr(0, dot));
@@ -510,6 +514,7 @@ std::vector<Packet>& Graph::tap(const std::string& port) {
       taps.emplace_back();
       auto b = std::make_unique<Buffer>();
       b->tap = &taps.back();
+      b->tap_keep = keep;
       b->from = port;
       b->to = "tap";
       out->consumers.push_back(b.get());
@@ -576,9 +581,11 @@ RunResult Graph::run() {
 namespace fba {
 
 Task::Task(const TaskConfig& config, RunOptions options)
-    : graph_(std::make_unique<detail::Graph>(config, std::move(options))) {}
+    : graph_(std::make_unique<detail::Graph>(config, std::move(options))) {
+  graph_->construct();
+}
 Task::~Task() = default;
-const std::vector<Packet>& Task::tap(const std::string& port) { return graph_->tap(port); }
+const std::vector<Packet>& Task::tap(const std::string& port, std::size_t keep) { return graph_->tap(port, keep); }
 RunResult Task::run() { return graph_->run(); }
 void Task::request_stop(Outcome outcome, const std::string& reason) { graph_->request_stop(outcome, reason); }
 

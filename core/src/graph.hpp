@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <deque>
 #include <map>
 #include <memory>
@@ -55,7 +56,8 @@ struct Buffer {
   std::atomic<std::size_t> size{0};  // readable without the lock, for scheduling decisions
   std::atomic<bool> producer_done{false};
   std::uint64_t delivered = 0, dropped = 0;
-  std::vector<Packet>* tap = nullptr;  // set for taps: every packet is appended
+  std::size_t tap_keep = SIZE_MAX;
+  std::vector<Packet>* tap = nullptr;  // set for taps: packets are appended, at most tap_keep kept
 
   void push(Packet&& p);
   // Pops the head; `was_full` tells the caller to wake a producer held back by this buffer.
@@ -149,8 +151,12 @@ class Executor {
 
 class Graph {
  public:
+  // Wires the graph; components are created by construct(), once every port is connected, so
+  // that a component sees its final connections in its constructor.
   Graph(const TaskConfig& config, RunOptions options);
   ~Graph();
+  // Creates every component; throws ConfigError when one refuses its configuration.
+  void construct();
 
   void notify(Node* n);
   void run_strand(Node* n);
@@ -161,7 +167,7 @@ class Graph {
   std::int64_t now_ns() const { return executor_->now_ns(); }
   void record_event(const Event& e);
   void deliver(const EventRule& rule, const Event& e);
-  std::vector<Packet>& tap(const std::string& port);
+  std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
   RunResult run();
   std::vector<Event> events() {
     std::lock_guard lock(result_mutex_);

@@ -1,5 +1,7 @@
 #include "fba/testing.hpp"
 
+#include <algorithm>
+
 #include "graph.hpp"
 
 namespace fba::testing {
@@ -13,7 +15,8 @@ struct ComponentHarness::Impl {
 };
 
 ComponentHarness::ComponentHarness(const Registry& registry, const std::string& type,
-                                   const std::map<std::string, std::string>& params)
+                                   const std::map<std::string, std::string>& params,
+                                   const std::vector<std::string>& optional_inputs)
     : impl_(std::make_unique<Impl>()) {
   std::string yaml = "components:\n  dut:\n    type: \"" + type + "\"\n    params:\n";
   for (const auto& [k, v] : params) yaml += "      " + k + ": " + v + "\n";
@@ -25,7 +28,13 @@ ComponentHarness::ComponentHarness(const Registry& registry, const std::string& 
   impl_->graph = std::make_unique<detail::Graph>(impl_->config, run);
   impl_->node = impl_->graph->nodes.front().get();
   auto& g = *impl_->graph;
+  for (const auto& name : optional_inputs)
+    if (!impl_->node->spec.find_input(name))
+      throw std::invalid_argument("'" + type + "' has no input '" + name + "'");
   for (auto& in : impl_->node->input_states) {
+    const bool wanted = in->spec->required ||
+                        std::find(optional_inputs.begin(), optional_inputs.end(), in->spec->name) != optional_inputs.end();
+    if (!wanted) continue;
     auto b = std::make_unique<detail::Buffer>();
     b->policy = BufferPolicy::Lossless;
     b->consumer = impl_->node;
@@ -36,13 +45,15 @@ ComponentHarness::ComponentHarness(const Registry& registry, const std::string& 
     g.buffers.push_back(std::move(b));
   }
   for (auto& out : impl_->node->output_states) impl_->outputs[out->spec->name] = &g.tap("dut." + out->spec->name);
+  g.construct();
 }
 
 ComponentHarness::~ComponentHarness() = default;
 
 void ComponentHarness::push_packet(const std::string& input, Packet p) {
   auto it = impl_->inputs.find(input);
-  if (it == impl_->inputs.end()) throw std::invalid_argument("the component has no input '" + input + "'");
+  if (it == impl_->inputs.end())
+    throw std::invalid_argument("the component has no connected input '" + input + "' (optional inputs are connected when named)");
   auto& node = *impl_->node;
   for (auto& in : node.input_states) {
     if (in->spec->name != input) continue;

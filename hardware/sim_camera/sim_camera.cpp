@@ -47,9 +47,8 @@ class SimCamera final : public fba::Component {
     camera_ = fba::geometry::make_camera(w, h, fx, fy, (w - 1) / 2.0, (h - 1) / 2.0);
     const auto bounds = fba::geometry::mesh_bounds(mesh_);
     const Eigen::Vector3d centre = bounds.center();
-    // Far enough that the whole object fits the shorter image side with a margin.
     double distance = ctx.param<double>("distance");
-    if (distance == 0) distance = 1.3 * bounds.diagonal().norm() / 2.0 * std::min(fx, fy) / (std::min(w, h) / 2.0);
+    if (distance == 0) distance = fba::geometry::framing_distance(bounds, w, h, std::min(fx, fy));
     const int n = ctx.param<int>("views");
     const double lo = ctx.param<double>("min_elevation") * kDegree, hi = ctx.param<double>("max_elevation") * kDegree;
     views_ = ctx.param<std::string>("viewpoints") == "ring" ? fba::geometry::ring_views(n, hi, distance, centre)

@@ -95,9 +95,7 @@ SyntheticResult evaluate_synthetic(const std::filesystem::path& mesh_path,
   // objects) wastes resolution on the carving margin. Parts of that margin may leave some images;
   // the carver never carves a node partly outside a view on that view's evidence, so this costs
   // no safety, only leaves such nodes to the other views.
-  const double sphere_radius = box.sizes().norm() / 2;
-  const double half_fov = std::atan(std::min(p.width, p.height) / 2.0 / p.focal);
-  out.camera_distance = 1.05 * sphere_radius / std::sin(half_fov);
+  out.camera_distance = fba::geometry::framing_distance(box, p.width, p.height, p.focal);
   constexpr double deg = std::numbers::pi / 180;
   const auto poses =
       geometry::hemisphere_views(p.views, p.min_elevation_deg * deg, p.max_elevation_deg * deg,

@@ -1,6 +1,7 @@
 // Building and running a task: the runtime's entry point for fba-run, tests and embedding.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -66,9 +67,10 @@ class Task {
   Task(const Task&) = delete;
   Task& operator=(const Task&) = delete;
 
-  // Records every sample leaving "component.output" without holding the producer back.
-  // Call before run(); read after.
-  const std::vector<Packet>& tap(const std::string& port);
+  // Records the samples leaving "component.output" without holding the producer back: all of
+  // them, or only the newest `keep` (a test that needs the final model need not hold every
+  // intermediate one). Call before run(); read after.
+  const std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
 
   // Runs to the end; the result says how it ended. May be called once.
   RunResult run();

@@ -17,8 +17,11 @@ namespace fba::testing {
 class ComponentHarness {
  public:
   // `params` are YAML values as a task file would write them ({"count", "5"}); they are checked
-  // exactly as in a task file. Throws ConfigError.
-  ComponentHarness(const Registry& registry, const std::string& type, const std::map<std::string, std::string>& params = {});
+  // exactly as in a task file. Required inputs are connected to the harness; optional ones
+  // only when named in `optional_inputs` (a component may behave differently without them).
+  // Throws ConfigError.
+  ComponentHarness(const Registry& registry, const std::string& type, const std::map<std::string, std::string>& params = {},
+                   const std::vector<std::string>& optional_inputs = {});
   ~ComponentHarness();
 
   template <class T>

@@ -85,4 +85,10 @@ bool project(const CameraModel& camera, const Eigen::Vector3d& world, Eigen::Vec
   return true;
 }
 
+double framing_distance(const Eigen::AlignedBox3d& box, int width, int height, double focal, double margin) {
+  const double sphere_radius = box.sizes().norm() / 2;
+  const double half_fov = std::atan(std::min(width, height) / 2.0 / focal);
+  return margin * sphere_radius / std::sin(half_fov);
+}
+
 }  // namespace fba::geometry

@@ -53,7 +53,7 @@ TEST(ImageSet, ServesTheGoodViewsInOrderWithTheirCalibration) {
 }
 
 TEST(ImageSet, OnRequestServesTheNearestUnservedView) {
-  ComponentHarness h(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}, {"good_only", "false"}});
+  ComponentHarness h(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}, {"good_only", "false"}}, {"request"});
   EXPECT_EQ(h.run(), 0);  // nothing is served until asked
   ComponentHarness reference(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}, {"good_only", "false"}});
   reference.run();
@@ -94,7 +94,7 @@ TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
     fsw << "camera_matrix" << (cv::Mat_<double>(3, 3) << 3310.4, 0, 316.73, 0, 3325.5, 200.55, 0, 0, 1);
     fsw << "distortion_coefficients" << (cv::Mat_<double>(1, 5) << 0.01, -0.002, 0, 0, 0);
   }
-  ComponentHarness h(registry(), "vision.camera", {{"source", quoted(video)}, {"calibration", quoted(calibration)}});
+  ComponentHarness h(registry(), "vision.camera", {{"source", quoted(video)}, {"calibration", quoted(calibration)}}, {"pose"});
   fba::Pose pose;
   pose.world_from_frame.translation() << 0.1, 0.2, 0.3;
   h.push<fba::Pose>("pose", pose);
@@ -165,7 +165,7 @@ TEST(SimCamera, RendersTheMeshFromEveryViewpoint) {
 }
 
 TEST(SimCamera, RendersFromAPoseItIsGiven) {
-  ComponentHarness h(registry(), "sim.camera", {{"mesh", quoted(kData + "/ycb/YcbMasterChefCan/model.obj")}});
+  ComponentHarness h(registry(), "sim.camera", {{"mesh", quoted(kData + "/ycb/YcbMasterChefCan/model.obj")}}, {"pose"});
   fba::Pose far;  // looking along +z from far below the object: nothing in view
   far.world_from_frame.translation() << 0, 0, -50;
   h.push<fba::Pose>("pose", far);

@@ -36,6 +36,10 @@ std::vector<Eigen::Isometry3d> hemisphere_views(int n, double min_elevation, dou
                                                 const Eigen::Vector3d& target = Eigen::Vector3d::Zero());
 
 // An ideal pinhole camera (no distortion) with the given intrinsics and pose.
+// How far from the box's centre a camera of this size and focal length must stand for the
+// sphere around the box to fit the image's shorter side, with `margin` to spare (1.05: 5%).
+double framing_distance(const Eigen::AlignedBox3d& box, int width, int height, double focal, double margin = 1.05);
+
 CameraModel make_camera(int width, int height, double fx, double fy, double cx, double cy,
                         const Eigen::Isometry3d& camera_from_world = Eigen::Isometry3d::Identity());
 
