@@ -72,6 +72,7 @@ case "$cmd" in
     configure asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFBA_SANITIZE=address,undefined -DFBA_BUILD_BENCHMARKS=OFF
     build asan
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+      LSAN_OPTIONS=suppressions=$top/tests/lsan.supp \
       run_tests asan -LE "install|benchmark"
 
     echo "== ThreadSanitizer: the runtime's concurrency tests"

@@ -94,7 +94,10 @@ TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
     fsw << "camera_matrix" << (cv::Mat_<double>(3, 3) << 3310.4, 0, 316.73, 0, 3325.5, 200.55, 0, 0, 1);
     fsw << "distortion_coefficients" << (cv::Mat_<double>(1, 5) << 0.01, -0.002, 0, 0, 0);
   }
-  ComponentHarness h(registry(), "vision.camera", {{"source", quoted(video)}, {"calibration", quoted(calibration)}}, {"pose"});
+  // The file backend by name: 'any' also probes USB and FireWire cameras, which is slow and
+  // leaks inside those libraries.
+  ComponentHarness h(registry(), "vision.camera",
+                     {{"source", quoted(video)}, {"backend", "ffmpeg"}, {"calibration", quoted(calibration)}}, {"pose"});
   fba::Pose pose;
   pose.world_from_frame.translation() << 0.1, 0.2, 0.3;
   h.push<fba::Pose>("pose", pose);
@@ -114,7 +117,8 @@ TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
 }
 
 TEST(Camera, AnUnopenableSourceIsAConfigurationError) {
-  EXPECT_THROW(ComponentHarness(registry(), "vision.camera", {{"source", quoted("/nonexistent/video.avi")}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(registry(), "vision.camera", {{"source", quoted("/nonexistent/video.avi")}, {"backend", "ffmpeg"}}),
+               fba::ConfigError);
 }
 
 TEST(ContourExtraction, ExtractsTheDinoAndWritesTheOverlay) {
