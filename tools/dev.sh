@@ -53,8 +53,8 @@ mkdir -p build
 case "$cmd" in
   run)
     install_packages
-    configure release -DCMAKE_BUILD_TYPE=Release -DFBA_BUILD_TESTS=OFF
-    build release
+    configure release -DCMAKE_BUILD_TYPE=RelWithDebInfo  # the same build as 'test' uses
+    build release --target fba_programs
     task=${2:-tasks/carve_dino.yaml}
     [ -f "$task" ] || task=tasks/examples/chain.yaml
     echo "== build/release/bin/fba-run $task --output-dir out/$(basename "$task" .yaml)"

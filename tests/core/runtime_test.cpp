@@ -242,7 +242,15 @@ on: { sink.done: stop_success }
 }
 
 TEST_P(RuntimeBoth, FailureEventStopsWithFailure) {
-  fba::Task task(load(chain(100, 1) + "  src.finished: stop_failure\n"), with(GetParam()));
+  // The sink expects nothing, so the only rule that can fire is the failure.
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 100 } }
+  sink: { type: examples.sink }
+connections: [ src.out -> sink.in ]
+on: { src.finished: stop_failure }
+)"),
+                 with(GetParam()));
   const auto r = task.run();
   EXPECT_EQ(r.outcome, Outcome::Failure);
   EXPECT_EQ(r.exit_code(), 1);
