@@ -47,7 +47,14 @@ int main(int argc, char** argv) {
         p = *end ? end + 1 : end;
       }
     }
-    else data = a;
+    else if (a.rfind("-", 0) == 0) {
+      const bool help = a == "--help" || a == "-h";
+      std::fprintf(help ? stdout : stderr, "usage: fba-carve-benchmark [shared-data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX]\n");
+      if (!help) std::fprintf(stderr, "unknown or incomplete option '%s'\n", a.c_str());
+      return help ? 0 : 2;
+    } else {
+      data = a;
+    }
   }
   const std::string dir = data + "/middlebury-dino";
   try {
