@@ -88,8 +88,8 @@ class OctreeCarverFilter final : public fba::Component {
   }
 
  private:
-  // The model seen from beside the first camera: turned 35 degrees around the model and raised
-  // 25, lit from the upper left, so that its sides and voxel steps show.
+  // The model seen from beside the first camera: turned 35 degrees around the model, raised 25
+  // and framed whole, lit from the upper left, so that its sides and voxel steps show.
   static cv::Mat picture(const fba::Octree& model, const fba::CameraModel& first) {
     const Eigen::Vector3d centre = model.bounds.center();
     const Eigen::Matrix3d world_from_camera = first.camera_from_world.linear().transpose();
@@ -97,6 +97,9 @@ class OctreeCarverFilter final : public fba::Component {
     Eigen::Vector3d eye = first.centre_in_world() - centre;
     eye = Eigen::AngleAxisd(35 * M_PI / 180, up) * eye;
     eye = Eigen::AngleAxisd(25 * M_PI / 180, up.cross(eye).normalized()) * eye;
+    // Far enough that the whole root box is in the picture, whatever the lens.
+    eye = eye.normalized() * fba::geometry::framing_distance(model.bounds, first.width, first.height,
+                                                             std::min(first.K(0, 0), first.K(1, 1)));
     fba::CameraModel camera = first;
     camera.camera_from_world = fba::geometry::look_at(centre + eye, centre, up);
     fba::geometry::RenderOptions look;
