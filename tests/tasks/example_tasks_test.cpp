@@ -2,18 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <fba/registry.hpp>
+
+#include "support/built_plugins.hpp"
 #include <fba/task.hpp>
 
 namespace {
 
-const fba::Registry& registry() {
-  static const fba::Registry r = [] {
-    fba::Registry reg;
-    for (const auto& e : reg.load_path({FBA_TEST_PLUGIN_DIR})) ADD_FAILURE() << e.what();
-    return reg;
-  }();
-  return r;
-}
+const fba::Registry& registry() { return fba::test::built_plugins(); }
 
 fba::TaskConfig example(const std::string& name, const fba::LoadOptions& o = {}) {
   return fba::load_task(std::string(FBA_TASKS_DIR) + "/examples/" + name, registry(), o);

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <fba/registry.hpp>
+
+#include "support/built_plugins.hpp"
 #include <fba/task.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/silhouette.hpp>
@@ -13,14 +15,7 @@
 
 namespace {
 
-const fba::Registry& registry() {
-  static const fba::Registry r = [] {
-    fba::Registry reg;
-    for (const auto& e : reg.load_path({FBA_TEST_PLUGIN_DIR})) ADD_FAILURE() << e.what();
-    return reg;
-  }();
-  return r;
-}
+const fba::Registry& registry() { return fba::test::built_plugins(); }
 
 fba::RunOptions deterministic() {
   fba::RunOptions o;

@@ -12,19 +12,14 @@
 #include <fba/types/pose.hpp>
 #include <fba/types/silhouette.hpp>
 
+#include "support/built_plugins.hpp"
+
 namespace fs = std::filesystem;
 using fba::testing::ComponentHarness;
 
 namespace {
 
-const fba::Registry& registry() {
-  static const fba::Registry r = [] {
-    fba::Registry reg;
-    for (const auto& e : reg.load_path({FBA_TEST_PLUGIN_DIR})) ADD_FAILURE() << e.what();
-    return reg;
-  }();
-  return r;
-}
+const fba::Registry& registry() { return fba::test::built_plugins(); }
 
 const std::string kData = FBA_SHARED_DATA_DIR;
 const std::string kDinoPar = kData + "/middlebury-dino/dinoSR_par.txt";
