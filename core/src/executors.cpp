@@ -49,16 +49,18 @@ class ThreadedExecutor final : public Executor {
     const int cores = static_cast<int>(std::max(2u, std::thread::hardware_concurrency()));
     threads_ = threads > 0 ? threads : cores;
     for (auto& n : g_.nodes)
-      if (n->config.dedicated_thread || n->spec.is_blocking()) dedicated_.push_back(std::make_unique<Dedicated>(n.get()));
+      if (n->dedicated) dedicated_.push_back(std::make_unique<Dedicated>(n.get()));
   }
 
   void enqueue(Node* n) override {
-    for (auto& d : dedicated_)
-      if (d->node == n) {
-        d->signal.fetch_add(1, std::memory_order_seq_cst);
-        d->signal.notify_one();
-        return;
-      }
+    if (n->dedicated) {
+      for (auto& d : dedicated_)
+        if (d->node == n) {
+          d->signal.fetch_add(1, std::memory_order_seq_cst);
+          d->signal.notify_one();
+          return;
+        }
+    }
     {
       std::lock_guard lock(queue_mutex_);
       queue_.push_back(n);

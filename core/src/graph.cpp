@@ -65,7 +65,8 @@ std::int64_t Buffer::head_stamp() {
 // Node
 
 Node::Node(Graph& g, const ComponentConfig& c)
-    : graph(g), config(c), spec(c.type->spec), trigger(c.trigger), is_sensor(spec.kind() == Kind::Sensor) {
+    : graph(g), config(c), spec(c.type->spec), trigger(c.trigger), is_sensor(spec.kind() == Kind::Sensor),
+      dedicated(c.dedicated_thread || spec.is_blocking()) {
   library = c.type->library;
   for (const auto& ps : spec.inputs()) {
     auto st = std::make_unique<InputState>();

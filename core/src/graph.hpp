@@ -105,6 +105,7 @@ class Node {
   const Spec& spec;
   Trigger trigger;
   bool is_sensor;
+  bool dedicated;  // runs on a thread of its own (blocking components, or thread: dedicated)
   bool periodic() const { return trigger.policy == TriggerPolicy::Periodic; }
 
   std::shared_ptr<const Library> library;  // destroyed after the component

@@ -1,5 +1,7 @@
 #include "fba/spec.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <set>
 #include <stdexcept>
 
@@ -111,14 +113,9 @@ const EventSpec* Spec::find_event(std::string_view name) const {
   return nullptr;
 }
 
-namespace {
-bool is_identifier(const std::string& s) {
-  if (s.empty()) return false;
-  for (char c : s)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
-  return true;
+bool is_valid_name(std::string_view name) {
+  return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
 }
-}  // namespace
 
 void Spec::validate() const {
   auto fail = [this](const std::string& what) { throw std::logic_error("type '" + type_name_ + "': " + what); };
@@ -126,7 +123,7 @@ void Spec::validate() const {
   std::set<std::string> names;
   for (const auto* list : {&inputs_, &outputs_})
     for (const auto& p : *list) {
-      if (!is_identifier(p.name)) fail("port name '" + p.name + "' must be letters, digits and '_'");
+      if (!is_valid_name(p.name)) fail("port name '" + p.name + "' must be letters, digits and '_'");
       if (!names.insert(p.name).second) fail("port '" + p.name + "' declared twice");
       if (!p.type) fail("port '" + p.name + "' has no type");
     }
@@ -143,7 +140,7 @@ void Spec::validate() const {
   if (kind_ == Kind::Actuator && (!outputs_.empty() || inputs_.empty())) fail("an actuator has inputs and no outputs");
   std::set<std::string> pnames;
   for (const auto& p : params_) {
-    if (!is_identifier(p.name)) fail("parameter name '" + p.name + "' must be letters, digits and '_'");
+    if (!is_valid_name(p.name)) fail("parameter name '" + p.name + "' must be letters, digits and '_'");
     if (!pnames.insert(p.name).second) fail("parameter '" + p.name + "' declared twice");
     if (p.default_value) {
       const Value& v = *p.default_value;
@@ -159,7 +156,7 @@ void Spec::validate() const {
   }
   std::set<std::string> enames{"error", "finished"};
   for (const auto& e : events_) {
-    if (!is_identifier(e.name)) fail("event name '" + e.name + "' must be letters, digits and '_'");
+    if (!is_valid_name(e.name)) fail("event name '" + e.name + "' must be letters, digits and '_'");
     if (!enames.insert(e.name).second) fail("event '" + e.name + "' declared twice (or a built-in: error, finished)");
   }
   for (const auto& [a, b] : transitions_) {

@@ -92,11 +92,6 @@ std::vector<std::string> names_of(const V& v) {
   return out;
 }
 
-bool is_identifier(const std::string& s) {
-  if (s.empty()) return false;
-  return std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
-}
-
 const char* node_kind(const YAML::Node& n) {
   switch (n.Type()) {
     case YAML::NodeType::Null: return "nothing";
@@ -328,7 +323,7 @@ class Loader {
         for (auto it = params.begin(); it != params.end(); ++it) {
           const std::string pname = it->first.Scalar();
           const YAML::Node p = it->second;
-          if (!is_identifier(pname)) err(it->first, "parameter name '" + pname + "' must be letters, digits and '_'");
+          if (!is_valid_name(pname)) err(it->first, "parameter name '" + pname + "' must be letters, digits and '_'");
           if (!p.IsMap() || !p["type"] || !p["type"].IsScalar()) {
             err(p, "parameter '" + pname + "' needs {type: bool|int|double|string|path|list, default: ..., doc: ...}");
             continue;
@@ -660,7 +655,7 @@ class Loader {
           error(place, message);
           kinds_[full] = nullptr;
         };
-        if (!is_identifier(name)) {
+        if (!is_valid_name(name)) {
           reject(where, "component name '" + name + "' must be letters, digits and '_'");
           continue;
         }

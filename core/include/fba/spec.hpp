@@ -4,6 +4,7 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -11,6 +12,9 @@
 #include "fba/value.hpp"
 
 namespace fba {
+
+// Names of ports, parameters, events and components: letters, digits and '_'.
+bool is_valid_name(std::string_view name);
 
 enum class Kind { Sensor, Filter, Actuator, Composite };
 const char* to_string(Kind k);
