@@ -30,9 +30,11 @@ struct Timer {
 };
 using TimerQueue = std::priority_queue<Timer, std::vector<Timer>, std::greater<>>;
 
-std::int64_t period_ns(const Node& n) {
-  return std::max<std::int64_t>(1, static_cast<std::int64_t>(n.trigger.period_s * 1e9));
-}
+// kNeverNs for a period beyond the clock's range: the node's next tick never comes in this run.
+std::int64_t period_ns(const Node& n) { return std::max<std::int64_t>(1, duration_ns(n.trigger.period_s)); }
+
+// The time-out as a nanosecond count, or kNeverNs for none (0, or too long to represent).
+std::int64_t timeout_ns(const Graph& g) { return g.timeout_s > 0 ? duration_ns(g.timeout_s) : kNeverNs; }
 
 std::string stuck_components(const Graph& g) {
   std::string s;
@@ -48,6 +50,8 @@ class ThreadedExecutor final : public Executor {
   ThreadedExecutor(Graph& g, int threads) : g_(g) {
     const int cores = static_cast<int>(std::max(2u, std::thread::hardware_concurrency()));
     threads_ = threads > 0 ? threads : cores;
+    // Spinning pays only while a spinner has a core to itself; the others sleep until woken.
+    spin_limit_ = std::max(1, std::min(threads_, cores) / 2);
     for (auto& n : g_.nodes)
       if (n->dedicated) dedicated_.push_back(std::make_unique<Dedicated>(n.get()));
   }
@@ -61,16 +65,19 @@ class ThreadedExecutor final : public Executor {
           return;
         }
     }
+    bool wake = false;
     {
       std::lock_guard lock(queue_mutex_);
       queue_.push_back(n);
-      queued_.fetch_add(1, std::memory_order_seq_cst);
+      queued_.store(queue_.size(), std::memory_order_seq_cst);
+      // Spinning workers pick up what they see, and woken ones are on their way: wake one
+      // sleeper per node beyond those, never all of them.
+      if (sleepers_ > 0 && queue_.size() > static_cast<std::size_t>(spinners_ + waking_)) {
+        ++waking_;
+        wake = true;
+      }
     }
-    // A worker that is spinning picks it up by itself; only a sleeping one costs a wake-up.
-    if (sleepers_.load(std::memory_order_seq_cst) > 0) {
-      epoch_.fetch_add(1, std::memory_order_seq_cst);
-      epoch_.notify_one();
-    }
+    if (wake) work_cv_.notify_one();
   }
 
   std::int64_t now_ns() const override {
@@ -78,8 +85,10 @@ class ThreadedExecutor final : public Executor {
   }
 
   void wake_all() override {
-    epoch_.fetch_add(1);
-    epoch_.notify_all();
+    {
+      std::lock_guard lock(queue_mutex_);  // a worker between its stop check and its wait gets the notification
+    }
+    work_cv_.notify_all();
     for (auto& d : dedicated_) {
       d->signal.fetch_add(1);
       d->signal.notify_one();
@@ -100,12 +109,30 @@ class ThreadedExecutor final : public Executor {
   void run() override {
     for (auto& n : g_.nodes)
       if (n->periodic()) timers_.push(Timer{0, timers_.size(), n.get()});
-    for (int i = 0; i < threads_; ++i) workers_.emplace_back([this] { worker(); });
-    for (auto& d : dedicated_) d->thread = std::thread([this, d = d.get()] { dedicated(*d); });
-    std::thread timer_thread([this] { timers(); });
+    std::thread timer_thread;
+    std::string starting;
+    try {
+      for (int i = 0; i < threads_; ++i) {
+        starting = "worker thread " + std::to_string(i + 1) + " of " + std::to_string(threads_);
+        workers_.emplace_back([this] { worker(); });
+      }
+      for (auto& d : dedicated_) {
+        starting = "the thread of component '" + d->node->config.name + "'";
+        d->thread = std::thread([this, d = d.get()] { dedicated(*d); });
+        ++dedicated_started_;
+      }
+      starting = "the timer thread";
+      timer_thread = std::thread([this] { timers(); });
+    } catch (const std::exception& e) {
+      // Out of threads or memory: end the run like any runtime error. The threads already
+      // started see the stop, return and are joined below; the actuators then go safe.
+      g_.request_stop(Outcome::RuntimeError, "could not start " + starting + ": " + e.what() +
+                                                 " (the system's limit on threads or memory was reached)");
+    }
 
-    const bool limited = g_.timeout_s > 0;
-    const auto deadline = g_.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(g_.timeout_s));
+    const std::int64_t limit_ns = timeout_ns(g_);
+    const bool limited = limit_ns != kNeverNs;
+    const auto deadline = g_.started + std::chrono::nanoseconds(limited ? limit_ns : 0);
     {
       std::unique_lock lock(main_mutex_);
       while (!g_.stopping()) {
@@ -133,8 +160,9 @@ class ThreadedExecutor final : public Executor {
       if (n->in_process.load() && n->component) n->component->interrupt();
     wait_for_threads(std::chrono::seconds(10));
     for (auto& w : workers_) w.join();
-    for (auto& d : dedicated_) d->thread.join();
-    timer_thread.join();
+    for (auto& d : dedicated_)
+      if (d->thread.joinable()) d->thread.join();
+    if (timer_thread.joinable()) timer_thread.join();
   }
 
  private:
@@ -145,35 +173,41 @@ class ThreadedExecutor final : public Executor {
     std::thread thread;
   };
 
-  Node* try_pop() {
-    if (queued_.load(std::memory_order_acquire) == 0) return nullptr;
-    std::lock_guard lock(queue_mutex_);
-    if (queue_.empty()) return nullptr;
-    Node* n = queue_.front();
-    queue_.pop_front();
-    queued_.fetch_sub(1, std::memory_order_seq_cst);
-    return n;
-  }
-
   void worker() {
+    constexpr int kSpins = 2000;  // pause instructions: tens of microseconds, less than a wake-up
+    std::unique_lock lock(queue_mutex_);
+    bool spun = false;
     while (!g_.stopping()) {
-      if (Node* n = try_pop()) {
+      if (!queue_.empty()) {
+        Node* n = queue_.front();
+        queue_.pop_front();
+        queued_.store(queue_.size(), std::memory_order_seq_cst);
+        lock.unlock();
         g_.run_strand(n);
+        lock.lock();
+        spun = false;
         continue;
       }
-      // Spin a little before sleeping: a hop that arrives within microseconds costs no
-      // system call on either side.
-      bool found = false;
-      for (int i = 0; i < 4000 && !found && !g_.stopping(); ++i) {
-        found = queued_.load(std::memory_order_acquire) > 0;
-        FBA_CPU_RELAX();
+      // A hop that arrives within microseconds costs no system call on either side, but only a
+      // few workers spin: with more workers than cores, spinners would take the cores from the
+      // workers with something to do.
+      if (!spun && spinners_ < spin_limit_) {
+        ++spinners_;
+        lock.unlock();
+        for (int i = 0; i < kSpins && queued_.load(std::memory_order_relaxed) == 0 && !g_.stopping(); ++i)
+          FBA_CPU_RELAX();
+        lock.lock();
+        --spinners_;
+        spun = true;
+        continue;
       }
-      if (found) continue;
-      sleepers_.fetch_add(1, std::memory_order_seq_cst);
-      const auto seen = epoch_.load(std::memory_order_seq_cst);
-      if (queued_.load(std::memory_order_seq_cst) == 0 && !g_.stopping()) epoch_.wait(seen);
-      sleepers_.fetch_sub(1, std::memory_order_seq_cst);
+      ++sleepers_;
+      work_cv_.wait(lock);
+      --sleepers_;
+      if (waking_ > 0) --waking_;
+      spun = false;
     }
+    lock.unlock();
     exited_.fetch_add(1);
     exited_.notify_all();
   }
@@ -207,14 +241,19 @@ class ThreadedExecutor final : public Executor {
       t.node->tick_pending.store(true, std::memory_order_seq_cst);  // before notify's state load
       g_.notify(t.node);
       // Fixed rate; ticks that could not be served in time are skipped, not queued up.
-      std::int64_t next = t.deadline_ns + period_ns(*t.node);
-      if (next < now_ns()) next = now_ns() + period_ns(*t.node);
+      const std::int64_t period = period_ns(*t.node), now = now_ns();
+      std::int64_t next = add_ns(t.deadline_ns, period);
+      if (next < now) next = add_ns(now, period);
+      if (next == kNeverNs) {
+        g_.end_ticks(t.node);  // beyond the clock's range: no more ticks in this run
+        continue;
+      }
       timers_.push(Timer{next, t.order, t.node});
     }
   }
 
   void wait_for_threads(std::chrono::seconds grace) {
-    const std::uint32_t total = static_cast<std::uint32_t>(workers_.size() + dedicated_.size());
+    const std::uint32_t total = static_cast<std::uint32_t>(workers_.size() + dedicated_started_);
     const auto until = Clock::now() + grace;
     for (;;) {
       auto n = exited_.load();
@@ -234,9 +273,11 @@ class ThreadedExecutor final : public Executor {
   const Clock::time_point start_ = Clock::now();
   std::mutex queue_mutex_;
   std::deque<Node*> queue_;
-  std::atomic<int> queued_{0};
-  std::atomic<int> sleepers_{0};
-  std::atomic<std::uint32_t> epoch_{0};
+  std::atomic<std::size_t> queued_{0};  // queue_.size(), for spinners to watch without the lock
+  std::condition_variable work_cv_;
+  int spin_limit_ = 1;
+  int spinners_ = 0, sleepers_ = 0, waking_ = 0;  // under queue_mutex_
+  std::size_t dedicated_started_ = 0;
   std::atomic<std::uint32_t> exited_{0};
   std::vector<std::thread> workers_;
   std::vector<std::unique_ptr<Dedicated>> dedicated_;
@@ -265,9 +306,9 @@ class DeterministicExecutor final : public Executor {
       if (g_.nodes[i]->periodic()) timers.push(Timer{0, i, g_.nodes[i].get()});
     const auto wall_start = Clock::now();
     std::uint64_t steps = 0;
+    const std::int64_t limit_ns = timeout_ns(g_);
     while (!g_.stopping()) {
-      if (g_.timeout_s > 0 && (++steps & 255) == 0 &&
-          std::chrono::duration<double>(Clock::now() - wall_start).count() > g_.timeout_s) {
+      if (limit_ns != kNeverNs && (++steps & 255) == 0 && Clock::now() - wall_start > std::chrono::nanoseconds(limit_ns)) {
         g_.request_stop(Outcome::RuntimeError, "timed out after " + std::to_string(g_.timeout_s) + " s");
         break;
       }
@@ -290,7 +331,9 @@ class DeterministicExecutor final : public Executor {
       virtual_ns_ = std::max(virtual_ns_, t.deadline_ns);
       t.node->tick_pending.store(true);
       g_.notify(t.node);
-      timers.push(Timer{t.deadline_ns + period_ns(*t.node), t.order, t.node});
+      const std::int64_t next = add_ns(t.deadline_ns, period_ns(*t.node));
+      if (next == kNeverNs) g_.end_ticks(t.node);  // beyond the clock's range: no more ticks in this run
+      else timers.push(Timer{next, t.order, t.node});
     }
   }
 

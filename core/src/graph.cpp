@@ -2,56 +2,123 @@
 
 #include <algorithm>
 #include <sstream>
+#include <unordered_set>
 
 #include "fba/log.hpp"
 
 namespace fba::detail {
 
 // ---------------------------------------------------------------------------------------------
+// Limits and names
+
+std::int64_t duration_ns(double seconds) {
+  if (!(seconds < kMaxDurationS)) return kNeverNs;  // NaN too
+  return std::max<std::int64_t>(0, static_cast<std::int64_t>(seconds * 1e9));
+}
+
+const std::string* intern_name(std::string_view name) {
+  // Never freed, and never destroyed at exit: a packet held in a static may still point here.
+  static auto* mutex = new std::mutex;
+  static auto* names = new std::unordered_set<std::string>;
+  std::lock_guard lock(*mutex);
+  return &*names->emplace(name).first;
+}
+
+namespace {
+
+// Text for an event payload: at most kMaxEventPayload bytes, the cut marked and not inside a
+// UTF-8 character.
+std::string bounded_payload(std::string_view text) {
+  if (text.size() <= kMaxEventPayload) return std::string(text);
+  const std::string marker = " [truncated: " + std::to_string(text.size()) + " bytes in all]";
+  std::size_t cut = kMaxEventPayload - marker.size();
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
+  return std::string(text.substr(0, cut)) + marker;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
 // Buffer
 
+void Buffer::publish_size() {
+  const std::size_t n = policy == BufferPolicy::Latest ? (latest ? 1 : 0) : queue.size();
+  size.store(n, std::memory_order_seq_cst);
+  peak = std::max(peak, n);
+  peak_bytes = std::max(peak_bytes, bytes.load(std::memory_order_relaxed));
+}
+
 void Buffer::push(Packet&& p) {
+  std::vector<Packet> displaced;  // declared before the lock: destroyed after it is released
   std::lock_guard lock(mutex);
-  ++delivered;
+  ++pushed;
   if (tap) {
-    if (tap->size() >= tap_keep && !tap->empty()) tap->erase(tap->begin());
+    if (tap->size() >= tap_keep && !tap->empty()) {
+      displaced.push_back(std::move(tap->front()));
+      tap->erase(tap->begin());
+    }
     if (tap_keep > 0) tap->push_back(std::move(p));
     return;
   }
+  const std::size_t b = p.bytes();
   switch (policy) {
     case BufferPolicy::Latest:
-      if (latest) ++dropped;  // superseded before anyone read it
+      if (latest) {  // superseded before anyone read it
+        ++dropped;
+        displaced.push_back(std::move(latest));
+      }
       latest = std::move(p);
-      size.store(1, std::memory_order_seq_cst);
-      return;
+      bytes.store(b, std::memory_order_seq_cst);
+      break;
     case BufferPolicy::DropOldest:
-      if (queue.size() >= capacity) {
+      while (!queue.empty() && (queue.size() >= capacity || (max_bytes > 0 && bytes.load() + b > max_bytes))) {
+        bytes.fetch_sub(queue.front().bytes(), std::memory_order_seq_cst);
+        displaced.push_back(std::move(queue.front()));
         queue.pop_front();
         ++dropped;
       }
       [[fallthrough]];
     case BufferPolicy::Lossless:
       queue.push_back(std::move(p));
-      size.store(queue.size(), std::memory_order_seq_cst);
-      return;
+      bytes.fetch_add(b, std::memory_order_seq_cst);
+      break;
   }
+  publish_size();
 }
 
-bool Buffer::pop(Packet& out, bool& was_full) {
-  std::lock_guard lock(mutex);
+bool Buffer::take_head(Packet& out, bool& was_full) {
   was_full = false;
   if (policy == BufferPolicy::Latest) {
     if (!latest) return false;
     out = std::move(latest);
     latest = Packet();
-    size.store(0, std::memory_order_seq_cst);
-    return true;
+  } else {
+    if (queue.empty()) return false;
+    was_full = full();
+    out = std::move(queue.front());
+    queue.pop_front();
   }
-  if (queue.empty()) return false;
-  was_full = gating && queue.size() >= capacity;
-  out = std::move(queue.front());
-  queue.pop_front();
-  size.store(queue.size(), std::memory_order_seq_cst);
+  bytes.fetch_sub(out.bytes(), std::memory_order_seq_cst);
+  publish_size();
+  return true;
+}
+
+bool Buffer::pop(Packet& out, bool& was_full) {
+  Packet taken;
+  {
+    std::lock_guard lock(mutex);
+    if (!take_head(taken, was_full)) return false;
+    ++consumed;
+  }
+  out = std::move(taken);  // frees the input's previous sample, outside the lock
+  return true;
+}
+
+bool Buffer::drop_head(bool& was_full) {
+  Packet taken;  // declared before the lock: destroyed after it is released
+  std::lock_guard lock(mutex);
+  if (!take_head(taken, was_full)) return false;
+  ++dropped;
   return true;
 }
 
@@ -59,6 +126,12 @@ std::int64_t Buffer::head_stamp() {
   std::lock_guard lock(mutex);
   if (policy == BufferPolicy::Latest) return latest.header().stamp_ns;
   return queue.front().header().stamp_ns;
+}
+
+std::size_t Buffer::queued() {
+  std::lock_guard lock(mutex);
+  if (tap) return 0;
+  return policy == BufferPolicy::Latest ? (latest ? 1 : 0) : queue.size();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -74,9 +147,8 @@ Node::Node(Graph& g, const ComponentConfig& c)
     input_states.push_back(std::move(st));
   }
   for (const auto& ps : spec.outputs()) {
-    auto st = std::make_unique<OutputState>();
+    auto st = std::make_unique<OutputState>(*intern_name(c.name + "." + ps.name));
     st->spec = &ps;
-    st->producer = c.name + "." + ps.name;
     st->node = this;
     output_states.push_back(std::move(st));
   }
@@ -171,13 +243,8 @@ bool Node::take_inputs() {
       Buffer* b = input_states[i]->buffer;
       if (!b || b->head_stamp() == newest) continue;
       matched = false;
-      Packet dropped;
       bool was_full = false;
-      b->pop(dropped, was_full);
-      {
-        std::lock_guard lock(b->mutex);
-        ++b->dropped;
-      }
+      b->drop_head(was_full);
       if (was_full && b->producer) graph.notify(b->producer);
     }
     if (matched) break;
@@ -233,7 +300,12 @@ void Node::invoke() {
   if (finish_requested && !finished.load()) on_finish();
 }
 
-void Node::fail(const std::string& reason) {
+void Node::fail(std::string_view what) {
+  // An exception's message becomes an event payload and the run's reason: bounded like one.
+  if (what.size() > kMaxEventPayload)
+    logger->warn("its error message has {} bytes; only the first {} are kept (the limit for an event payload)",
+                 what.size(), kMaxEventPayload);
+  const std::string reason = bounded_payload(what);
   ++errors;
   logger->error("failed in {}: {}", spec.type_name(), reason);
   emit_event("error", reason);
@@ -257,20 +329,27 @@ void Node::fail(const std::string& reason) {
 }
 
 void Node::emit_event(std::string_view name, std::string payload) {
-  Event e{config.name, std::string(name), std::move(payload), graph.now_ns()};
+  if (payload.size() > kMaxEventPayload) {
+    logger->warn("event '{}' carries {} bytes; only the first {} are kept (the limit for an event payload)", name,
+                 payload.size(), kMaxEventPayload);
+    payload = bounded_payload(payload);
+  }
+  auto e = std::make_shared<const Event>(Event{config.name, std::string(name), std::move(payload), graph.now_ns()});
   graph.record_event(e);
   auto it = rules.find(name);
   if (it == rules.end()) return;
-  for (const EventRule* r : it->second) {
+  EventRules& event_rules = it->second;
+  const Header header{event_rules.next_seq.fetch_add(1, std::memory_order_relaxed), e->stamp_ns, event_rules.producer};
+  for (const EventRule* r : event_rules.list) {
     switch (r->action) {
       case RuleAction::StopSuccess:
-        graph.request_stop(Outcome::Success, "event " + config.name + "." + e.name, e);
+        graph.request_stop(Outcome::Success, "event " + config.name + "." + e->name, e);
         break;
       case RuleAction::StopFailure:
-        graph.request_stop(Outcome::Failure, "event " + config.name + "." + e.name, e);
+        graph.request_stop(Outcome::Failure, "event " + config.name + "." + e->name, e);
         break;
       case RuleAction::Deliver:
-        graph.deliver(*r, e);
+        graph.deliver(*r, e, header);
         break;
     }
   }
@@ -278,7 +357,7 @@ void Node::emit_event(std::string_view name, std::string payload) {
 
 void Node::on_finish() {
   if (finished.exchange(true)) return;
-  if (periodic()) graph.live_periodic.fetch_sub(1);
+  graph.end_ticks(this);
   emit_event("finished", {});
   for (const auto& out : output_states)
     for (Buffer* b : out->consumers) {
@@ -308,6 +387,7 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
     auto b = std::make_unique<Buffer>();
     b->policy = c.policy;
     b->capacity = std::max<std::size_t>(1, c.capacity);
+    b->max_bytes = c.max_bytes;
     // A back edge never holds its producer back: two full queues in a loop would otherwise
     // wait on each other forever. Its queue grows instead, by what the loop amplifies.
     b->gating = c.policy == BufferPolicy::Lossless && !c.feedback;
@@ -333,7 +413,9 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
       if (!out->type) out->type = out->spec->type;
   for (const auto& r : config.rules) {
     Node* src = by_name.at(r.source);
-    src->rules[r.event].push_back(&r);
+    auto& event_rules = src->rules[r.event];
+    event_rules.list.push_back(&r);
+    event_rules.producer = intern_name(r.source + "." + r.event);
     if (r.action != RuleAction::Deliver) continue;
     Node* dst = by_name.at(r.target);
     InputState* in = input_of(dst, r.target_port);
@@ -350,7 +432,22 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
     }
   }
   const ExecutorKind kind = options.executor.value_or(config.executor);
-  const int threads = options.threads > 0 ? options.threads : config.threads;
+  const int threads = options.threads != 0 ? options.threads : config.threads;
+  // Refused before any thread starts: past these the system runs out of threads, and a run
+  // that fails half-started is worse than one that never starts.
+  const Location task_location{config.file.empty() ? std::string("the task") : config.file.string()};
+  if (threads < 0 || threads > kMaxWorkers)
+    throw ConfigError({Diagnostic{task_location, "threads must be in [0, " + std::to_string(kMaxWorkers) +
+                                                    "] (0: one per core); found " + std::to_string(threads)}});
+  if (kind == ExecutorKind::Threaded) {
+    std::size_t dedicated = 0;
+    for (auto& n : nodes) dedicated += n->dedicated ? 1 : 0;
+    if (dedicated > kMaxDedicatedThreads)
+      throw ConfigError({Diagnostic{task_location, std::to_string(dedicated) +
+                                                      " components need a thread of their own (thread: dedicated, or a "
+                                                      "blocking type); at most " +
+                                                      std::to_string(kMaxDedicatedThreads) + " may"}});
+  }
   executor_ = kind == ExecutorKind::Deterministic ? make_deterministic_executor(*this)
                                                   : make_threaded_executor(*this, threads);
   timeout_s = options.timeout_s;
@@ -471,6 +568,9 @@ void Graph::check_idle() {
     for (auto& out : n->output_states)
       for (Buffer* b : out->consumers)
         if (b->full()) waits.push_back("held back by the full lossless queue " + b->from + " -> " + b->to);
+    if (waits.empty() && n->periodic() && !n->ticking.load())
+      waits.push_back("its next tick would come after " + std::to_string(static_cast<long long>(kMaxDurationS)) +
+                      " s, beyond the run's clock (period " + std::to_string(n->trigger.period_s) + " s)");
     if (waits.empty())
       for (auto& in : n->input_states)
         if (in->buffer && in->buffer->empty() && !in->closed()) waits.push_back("waiting on input '" + in->spec->name + "'");
@@ -479,31 +579,47 @@ void Graph::check_idle() {
   if (quiet()) request_stop(Outcome::RuntimeError, why.str());
 }
 
-void Graph::request_stop(Outcome outcome, const std::string& reason, std::optional<Event> event) {
+void Graph::request_stop(Outcome outcome, const std::string& reason, std::shared_ptr<const Event> event) {
   {
     std::lock_guard lock(result_mutex_);
     if (stopping_.load()) return;
     result_.outcome = outcome;
     result_.reason = reason;
-    result_.final_event = std::move(event);
+    final_event_ = std::move(event);
     stopping_.store(true, std::memory_order_release);
   }
   if (executor_) executor_->wake_all();
 }
 
-void Graph::record_event(const Event& e) {
+void Graph::record_event(const Event& e) { record_event(std::make_shared<const Event>(e)); }
+
+void Graph::record_event(std::shared_ptr<const Event> e) {
   std::lock_guard lock(result_mutex_);
-  if (events_.size() < 10000) events_.push_back(e);
+  if (events_.size() < 10000) events_.push_back(std::move(e));
 }
 
-void Graph::deliver(const EventRule& rule, const Event& e) {
+std::vector<Event> Graph::events() {
+  std::lock_guard lock(result_mutex_);
+  std::vector<Event> out;
+  out.reserve(events_.size());
+  for (const auto& e : events_) out.push_back(*e);
+  return out;
+}
+
+void Graph::deliver(const EventRule& rule, const std::shared_ptr<const Event>& e, const Header& header) {
   Node& dst = node(rule.target);
   for (auto& in : dst.input_states)
     if (in->spec->name == rule.target_port) {
-      in->buffer->push(Packet::make<Event>(std::make_shared<const Event>(e), Header{0, e.stamp_ns, nullptr}));
+      in->buffer->push(Packet::make<Event>(e, header));
       notify(&dst);
       return;
     }
+}
+
+void Graph::end_ticks(Node* n) {
+  if (!n->ticking.exchange(false)) return;
+  // The last timer gone may leave nothing that could wake the graph: let the executor look.
+  if (live_periodic.fetch_sub(1) == 1 && executor_) executor_->poke();
 }
 
 std::vector<Packet>& Graph::tap(const std::string& port, std::size_t keep) {
@@ -530,7 +646,10 @@ RunResult Graph::run() {
   ran_ = true;
   started = std::chrono::steady_clock::now();
   for (auto& n : nodes)
-    if (n->periodic()) live_periodic.fetch_add(1);
+    if (n->periodic()) {
+      n->ticking.store(true);
+      live_periodic.fetch_add(1);
+    }
   for (auto& n : nodes) notify(n.get());
   executor_->run();  // returns with every thread joined
 
@@ -552,7 +671,12 @@ RunResult Graph::run() {
   std::lock_guard lock(result_mutex_);
   RunResult r = result_;
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  r.events = events_;
+  r.events.reserve(events_.size());
+  for (std::size_t i = 0; i < events_.size(); ++i) {
+    r.events.push_back(*events_[i]);
+    if (events_[i] == final_event_) r.final_event_index = i;
+  }
+  if (final_event_) r.final_event = *final_event_;
   for (auto& n : nodes) {
     ComponentStats s;
     s.name = n->config.name;
@@ -569,11 +693,16 @@ RunResult Graph::run() {
     }
     r.components.push_back(std::move(s));
   }
+  std::uint64_t left = 0;
   for (auto& b : buffers) {
-    if (b->tap || !b->producer) continue;
+    if (b->tap || !b->consumer) continue;
+    const std::uint64_t queued = b->queued();
     std::lock_guard block(b->mutex);
-    r.connections.push_back(ConnectionStats{b->from, b->to, b->policy, b->delivered, b->dropped});
+    r.connections.push_back(ConnectionStats{b->from, b->to, b->policy, b->pushed, b->consumed, b->dropped, queued,
+                                            b->peak, b->peak_bytes});
+    left += queued;
   }
+  if (left > 0) make_logger("runtime")->info("{} samples were still queued at the stop (see 'left' per connection in the summary)", left);
   return r;
 }
 

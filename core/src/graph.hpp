@@ -11,6 +11,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -23,49 +24,69 @@ namespace fba::detail {
 class Node;
 class Graph;
 
-// A lock for critical sections of a few instructions (a queue push or pop), where a mutex's
-// sleep and wake would cost more than the work; it yields if the holder was preempted.
-class SpinLock {
- public:
-  void lock() {
-    for (int spins = 0; flag_.exchange(true, std::memory_order_acquire); ++spins) {
-      while (flag_.load(std::memory_order_relaxed)) {
-        if (++spins > 64) std::this_thread::yield();
-      }
-    }
-  }
-  void unlock() { flag_.store(false, std::memory_order_release); }
+// Limits the runtime enforces, documented in docs/task-files.md.
+constexpr int kMaxWorkers = 256;                       // worker threads of the threaded executor
+constexpr std::size_t kMaxDedicatedThreads = 1024;     // components with a thread of their own
+constexpr std::size_t kMaxEventPayload = 64 * 1024;    // bytes; longer payloads are truncated
+// Durations are int64 nanoseconds on the executor's clock; a period or a time-out longer than
+// this (about 285 years) means "never within this run". Kept below INT64_MAX so that adding it
+// to a steady clock reading cannot overflow.
+constexpr double kMaxDurationS = 9e9;
+constexpr std::int64_t kNeverNs = INT64_MAX;
+// Seconds to nanoseconds, saturating at kNeverNs (NaN and infinity included).
+std::int64_t duration_ns(double seconds);
+// a + b for non-negative b, saturating at kNeverNs.
+inline std::int64_t add_ns(std::int64_t a, std::int64_t b) { return a > kNeverNs - b ? kNeverNs : a + b; }
 
- private:
-  std::atomic<bool> flag_{false};
-};
+// A name that lives as long as the process (headers point to it: a packet may outlive its task).
+const std::string* intern_name(std::string_view name);
 
 // One connection's storage, in front of one input.
+//
+// The lock is a mutex, not a spinlock: under real-time priorities a spinning waiter can keep
+// the preempted holder from ever running. Packets leaving the buffer (displaced, dropped, or an
+// input's previous sample) are destroyed after it is released: one may be a whole frame.
 struct Buffer {
   BufferPolicy policy = BufferPolicy::Lossless;
   std::size_t capacity = 16;
+  std::size_t max_bytes = 0;  // payload bytes queued at most; 0 for no byte budget
   bool gating = false;  // a full buffer holds its producer back (lossless connections)
   bool feedback = false;
   Node* producer = nullptr;  // null for event deliveries
   Node* consumer = nullptr;  // null for taps
   std::string from, to;      // "component.port", for messages and statistics
 
-  SpinLock mutex;
+  std::mutex mutex;
   std::deque<Packet> queue;  // Lossless and DropOldest
   Packet latest;             // Latest
-  std::atomic<std::size_t> size{0};  // readable without the lock, for scheduling decisions
+  std::atomic<std::size_t> size{0};   // readable without the lock, for scheduling decisions
+  std::atomic<std::size_t> bytes{0};  // payload bytes queued, likewise
   std::atomic<bool> producer_done{false};
-  std::uint64_t delivered = 0, dropped = 0;
+  // Under the lock. Every sample pushed is consumed, dropped by the policy, or still queued:
+  // pushed = consumed + dropped + queued().
+  std::uint64_t pushed = 0, consumed = 0, dropped = 0;
+  std::size_t peak = 0, peak_bytes = 0;  // the most samples and bytes queued at once
   std::size_t tap_keep = SIZE_MAX;
   std::vector<Packet>* tap = nullptr;  // set for taps: packets are appended, at most tap_keep kept
 
   void push(Packet&& p);
   // Pops the head; `was_full` tells the caller to wake a producer held back by this buffer.
   bool pop(Packet& out, bool& was_full);
-  bool full() const { return gating && size.load(std::memory_order_seq_cst) >= capacity; }
+  // Drops the head, counted as dropped (an All trigger's unmatched sample).
+  bool drop_head(bool& was_full);
+  bool full() const {
+    return gating && (size.load(std::memory_order_seq_cst) >= capacity ||
+                      (max_bytes > 0 && bytes.load(std::memory_order_seq_cst) >= max_bytes));
+  }
   bool empty() const { return size.load(std::memory_order_seq_cst) == 0; }
   // Peeks at the head's stamp (All trigger matching); requires non-empty.
   std::int64_t head_stamp();
+  // Samples still queued (at the stop: left unseen). Takes the lock.
+  std::size_t queued();
+
+ private:
+  bool take_head(Packet& out, bool& was_full);  // under the lock
+  void publish_size();                          // under the lock
 };
 
 struct InputState {
@@ -79,10 +100,11 @@ struct InputState {
 };
 
 struct OutputState {
+  explicit OutputState(const std::string& producer_name) : producer(producer_name) {}
   const PortSpec* spec = nullptr;
   const TypeInfo* type = nullptr;  // resolved (outputs typed like an input get that type)
   std::vector<Buffer*> consumers;
-  std::string producer;  // "component.output", pointed to by every header
+  const std::string& producer;  // "component.output", interned: every header points to it
   std::uint64_t next_seq = 0;
   Node* node = nullptr;
 };
@@ -97,6 +119,7 @@ class Node {
   bool ready() const;
   // One invocation (or the end-of-stream call). Runs on the node's strand only.
   void invoke();
+  // Records an event and applies its rules; a payload over kMaxEventPayload is truncated.
   void emit_event(std::string_view name, std::string payload);
   void on_finish();  // marks finished and tells the consumers
 
@@ -124,7 +147,13 @@ class Node {
   bool finish_requested = false;  // set by Context::finish, acted on after process()
   std::atomic<bool> eos_delivered{false};
   bool constructing = false;
-  std::map<std::string, std::vector<const EventRule*>, std::less<>> rules;
+  struct EventRules {
+    std::vector<const EventRule*> list;
+    const std::string* producer = nullptr;  // "component.event", interned, in delivered headers
+    std::atomic<std::uint64_t> next_seq{0};  // per source event, so a sink sees 0, 1, 2, ...
+  };
+  std::map<std::string, EventRules, std::less<>> rules;
+  std::atomic<bool> ticking{false};  // periodic, and a tick will still come (see Graph::end_ticks)
 
   std::uint64_t invocations = 0, errors = 0, restarts = 0;
   std::mutex stage_mutex;
@@ -134,7 +163,7 @@ class Node {
   bool outputs_have_room() const;
   bool inputs_closed() const;
   bool take_inputs();  // false when an All trigger found no match
-  void fail(const std::string& reason);
+  void fail(std::string_view reason);
 };
 
 class Executor {
@@ -163,17 +192,17 @@ class Graph {
   void run_strand(Node* n);
   // Called by executors whenever no node is queued or running.
   void check_idle();
-  void request_stop(Outcome outcome, const std::string& reason, std::optional<Event> event = {});
+  void request_stop(Outcome outcome, const std::string& reason, std::shared_ptr<const Event> event = {});
   bool stopping() const { return stopping_.load(std::memory_order_acquire); }
   std::int64_t now_ns() const { return executor_->now_ns(); }
   void record_event(const Event& e);
-  void deliver(const EventRule& rule, const Event& e);
+  void record_event(std::shared_ptr<const Event> e);
+  void deliver(const EventRule& rule, const std::shared_ptr<const Event>& e, const Header& header);
+  // The node's periodic ticks are over (finished, or its next tick would never come).
+  void end_ticks(Node* n);
   std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
   RunResult run();
-  std::vector<Event> events() {
-    std::lock_guard lock(result_mutex_);
-    return events_;
-  }
+  std::vector<Event> events();
   std::string stop_reason() {
     std::lock_guard lock(result_mutex_);
     return result_.reason;
@@ -197,7 +226,9 @@ class Graph {
   std::atomic<bool> stopping_{false};
   std::mutex result_mutex_;
   RunResult result_;
-  std::vector<Event> events_;
+  // Each event is stored once; the final event is one of them (or, past the list's bound, its own).
+  std::vector<std::shared_ptr<const Event>> events_;
+  std::shared_ptr<const Event> final_event_;
   bool ran_ = false;
 };
 

@@ -36,10 +36,14 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
   j["exit_code"] = r.exit_code();
   j["reason"] = r.reason;
   j["wall_time_s"] = r.wall_s;
+  // The final event is written once: by its index in `events` when it is listed there.
   j["final_event"] = nullptr;
-  if (r.final_event)
-    j["final_event"] = {{"source", r.final_event->source}, {"name", r.final_event->name}, {"payload", r.final_event->payload},
-                        {"time_s", r.final_event->stamp_ns * 1e-9}};
+  if (r.final_event) {
+    json fe{{"source", r.final_event->source}, {"name", r.final_event->name}, {"time_s", r.final_event->stamp_ns * 1e-9}};
+    if (r.final_event_index) fe["index"] = *r.final_event_index;
+    else fe["payload"] = r.final_event->payload;
+    j["final_event"] = fe;
+  }
   json comps = json::object();
   const double wall = r.wall_s > 0 ? r.wall_s : 1e-9;
   for (const auto& c : r.components) {
@@ -58,12 +62,21 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
   j["components"] = comps;
   json conns = json::array();
   for (const auto& c : r.connections)
-    conns.push_back({{"from", c.from}, {"to", c.to}, {"buffer", to_string(c.policy)}, {"delivered", c.delivered}, {"dropped", c.dropped}});
+    conns.push_back({{"from", c.from},
+                     {"to", c.to},
+                     {"buffer", to_string(c.policy)},
+                     {"pushed", c.pushed},
+                     {"delivered", c.delivered},
+                     {"dropped", c.dropped},
+                     {"left", c.left},
+                     {"peak", c.peak},
+                     {"peak_bytes", c.peak_bytes}});
   j["connections"] = conns;
   json events = json::array();
   for (const auto& e : r.events) events.push_back({{"source", e.source}, {"name", e.name}, {"payload", e.payload}, {"time_s", e.stamp_ns * 1e-9}});
   j["events"] = events;
-  return j.dump(2) + "\n";
+  // Payloads are free-form bytes: invalid UTF-8 is replaced rather than failing the summary.
+  return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace fba

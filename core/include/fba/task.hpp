@@ -28,7 +28,7 @@ struct RunOptions {
   std::optional<ExecutorKind> executor;  // overrides the task file
   int threads = 0;                       // overrides the task file; 0 keeps it
   std::filesystem::path output_dir;      // artefacts; empty for none
-  double timeout_s = 0;                  // 0: no limit
+  double timeout_s = 0;                  // 0: no limit; beyond 9e9 s (or not finite), no limit either
 };
 
 struct ComponentStats {
@@ -41,13 +41,17 @@ struct ComponentStats {
 struct ConnectionStats {
   std::string from, to;  // "component.port"
   BufferPolicy policy = BufferPolicy::Lossless;
-  std::uint64_t delivered = 0, dropped = 0;
+  // Every sample pushed was delivered (taken by the receiving component), dropped by the
+  // buffer's policy, or left in the queue when the run stopped: pushed = delivered + dropped + left.
+  std::uint64_t pushed = 0, delivered = 0, dropped = 0, left = 0;
+  std::uint64_t peak = 0, peak_bytes = 0;  // the most samples and payload bytes queued at once
 };
 
 struct RunResult {
   Outcome outcome = Outcome::Success;
   std::string reason;
   std::optional<Event> final_event;
+  std::optional<std::size_t> final_event_index;  // its place in `events`, when it is listed there
   double wall_s = 0;
   std::vector<ComponentStats> components;
   std::vector<ConnectionStats> connections;

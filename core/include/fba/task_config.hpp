@@ -65,6 +65,7 @@ struct ConnectionConfig {
   const TypeInfo* type = nullptr;  // resolved
   BufferPolicy policy = BufferPolicy::Lossless;
   std::size_t capacity = 16;
+  std::size_t max_bytes = 0;  // payload bytes queued at most (see Packet::bytes); 0 for no budget
   bool feedback = false;  // an explicit back edge of a cycle
   Location where;
 };
