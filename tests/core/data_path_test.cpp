@@ -251,6 +251,24 @@ connections: [ src.out -> f.in ]
   EXPECT_TRUE(found);
 }
 
+TEST(DataPath, AnEventOverTheLimitIsTruncatedAndAPayloadAtTheLimitIsNot) {
+  for (std::size_t bytes : {fba::detail::kMaxEventPayload, fba::detail::kMaxEventPayload + 1, std::size_t{3} << 20}) {
+    fba::Task task(load("components:\n  s: { type: test.shout, params: { bytes: " + std::to_string(bytes) + " } }\n"),
+                   with(ExecutorKind::Deterministic));
+    const auto r = task.run();
+    ASSERT_EQ(r.outcome, Outcome::Success) << r.reason;
+    std::size_t said = 0;
+    for (const auto& e : r.events) {
+      if (e.name != "said") continue;
+      ++said;
+      EXPECT_LE(e.payload.size(), fba::detail::kMaxEventPayload);
+      const bool truncated = e.payload.find("[truncated: " + std::to_string(bytes) + " bytes in all]") != std::string::npos;
+      EXPECT_EQ(truncated, bytes > fba::detail::kMaxEventPayload) << bytes;
+    }
+    EXPECT_EQ(said, 1u);
+  }
+}
+
 TEST(DataPath, TheFinalEventIsWrittenOnceInTheSummary) {
   fba::Task task(load(R"(
 components:

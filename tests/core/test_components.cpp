@@ -150,6 +150,26 @@ class Reader final : public fba::Component {
   fba::Output& out_;
 };
 
+// Emits one event with a payload of the given size, then finishes: payload limits.
+class Shout final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::sensor("test.shout", "Emits one event 'said' with a payload of `bytes` bytes, then finishes.")
+        .output<std::int64_t>("out", "nothing")
+        .param("bytes", 0, "the payload's size").range(0, std::nullopt)
+        .event("said", "the payload: `bytes` times 'y'");
+  }
+  explicit Shout(fba::Context& ctx) : ctx_(ctx), bytes_(ctx.param<std::int64_t>("bytes")) {}
+  void process() override {
+    ctx_.emit_event("said", std::string(static_cast<std::size_t>(bytes_), 'y'));
+    ctx_.finish();
+  }
+
+ private:
+  fba::Context& ctx_;
+  const std::int64_t bytes_;
+};
+
 // An actuator whose process() blocks until interrupt(): shutdown must not hang on it.
 class Blocker final : public fba::Component {
  public:
@@ -185,6 +205,7 @@ FBA_COMPONENT(EventLog);
 FBA_COMPONENT(Staged);
 FBA_COMPONENT(Reader);
 FBA_COMPONENT(Blocker);
+FBA_COMPONENT(Shout);
 
 namespace fba::test {
 

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
+
 #include <fba/component.hpp>
 #include <fba/log.hpp>
 #include <fba/registry.hpp>
@@ -89,6 +91,13 @@ double per_sample_ns(int hops, long count, fba::ExecutorKind executor, int reps)
   return best;
 }
 
+// CPU time of the whole process (every thread), user and system.
+double cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
+}
+
 long rss_kib() {
   std::ifstream status("/proc/self/status");
   std::string line;
@@ -151,6 +160,16 @@ int main(int argc, char** argv) {
     const double p99 = static_cast<double>(l[l.size() * 99 / 100]) / 1000.0;
     out("threaded latency K=" + std::to_string(k) + " median per hop (1 kHz)", median / (k + 1), "us");
     out("threaded latency K=" + std::to_string(k) + " p99 end to end (1 kHz)", p99, "us");
+  }
+
+  // More workers than cores: idle workers must sleep, not take the cores from the busy ones.
+  for (int workers : {2, 256}) {
+    const double cpu_before = cpu_s();
+    const auto r = run(chain_yaml(10, n, 0, "examples.sink", 64), fba::ExecutorKind::Threaded, workers);
+    const double cpu = cpu_s() - cpu_before;
+    const std::string key = "threaded K=10, " + std::to_string(workers) + " workers: ";
+    out(key + "wall per sample", r.wall_s * 1e9 / static_cast<double>(n), "ns");
+    out(key + "CPU per sample", cpu * 1e9 / static_cast<double>(n), "ns");
   }
 
   // Building a task of 1000 components: parse, check, construct.
