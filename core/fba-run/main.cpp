@@ -1,11 +1,22 @@
 // fba-run: loads plugins, checks a task file, and runs it.
+//
+// Every way out ends in order: a signal at any moment (blocked first thing, taken by a watcher
+// thread), a plugin calling exit(), a crash (best effort), a component that never returns. Each
+// writes summary.json when --output-dir is given and picks the exit status; see
+// docs/task-files.md, "Exit statuses and shutdown".
+#include <fcntl.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <cstdlib>
+#include <cstring>
 #include <iostream>
+#include <mutex>
 #include <thread>
 
 #include <boost/program_options.hpp>
@@ -21,20 +32,191 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kConfigError = 2;
+constexpr int kRuntimeError = 3;
 
 int usage_error(const std::string& message) {
   std::cerr << "fba-run: " << message << "\nTry 'fba-run --help'.\n";
   return kConfigError;
 }
 
-}  // namespace
+const char* signal_name(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal"; }
 
-int main(int argc, char** argv) {
-  po::options_description visible("Usage: fba-run [options] TASK.yaml\n\nRuns a task. Exit status: 0 success, 1 failure event, "
-                                  "2 configuration error, 3 runtime error (also a timeout), 130 interrupted.\n\nOptions");
+// What the watcher, the exit handler and the crash handler need to know about the run.
+struct State {
+  std::mutex mutex;                       // orders the task's publication against the first signal
+  std::atomic<const char*> phase{"loading"};  // loading, constructing, running
+  std::atomic<int> signal{0};             // the first SIGINT or SIGTERM
+  std::atomic<const char*> signal_phase{nullptr};
+  std::atomic<int> signals{0};
+  std::atomic<fba::Task*> task{nullptr};  // set once constructed
+  fs::path summary;                       // empty without --output-dir
+  fba::TaskConfig config;                 // what the summary names (the file before it is loaded)
+  std::atomic<bool> returning{false};     // main is returning normally: exit() is expected
+  std::atomic<bool> exit_taken{false};    // an unexpected exit() is being handled
+  std::atomic<bool> watching{true};
+  std::thread watcher;
+};
+State& state() {
+  static State* s = new State;  // alive for the exit handler
+  return *s;
+}
+
+// Writes summary.json; returns the error, or empty.
+std::string write_summary(const fba::RunResult& result) {
+  auto& st = state();
+  if (st.summary.empty()) return {};
+  const std::string text = fba::summary_json(result, st.config);
+  std::FILE* f = std::fopen(st.summary.c_str(), "w");
+  if (!f) return st.summary.string() + ": " + std::strerror(errno);
+  const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  const int write_errno = errno;
+  const bool flushed = std::fflush(f) == 0;
+  const int flush_errno = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (wrote && flushed && closed) return {};
+  return st.summary.string() + ": " + std::strerror(!wrote ? write_errno : !flushed ? flush_errno : errno);
+}
+
+// The run ends before or without Task::run(): a summary with the outcome and where it ended.
+fba::RunResult early_result(fba::Outcome outcome, const std::string& reason) {
+  fba::RunResult r;
+  r.outcome = outcome;
+  r.reason = reason;
+  r.phase = state().phase.load();
+  if (outcome == fba::Outcome::Interrupted) r.signal = state().signal.load();
+  return r;
+}
+
+// Leaves without running static destructors or other exit handlers: used when threads were
+// left behind in component calls, or an exit() is being handled.
+[[noreturn]] void leave(int status) {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  std::cerr.flush();
+  _exit(status);
+}
+
+// A signal that arrived while nothing ran yet ends the run here: exit 128 + signal.
+bool interrupted_early(int& status) {
+  auto& st = state();
+  const int sig = st.signal.load();
+  if (sig == 0) return false;
+  const std::string reason = std::string("interrupted by ") + signal_name(sig) + " while " + st.signal_phase.load();
+  const auto r = early_result(fba::Outcome::Interrupted, reason);
+  const std::string error = write_summary(r);
+  std::cerr << "fba-run: interrupted: " << reason << "\n";
+  status = r.exit_code();
+  if (!error.empty()) {
+    std::cerr << "fba-run: could not write the summary " << error << "\n";
+    status = kRuntimeError;
+  }
+  return true;
+}
+
+void watch_signals(sigset_t signals) {
+  auto& st = state();
+  const timespec tick{0, 50'000'000};
+  while (st.watching.load()) {
+    siginfo_t info;
+    if (sigtimedwait(&signals, &info, &tick) <= 0) continue;
+    const int sig = info.si_signo;
+    if (st.signals.fetch_add(1) > 0) {
+      // A second signal forces the exit at once, with whatever safe states were attempted.
+      fba::Task* task = st.task.load();
+      const std::string done = task ? task->safe_states_so_far() : "no component was constructed";
+      std::fprintf(stderr, "fba-run: second %s while stopping: exiting now without waiting; safe states: %s\n",
+                   signal_name(sig), done.c_str());
+      leave(128 + sig);
+    }
+    std::lock_guard lock(st.mutex);
+    st.signal_phase.store(st.phase.load());
+    st.signal.store(sig);
+    std::fprintf(stderr, "fba-run: %s received: stopping in order (a second one forces the exit)\n", signal_name(sig));
+    if (fba::Task* task = st.task.load())
+      task->request_stop(fba::Outcome::Interrupted, std::string("interrupted by ") + signal_name(sig));
+  }
+}
+
+// exit() from a plugin (a static constructor, a component): the run fails, with the summary.
+void on_unexpected_exit() {
+  auto& st = state();
+  if (st.returning.load() || st.exit_taken.exchange(true)) return;
+  const fba::ActiveCall call = fba::active_call();
+  std::string who = call.component ? std::string("component '") + call.component + "' (" + call.type + ") called exit() from " + call.call
+                                   : std::string("a plugin called exit() while ") + st.phase.load();
+  std::fprintf(stderr, "fba-run: unexpected exit: %s; the run fails\n", who.c_str());
+  fba::Task* task = st.task.load();
+  if (task && call.component && std::string_view(st.phase.load()) == "running") {
+    // On a runtime thread: the main thread stops the run in order (safe states, summary) and
+    // leaves with status 3; this thread waits there, reported as not returning from the call.
+    task->request_stop(fba::Outcome::RuntimeError, who);
+    for (;;) pause();
+  }
+  const std::string error = write_summary(early_result(fba::Outcome::RuntimeError, "unexpected exit: " + who));
+  if (!error.empty()) std::fprintf(stderr, "fba-run: could not write the summary %s\n", error.c_str());
+  leave(kRuntimeError);
+}
+
+// Async-signal-safe pieces for the crash handler.
+void say(const char* s) {
+  if (!s) return;
+  const auto written = ::write(2, s, std::strlen(s));
+  (void)written;  // nothing more to do if stderr is gone
+}
+
+// SIGSEGV, SIGBUS, SIGFPE, SIGILL: name what ran, attempt the safe states, write what can be
+// written, exit 3. Best effort: after a crash the process may be too damaged for any of it.
+void on_crash(int sig, siginfo_t*, void*) {
+  static std::atomic<bool> once{false};
+  if (once.exchange(true)) _exit(kRuntimeError);  // crashed again while reporting
+  const fba::ActiveCall call = fba::active_call();
+  say("fba-run: fatal signal ");
+  say(sig == SIGSEGV ? "SIGSEGV" : sig == SIGBUS ? "SIGBUS" : sig == SIGFPE ? "SIGFPE" : "SIGILL");
+  if (call.component) {
+    say(" in component '");
+    say(call.component);
+    say("' (");
+    say(call.type);
+    say(") during ");
+    say(call.call);
+  } else {
+    say(" while ");
+    say(state().phase.load());
+  }
+  say("; attempting the actuators' safe states (best effort)\n");
+  auto& st = state();
+  if (fba::Task* task = st.task.load()) task->emergency_safe_states();
+  std::string reason = std::string("fatal signal ") + strsignal(sig);
+  if (call.component) reason += std::string(" in component '") + call.component + "' (" + call.type + ") during " + call.call;
+  auto r = early_result(fba::Outcome::RuntimeError, reason);
+  if (fba::Task* task = st.task.load()) r.reason += "; safe states: " + task->safe_states_so_far();
+  write_summary(r);
+  _exit(kRuntimeError);
+}
+
+void install_crash_handlers() {
+  static char stack[64 * 1024];  // the main thread's; runtime threads get theirs from the library
+  stack_t ss{};
+  ss.ss_sp = stack;
+  ss.ss_size = sizeof stack;
+  sigaltstack(&ss, nullptr);
+  struct sigaction sa {};
+  sa.sa_sigaction = on_crash;
+  sa.sa_flags = SA_SIGINFO | SA_ONSTACK;
+  sigemptyset(&sa.sa_mask);
+  for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL}) sigaction(sig, &sa, nullptr);
+}
+
+int run(int argc, char** argv) {
+  auto& st = state();
+  po::options_description visible(
+      "Usage: fba-run [options] TASK.yaml\n\nRuns a task. Exit status: 0 success, 1 failure event, 2 configuration error, "
+      "3 runtime error (also a timeout, a component that did not return after the stop, a summary that could not be "
+      "written), 130 interrupted by SIGINT, 143 by SIGTERM.\n\nOptions");
   std::vector<std::string> sets, plugin_dirs;
   std::string output_dir, executor, log_level = "info";
   double timeout = 0;
+  double stop_grace = fba::RunOptions{}.stop_grace_s;
   int threads = 0;
   visible.add_options()
       ("help,h", "show this help")
@@ -45,6 +227,8 @@ int main(int argc, char** argv) {
       ("plugin-path,p", po::value(&plugin_dirs)->composing(), "add a plugin folder (repeatable; also FBA_PLUGIN_PATH)")
       ("output-dir,o", po::value(&output_dir), "write the run's artefacts (summary.json, images, models) here")
       ("timeout,t", po::value(&timeout), "stop the run after this many seconds (exit 3)")
+      ("stop-grace", po::value(&stop_grace),
+       "seconds that components get to return after a stop, and each actuator's safe state (default 5)")
       ("executor,e", po::value(&executor), "threaded or deterministic (overrides the task file)")
       ("threads", po::value(&threads), "worker threads of the threaded executor (default: one per core)")
       ("log-level", po::value(&log_level), "trace, debug, info, warn, error, critical, off");
@@ -72,6 +256,7 @@ int main(int argc, char** argv) {
   }
   if (!vm.count("task")) return usage_error("no task file given");
   if (timeout < 0) return usage_error("--timeout must be >= 0 seconds");
+  if (!(stop_grace >= 0 && std::isfinite(stop_grace))) return usage_error("--stop-grace must be a finite number of seconds >= 0");
   fba::RunOptions options;
   if (!executor.empty()) {
     if (executor == "threaded") options.executor = fba::ExecutorKind::Threaded;
@@ -83,6 +268,17 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     return usage_error(e.what());
   }
+  const fs::path task_file = vm["task"].as<std::string>();
+  st.config.file = task_file;
+  if (!output_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(output_dir, ec);
+    if (ec) return usage_error("cannot create --output-dir '" + output_dir + "': " + ec.message());
+    options.output_dir = fs::absolute(output_dir);
+    st.summary = options.output_dir / "summary.json";
+  }
+  int status = 0;
+  if (interrupted_early(status)) return status;
 
   fba::Registry registry;
   std::vector<fs::path> extra(plugin_dirs.begin(), plugin_dirs.end());
@@ -93,8 +289,8 @@ int main(int argc, char** argv) {
     for (const auto& e : plugin_errors) std::cerr << "fba-run: plugin " << e.file() << ": " << e.reason() << "\n";
     return kConfigError;
   }
+  if (interrupted_early(status)) return status;
 
-  const fs::path task_file = vm["task"].as<std::string>();
   fba::LoadOptions load;
   for (const auto& s : sets) load.overrides.push_back({s});
   fba::TaskConfig config;
@@ -113,52 +309,96 @@ int main(int argc, char** argv) {
               << " connections, " << config.rules.size() << " event rules)\n";
     return 0;
   }
+  st.config = config;
+  if (interrupted_early(status)) return status;
   options.threads = threads;
   options.timeout_s = timeout;
-  if (!output_dir.empty()) {
-    std::error_code ec;
-    fs::create_directories(output_dir, ec);
-    if (ec) return usage_error("cannot create --output-dir '" + output_dir + "': " + ec.message());
-    options.output_dir = fs::absolute(output_dir);
-  }
+  options.stop_grace_s = stop_grace;
 
-  // Signals are taken by one thread with sigwait, so the stop is orderly: no work happens in a
-  // signal handler. Blocked before any runtime thread exists, so all of them inherit the mask.
+  st.phase.store("constructing");
+  std::unique_ptr<fba::Task> task;
+  try {
+    task = std::make_unique<fba::Task>(config, options);
+  } catch (const fba::ConfigError& e) {
+    std::string reason;
+    for (const auto& d : e.diagnostics()) {
+      std::cerr << d.str() << "\n";
+      reason += (reason.empty() ? "" : "; ") + d.str();
+    }
+    if (interrupted_early(status)) return status;
+    const std::string error = write_summary(early_result(fba::Outcome::ConfigError, reason));
+    if (!error.empty()) std::cerr << "fba-run: could not write the summary " << error << "\n";
+    return kConfigError;
+  }
+  {
+    // A signal during construction still stops in order: run() then only takes the safe states.
+    std::lock_guard lock(st.mutex);
+    st.task.store(task.get());
+    if (const int sig = st.signal.load())
+      task->request_stop(fba::Outcome::Interrupted,
+                         std::string("interrupted by ") + signal_name(sig) + " while " + st.signal_phase.load());
+    else
+      st.phase.store("running");
+  }
+  // Registered again now: handlers run newest first, so this one runs before the plugins'
+  // static destructors, while the components still have what they use.
+  std::atexit(on_unexpected_exit);
+
+  fba::RunResult result = task->run();
+  result.phase = st.signal_phase.load() ? st.signal_phase.load() : st.phase.load();
+  if (result.outcome == fba::Outcome::Interrupted) result.signal = st.signal.load();
+  status = result.exit_code();
+  const std::string error = write_summary(result);
+  std::cerr << "fba-run: " << fba::to_string(result.outcome) << ": " << result.reason;
+  if (result.final_event && !result.final_event->payload.empty()) std::cerr << " (" << result.final_event->payload << ")";
+  if (result.lost_to_restarts > 0) {
+    std::uint64_t restarts = 0;
+    for (const auto& c : result.components) restarts += c.restarts;
+    std::cerr << "; " << result.lost_to_restarts << " sample(s) lost to " << restarts << " restart(s)";
+  }
+  std::fprintf(stderr, " [%.3f s]\n", result.wall_s);
+  if (!error.empty()) {
+    std::cerr << "fba-run: the run failed: could not write the summary " << error << "\n";
+    status = kRuntimeError;
+  }
+  if (!result.stuck.empty() || st.exit_taken.load()) leave(status);  // threads still run in components
+  st.task.store(nullptr);
+  task.reset();
+  return status;
+}
+
+// Before any shared library's initialiser: SIGINT and SIGTERM wait for the watcher from the
+// program's first instruction (only the dynamic loader's own start comes earlier).
+void block_stop_signals_early(int, char**, char**) {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  sigprocmask(SIG_BLOCK, &signals, nullptr);
+}
+[[gnu::section(".preinit_array"), gnu::used]] void (*const block_stop_signals_entry)(int, char**, char**) = block_stop_signals_early;
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // First thing, before any plugin or thread exists: SIGINT and SIGTERM are taken by one
+  // thread with sigwait (every thread inherits the mask), so a signal at any moment stops the
+  // run in order; no work happens in a signal handler.
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  signal(SIGPIPE, SIG_IGN);  // a reader that went away is an EPIPE error, handled where written
+  install_crash_handlers();
+  std::atexit(on_unexpected_exit);
+  auto& st = state();
+  st.watcher = std::thread(watch_signals, signals);
 
-  std::unique_ptr<fba::Task> task;
-  try {
-    task = std::make_unique<fba::Task>(config, options);
-  } catch (const fba::ConfigError& e) {
-    for (const auto& d : e.diagnostics()) std::cerr << d.str() << "\n";
-    return kConfigError;
-  }
-  std::atomic<bool> done{false};
-  std::thread watcher([&] {
-    const timespec tick{0, 100'000'000};
-    while (!done.load()) {
-      siginfo_t info;
-      if (sigtimedwait(&signals, &info, &tick) > 0) {
-        task->request_stop(fba::Outcome::Interrupted, std::string("interrupted by ") + (info.si_signo == SIGINT ? "SIGINT" : "SIGTERM"));
-      }
-    }
-  });
-  fba::RunResult result = task->run();
-  done.store(true);
-  watcher.join();
-
-  if (!options.output_dir.empty()) {
-    std::ofstream out(options.output_dir / "summary.json");
-    out << fba::summary_json(result, config);
-    if (!out) std::cerr << "fba-run: could not write " << (options.output_dir / "summary.json").string() << "\n";
-  }
-  std::cerr << "fba-run: " << fba::to_string(result.outcome) << ": " << result.reason;
-  if (result.final_event && !result.final_event->payload.empty()) std::cerr << " (" << result.final_event->payload << ")";
-  std::fprintf(stderr, " [%.3f s]\n", result.wall_s);
-  task.reset();
-  return result.exit_code();
+  const int status = run(argc, argv);
+  st.returning.store(true);
+  st.watching.store(false);
+  st.watcher.join();
+  if (st.exit_taken.load()) leave(kRuntimeError);
+  return status;
 }

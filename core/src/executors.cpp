@@ -36,13 +36,6 @@ std::int64_t period_ns(const Node& n) { return std::max<std::int64_t>(1, duratio
 // The time-out as a nanosecond count, or kNeverNs for none (0, or too long to represent).
 std::int64_t timeout_ns(const Graph& g) { return g.timeout_s > 0 ? duration_ns(g.timeout_s) : kNeverNs; }
 
-std::string stuck_components(const Graph& g) {
-  std::string s;
-  for (const auto& n : g.nodes)
-    if (n->in_process.load()) s += (s.empty() ? "" : ", ") + n->config.name;
-  return s.empty() ? "none" : s;
-}
-
 // ---------------------------------------------------------------------------------------------
 
 class ThreadedExecutor final : public Executor {
@@ -109,23 +102,22 @@ class ThreadedExecutor final : public Executor {
   void run() override {
     for (auto& n : g_.nodes)
       if (n->periodic()) timers_.push(Timer{0, timers_.size(), n.get()});
-    std::thread timer_thread;
+    // A thread that cannot be created (out of threads or memory) stops the run like any runtime
+    // error; the threads already started see the stop and are joined (or left) by join().
     std::string starting;
     try {
       for (int i = 0; i < threads_; ++i) {
         starting = "worker thread " + std::to_string(i + 1) + " of " + std::to_string(threads_);
-        workers_.emplace_back([this] { worker(); });
+        workers_.emplace_back([this] { prepare_thread_for_crash_reports(); worker(); });
       }
       for (auto& d : dedicated_) {
         starting = "the thread of component '" + d->node->config.name + "'";
-        d->thread = std::thread([this, d = d.get()] { dedicated(*d); });
+        d->thread = std::thread([this, d = d.get()] { prepare_thread_for_crash_reports(); dedicated(*d); });
         ++dedicated_started_;
       }
       starting = "the timer thread";
-      timer_thread = std::thread([this] { timers(); });
+      timer_thread_ = std::thread([this] { timers(); });
     } catch (const std::exception& e) {
-      // Out of threads or memory: end the run like any runtime error. The threads already
-      // started see the stop, return and are joined below; the actuators then go safe.
       g_.request_stop(Outcome::RuntimeError, "could not start " + starting + ": " + e.what() +
                                                  " (the system's limit on threads or memory was reached)");
     }
@@ -133,36 +125,57 @@ class ThreadedExecutor final : public Executor {
     const std::int64_t limit_ns = timeout_ns(g_);
     const bool limited = limit_ns != kNeverNs;
     const auto deadline = g_.started + std::chrono::nanoseconds(limited ? limit_ns : 0);
-    {
-      std::unique_lock lock(main_mutex_);
-      while (!g_.stopping()) {
-        auto woken = [this] { return poked_ || g_.stopping(); };
-        if (limited) {
-          if (!main_cv_.wait_until(lock, deadline, woken)) {
-            lock.unlock();
-            g_.request_stop(Outcome::RuntimeError, "timed out after " + std::to_string(g_.timeout_s) + " s");
-            lock.lock();
-            continue;
-          }
-        } else {
-          main_cv_.wait(lock, woken);
-        }
-        if (poked_ && !g_.stopping()) {
-          poked_ = false;
-          lock.unlock();
-          g_.check_idle();
-          lock.lock();
-        }
+    const auto stall = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.001, g_.options.stall_warning_s)));
+    auto progress = g_.progress.load();
+    auto quiet_since = Clock::now();
+    std::unique_lock lock(main_mutex_);
+    while (!g_.stopping()) {
+      auto woken = [this] { return poked_ || g_.stopping(); };
+      const auto wake_at = limited ? std::min(deadline, quiet_since + stall) : quiet_since + stall;
+      main_cv_.wait_until(lock, wake_at, woken);
+      if (g_.stopping()) break;
+      const auto now = Clock::now();
+      if (limited && now >= deadline) {
+        lock.unlock();
+        g_.request_stop(Outcome::RuntimeError, "timed out after " + std::to_string(g_.timeout_s) + " s");
+        lock.lock();
+        continue;
+      }
+      if (g_.progress.load() != progress) {
+        progress = g_.progress.load();
+        quiet_since = now;
+      } else if (now >= quiet_since + stall) {
+        lock.unlock();
+        g_.warn_stall(std::chrono::duration<double>(now - quiet_since).count());
+        lock.lock();
+        quiet_since = now;  // again after another quiet period
+      }
+      if (poked_ && !g_.stopping()) {
+        poked_ = false;
+        lock.unlock();
+        g_.check_idle();
+        lock.lock();
       }
     }
-    // Ask blocking components to return, then give everyone a bounded time to finish.
-    for (auto& n : g_.nodes)
-      if (n->in_process.load() && n->component) n->component->interrupt();
-    wait_for_threads(std::chrono::seconds(10));
-    for (auto& w : workers_) w.join();
-    for (auto& d : dedicated_)
-      if (d->thread.joinable()) d->thread.join();
-    if (timer_thread.joinable()) timer_thread.join();
+  }
+
+  bool join(double grace_s) override {
+    wake_all();
+    const std::uint32_t total = static_cast<std::uint32_t>(workers_.size() + dedicated_started_);
+    const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(grace_s));
+    while (exited_.load() < total && Clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    const bool all = exited_.load() >= total;
+    // Which thread is stuck is not known here, only that one is: the graph names the component
+    // call. A thread left behind holds the graph, which then is never destroyed.
+    auto finish = [all](std::thread& t) {
+      if (!t.joinable()) return;
+      if (all) t.join();
+      else t.detach();
+    };
+    for (auto& w : workers_) finish(w);
+    for (auto& d : dedicated_) finish(d->thread);
+    if (timer_thread_.joinable()) timer_thread_.join();  // waits on the stop flag only
+    return all;
   }
 
  private:
@@ -252,22 +265,6 @@ class ThreadedExecutor final : public Executor {
     }
   }
 
-  void wait_for_threads(std::chrono::seconds grace) {
-    const std::uint32_t total = static_cast<std::uint32_t>(workers_.size() + dedicated_started_);
-    const auto until = Clock::now() + grace;
-    for (;;) {
-      auto n = exited_.load();
-      if (n >= total) return;
-      if (Clock::now() > until) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    }
-    // A component that never returns from process() would hang the process forever: report it
-    // and leave; a run must end.
-    fprintf(stderr, "fba: component(s) still inside process() %lld s after the stop: %s; exiting\n",
-            static_cast<long long>(grace.count()), stuck_components(g_).c_str());
-    std::_Exit(3);
-  }
-
   Graph& g_;
   int threads_ = 2;
   const Clock::time_point start_ = Clock::now();
@@ -281,6 +278,7 @@ class ThreadedExecutor final : public Executor {
   std::atomic<std::uint32_t> exited_{0};
   std::vector<std::thread> workers_;
   std::vector<std::unique_ptr<Dedicated>> dedicated_;
+  std::thread timer_thread_;
   std::mutex timer_mutex_;
   std::condition_variable timer_cv_;
   TimerQueue timers_;
@@ -297,10 +295,54 @@ class DeterministicExecutor final : public Executor {
 
   void enqueue(Node* n) override { queue_.push_back(n); }
   std::int64_t now_ns() const override { return virtual_ns_; }
-  void wake_all() override {}
+  void wake_all() override {
+    std::lock_guard lock(mutex_);
+    cv_.notify_all();
+  }
   void poke() override {}
 
+  // The loop runs on a thread of its own, so that a component that never returns cannot hold
+  // the stop (and the timeout) back: the caller waits here for either.
   void run() override {
+    try {
+      thread_ = std::thread([this] {
+        prepare_thread_for_crash_reports();
+        loop();
+        std::lock_guard lock(mutex_);
+        done_ = true;
+        cv_.notify_all();
+      });
+    } catch (const std::system_error& e) {
+      g_.request_stop(Outcome::RuntimeError, std::string("could not start the executor's thread: ") + e.what());
+      return;
+    }
+    const std::int64_t limit_ns = timeout_ns(g_);
+    const auto deadline = g_.started + std::chrono::nanoseconds(limit_ns == kNeverNs ? 0 : limit_ns);
+    std::unique_lock lock(mutex_);
+    auto woken = [this] { return done_ || g_.stopping(); };
+    while (!woken()) {
+      if (limit_ns == kNeverNs) {
+        cv_.wait(lock, woken);
+      } else if (!cv_.wait_until(lock, deadline, woken)) {
+        lock.unlock();
+        g_.request_stop(Outcome::RuntimeError, "timed out after " + std::to_string(g_.timeout_s) + " s");
+        lock.lock();
+      }
+    }
+  }
+
+  bool join(double grace_s) override {
+    if (!thread_.joinable()) return true;
+    std::unique_lock lock(mutex_);
+    const bool done = cv_.wait_for(lock, std::chrono::duration<double>(grace_s), [this] { return done_; });
+    lock.unlock();
+    if (done) thread_.join();
+    else thread_.detach();
+    return done;
+  }
+
+ private:
+  void loop() {
     TimerQueue timers;
     for (std::size_t i = 0; i < g_.nodes.size(); ++i)
       if (g_.nodes[i]->periodic()) timers.push(Timer{0, i, g_.nodes[i].get()});
@@ -337,10 +379,13 @@ class DeterministicExecutor final : public Executor {
     }
   }
 
- private:
   Graph& g_;
   std::deque<Node*> queue_;
   std::int64_t virtual_ns_ = 0;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool done_ = false;
 };
 
 }  // namespace

@@ -1,7 +1,10 @@
 #include "graph.hpp"
 
+#include <signal.h>
+
 #include <algorithm>
 #include <sstream>
+#include <system_error>
 #include <unordered_set>
 
 #include "fba/log.hpp"
@@ -161,10 +164,112 @@ Node::Node(Graph& g, const ComponentConfig& c)
   if (!spec.stage_names().empty()) stage = spec.stage_names().front();
 }
 
+// The component call running on this thread, for crash and exit reports (see active_call).
+thread_local const Node* t_active_node = nullptr;
+thread_local const char* t_active_call = nullptr;
+
+namespace {
+
+// Marks this thread as running one of a node's calls, for as long as it lives.
+class ActiveScope {
+ public:
+  ActiveScope(const Node* n, const char* call) : node_(t_active_node), call_(t_active_call) {
+    t_active_node = n;
+    t_active_call = call;
+  }
+  ~ActiveScope() {
+    t_active_node = node_;
+    t_active_call = call_;
+  }
+  ActiveScope(const ActiveScope&) = delete;
+  ActiveScope& operator=(const ActiveScope&) = delete;
+
+ private:
+  const Node* node_;
+  const char* call_;
+};
+
+// Runs f, catching everything; returns what it threw, worded for "component 'x' (type) ...".
+template <class F>
+std::string catch_all(const char* call, F&& f) {
+  try {
+    f();
+    return {};
+  } catch (const std::exception& e) {
+    if (std::string_view(call) == "process()") return e.what();  // the common case keeps its short form
+    return std::string(e.what()) + " (thrown from " + call + ")";
+  } catch (...) {
+    return std::string("threw a non-exception (not derived from std::exception) from ") + call;
+  }
+}
+
+}  // namespace
+
+std::string Node::describe(const std::string& reason) const {
+  const std::string who = "component '" + config.name + "' (" + spec.type_name() + ") ";
+  return who + (reason.rfind("threw ", 0) == 0 ? reason : "failed: " + reason);
+}
+
+template <class F>
+std::string Node::guarded(const char* what, F&& f) {
+  ActiveScope active(this, what);
+  call.store(what, std::memory_order_seq_cst);
+  std::string error = catch_all(what, std::forward<F>(f));
+  call.store(nullptr, std::memory_order_seq_cst);
+  return error;
+}
+
 void Node::construct() {
+  ActiveScope active(this, "its constructor");
   constructing = true;
-  component = config.type->make(*context);
+  std::unique_ptr<Component> made;
+  try {
+    made = config.type->make(*context);
+  } catch (...) {
+    constructing = false;
+    throw;
+  }
   constructing = false;
+  std::lock_guard lock(component_mutex);
+  component = std::move(made);
+}
+
+std::shared_ptr<Component> Node::current_component() {
+  std::lock_guard lock(component_mutex);
+  return component;
+}
+
+void Node::interrupt() {
+  auto c = current_component();
+  if (!c) return;
+  ActiveScope active(this, "interrupt()");
+  const std::string error = catch_all("interrupt()", [&] { c->interrupt(); });
+  if (error.empty()) return;
+  logger->error("{}", describe(error));
+  graph.record_event(Event{config.name, "error", error, graph.now_ns()});
+}
+
+SafeStateResult Node::safe_state() {
+  SafeStateResult r{config.name, "not constructed", {}};
+  auto c = current_component();
+  int expected = 0;
+  if (!c || !safe_state_progress.compare_exchange_strong(expected, 1)) {
+    if (c) r.status = "already attempted";
+    return r;
+  }
+  ActiveScope active(this, "safe_state()");
+  r.message = catch_all("safe_state()", [&] { c->safe_state(); });
+  r.status = r.message.empty() ? "reached" : "failed";
+  safe_state_progress.store(r.message.empty() ? 2 : 3);
+  if (r.message.empty()) logger->info("safe state reached");
+  else logger->error("could not reach a safe state: {}", describe(r.message));
+  return r;
+}
+
+std::uint64_t Node::samples_emitted() const {
+  std::uint64_t n = 0;
+  for (const auto& out : output_states) n += out->next_seq;
+  return n;
 }
 
 bool Node::outputs_have_room() const {
@@ -261,14 +366,8 @@ void Node::invoke() {
 
   if (!is_sensor && !has_input && !tick && !eos_delivered && inputs_closed()) {
     eos_delivered = true;
-    try {
-      in_process.store(true, std::memory_order_relaxed);
-      component->end_of_stream();
-      in_process.store(false, std::memory_order_relaxed);
-    } catch (const std::exception& e) {
-      in_process.store(false, std::memory_order_relaxed);
-      fail(e.what());
-    }
+    const std::string error = guarded("end_of_stream()", [&] { component->end_of_stream(); });
+    if (!error.empty()) fail(error);
     on_finish();
     return;
   }
@@ -281,49 +380,50 @@ void Node::invoke() {
       break;
     case TriggerPolicy::Periodic:
       if (!tick) return;
+      last_tick_ns.store(graph.now_ns(), std::memory_order_relaxed);
       break;
     case TriggerPolicy::Free:
       break;
   }
   ++invocations;
-  try {
-    in_process.store(true, std::memory_order_relaxed);
-    component->process();
-    in_process.store(false, std::memory_order_relaxed);
-  } catch (const std::exception& e) {
-    in_process.store(false, std::memory_order_relaxed);
-    fail(e.what());
-  } catch (...) {
-    in_process.store(false, std::memory_order_relaxed);
-    fail("unknown exception");
-  }
+  std::uint64_t taken = 0;
+  for (const auto& in : inputs) taken += in.has_ ? 1 : 0;
+  const std::uint64_t emitted = samples_emitted();
+  // `component` is only replaced on this thread (a restart), so it is read here without the lock.
+  const std::string error = guarded("process()", [&] { component->process(); });
+  if (!error.empty()) fail(error, taken);
+  else if (samples_emitted() != emitted) graph.progress.fetch_add(1, std::memory_order_relaxed);
   if (finish_requested && !finished.load()) on_finish();
 }
 
-void Node::fail(std::string_view what) {
+void Node::fail(std::string_view what, std::uint64_t lost) {
   // An exception's message becomes an event payload and the run's reason: bounded like one.
   if (what.size() > kMaxEventPayload)
     logger->warn("its error message has {} bytes; only the first {} are kept (the limit for an event payload)",
                  what.size(), kMaxEventPayload);
   const std::string reason = bounded_payload(what);
   ++errors;
-  logger->error("failed in {}: {}", spec.type_name(), reason);
+  logger->error("{}", describe(reason));
   emit_event("error", reason);
   if (graph.stopping()) return;  // a rule on the error event decided already
   if (config.on_error == ErrorPolicy::Restart && restarts < static_cast<std::uint64_t>(config.max_restarts)) {
     ++restarts;
-    logger->warn("restarting ({} of at most {})", restarts, config.max_restarts);
-    component.reset();
-    try {
-      construct();
-      return;
-    } catch (const std::exception& e) {
-      graph.request_stop(Outcome::RuntimeError,
-                         "component '" + config.name + "' could not be restarted: " + e.what());
-      return;
+    lost_to_restarts += lost;
+    logger->warn("restarting ({} of at most {}); {} input sample(s) lost with the failed call", restarts,
+                 config.max_restarts, lost);
+    std::shared_ptr<Component> old;
+    {
+      std::lock_guard lock(component_mutex);
+      old = std::move(component);
     }
+    old.reset();  // the old instance releases its devices before the new one opens them
+    const std::string error = catch_all("its constructor", [&] { construct(); });
+    if (!error.empty())
+      graph.request_stop(Outcome::RuntimeError, "component '" + config.name + "' (" + spec.type_name() +
+                                                    ") could not be restarted: " + error);
+    return;
   }
-  std::string why = "component '" + config.name + "' (" + spec.type_name() + ") failed: " + reason;
+  std::string why = describe(reason);
   if (config.on_error == ErrorPolicy::Restart) why += " (after " + std::to_string(restarts) + " restarts)";
   graph.request_stop(Outcome::RuntimeError, why);
 }
@@ -455,14 +555,25 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
 
 void Graph::construct() {
   for (auto& n : nodes) {
+    std::string error;
     try {
       n->construct();
     } catch (const ConfigError&) {
       throw;
     } catch (const std::exception& e) {
-      throw ConfigError({Diagnostic{n->config.where, "component '" + n->config.name + "' (" +
-                                                         n->spec.type_name() + ") refused its configuration: " + e.what()}});
+      error = e.what();
+    } catch (...) {
+      error = "it threw a non-exception (not derived from std::exception) from its constructor";
     }
+    if (error.empty()) continue;
+    // The actuators created so far may already hold a device: they go to their safe state.
+    Watchdog safe;
+    for (auto& a : nodes)
+      if (a->spec.kind() == Kind::Actuator && a->current_component()) safe.start([a = a.get()] { a->safe_state(); });
+    safe.wait_until(std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                          std::chrono::duration<double>(std::max(0.0, options.stop_grace_s))));
+    throw ConfigError({Diagnostic{n->config.where, "component '" + n->config.name + "' (" + n->spec.type_name() +
+                                                       ") refused its configuration: " + error}});
   }
 }
 
@@ -474,6 +585,80 @@ Graph::~Graph() {
     for (auto& in : n->inputs) in = Input();
   }
   for (auto& n : nodes) n->component.reset();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Watchdog
+
+Watchdog::~Watchdog() {
+  std::vector<char> done;
+  {
+    std::lock_guard lock(shared_->mutex);
+    done = shared_->done;
+  }
+  for (std::size_t i = 0; i < threads_.size(); ++i) {
+    if (!threads_[i].joinable()) continue;
+    if (done[i]) threads_[i].join();
+    else threads_[i].detach();  // it holds `shared_` (and whatever f holds), never this object
+  }
+}
+
+void Watchdog::start(std::function<void()> f) {
+  std::size_t i = 0;
+  {
+    std::lock_guard lock(shared_->mutex);
+    i = shared_->done.size();
+    shared_->done.push_back(0);
+  }
+  auto finish = [s = shared_, i] {
+    std::lock_guard lock(s->mutex);
+    s->done[i] = 1;
+    s->cv.notify_all();
+  };
+  auto fn = std::make_shared<std::function<void()>>(std::move(f));
+  try {
+    threads_.emplace_back([fn, finish] {
+      prepare_thread_for_crash_reports();
+      (*fn)();
+      finish();
+    });
+  } catch (const std::system_error&) {  // no thread to spare: call it here, unguarded
+    threads_.emplace_back();
+    (*fn)();
+    finish();
+  }
+}
+
+void Watchdog::wait_until(std::chrono::steady_clock::time_point deadline) {
+  std::unique_lock lock(shared_->mutex);
+  shared_->cv.wait_until(lock, deadline, [this] {
+    return std::all_of(shared_->done.begin(), shared_->done.end(), [](char d) { return d != 0; });
+  });
+}
+
+bool Watchdog::returned(std::size_t i) {
+  std::lock_guard lock(shared_->mutex);
+  return shared_->done.at(i) != 0;
+}
+
+void prepare_thread_for_crash_reports() {
+  struct AltStack {
+    std::unique_ptr<char[]> memory;
+    ~AltStack() {
+      if (!memory) return;
+      stack_t off{};
+      off.ss_flags = SS_DISABLE;
+      sigaltstack(&off, nullptr);  // before the memory goes
+    }
+  };
+  thread_local AltStack alt;
+  if (alt.memory) return;
+  constexpr std::size_t kSize = 64 * 1024;
+  alt.memory = std::make_unique<char[]>(kSize);
+  stack_t ss{};
+  ss.ss_sp = alt.memory.get();
+  ss.ss_size = kSize;
+  if (sigaltstack(&ss, nullptr) != 0) alt.memory.reset();
 }
 
 Node& Graph::node(const std::string& name) {
@@ -651,22 +836,8 @@ RunResult Graph::run() {
       live_periodic.fetch_add(1);
     }
   for (auto& n : nodes) notify(n.get());
-  executor_->run();  // returns with every thread joined
-
-  for (auto& n : nodes) {
-    if (n->spec.kind() != Kind::Actuator || !n->component) continue;
-    try {
-      n->component->safe_state();
-      n->logger->info("safe state reached");
-    } catch (const std::exception& e) {
-      n->logger->error("could not reach a safe state: {}", e.what());
-      std::lock_guard lock(result_mutex_);
-      if (result_.outcome == Outcome::Success) {
-        result_.outcome = Outcome::RuntimeError;
-        result_.reason = "component '" + n->config.name + "' could not reach a safe state: " + e.what();
-      }
-    }
-  }
+  executor_->run();  // returns once the graph is stopping
+  const std::vector<StuckCall> stuck = stop();
 
   std::lock_guard lock(result_mutex_);
   RunResult r = result_;
@@ -677,6 +848,8 @@ RunResult Graph::run() {
     if (events_[i] == final_event_) r.final_event_index = i;
   }
   if (final_event_) r.final_event = *final_event_;
+  r.stuck = stuck;
+  r.safe_states = safe_states_;
   for (auto& n : nodes) {
     ComponentStats s;
     s.name = n->config.name;
@@ -687,6 +860,8 @@ RunResult Graph::run() {
     for (auto& out : n->output_states) s.samples_out += out->next_seq;
     s.errors = n->errors;
     s.restarts = n->restarts;
+    s.lost_to_restarts = n->lost_to_restarts;
+    r.lost_to_restarts += n->lost_to_restarts;
     {
       std::lock_guard stage_lock(n->stage_mutex);
       s.stage = n->stage;
@@ -706,6 +881,129 @@ RunResult Graph::run() {
   return r;
 }
 
+std::vector<StuckCall> Graph::stop() {
+  using Clock = std::chrono::steady_clock;
+  const auto grace = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, options.stop_grace_s)));
+  // Ask running (and blocking) components to return. interrupt() may block too: each call gets
+  // a thread of its own, so a stuck one is only reported.
+  Watchdog interrupts;
+  std::vector<Node*> interrupted;
+  for (auto& n : nodes)
+    if (n->current_component() && (n->call.load() != nullptr || n->spec.is_blocking())) {
+      interrupted.push_back(n.get());
+      interrupts.start([n = n.get()] { n->interrupt(); });
+    }
+  const auto deadline = Clock::now() + grace;
+  const bool joined = executor_->join(options.stop_grace_s);
+  interrupts.wait_until(deadline);
+
+  // Every actuator goes to its safe state, whether or not the other threads returned: in
+  // parallel, each under its own watchdog. After the threads, so that an actuator's safe_state()
+  // does not overlap its own process() unless that one is stuck.
+  Watchdog safe;
+  std::vector<Node*> actuators;
+  std::vector<std::shared_ptr<SafeStateResult>> results;
+  for (auto& n : nodes) {
+    if (n->spec.kind() != Kind::Actuator) continue;
+    actuators.push_back(n.get());
+    results.push_back(std::make_shared<SafeStateResult>());
+    safe.start([n = n.get(), r = results.back()] { *r = n->safe_state(); });
+  }
+  safe.wait_until(Clock::now() + grace);
+
+  std::vector<StuckCall> stuck;
+  for (auto& n : nodes)
+    if (const char* call = n->call.load()) stuck.push_back({n->config.name, n->spec.type_name(), call});
+  for (std::size_t i = 0; i < interrupted.size(); ++i)
+    if (!interrupts.returned(i)) stuck.push_back({interrupted[i]->config.name, interrupted[i]->spec.type_name(), "interrupt()"});
+  std::vector<SafeStateResult> safe_states;
+  for (std::size_t i = 0; i < actuators.size(); ++i) {
+    if (safe.returned(i)) {
+      safe_states.push_back(*results[i]);
+      continue;
+    }
+    stuck.push_back({actuators[i]->config.name, actuators[i]->spec.type_name(), "safe_state()"});
+    safe_states.push_back({actuators[i]->config.name, "did not return", "safe_state() did not return within the stop grace"});
+  }
+  if (!joined && stuck.empty()) stuck.push_back({"", "", "a runtime thread"});
+  if (!stuck.empty()) abandoned.store(true);
+
+  std::lock_guard lock(result_mutex_);
+  safe_states_ = safe_states;
+  for (const auto& s : safe_states) {
+    if (s.status != "failed" || result_.outcome != Outcome::Success) continue;
+    result_.outcome = Outcome::RuntimeError;
+    result_.reason = "component '" + s.component + "' could not reach a safe state: " + s.message;
+  }
+  if (!stuck.empty()) {
+    // The run cannot end cleanly with a call still running: a runtime error that names it.
+    std::string why;
+    for (const auto& c : stuck) {
+      if (!why.empty()) why += "; ";
+      if (c.component.empty()) why += "a runtime thread did not return";
+      else why += "component '" + c.component + "' (" + c.type + ") did not return from " + c.call;
+    }
+    char grace_text[32];
+    std::snprintf(grace_text, sizeof grace_text, "%g", options.stop_grace_s);
+    why += " within " + std::string(grace_text) + " s of the stop; left running";
+    if (!result_.reason.empty()) why = result_.reason + "; then " + why;
+    result_.outcome = Outcome::RuntimeError;
+    result_.reason = why;
+  }
+  return stuck;
+}
+
+void Graph::emergency_safe_states() noexcept {
+  for (auto& n : nodes)
+    if (n->spec.kind() == Kind::Actuator) {
+      try {
+        n->safe_state();
+      } catch (...) {  // the result's strings could not be made: nothing more to do
+      }
+    }
+}
+
+std::string Graph::safe_states_so_far() const {
+  static constexpr const char* kProgress[] = {"not attempted", "attempted, did not return", "reached", "failed"};
+  std::string s;
+  for (const auto& n : nodes)
+    if (n->spec.kind() == Kind::Actuator) {
+      if (!s.empty()) s += ", ";
+      s += n->config.name + " (" + kProgress[std::clamp(n->safe_state_progress.load(), 0, 3)] + ")";
+    }
+  return s.empty() ? "no actuators" : s;
+}
+
+void Graph::warn_stall(double quiet_s) {
+  if (stopping()) return;
+  const double now_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  std::ostringstream why;
+  why << "no component has produced anything for " << quiet_s << " s";
+  double next_tick_s = -1;
+  for (auto& n : nodes) {
+    if (n->finished.load() || !n->periodic()) continue;
+    const double last = static_cast<double>(n->last_tick_ns.load()) * 1e-9;
+    const double in_s = std::max(0.0, (last < 0 ? 0 : last) + n->trigger.period_s - now_s);
+    why << "; the next tick of periodic '" << n->config.name << "' is " << in_s << " s away";
+    if (next_tick_s < 0 || in_s < next_tick_s) next_tick_s = in_s;
+  }
+  for (auto& n : nodes)
+    if (n->is_sensor && !n->periodic() && !n->finished.load() && n->trigger.policy == TriggerPolicy::Free)
+      why << "; the free-running sensor '" << n->config.name << "' runs but produces nothing";
+  if (timeout_s > 0) {
+    const double left = std::max(0.0, timeout_s - now_s);
+    why << "; the run times out in " << left << " s";
+    if (next_tick_s > left) why << ", before anything can happen";
+  } else if (next_tick_s < 0) {
+    why << "; nothing may ever happen: stop it (Ctrl-C) or give --timeout";
+  } else {
+    why << "; stop it (Ctrl-C) or give --timeout";
+  }
+  const std::string text = why.str();
+  make_logger("fba")->warn("{}", text);
+  record_event(Event{"fba", "stall_warning", text, now_ns()});
+}
+
 }  // namespace fba::detail
 
 namespace fba {
@@ -714,9 +1012,25 @@ Task::Task(const TaskConfig& config, RunOptions options)
     : graph_(std::make_unique<detail::Graph>(config, std::move(options))) {
   graph_->construct();
 }
-Task::~Task() = default;
+Task::~Task() {
+  if (!graph_->abandoned.load()) return;
+  // Threads left in component calls use the graph: keep it (and the plugins) for good. Held by a
+  // global so that it is not reported as a leak.
+  static std::mutex mutex;
+  static auto* kept = new std::vector<std::unique_ptr<detail::Graph>>;
+  std::lock_guard lock(mutex);
+  kept->push_back(std::move(graph_));
+}
 const std::vector<Packet>& Task::tap(const std::string& port, std::size_t keep) { return graph_->tap(port, keep); }
 RunResult Task::run() { return graph_->run(); }
 void Task::request_stop(Outcome outcome, const std::string& reason) { graph_->request_stop(outcome, reason); }
+void Task::emergency_safe_states() noexcept { graph_->emergency_safe_states(); }
+std::string Task::safe_states_so_far() const { return graph_->safe_states_so_far(); }
+
+ActiveCall active_call() noexcept {
+  const detail::Node* n = detail::t_active_node;
+  if (!n) return {};
+  return {n->config.name.c_str(), n->spec.type_name().c_str(), detail::t_active_call};
+}
 
 }  // namespace fba

@@ -7,6 +7,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -122,6 +123,20 @@ class Node {
   // Records an event and applies its rules; a payload over kMaxEventPayload is truncated.
   void emit_event(std::string_view name, std::string payload);
   void on_finish();  // marks finished and tells the consumers
+  // Calls one of the component's methods, catching everything: the message of what it threw
+  // ("component 'x' (type) threw ... from process()"), or empty when it returned normally.
+  // `call` names the method while it runs (for stuck-call and crash reports).
+  template <class F>
+  std::string guarded(const char* call, F&& f);
+  // The component, for calls from other threads than the node's (interrupt, safe_state): a
+  // restart may replace it meanwhile, so the pointer is read under a lock and the object kept
+  // alive by the reference.
+  std::shared_ptr<Component> current_component();
+  // The stop path's calls, from the graph's stopping thread.
+  void interrupt();
+  SafeStateResult safe_state();
+  // "component 'x' (type) failed: reason", or "... threw a non-exception ..." as it stands.
+  std::string describe(const std::string& reason) const;
 
   Graph& graph;
   const ComponentConfig& config;
@@ -138,7 +153,11 @@ class Node {
   std::vector<Output> outputs;
   std::shared_ptr<spdlog::logger> logger;
   std::unique_ptr<Context> context;
-  std::unique_ptr<Component> component;
+  std::shared_ptr<Component> component;  // swapped under component_mutex (restarts)
+  std::mutex component_mutex;
+  std::atomic<const char*> call{nullptr};  // the component method running now, if any
+  // 0 not attempted, 1 attempting, 2 reached, 3 failed: a crash or forced exit knows what is left.
+  std::atomic<int> safe_state_progress{0};
 
   std::atomic<int> state{Idle};
   std::atomic<bool> tick_pending{false};
@@ -155,7 +174,8 @@ class Node {
   std::map<std::string, EventRules, std::less<>> rules;
   std::atomic<bool> ticking{false};  // periodic, and a tick will still come (see Graph::end_ticks)
 
-  std::uint64_t invocations = 0, errors = 0, restarts = 0;
+  std::uint64_t invocations = 0, errors = 0, restarts = 0, lost_to_restarts = 0;
+  std::atomic<std::int64_t> last_tick_ns{-1};  // for the stall warning: when the next tick is due
   std::mutex stage_mutex;
   std::string stage;
 
@@ -163,7 +183,9 @@ class Node {
   bool outputs_have_room() const;
   bool inputs_closed() const;
   bool take_inputs();  // false when an All trigger found no match
-  void fail(std::string_view reason);
+  std::uint64_t samples_emitted() const;
+  // `lost`: the input samples the failed call had taken, counted if the component restarts.
+  void fail(std::string_view reason, std::uint64_t lost = 0);
 };
 
 class Executor {
@@ -171,8 +193,11 @@ class Executor {
   virtual ~Executor() = default;
   virtual void enqueue(Node* n) = 0;
   virtual std::int64_t now_ns() const = 0;
-  // Runs until the graph stops; returns with every thread joined.
+  // Runs until the graph stops; its threads may still be finishing their current call.
   virtual void run() = 0;
+  // Joins the threads that return within `grace_s`; the others are detached and left behind
+  // (they hold the graph: see Graph::abandoned). False when some were left.
+  virtual bool join(double grace_s) = 0;
   // Wakes whatever waits so that it sees the graph's stop flag.
   virtual void wake_all() = 0;
   // Wakes the run loop to look at the graph's state (idle, stop).
@@ -195,6 +220,8 @@ class Graph {
   void request_stop(Outcome outcome, const std::string& reason, std::shared_ptr<const Event> event = {});
   bool stopping() const { return stopping_.load(std::memory_order_acquire); }
   std::int64_t now_ns() const { return executor_->now_ns(); }
+  // Logs at warn level what the run waits for when nothing has been produced for a while.
+  void warn_stall(double quiet_s);
   void record_event(const Event& e);
   void record_event(std::shared_ptr<const Event> e);
   void deliver(const EventRule& rule, const std::shared_ptr<const Event>& e, const Header& header);
@@ -202,6 +229,8 @@ class Graph {
   void end_ticks(Node* n);
   std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
   RunResult run();
+  void emergency_safe_states() noexcept;
+  std::string safe_states_so_far() const;
   std::vector<Event> events();
   std::string stop_reason() {
     std::lock_guard lock(result_mutex_);
@@ -218,19 +247,56 @@ class Graph {
   std::atomic<int> active{0};  // nodes queued or running
   std::atomic<std::uint64_t> notifications{0};  // Idle -> Queued transitions, for check_idle
   std::atomic<int> live_periodic{0};
+  std::atomic<std::uint64_t> progress{0};  // invocations that emitted something: for the stall warning
+  // Threads were left behind in a component call: the graph must outlive them, so the Task
+  // leaks it on purpose rather than destroy what they use.
+  std::atomic<bool> abandoned{false};
   std::chrono::steady_clock::time_point started;
   double timeout_s = 0;
 
  private:
   Node& node(const std::string& name);
+  // After the executor stopped: interrupts, joins within the grace, and safe states; returns
+  // the calls that did not return.
+  std::vector<StuckCall> stop();
   std::atomic<bool> stopping_{false};
   std::mutex result_mutex_;
   RunResult result_;
   // Each event is stored once; the final event is one of them (or, past the list's bound, its own).
   std::vector<std::shared_ptr<const Event>> events_;
   std::shared_ptr<const Event> final_event_;
+  std::vector<SafeStateResult> safe_states_;
   bool ran_ = false;
 };
+
+// Calls made on threads of their own so that one that never returns cannot hang the stop: the
+// caller waits for them up to a deadline, and those still running are left behind (detached).
+class Watchdog {
+ public:
+  Watchdog() = default;
+  Watchdog(const Watchdog&) = delete;
+  Watchdog& operator=(const Watchdog&) = delete;
+  ~Watchdog();  // joins the calls that returned; detaches the others
+  void start(std::function<void()> f);  // runs f inline if no thread can be created
+  void wait_until(std::chrono::steady_clock::time_point deadline);
+  bool returned(std::size_t i);
+
+ private:
+  struct Shared {
+    std::mutex mutex;
+    std::condition_variable cv;
+    std::vector<char> done;
+  };
+  std::shared_ptr<Shared> shared_ = std::make_shared<Shared>();
+  std::vector<std::thread> threads_;
+};
+
+// Gives the calling thread an alternate signal stack, so that a crash handler can run even
+// when a component overflowed its stack (fba-run installs the handler).
+void prepare_thread_for_crash_reports();
+
+extern thread_local const Node* t_active_node;
+extern thread_local const char* t_active_call;
 
 std::unique_ptr<Executor> make_threaded_executor(Graph& g, int threads);
 std::unique_ptr<Executor> make_deterministic_executor(Graph& g);

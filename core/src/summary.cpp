@@ -35,7 +35,10 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
   j["outcome"] = to_string(r.outcome);
   j["exit_code"] = r.exit_code();
   j["reason"] = r.reason;
+  if (!r.phase.empty()) j["phase"] = r.phase;
+  if (r.signal > 0) j["signal"] = r.signal;
   j["wall_time_s"] = r.wall_s;
+  j["lost_to_restarts"] = r.lost_to_restarts;
   // The final event is written once: by its index in `events` when it is listed there.
   j["final_event"] = nullptr;
   if (r.final_event) {
@@ -55,7 +58,8 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
             {"invocations_per_s", c.invocations / wall},
             {"samples_out_per_s", c.samples_out / wall},
             {"errors", c.errors},
-            {"restarts", c.restarts}};
+            {"restarts", c.restarts},
+            {"lost_to_restarts", c.lost_to_restarts}};
     if (!c.stage.empty()) cj["stage"] = c.stage;
     comps[c.name] = cj;
   }
@@ -75,6 +79,12 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
   json events = json::array();
   for (const auto& e : r.events) events.push_back({{"source", e.source}, {"name", e.name}, {"payload", e.payload}, {"time_s", e.stamp_ns * 1e-9}});
   j["events"] = events;
+  json stuck = json::array();
+  for (const auto& c : r.stuck) stuck.push_back({{"component", c.component}, {"type", c.type}, {"call", c.call}});
+  j["stuck"] = stuck;
+  json safe = json::object();
+  for (const auto& s : r.safe_states) safe[s.component] = {{"status", s.status}, {"message", s.message}};
+  j["safe_states"] = safe;
   // Payloads are free-form bytes: invalid UTF-8 is replaced rather than failing the summary.
   return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
 }

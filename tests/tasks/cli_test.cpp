@@ -1,62 +1,18 @@
 // fba-run's contract with the shell: exit statuses, signals, --check, --dot, --output-dir.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <fcntl.h>
+#include <nlohmann/json.hpp>
 
-#include <chrono>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
-#include <thread>
-
-extern char** environ;
+#include "fba_run_process.hpp"
 
 namespace {
 
-namespace fs = std::filesystem;
-
-struct Result {
-  int status = -1;  // exit status, or 128 + signal
-  std::string output;
-};
-
-// Runs fba-run with arguments; optionally sends `signal` after `delay`.
-Result fba_run(std::vector<std::string> args, int signal = 0, std::chrono::milliseconds delay = {}) {
-  const fs::path log = fs::path(testing::TempDir()) / ("fba-run-" + std::to_string(getpid()) + ".log");
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  args.insert(args.begin(), FBA_RUN);
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  Result r;
-  if (posix_spawn(&pid, FBA_RUN, &actions, nullptr, argv.data(), environ) != 0) return r;
-  posix_spawn_file_actions_destroy(&actions);
-  if (signal) {
-    std::this_thread::sleep_for(delay);
-    kill(pid, signal);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  std::ifstream in(log);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.output = ss.str();
-  return r;
-}
+using namespace fba::test;
 
 std::string task(const std::string& name) { return std::string(FBA_TASKS_DIR) + "/examples/" + name; }
 
 std::string write_task(const std::string& name, const std::string& text) {
-  const fs::path p = fs::path(testing::TempDir()) / name;
+  const fs::path p = temp_dir("task") / name;
   std::ofstream(p) << text;
   return p.string();
 }
@@ -112,25 +68,216 @@ connections: [ src.out -> bad.in, bad.out -> sink.in ]
 }
 
 TEST(Cli, TimeoutExitsThree) {
-  const auto r = fba_run({write_task("long.yaml", kLong), "--timeout", "0.5"});
+  const auto r = fba_run({write_task("long.yaml", kLong), "--timeout", "0.2"});
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.output.find("timed out"), std::string::npos) << r.output;
 }
 
-TEST(Cli, SigintAndSigtermStopInOrderWith130) {
+// At once, while fba-run is still starting: the signal waits for the watcher, which stops the
+// run in order whatever the phase (the summary says which).
+TEST(Cli, SigintAndSigtermStopInOrderWith130And143) {
   for (int sig : {SIGINT, SIGTERM}) {
-    const fs::path out = fs::path(testing::TempDir()) / ("sig" + std::to_string(sig));
-    fs::remove_all(out);
-    const auto start = std::chrono::steady_clock::now();
-    const auto r = fba_run({write_task("long.yaml", kLong), "--output-dir", out.string()}, sig, std::chrono::milliseconds(500));
-    EXPECT_EQ(r.status, 130) << r.output;
-    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
-    EXPECT_NE(r.output.find("safe state reached"), std::string::npos) << r.output;
-    std::ifstream summary(out / "summary.json");
-    std::stringstream ss;
-    ss << summary.rdbuf();
-    EXPECT_NE(ss.str().find("\"outcome\": \"interrupted\""), std::string::npos) << ss.str();
+    const fs::path out = temp_dir("sig");
+    Process p({write_task("long.yaml", kLong), "--output-dir", out.string()}, {}, true);
+    p.signal(sig);
+    const auto r = p.wait();
+    EXPECT_EQ(r.status, sig == SIGINT ? 130 : 143) << r.output;
+    const std::string summary = read_file(out / "summary.json");
+    EXPECT_NE(summary.find("\"outcome\": \"interrupted\""), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\"phase\": "), std::string::npos) << summary;
+    EXPECT_NE(summary.find(sig == SIGINT ? "interrupted by SIGINT" : "interrupted by SIGTERM"), std::string::npos) << summary;
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Misbehaving components (tests/plugins/misbehaving): every way out ends with the documented
+// exit status, a valid summary.json naming the cause, and the actuator's safe state attempted.
+
+const char* kMisbehaving = R"(
+components:
+  act: { type: test.misbehaving_actuator, params: { mode: none } }
+  src: { type: examples.counter, params: { count: 1000000000 } }
+  bad: { type: test.misbehaving, params: { mode: none, after: 3 } }
+connections: [ src.out -> bad.in, bad.out -> act.in ]
+)";
+
+struct Misbehaved {
+  Result run;
+  nlohmann::json summary;  // null when missing or not valid JSON
+  bool safe_state = false;
+  fs::path out;
+};
+
+// Runs kMisbehaving (or `task`) with the test plugin, a short grace, and extra arguments.
+Misbehaved misbehave(std::vector<std::string> args, const std::string& task = kMisbehaving,
+                     const std::vector<std::string>& env = {}) {
+  Misbehaved m;
+  m.out = temp_dir("misbehaving");
+  args.insert(args.begin(), {write_task("misbehaving.yaml", task), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+                             m.out.string(), "--stop-grace", "0.2"});
+  m.run = fba_run(args, env);
+  m.summary = nlohmann::json::parse(read_file(m.out / "summary.json"), nullptr, false);
+  if (m.summary.is_discarded()) m.summary = nullptr;
+  m.safe_state = fs::exists(m.out / "safe_state.act");
+  return m;
+}
+
+std::string reason(const Misbehaved& m) { return m.summary.is_object() ? m.summary.value("reason", "") : ""; }
+
+TEST(CliMisbehaving, AnExceptionFromProcessExitsThreeNamingTheComponent) {
+  const auto m = misbehave({"--set", "bad.mode=throw_exception"});
+  EXPECT_EQ(m.run.status, 3) << m.run.output;
+  ASSERT_TRUE(m.summary.is_object()) << m.run.output;
+  EXPECT_EQ(m.summary["outcome"], "runtime_error");
+  EXPECT_EQ(reason(m), "component 'bad' (test.misbehaving) failed: misbehaving on purpose");
+  EXPECT_TRUE(m.safe_state);
+}
+
+TEST(CliMisbehaving, ANonExceptionFromProcessExitsThreeNamingTheComponentAndTheCall) {
+  const auto m = misbehave({"--set", "bad.mode=throw_int"});
+  EXPECT_EQ(m.run.status, 3) << m.run.output;
+  EXPECT_EQ(reason(m), "component 'bad' (test.misbehaving) threw a non-exception (not derived from std::exception) from process()");
+  EXPECT_TRUE(m.safe_state);
+}
+
+TEST(CliMisbehaving, AConstructorThrowingAnIntIsAConfigurationErrorAndEarlierActuatorsGoSafe) {
+  const auto m = misbehave({"--set", "bad.mode=throw_in_constructor_int"});
+  EXPECT_EQ(m.run.status, 2) << m.run.output;
+  ASSERT_TRUE(m.summary.is_object()) << m.run.output;
+  EXPECT_EQ(m.summary["outcome"], "configuration_error");
+  EXPECT_EQ(m.summary["phase"], "constructing");
+  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) refused its configuration: it threw a non-exception"), std::string::npos)
+      << reason(m);
+  EXPECT_TRUE(m.safe_state);  // 'act' was constructed first
+}
+
+TEST(CliMisbehaving, ASegfaultExitsThreeNamingTheComponentAfterTheSafeStates) {
+  const auto m = misbehave({"--set", "bad.mode=segfault"});
+  EXPECT_EQ(m.run.status, 3) << m.run.output;
+  EXPECT_NE(m.run.output.find("fatal signal SIGSEGV in component 'bad' (test.misbehaving) during process()"), std::string::npos)
+      << m.run.output;
+  EXPECT_NE(reason(m).find("in component 'bad' (test.misbehaving) during process()"), std::string::npos) << reason(m);
+  EXPECT_TRUE(m.safe_state);
+}
+
+TEST(CliMisbehaving, AProcessThatNeverReturnsIsNamedAndTheRunStillEnds) {
+  const auto m = misbehave({"--set", "bad.mode=block_process", "--timeout", "0.3"});
+  EXPECT_EQ(m.run.status, 3) << m.run.output;
+  ASSERT_TRUE(m.summary.is_object()) << m.run.output;
+  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) did not return from process()"), std::string::npos) << reason(m);
+  ASSERT_EQ(m.summary["stuck"].size(), 1u);
+  EXPECT_EQ(m.summary["stuck"][0]["component"], "bad");
+  EXPECT_EQ(m.summary["stuck"][0]["call"], "process()");
+  EXPECT_TRUE(m.safe_state);
+}
+
+TEST(CliMisbehaving, ASafeStateThatNeverReturnsIsNamedAndTheRunStillEnds) {
+  const auto m = misbehave({"--set", "act.mode=block_safe_state", "--set", "src.count=5"});
+  EXPECT_EQ(m.run.status, 3) << m.run.output;
+  ASSERT_TRUE(m.summary.is_object()) << m.run.output;
+  EXPECT_NE(reason(m).find("component 'act' (test.misbehaving_actuator) did not return from safe_state()"), std::string::npos)
+      << reason(m);
+  EXPECT_EQ(m.summary["safe_states"]["act"]["status"], "did not return");
+  EXPECT_TRUE(m.safe_state);
+}
+
+TEST(CliMisbehaving, ExitZeroFromProcessExitsThreeNamingTheComponent) {
+  const auto m = misbehave({"--set", "bad.mode=exit_zero"});
+  EXPECT_EQ(m.run.status, 3) << m.run.output;
+  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) called exit() from process()"), std::string::npos) << reason(m);
+  EXPECT_TRUE(m.safe_state);
+}
+
+TEST(CliMisbehaving, ExitZeroWhileLoadingThePluginExitsThree) {
+  const auto m = misbehave({}, kMisbehaving, {"FBA_TEST_EXIT_IN_STATIC_INIT=1"});
+  EXPECT_EQ(m.run.status, 3) << m.run.output;
+  ASSERT_TRUE(m.summary.is_object()) << m.run.output;
+  EXPECT_EQ(m.summary["phase"], "loading");
+  EXPECT_NE(reason(m).find("a plugin called exit() while loading"), std::string::npos) << reason(m);
+  EXPECT_FALSE(m.safe_state);  // nothing was constructed
+}
+
+TEST(CliMisbehaving, ASensorThatNeverFinishesEndsAtTheTimeout) {
+  const auto m = misbehave({"--timeout", "0.3"}, R"(
+components:
+  act: { type: test.misbehaving_actuator }
+  src: { type: test.misbehaving_sensor, params: { mode: never_finish } }
+connections: [ src.out -> act.in ]
+)");
+  EXPECT_EQ(m.run.status, 3) << m.run.output;
+  EXPECT_NE(reason(m).find("timed out"), std::string::npos) << reason(m);
+  EXPECT_TRUE(m.safe_state);
+}
+
+// Once the actuators exist, a signal puts them in their safe state; a second one forces the
+// exit when a component holds the stop back.
+TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
+  for (int sig : {SIGINT, SIGTERM}) {
+    const fs::path out = temp_dir("sig-running");
+    Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir", out.string()});
+    ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
+    p.signal(sig);
+    const auto r = p.wait();
+    EXPECT_EQ(r.status, sig == SIGINT ? 130 : 143) << r.output;
+    EXPECT_TRUE(fs::exists(out / "safe_state.act"));
+    const auto summary = nlohmann::json::parse(read_file(out / "summary.json"));
+    EXPECT_EQ(summary["phase"], "running");
+    EXPECT_EQ(summary["exit_code"], sig == SIGINT ? 130 : 143);
+  }
+}
+
+TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) {
+  const fs::path out = temp_dir("second-sigint");
+  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir", out.string(), "--set",
+             "bad.mode=block_process", "--stop-grace", "600"});
+  ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
+  p.signal(SIGINT);
+  ASSERT_TRUE(p.wait_for_output("SIGINT received")) << p.output();
+  p.signal(SIGINT);
+  const auto r = p.wait();
+  EXPECT_EQ(r.status, 130) << r.output;
+  EXPECT_NE(r.output.find("second SIGINT while stopping: exiting now"), std::string::npos) << r.output;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The output's readers and the summary's file
+
+TEST(Cli, AStderrReaderThatWentAwayDoesNotStopTheRun) {
+  const fs::path out = temp_dir("epipe");
+  int fds[2];
+  ASSERT_EQ(pipe(fds), 0);
+  close(fds[0]);  // the reader is gone before the first line: every write fails with EPIPE
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
+  std::vector<std::string> args{FBA_RUN, task("chain.yaml"), "--output-dir", out.string(), "--log-level", "debug"};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, FBA_RUN, &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  close(fds[1]);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_NE(read_file(out / "summary.json").find("\"outcome\": \"success\""), std::string::npos);
+}
+
+TEST(Cli, ASummaryThatCannotBeWrittenFailsTheRun) {
+  const fs::path dir = temp_dir("summary-dir");
+  fs::create_directory(dir / "summary.json");
+  auto r = fba_run({task("chain.yaml"), "--output-dir", dir.string()});
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("could not write the summary " + (dir / "summary.json").string()), std::string::npos) << r.output;
+
+  const fs::path full = temp_dir("summary-full");
+  fs::create_symlink("/dev/full", full / "summary.json");
+  r = fba_run({task("chain.yaml"), "--output-dir", full.string()});
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find((full / "summary.json").string() + ": No space left on device"), std::string::npos) << r.output;
 }
 
 TEST(Cli, CheckValidatesWithoutRunning) {
@@ -147,8 +294,7 @@ TEST(Cli, DotPrintsTheGraph) {
 }
 
 TEST(Cli, OutputDirHoldsTheSummary) {
-  const fs::path out = fs::path(testing::TempDir()) / "summary-test";
-  fs::remove_all(out);
+  const fs::path out = temp_dir("summary-test");
   ASSERT_EQ(fba_run({task("chain.yaml"), "-o", out.string(), "-e", "deterministic"}).status, 0);
   std::ifstream in(out / "summary.json");
   std::stringstream ss;

@@ -21,7 +21,8 @@ class Graph;
 enum class Outcome { Success, Failure, ConfigError, RuntimeError, Interrupted };
 const char* to_string(Outcome o);
 // fba-run's exit status: 0 success, 1 failure event, 2 configuration error, 3 runtime error
-// (including a timeout or a stall), 130 interrupted.
+// (including a timeout, a stall or a component that did not return after the stop), 130
+// interrupted (143 when by SIGTERM: see RunResult::signal).
 int exit_code(Outcome o);
 
 struct RunOptions {
@@ -29,13 +30,31 @@ struct RunOptions {
   int threads = 0;                       // overrides the task file; 0 keeps it
   std::filesystem::path output_dir;      // artefacts; empty for none
   double timeout_s = 0;                  // 0: no limit; beyond 9e9 s (or not finite), no limit either
+  // After a stop: how long running components get to return (after interrupt()), and how long
+  // each actuator's safe_state() gets. A call still running then is reported and left behind.
+  double stop_grace_s = 5;
+  // A warning names what the run waits for when no component has produced anything this long.
+  double stall_warning_s = 10;
 };
 
 struct ComponentStats {
   std::string name, type;
   Kind kind = Kind::Filter;
   std::uint64_t invocations = 0, samples_in = 0, samples_out = 0, errors = 0, restarts = 0;
+  std::uint64_t lost_to_restarts = 0;  // input samples taken by invocations that failed and restarted
   std::string stage;
+};
+
+// A component call that had not returned when the run ended: its thread was left behind.
+struct StuckCall {
+  std::string component, type, call;  // call: "process()", "safe_state()", ...
+};
+
+// What an actuator's safe_state() did at the end of the run.
+struct SafeStateResult {
+  std::string component;
+  std::string status;  // "reached", "failed", "did not return", "not constructed"
+  std::string message;
 };
 
 struct ConnectionStats {
@@ -56,8 +75,22 @@ struct RunResult {
   std::vector<ComponentStats> components;
   std::vector<ConnectionStats> connections;
   std::vector<Event> events;  // every event emitted, in order (bounded: the first 10000)
-  int exit_code() const { return fba::exit_code(outcome); }
+  std::vector<StuckCall> stuck;
+  std::vector<SafeStateResult> safe_states;
+  std::uint64_t lost_to_restarts = 0;  // the components' total
+  std::string phase;  // where fba-run was when it ended: loading, constructing, running
+  int signal = 0;     // the signal that interrupted the run, if any: its exit status is 128 + signal
+  int exit_code() const { return outcome == Outcome::Interrupted && signal > 0 ? 128 + signal : fba::exit_code(outcome); }
 };
+
+// The component call running on the calling thread, for crash and exit reports; null fields
+// when none. Async-signal-safe: it only reads a thread-local pointer.
+struct ActiveCall {
+  const char* component = nullptr;
+  const char* type = nullptr;
+  const char* call = nullptr;
+};
+ActiveCall active_call() noexcept;
 
 // summary.json: outcome, final event, wall time, per-component counts and rates.
 std::string summary_json(const RunResult& result, const TaskConfig& task);
@@ -80,6 +113,12 @@ class Task {
   RunResult run();
   // From any thread (signal watcher, a test): stop in order with this outcome.
   void request_stop(Outcome outcome, const std::string& reason);
+  // Last resort after a crash, on the crashing thread: calls safe_state() on every constructed
+  // actuator whose safe state was not attempted yet, catching everything. Not async-signal-safe
+  // (components run arbitrary code): best effort.
+  void emergency_safe_states() noexcept;
+  // The actuators' safe states so far, for a forced exit's message: "name (status)", ...
+  std::string safe_states_so_far() const;
 
  private:
   std::unique_ptr<detail::Graph> graph_;

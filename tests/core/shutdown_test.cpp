@@ -1,0 +1,404 @@
+// The stop path's rules: every way out interrupts what runs, puts every actuator in its safe
+// state, reports calls that did not return by name (and leaves them behind), catches whatever a
+// component throws, and counts what restarts lost.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include <fba/component.hpp>
+#include <fba/task.hpp>
+
+#include "test_components.hpp"
+
+using fba::ExecutorKind;
+using fba::Outcome;
+using fba::test::load;
+
+namespace {
+
+std::atomic<int> g_stuck_entered{0};
+std::atomic<int> g_interrupt_entered{0};
+std::atomic<int> g_constructions{0};
+std::atomic<int> g_safe_states{0};
+
+// Blocks in process() for good: interrupt() does not help.
+class Stuck final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::filter("test.stuck", "Never returns from process(), whatever it is told.")
+        .input<std::int64_t>("in", "anything")
+        .output<std::int64_t>("out", "nothing");
+  }
+  explicit Stuck(fba::Context&) {}
+  void process() override {
+    g_stuck_entered.fetch_add(1);
+    for (;;) pause();
+  }
+};
+
+// An actuator whose safe_state() never returns.
+class HangingSafeState final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::actuator("test.hanging_safe_state", "Its safe_state() never returns.").input<std::int64_t>("in", "anything");
+  }
+  explicit HangingSafeState(fba::Context&) {}
+  void process() override {}
+  void safe_state() override {
+    for (;;) pause();
+  }
+};
+
+// Counts its safe states, so a test sees them when no run result exists.
+class CountedActuator final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::actuator("test.counted_actuator", "Counts calls of safe_state().").optional_input<std::int64_t>("in", "anything");
+  }
+  explicit CountedActuator(fba::Context&) {}
+  void process() override {}
+  void safe_state() override { g_safe_states.fetch_add(1); }
+};
+
+// Throws an int (not a std::exception) from the call its parameter names.
+class IntThrower final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::actuator("test.int_thrower", "Throws 42 from one call.")
+        .input<std::int64_t>("in", "anything")
+        .param("from", "process", "process, end_of_stream, safe_state, constructor, or restart (process, then the constructor)");
+  }
+  explicit IntThrower(fba::Context& ctx) : from_(ctx.param<std::string>("from")) {
+    const int n = g_constructions.fetch_add(1);
+    if (from_ == "constructor" || (from_ == "restart" && n > 0)) throw 7;
+  }
+  void process() override {
+    if (from_ == "process") throw 42;
+    if (from_ == "restart") throw std::runtime_error("first failure");
+  }
+  void end_of_stream() override {
+    if (from_ == "end_of_stream") throw 42;
+  }
+  void safe_state() override {
+    if (from_ == "safe_state") throw 42;
+  }
+
+ private:
+  std::string from_;
+};
+
+// Blocks in process() until interrupted; its interrupt() then throws.
+class ThrowingInterrupt final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::actuator("test.throwing_interrupt", "interrupt() releases process() and throws 5.")
+        .input<std::int64_t>("in", "anything")
+        .blocking();
+  }
+  explicit ThrowingInterrupt(fba::Context&) {}
+  void process() override {
+    g_interrupt_entered.fetch_add(1);
+    std::unique_lock lock(mutex_);
+    cv_.wait(lock, [this] { return interrupted_; });
+  }
+  void interrupt() override {
+    {
+      std::lock_guard lock(mutex_);
+      interrupted_ = true;
+    }
+    cv_.notify_all();
+    throw 5;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool interrupted_ = false;
+};
+
+// Fails every invocation, on a thread of its own: restarts run while the stop interrupts it.
+class AlwaysFails final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::filter("test.always_fails", "Throws from every process().")
+        .input<std::int64_t>("in", "anything")
+        .output<std::int64_t>("out", "nothing")
+        .blocking();
+  }
+  explicit AlwaysFails(fba::Context&) { g_constructions.fetch_add(1); }
+  void process() override { throw std::runtime_error("always"); }
+  void interrupt() override {}  // process() never waits
+};
+
+// Free-running, produces nothing, never finishes.
+class Idle final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::sensor("test.idle", "Runs and produces nothing.").output<std::int64_t>("out", "nothing").trigger({fba::TriggerPolicy::Free, 0});
+  }
+  explicit Idle(fba::Context&) {}
+  void process() override { std::this_thread::yield(); }
+};
+
+}  // namespace
+
+FBA_COMPONENT(Stuck);
+FBA_COMPONENT(HangingSafeState);
+FBA_COMPONENT(CountedActuator);
+FBA_COMPONENT(IntThrower);
+FBA_COMPONENT(ThrowingInterrupt);
+FBA_COMPONENT(AlwaysFails);
+FBA_COMPONENT(Idle);
+
+namespace {
+
+fba::RunOptions options(ExecutorKind e, double grace_s = 0.1) {
+  fba::RunOptions o;
+  o.executor = e;
+  o.stop_grace_s = grace_s;
+  return o;
+}
+
+bool has_event(const fba::RunResult& r, const std::string& source, const std::string& name, const std::string& payload_part = "") {
+  for (const auto& e : r.events)
+    if (e.source == source && e.name == name && e.payload.find(payload_part) != std::string::npos) return true;
+  return false;
+}
+
+const fba::SafeStateResult* safe_state_of(const fba::RunResult& r, const std::string& name) {
+  for (const auto& s : r.safe_states)
+    if (s.component == name) return &s;
+  return nullptr;
+}
+
+// Stops the task from another thread once `counter` went past `seen`.
+std::thread stop_when(fba::Task& task, std::atomic<int>& counter, int seen) {
+  return std::thread([&task, &counter, seen] {
+    while (counter.load() <= seen) std::this_thread::yield();
+    task.request_stop(Outcome::Interrupted, "stopped by the test");
+  });
+}
+
+class Shutdown : public ::testing::TestWithParam<ExecutorKind> {};
+
+TEST_P(Shutdown, AComponentStuckInProcessIsNamedLeftBehindAndTheSafeStatesStillRun) {
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 1000000000 } }
+  stuck: { type: test.stuck }
+  sink: { type: examples.sink }
+connections: [ src.out -> stuck.in, src.out -> sink.in ]
+)"),
+                 options(GetParam()));
+  auto stopper = stop_when(task, g_stuck_entered, g_stuck_entered.load());
+  const auto r = task.run();
+  stopper.join();
+  EXPECT_EQ(r.outcome, Outcome::RuntimeError);
+  EXPECT_EQ(r.exit_code(), 3);
+  ASSERT_EQ(r.stuck.size(), 1u);
+  EXPECT_EQ(r.stuck[0].component, "stuck");
+  EXPECT_EQ(r.stuck[0].type, "test.stuck");
+  EXPECT_EQ(r.stuck[0].call, "process()");
+  EXPECT_NE(r.reason.find("component 'stuck' (test.stuck) did not return from process()"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("stopped by the test"), std::string::npos) << r.reason;
+  ASSERT_NE(safe_state_of(r, "sink"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "sink")->status, "reached");
+  EXPECT_TRUE(has_event(r, "sink", "safe_state"));
+  const std::string summary = fba::summary_json(r, fba::TaskConfig{});
+  EXPECT_NE(summary.find("\"call\": \"process()\""), std::string::npos) << summary;
+}  // the task's destructor leaves the stuck component alone
+
+TEST_P(Shutdown, ASafeStateThatNeverReturnsIsNamedAndTheOthersStillRun) {
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 3 } }
+  hang: { type: test.hanging_safe_state }
+  sink: { type: examples.sink }
+connections: [ src.out -> hang.in, src.out -> sink.in ]
+)"),
+                 options(GetParam()));
+  const auto r = task.run();
+  EXPECT_EQ(r.outcome, Outcome::RuntimeError);
+  ASSERT_EQ(r.stuck.size(), 1u);
+  EXPECT_EQ(r.stuck[0].component, "hang");
+  EXPECT_EQ(r.stuck[0].call, "safe_state()");
+  EXPECT_NE(r.reason.find("component 'hang' (test.hanging_safe_state) did not return from safe_state()"), std::string::npos)
+      << r.reason;
+  ASSERT_NE(safe_state_of(r, "hang"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "hang")->status, "did not return");
+  ASSERT_NE(safe_state_of(r, "sink"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "sink")->status, "reached");
+}
+
+TEST_P(Shutdown, ANonExceptionFromProcessOrEndOfStreamNamesTheComponentAndTheCall) {
+  for (const std::string call : {"process", "end_of_stream"}) {
+    fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 3 } }
+  t: { type: test.int_thrower, params: { from: )" + call + R"( } }
+connections: [ src.out -> t.in ]
+)"),
+                   options(GetParam()));
+    const auto r = task.run();
+    EXPECT_EQ(r.outcome, Outcome::RuntimeError);
+    EXPECT_EQ(r.reason, "component 't' (test.int_thrower) threw a non-exception (not derived from std::exception) from " + call + "()");
+    ASSERT_NE(safe_state_of(r, "t"), nullptr);
+    EXPECT_EQ(safe_state_of(r, "t")->status, "reached");
+  }
+}
+
+TEST_P(Shutdown, ANonExceptionFromSafeStateFailsTheRunWithItsName) {
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 3 } }
+  t: { type: test.int_thrower, params: { from: safe_state } }
+connections: [ src.out -> t.in ]
+)"),
+                 options(GetParam()));
+  const auto r = task.run();
+  EXPECT_EQ(r.outcome, Outcome::RuntimeError);
+  EXPECT_NE(r.reason.find("component 't' could not reach a safe state: threw a non-exception (not derived from std::exception) from safe_state()"),
+            std::string::npos)
+      << r.reason;
+  ASSERT_NE(safe_state_of(r, "t"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "t")->status, "failed");
+}
+
+TEST(Shutdown, AnInterruptThatThrowsIsReportedAndTheStopCompletes) {
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 1000000000 } }
+  dev: { type: test.throwing_interrupt }
+connections: [ src.out -> dev.in ]
+)"),
+                 options(ExecutorKind::Threaded));
+  auto stopper = stop_when(task, g_interrupt_entered, g_interrupt_entered.load());
+  const auto r = task.run();
+  stopper.join();
+  EXPECT_EQ(r.outcome, Outcome::Interrupted);
+  EXPECT_TRUE(r.stuck.empty());
+  EXPECT_TRUE(has_event(r, "dev", "error", "threw a non-exception (not derived from std::exception) from interrupt()"));
+}
+
+TEST(Shutdown, AConstructorThrowingANonExceptionIsAConfigurationErrorAndEarlierActuatorsGoSafe) {
+  g_constructions = 0;
+  const int safe_before = g_safe_states.load();
+  try {
+    fba::Task task(load(R"(
+components:
+  first: { type: test.counted_actuator }
+  t: { type: test.int_thrower, params: { from: constructor } }
+  src: { type: examples.counter }
+connections: [ src.out -> t.in ]
+)"),
+                   options(ExecutorKind::Threaded));
+    FAIL() << "the constructor's throw was not reported";
+  } catch (const fba::ConfigError& e) {
+    ASSERT_FALSE(e.diagnostics().empty());
+    EXPECT_NE(e.diagnostics()[0].message.find(
+                  "component 't' (test.int_thrower) refused its configuration: it threw a non-exception (not derived from "
+                  "std::exception) from its constructor"),
+              std::string::npos)
+        << e.diagnostics()[0].message;
+  }
+  EXPECT_EQ(g_safe_states.load(), safe_before + 1);
+}
+
+TEST_P(Shutdown, ARestartWhoseConstructorThrowsANonExceptionStopsWithItsName) {
+  g_constructions = 0;
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 3 } }
+  t: { type: test.int_thrower, params: { from: restart }, on_error: restart }
+connections: [ src.out -> t.in ]
+)"),
+                 options(GetParam()));
+  const auto r = task.run();
+  EXPECT_EQ(r.outcome, Outcome::RuntimeError);
+  EXPECT_EQ(r.reason,
+            "component 't' (test.int_thrower) could not be restarted: threw a non-exception (not derived from std::exception) "
+            "from its constructor");
+}
+
+TEST_P(Shutdown, ARestartThatRecoveredSucceedsAndCountsTheLostSamples) {
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 12 } }
+  bad: { type: examples.faulty, params: { fail_after: 5 }, on_error: { policy: restart, max_restarts: 2 } }
+  m: { type: test.merge }
+  sink: { type: examples.sink }
+connections: [ src.out -> bad.in, bad.out -> m.a, m.out -> sink.in ]
+)"),
+                 options(GetParam()));
+  const auto r = task.run();
+  EXPECT_EQ(r.outcome, Outcome::Success) << r.reason;
+  ASSERT_EQ(r.components[1].name, "bad");
+  EXPECT_EQ(r.components[1].restarts, 2u);
+  EXPECT_EQ(r.components[1].lost_to_restarts, 2u);  // the 6th and the 12th sample
+  EXPECT_EQ(r.lost_to_restarts, 2u);
+  EXPECT_EQ(r.components[3].samples_in, 10u);
+  const std::string summary = fba::summary_json(r, fba::TaskConfig{});
+  EXPECT_NE(summary.find("\"lost_to_restarts\": 2"), std::string::npos) << summary;
+}
+
+// The stop interrupts a component while its own thread replaces it after a failure: the
+// component pointer is shared under a lock (ThreadSanitizer reports the race otherwise).
+TEST(Shutdown, InterruptingAComponentThatIsRestartingIsRaceFree) {
+  for (int i = 0; i < 3; ++i) {
+    fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 1000000000 } }
+  flaky: { type: test.always_fails, on_error: { policy: restart, max_restarts: 1000000 } }
+connections: [ src.out -> flaky.in ]
+)"),
+                   options(ExecutorKind::Threaded, 30));
+    auto stopper = stop_when(task, g_constructions, g_constructions.load() + 20);
+    const auto r = task.run();
+    stopper.join();
+    EXPECT_EQ(r.outcome, Outcome::Interrupted) << r.reason;
+    EXPECT_TRUE(r.stuck.empty());
+  }
+}
+
+TEST(Shutdown, AStallWarnsThatTheNextTickIsFarAway) {
+  auto o = options(ExecutorKind::Threaded);
+  o.stall_warning_s = 0.05;
+  o.timeout_s = 2;
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 10, rate: 1e-9 } }
+  sink: { type: examples.sink }
+connections: [ src.out -> sink.in ]
+)"),
+                 o);
+  const auto r = task.run();
+  EXPECT_EQ(r.outcome, Outcome::RuntimeError);
+  EXPECT_TRUE(has_event(r, "fba", "stall_warning", "the next tick of periodic 'src' is 1e+09 s away"));
+  EXPECT_TRUE(has_event(r, "fba", "stall_warning", "before anything can happen"));
+}
+
+TEST(Shutdown, AStallWarnsThatAFreeRunningSensorProducesNothing) {
+  auto o = options(ExecutorKind::Threaded);
+  o.stall_warning_s = 0.05;
+  o.timeout_s = 2;
+  fba::Task task(load(R"(
+components:
+  src: { type: test.idle }
+  sink: { type: examples.sink }
+connections: [ src.out -> sink.in ]
+)"),
+                 o);
+  const auto r = task.run();
+  EXPECT_TRUE(has_event(r, "fba", "stall_warning", "the free-running sensor 'src' runs but produces nothing"));
+}
+
+INSTANTIATE_TEST_SUITE_P(Executors, Shutdown, ::testing::Values(ExecutorKind::Threaded, ExecutorKind::Deterministic),
+                         [](const auto& info) { return info.param == ExecutorKind::Threaded ? "Threaded" : "Deterministic"; });
+
+}  // namespace
