@@ -580,8 +580,17 @@ class Loader {
           ParamSpec ps;
           ps.name = pname;
           ps.type = t->second;
-          if (p["min"] && p["min"].IsScalar()) ps.min = std::strtod(p["min"].Scalar().c_str(), nullptr);
-          if (p["max"] && p["max"].IsScalar()) ps.max = std::strtod(p["max"].Scalar().c_str(), nullptr);
+          for (const char* bound : {"min", "max"}) {
+            const YAML::Node b = p[bound];
+            if (!b) continue;
+            double x = 0;
+            if (!b.IsScalar() || !parse_double(b.Scalar(), x)) {
+              err(b, "parameter '" + pname + "': " + bound + " must be a finite number; found " +
+                         (b.IsScalar() ? "'" + b.Scalar() + "'" : std::string(node_kind(b))));
+              continue;
+            }
+            (std::string(bound) == "min" ? ps.min : ps.max) = x;
+          }
           if (p["doc"] && p["doc"].IsScalar()) ps.doc = p["doc"].Scalar();
           if (p["default"]) {
             Loader probe(registry_, {});
