@@ -1,5 +1,7 @@
 #include "fba/component.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 
 #include "graph.hpp"
@@ -98,6 +100,9 @@ const std::filesystem::path& Context::task_dir() const { return node_.graph.task
 
 void Context::set_trigger(Trigger t) {
   if (!node_.constructing) throw std::logic_error("set_trigger is only allowed in a component's constructor");
+  // Periods become int64 nanoseconds: the task files' limit, so that no deadline can wrap around.
+  if (t.policy == TriggerPolicy::Periodic && !(t.period_s > 0 && t.period_s <= 1e9))
+    throw std::invalid_argument(fmt::format("a periodic trigger's period must be in (0, 1000000000] seconds; found {}", t.period_s));
   node_.trigger = t;
 }
 

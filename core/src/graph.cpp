@@ -507,10 +507,13 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
     in->buffer = b.get();
     buffers.push_back(std::move(b));
   }
-  // Outputs nobody listens to still need their declared type for the emit check.
+  // Outputs nobody listens to still need their type for the emit check: as the loader resolved it.
   for (auto& n : nodes)
     for (auto& out : n->output_states)
-      if (!out->type) out->type = out->spec->type;
+      if (!out->type) {
+        const auto t = n->config.output_types.find(out->spec->name);
+        out->type = t != n->config.output_types.end() ? t->second : out->spec->type;
+      }
   for (const auto& r : config.rules) {
     Node* src = by_name.at(r.source);
     auto& event_rules = src->rules[r.event];

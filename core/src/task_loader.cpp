@@ -5,13 +5,16 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <regex>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "fba/task_config.hpp"
 
@@ -31,6 +34,27 @@ std::string Location::str() const {
 }
 
 namespace {
+// Messages echo names and values from files: raw control bytes (NUL, ESC) would reach the
+// terminal, and a newline would split one diagnostic into two lines.
+std::string escape_controls(const std::string& s) {
+  static const char* hex = "0123456789abcdef";
+  std::string out;
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7f) out += std::string("\\x") + hex[c >> 4] + hex[c & 15];
+    else out += ch;
+  }
+  return out;
+}
+
+std::vector<Diagnostic> escaped(std::vector<Diagnostic> ds) {
+  for (auto& d : ds) {
+    d.where.file = escape_controls(d.where.file);
+    d.message = escape_controls(d.message);
+  }
+  return ds;
+}
+
 std::string join_messages(const std::vector<Diagnostic>& ds) {
   std::string s;
   for (const auto& d : ds) s += (s.empty() ? "" : "\n") + d.str();
@@ -38,8 +62,9 @@ std::string join_messages(const std::vector<Diagnostic>& ds) {
 }
 }  // namespace
 
+// The base is built first, from a copy; the member then takes the vector over.
 ConfigError::ConfigError(std::vector<Diagnostic> diagnostics)
-    : std::runtime_error(join_messages(diagnostics)), diagnostics_(std::move(diagnostics)) {}
+    : std::runtime_error(join_messages(escaped(diagnostics))), diagnostics_(escaped(std::move(diagnostics))) {}
 
 const char* to_string(BufferPolicy p) {
   switch (p) {
@@ -77,6 +102,156 @@ Location at(const Source& src, const YAML::Node& n) {
 std::string syntax_message(const YAML::ParserException& e) {
   if (dynamic_cast<const YAML::DeepRecursion*>(&e)) return "YAML syntax: nested too deeply for the YAML parser";
   return "YAML syntax: " + e.msg;
+}
+
+// Task and composite files are read whole, so anything that is not a file of a sensible size is
+// refused before reading: /dev/zero or a FIFO would never end, a huge file would exhaust memory.
+constexpr std::uintmax_t kMaxFileBytes = 4u << 20;
+
+const char* file_kind(fs::file_type t) {
+  switch (t) {
+    case fs::file_type::not_found: return "does not exist";
+    case fs::file_type::directory: return "is a directory";
+    case fs::file_type::character: return "is a character device";
+    case fs::file_type::block: return "is a block device";
+    case fs::file_type::fifo: return "is a FIFO (a pipe)";
+    case fs::file_type::socket: return "is a socket";
+    default: return "is not a regular file";
+  }
+}
+
+// The text of a task or composite file; on failure `problem` says why, as in "'x' PROBLEM".
+std::string read_text(const fs::path& path, std::string& problem) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (st.type() == fs::file_type::none) {
+    problem = "cannot be read: " + ec.message();
+    return {};
+  }
+  if (st.type() != fs::file_type::regular) {
+    problem = std::string(file_kind(st.type())) + (st.type() == fs::file_type::not_found ? "" : "; expected a regular file");
+    return {};
+  }
+  const std::uintmax_t size = fs::file_size(path, ec);
+  const std::string limit = "; task and composite files are limited to 4 MiB (" + std::to_string(kMaxFileBytes) + " bytes)";
+  if (!ec && size > kMaxFileBytes) {
+    problem = "is " + std::to_string(size) + " bytes" + limit;
+    return {};
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    problem = "cannot be opened: " + std::string(std::strerror(errno));
+    return {};
+  }
+  // One byte more than the limit tells a file that grew since it was measured.
+  std::string text(kMaxFileBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxFileBytes) problem = "is larger than 4 MiB" + limit;
+  return text;
+}
+
+// Guards the YAML parser's recursion: deeply nested flow collections would exhaust the stack.
+bool check_nesting(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
+  int depth = 0, line = 1, col = 0;
+  for (char ch : text) {
+    ++col;
+    if (ch == '\n') { ++line; col = 0; }
+    if (ch == '[' || ch == '{') {
+      if (++depth > 64) {
+        d.push_back(Diagnostic{Location{shown, line, col}, "nesting deeper than 64 levels"});
+        return false;
+      }
+    } else if ((ch == ']' || ch == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return true;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
+// YAML allows a plain key of at most 1024 characters; yaml-cpp then reports only "illegal map
+// value". Names that long are found on the failing line and said so.
+std::optional<Diagnostic> long_key(const std::string& text, const std::string& shown, const YAML::Mark& mark) {
+  const auto lines = lines_of(text);
+  if (mark.line < 0 || static_cast<std::size_t>(mark.line) >= lines.size()) return std::nullopt;
+  const std::string& l = lines[static_cast<std::size_t>(mark.line)];
+  const auto start = l.find_first_not_of(" \t-{,");
+  const auto colon = l.find(':', start == std::string::npos ? 0 : start);
+  if (start == std::string::npos || colon == std::string::npos || colon - start <= 1024) return std::nullopt;
+  return Diagnostic{Location{shown, mark.line + 1, static_cast<int>(start) + 1},
+                    "a key of " + std::to_string(colon - start) + " characters; YAML allows keys (names) of at most 1024 characters"};
+}
+
+// One YAML document, or nothing with the reasons added to `d`. A second document would be
+// ignored by a plain load, and its content silently lost.
+std::optional<YAML::Node> parse_yaml(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
+  if (!check_nesting(text, shown, d)) return std::nullopt;
+  std::vector<YAML::Node> docs;
+  try {
+    docs = YAML::LoadAll(text);
+  } catch (const YAML::ParserException& e) {
+    if (auto k = long_key(text, shown, e.mark)) d.push_back(*k);
+    else d.push_back(Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e)});
+    return std::nullopt;
+  } catch (const YAML::Exception& e) {
+    d.push_back(Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, "YAML: " + e.msg});
+    return std::nullopt;
+  }
+  if (docs.empty()) return YAML::Node();
+  if (docs.size() > 1) {
+    // The second document starts at its '---' line, at or before its first node.
+    const auto lines = lines_of(text);
+    int line = docs[1].Mark().line >= 0 ? docs[1].Mark().line : static_cast<int>(lines.size()) - 1;
+    for (int i = std::min(line, static_cast<int>(lines.size()) - 1); i >= 0; --i) {
+      const std::string& l = lines[static_cast<std::size_t>(i)];
+      if (l.rfind("---", 0) == 0 && (l.size() == 3 || l[3] == ' ' || l[3] == '\t' || l[3] == '\r')) {
+        line = i;
+        break;
+      }
+    }
+    d.push_back(Diagnostic{Location{shown, std::max(line, 0) + 1, 1},
+                           "a second YAML document ('---') in one file; a task or composite file is one document"});
+    return std::nullopt;
+  }
+  return docs[0];
+}
+
+// yaml-cpp keeps every duplicate key of a mapping (a lookup finds the first) and reads the merge
+// key '<<' as an ordinary key: both would silently change what a file means, so both are errors.
+// A node reached again through an alias is walked once (aliases can multiply a tree exponentially).
+void check_mappings(const YAML::Node& n, const Source& src, std::vector<Diagnostic>& d, std::set<std::tuple<int, int, bool>>& seen) {
+  if (!n.IsMap() && !n.IsSequence()) return;
+  const YAML::Mark m = n.Mark();
+  if (!seen.insert({m.line, m.column, n.IsMap()}).second) return;
+  if (n.IsSequence()) {
+    for (const auto& e : n) check_mappings(e, src, d, seen);
+    return;
+  }
+  std::map<std::string, YAML::Node> keys;
+  for (auto it = n.begin(); it != n.end(); ++it) {
+    const YAML::Node k = it->first;
+    if (k.IsScalar() && k.Scalar() == "<<" && k.Tag() == "?") {
+      d.push_back(Diagnostic{at(src, k), "YAML merge keys ('<<') are not supported; write the keys out"});
+    } else if (k.IsScalar()) {
+      if (auto [first, fresh] = keys.emplace(k.Scalar(), k); !fresh)
+        d.push_back(Diagnostic{at(src, k), "key '" + k.Scalar() + "' is given twice in one mapping (first at line " +
+                                               std::to_string(first->second.Mark().line + 1) + ", column " +
+                                               std::to_string(first->second.Mark().column + 1) + "); a key can appear once"});
+    }
+    check_mappings(it->second, src, d, seen);
+  }
+}
+
+void check_mappings(const YAML::Node& root, const Source& src, std::vector<Diagnostic>& d) {
+  std::set<std::tuple<int, int, bool>> seen;
+  check_mappings(root, src, d, seen);
 }
 
 std::string list_of(const std::vector<std::string>& v) {
@@ -126,8 +301,9 @@ class Loader {
       // An empty file has no position; its first line is the place to look.
       const Location where = root.Mark().line < 0 ? Location{src.shown, 1, 1} : at(src, root);
       error(where, std::string("a task file is a mapping with the keys components, connections, on; found ") + node_kind(root));
-      throw ConfigError(diags_);
+      throw ConfigError(all_diagnostics());
     }
+    report_mappings(root, src);
     check_keys(root, src, {"task", "doc", "executor", "threads", "include", "components", "connections", "on"});
     if (auto n = root["task"]) task.name = scalar(n, src, "the task's name");
     if (auto n = root["executor"]) {
@@ -138,13 +314,19 @@ class Loader {
     }
     if (auto n = root["threads"]) task.threads = static_cast<int>(integer(n, src, "threads", 0, 256));
     std::set<std::string> include_stack;
+    std::error_code ec;
+    if (!file.empty()) include_stack.insert(fs::weakly_canonical(file, ec).string());  // a task that includes itself
     load_includes(root, src, include_stack);
     if (!root["components"]) error(at(src, root), "a task needs 'components:' (a mapping of name: {type: ..., params: ...})");
     expand(root, src, "", {}, task, {});
     for (const auto& [key, o] : overrides_)
       if (!o.used) error(o.where, "--set " + key + ": the task has no component '" + o.comp + "' with a parameter '" + o.param + "'");
+    // Nothing to run would leave the executor waiting for work that never comes.
+    if (diags_.empty() && task.components.empty())
+      error(at(src, root["components"] ? root["components"] : root), "the task has no components; list at least one under 'components:'");
+    check_thread_limit(task);
     if (diags_.empty()) check_graph(task);
-    if (!diags_.empty()) throw ConfigError(diags_);
+    if (!diags_.empty()) throw ConfigError(all_diagnostics());
     return task;
   }
 
@@ -161,8 +343,46 @@ class Loader {
     bool used = false;
   };
 
+  // A lossless queue of this many samples is already more memory than most hosts should give one
+  // connection; more is a mistake (an extra zero) rather than a design.
+  static constexpr std::int64_t kMaxCapacity = 1000000;
+  // Periods are int64 nanoseconds at run time; this keeps every deadline far from overflow.
+  static constexpr double kMaxPeriodSeconds = 1e9;
+
+  // The first kMaxShown errors are kept, and the rest counted: a file with thousands of mistakes
+  // gets a screenful and the total, not thousands of lines.
+  static constexpr std::size_t kMaxShown = 100;
+
   void error(Location where, std::string message) {
-    if (diags_.size() < 100) diags_.push_back(Diagnostic{std::move(where), std::move(message)});
+    if (diags_.size() < kMaxShown) diags_.push_back(Diagnostic{std::move(where), std::move(message)});
+    else if (more_++ == 0) first_hidden_ = std::move(where);
+  }
+
+  void report_mappings(const YAML::Node& root, const Source& src) {
+    std::vector<Diagnostic> d;
+    check_mappings(root, src, d);
+    for (auto& x : d) error(std::move(x.where), std::move(x.message));
+  }
+
+  std::vector<Diagnostic> all_diagnostics() const {
+    auto all = diags_;
+    if (more_ > 0)
+      all.push_back(Diagnostic{first_hidden_, "... and " + std::to_string(more_) + " more error" + (more_ == 1 ? "" : "s") +
+                                                  " (not shown; the first of them is here)"});
+    return all;
+  }
+
+  // Every thread of its own is a real thread: beyond this, creating them fails mid-start.
+  static constexpr std::size_t kMaxDedicatedThreads = 1024;
+
+  void check_thread_limit(const TaskConfig& task) {
+    std::vector<const ComponentConfig*> own;
+    for (const auto& c : task.components)
+      if (c.dedicated_thread || c.type->spec.is_blocking()) own.push_back(&c);
+    if (own.size() > kMaxDedicatedThreads)
+      error(own[kMaxDedicatedThreads]->where, "at most " + std::to_string(kMaxDedicatedThreads) +
+                                                 " components can have a thread of their own ('thread: dedicated', or a blocking type); found " +
+                                                 std::to_string(own.size()));
   }
 
   void parse_override(const Override& o) {
@@ -183,7 +403,13 @@ class Loader {
       return;
     }
     e.where = where;
-    overrides_[e.comp + "." + e.param] = std::move(e);
+    report_mappings(e.value, Source{where.file, {}, false});
+    const std::string key = e.comp + "." + e.param;
+    if (auto it = overrides_.find(key); it != overrides_.end()) {
+      error(where, "'" + key + "' is set twice on the command line (also by " + it->second.where.file + ")");
+      return;
+    }
+    overrides_[key] = std::move(e);
   }
 
   void check_keys(const YAML::Node& map, const Source& src, const std::vector<std::string>& allowed) {
@@ -193,6 +419,7 @@ class Loader {
         continue;
       }
       const std::string k = it->first.Scalar();
+      if (k == "<<") continue;  // a merge key: reported as unsupported by check_mappings
       if (std::find(allowed.begin(), allowed.end(), k) == allowed.end())
         error(at(src, it->first), "unknown key '" + k + "'; valid keys here: " + list_of(allowed));
     }
@@ -213,14 +440,21 @@ class Loader {
   // Errors point at `place`: a value made by substituting composite parameters has no position.
   std::int64_t integer(const YAML::Node& n, const YAML::Node& place, const Source& src, const std::string& what, std::int64_t lo,
                        std::int64_t hi) {
-    const std::string s = scalar(n, src, what);
+    if (!n.IsScalar()) {
+      error(at(src, place), what + " must be a whole number; found " + node_kind(n));
+      return lo;
+    }
+    const std::string s = n.Scalar();
     std::int64_t v = 0;
     auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
     if (ec != std::errc() || p != s.data() + s.size()) {
       error(at(src, place), what + " must be a whole number; found '" + s + "'");
       return lo;
     }
-    if (v < lo || v > hi) error(at(src, place), what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]; found " + s);
+    if (v < lo || v > hi) {
+      error(at(src, place), what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]; found " + s);
+      return lo;
+    }
     return v;
   }
 
@@ -237,50 +471,57 @@ class Loader {
     return s;
   }
 
-  void load_includes(const YAML::Node& root, const Source& src, std::set<std::string>& stack) {
+  // Returns false when an include cycle was found below `root`: the composites on the cycle are
+  // then left out quietly, as their missing types would only repeat the cycle's one error.
+  bool load_includes(const YAML::Node& root, const Source& src, std::set<std::string>& stack) {
     const YAML::Node inc = root["include"];
-    if (!inc) return;
+    if (!inc) return true;
+    bool acyclic = true;
     std::vector<YAML::Node> items;
     if (inc.IsScalar()) items.push_back(inc);
     else if (inc.IsSequence()) for (const auto& i : inc) items.push_back(i);
     else {
       error(at(src, inc), std::string("include takes a file name or a list of them; found ") + node_kind(inc));
-      return;
+      return true;
     }
     for (const auto& item : items) {
       const std::string rel = scalar(item, src, "an include");
       if (rel.empty()) continue;
       const fs::path path = (src.dir / rel).lexically_normal();
-      std::error_code ec;
-      if (!fs::is_regular_file(path, ec)) {
-        error(at(src, item), "included file '" + rel + "' does not exist (looked for " + path.string() + ")");
+      std::string problem;
+      const std::string text = read_text(path, problem);
+      if (!problem.empty()) {
+        error(at(src, item), "included file '" + rel + "' " + problem + " (looked for " + path.string() + ")");
         continue;
       }
+      std::error_code ec;
       const std::string key = fs::weakly_canonical(path, ec).string();
       if (stack.count(key)) {
         error(at(src, item), "include cycle: '" + rel + "' includes itself, directly or through other files");
+        acyclic = false;
         continue;
       }
       if (included_.count(key)) continue;
       included_.insert(key);
-      YAML::Node doc;
       const Source inner{(src.dir / rel).lexically_normal().string(), path.parent_path()};
-      try {
-        doc = YAML::LoadFile(path.string());
-      } catch (const YAML::ParserException& e) {
-        error(Location{inner.shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e));
-        continue;
-      } catch (const YAML::Exception& e) {
-        error(at(src, item), "included file '" + rel + "' cannot be read: " + e.msg);
-        continue;
-      }
+      std::vector<Diagnostic> parse_errors;
+      const auto parsed = parse_yaml(text, inner.shown, parse_errors);
+      for (auto& x : parse_errors) error(x.where, x.message);
+      if (!parsed) continue;
+      const YAML::Node doc = *parsed;
+      report_mappings(doc, inner);
       if (!doc.IsMap() || !doc["composite"]) {
         error(at(src, item), "included file '" + rel + "' is not a composite definition (a mapping with 'composite: name')");
         continue;
       }
       stack.insert(key);
-      load_includes(doc, inner, stack);
+      const bool inner_acyclic = load_includes(doc, inner, stack);
       stack.erase(key);
+      if (!inner_acyclic) {
+        if (doc["composite"].IsScalar()) broken_types_.insert(doc["composite"].Scalar());
+        acyclic = false;
+        continue;
+      }
       auto def = std::make_shared<CompositeDef>(CompositeDef{path, inner.shown, doc});
       const std::size_t before = diags_.size();
       Spec spec = composite_spec_checked(*def);
@@ -296,6 +537,7 @@ class Loader {
       }
       local_types_.emplace(name, std::make_shared<const TypeEntry>(TypeEntry{std::move(spec), nullptr, def, nullptr, inner.shown}));
     }
+    return acyclic;
   }
 
   Spec composite_spec_checked(const CompositeDef& def) {
@@ -338,8 +580,17 @@ class Loader {
           ParamSpec ps;
           ps.name = pname;
           ps.type = t->second;
-          if (p["min"] && p["min"].IsScalar()) ps.min = std::strtod(p["min"].Scalar().c_str(), nullptr);
-          if (p["max"] && p["max"].IsScalar()) ps.max = std::strtod(p["max"].Scalar().c_str(), nullptr);
+          for (const char* bound : {"min", "max"}) {
+            const YAML::Node b = p[bound];
+            if (!b) continue;
+            double x = 0;
+            if (!b.IsScalar() || !parse_double(b.Scalar(), x)) {
+              err(b, "parameter '" + pname + "': " + bound + " must be a finite number; found " +
+                         (b.IsScalar() ? "'" + b.Scalar() + "'" : std::string(node_kind(b))));
+              continue;
+            }
+            (std::string(bound) == "min" ? ps.min : ps.max) = x;
+          }
           if (p["doc"] && p["doc"].IsScalar()) ps.doc = p["doc"].Scalar();
           if (p["default"]) {
             Loader probe(registry_, {});
@@ -360,7 +611,15 @@ class Loader {
       if (!comps || !comps.IsMap() || !comps[comp]) { err(n, "the composite has no component '" + comp + "'"); return nullptr; }
       const YAML::Node type = comps[comp]["type"];
       const auto te = type && type.IsScalar() ? find_type(type.Scalar()) : nullptr;
-      if (!te) { err(n, "component '" + comp + "' has an unknown type"); return nullptr; }
+      if (!te && type && type.IsScalar() && broken_types_.count(type.Scalar())) return nullptr;  // its errors are reported
+      if (!te && type && type.IsScalar() && type.Scalar() == type_name) {
+        err(n, "composite '" + type_name + "' contains itself (as its component '" + comp + "')");
+        return nullptr;
+      }
+      if (!te) {
+        err(n, "component '" + comp + "' has " + (type && type.IsScalar() ? "an unknown type '" + type.Scalar() + "'" : std::string("no type")));
+        return nullptr;
+      }
       const PortSpec* ps = input ? te->spec.find_input(port) : te->spec.find_output(port);
       if (!ps) err(n, "component '" + comp + "' (" + te->spec.type_name() + ") has no " + (input ? "input" : "output") + " '" + port +
                           "'; it has: " + list_of(names_of(input ? te->spec.inputs() : te->spec.outputs())));
@@ -440,6 +699,27 @@ class Loader {
     out.append(begin, s.cend());
     YAML::Node copy(out);
     return copy;
+  }
+
+  // A setting of the task itself (not a component parameter) after substitution: the text a
+  // literal would have, so that it is checked by the same rules, range included.
+  std::optional<YAML::Node> substituted(const YAML::Node& n, const Bindings& b, const Source& src) {
+    bool whole = false;
+    Value bound;
+    auto v = substitute(n, b, src, whole, bound);
+    if (v && whole) return YAML::Node(to_string(bound));
+    return v;
+  }
+
+  // A scalar setting after substitution; empty when it is missing or not a scalar (reported).
+  std::string text_of(const YAML::Node& n, const Bindings& b, const Source& src, const std::string& what) {
+    const auto v = substituted(n, b, src);
+    if (!v) return {};
+    if (!v->IsScalar()) {
+      error(at(src, n), what + " must be a scalar; found " + node_kind(*v));
+      return {};
+    }
+    return v->Scalar();
   }
 
  public:
@@ -550,10 +830,13 @@ class Loader {
     return v;
   }
 
+  // Numbers in messages are exact (the shortest text that reads back as the same double), so a
+  // value just outside a range never looks like the limit itself. Whole numbers print as such.
   static std::string fmt_num(double d) {
-    std::ostringstream o;
-    o << d;
-    return o.str();
+    if (std::isfinite(d) && d == std::trunc(d) && std::fabs(d) < 1e15) return std::to_string(static_cast<std::int64_t>(d));
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, d);
+    return std::string(buf, r.ptr);
   }
 
   // Reads a component's params against its spec; fills defaults; applies --set overrides.
@@ -571,7 +854,7 @@ class Loader {
                                         "'; its parameters: " + list_of(names_of(spec.params())));
           continue;
         }
-        if (!given.insert(name).second) { error(at(src, it->first), "parameter '" + name + "' given twice"); continue; }
+        if (!given.insert(name).second) continue;  // a duplicate key: reported with both places by check_mappings
         if (auto v = param_value(*ps, it->second, src, bindings)) out[name] = *v;
       }
     }
@@ -642,13 +925,14 @@ class Loader {
     }
     if (comps)
       for (auto it = comps.begin(); it != comps.end(); ++it) {
-        const std::string name = it->first.IsScalar() ? it->first.Scalar() : "";
         const Location where = at(src, it->first);
-        const std::string full = prefix + name;
-        if (kinds_.count(full)) {
-          error(where, "component '" + name + "' is defined twice");
+        if (!it->first.IsScalar()) {
+          error(where, std::string("a component's name is a plain name (letters, digits and '_'); found ") + node_kind(it->first));
           continue;
         }
+        const std::string name = it->first.Scalar();
+        const std::string full = prefix + name;
+        if (kinds_.count(full)) continue;  // a duplicate key: reported with both places by check_mappings
         // A component that cannot be read is still known by name (with no spec), so that the
         // connections and rules naming it do not add a 'no component' error to its own.
         auto reject = [&](const Location& place, const std::string& message) {
@@ -730,10 +1014,10 @@ class Loader {
         cc.where = where;
         cc.trigger = te->spec.default_trigger();
         cc.params = read_params(full, te->spec, c["params"], src, bindings, where);
-        if (const YAML::Node t = c["trigger"]) read_trigger(t, src, cc);
-        if (const YAML::Node e = c["on_error"]) read_error_policy(e, src, cc);
+        if (const YAML::Node t = c["trigger"]) read_trigger(t, src, bindings, cc);
+        if (const YAML::Node e = c["on_error"]) read_error_policy(e, src, bindings, cc);
         if (const YAML::Node t = c["thread"]) {
-          const std::string s = scalar(t, src, "thread");
+          const std::string s = text_of(t, bindings, src, "thread");
           if (s == "dedicated") cc.dedicated_thread = true;
           else if (s != "shared") error(at(src, t), "thread must be 'shared' (the worker pool, default) or 'dedicated'; found '" + s + "'");
         }
@@ -754,13 +1038,13 @@ class Loader {
     }
   }
 
-  void read_trigger(const YAML::Node& t, const Source& src, ComponentConfig& cc) {
+  void read_trigger(const YAML::Node& t, const Source& src, const Bindings& bindings, ComponentConfig& cc) {
     const std::string valid = "any, all, free, or {policy: periodic, period: SECONDS}";
     std::string policy;
-    if (t.IsScalar()) policy = t.Scalar();
+    if (t.IsScalar()) policy = text_of(t, bindings, src, "trigger");
     else if (t.IsMap()) {
       check_keys(t, src, {"policy", "period"});
-      policy = t["policy"] && t["policy"].IsScalar() ? t["policy"].Scalar() : "";
+      policy = t["policy"] ? text_of(t["policy"], bindings, src, "policy") : "";
     } else {
       error(at(src, t), "trigger: " + valid + "; found " + node_kind(t));
       return;
@@ -769,9 +1053,23 @@ class Loader {
     else if (policy == "all") cc.trigger = {TriggerPolicy::All, 0};
     else if (policy == "free") cc.trigger = {TriggerPolicy::Free, 0};
     else if (policy == "periodic") {
+      if (!t.IsMap() || !t["period"]) {
+        error(at(src, t), "a periodic trigger needs period: SECONDS, in (0, " + fmt_num(kMaxPeriodSeconds) + "]");
+        return;
+      }
+      const YAML::Node p = t["period"];
+      const auto v = substituted(p, bindings, src);
+      if (!v) return;
+      const std::string range = "(0, " + fmt_num(kMaxPeriodSeconds) + "] seconds";
+      const std::string text = v->IsScalar() ? v->Scalar() : node_kind(*v);
       double period = 0;
-      if (!t.IsMap() || !t["period"] || !t["period"].IsScalar() || !parse_double(t["period"].Scalar(), period) || !(period > 0)) {
-        error(at(src, t), "a periodic trigger needs period: SECONDS (> 0)");
+      if (!v->IsScalar() || !parse_double(text, period)) {
+        error(at(src, p), "period must be a number in " + range + "; found '" + text + "'");
+        return;
+      }
+      // Periods are kept in int64 nanoseconds: beyond about 9.2e9 s they would wrap around.
+      if (!(period > 0 && period <= kMaxPeriodSeconds)) {
+        error(at(src, p), "period must be in " + range + "; found " + text);
         return;
       }
       cc.trigger = {TriggerPolicy::Periodic, period};
@@ -783,14 +1081,17 @@ class Loader {
       error(at(src, t), "only sensors can be free-running; '" + cc.name + "' is a " + to_string(cc.type->spec.kind()));
   }
 
-  void read_error_policy(const YAML::Node& e, const Source& src, ComponentConfig& cc) {
-    std::string policy = e.IsScalar() ? e.Scalar() : (e.IsMap() && e["policy"] && e["policy"].IsScalar() ? e["policy"].Scalar() : "");
+  void read_error_policy(const YAML::Node& e, const Source& src, const Bindings& bindings, ComponentConfig& cc) {
+    std::string policy = e.IsScalar() ? text_of(e, bindings, src, "on_error")
+                                      : (e.IsMap() && e["policy"] ? text_of(e["policy"], bindings, src, "policy") : "");
     if (e.IsMap()) check_keys(e, src, {"policy", "max_restarts"});
     if (policy == "stop") cc.on_error = ErrorPolicy::Stop;
     else if (policy == "restart") {
       cc.on_error = ErrorPolicy::Restart;
       cc.max_restarts = 3;
-      if (e.IsMap() && e["max_restarts"]) cc.max_restarts = static_cast<int>(integer(e["max_restarts"], src, "max_restarts", 0, 1000000));
+      if (e.IsMap() && e["max_restarts"])
+        if (const auto v = substituted(e["max_restarts"], bindings, src))
+          cc.max_restarts = static_cast<int>(integer(*v, e["max_restarts"], src, "max_restarts", 0, 1000000));
     } else {
       error(at(src, e), "on_error: stop, restart, or {policy: restart, max_restarts: N}; found '" + (e.IsScalar() ? e.Scalar() : std::string(node_kind(e))) + "'");
     }
@@ -830,26 +1131,16 @@ class Loader {
       from = scalar(from_node, src, "from");
       to = scalar(to_node, src, "to");
       if (const YAML::Node b = n["buffer"]) {
-        const std::string p = scalar(b, src, "buffer");
+        const std::string p = text_of(b, bindings, src, "buffer");
         if (p == "lossless") c.policy = BufferPolicy::Lossless;
         else if (p == "drop_oldest") c.policy = BufferPolicy::DropOldest;
         else if (p == "latest") c.policy = BufferPolicy::Latest;
         else error(at(src, b), "buffer '" + p + "' is not one of: lossless (bounded queue, holds the producer back), drop_oldest, latest");
       }
-      if (const YAML::Node cap = n["capacity"]) {
-        bool whole = false;
-        Value bound;
-        if (const auto v = substitute(cap, bindings, src, whole, bound)) {
-          if (whole && std::holds_alternative<std::int64_t>(bound) && std::get<std::int64_t>(bound) >= 1)
-            c.capacity = static_cast<std::size_t>(std::get<std::int64_t>(bound));
-          else if (whole)
-            error(at(src, cap), "capacity must be a whole number >= 1; the composite parameter gives '" + to_string(bound) + "'");
-          else
-            c.capacity = static_cast<std::size_t>(integer(*v, cap, src, "capacity", 1, 1 << 24));
-        }
-      }
+      if (const YAML::Node cap = n["capacity"])
+        if (const auto v = substituted(cap, bindings, src)) c.capacity = static_cast<std::size_t>(integer(*v, cap, src, "capacity", 1, kMaxCapacity));
       if (const YAML::Node fb = n["feedback"]) {
-        const std::string f = scalar(fb, src, "feedback");
+        const std::string f = text_of(fb, bindings, src, "feedback");
         if (f == "true") c.feedback = true;
         else if (f != "false") error(at(src, fb), "feedback is true or false; found '" + f + "'");
       }
@@ -994,6 +1285,13 @@ class Loader {
     for (const auto& c : task.components)
       for (const auto& o : c.type->spec.outputs())
         if (o.same_as.empty()) out_type[{c.name, o.name}] = o.type;
+    // Events arrive as fba.Event: outputs typed like an input that takes delivered events carry that.
+    for (const auto& r : task.rules)
+      if (r.action == RuleAction::Deliver) {
+        in_type[{r.target, r.target_port}] = type_of<Event>();
+        for (const auto& o : comps.at(r.target)->type->spec.outputs())
+          if (o.same_as == r.target_port) out_type[{r.target, o.name}] = type_of<Event>();
+      }
     for (std::size_t pass = 0; pass <= task.components.size() + 1; ++pass) {
       bool changed = false;
       for (auto& c : task.connections) {
@@ -1007,6 +1305,10 @@ class Loader {
       }
       if (!changed) break;
     }
+    // The runtime checks every sample sent against its output's type, connected or not.
+    for (auto& c : task.components)
+      for (const auto& o : c.type->spec.outputs())
+        if (auto t = out_type.find({c.name, o.name}); t != out_type.end()) c.output_types[o.name] = t->second;
     for (auto& c : task.connections) {
       auto ot = out_type.find({c.from, c.from_port});
       if (ot == out_type.end()) {
@@ -1030,6 +1332,8 @@ class Loader {
   const Registry& registry_;
   bool require_inputs_ = true;
   std::vector<Diagnostic> diags_;
+  std::size_t more_ = 0;   // errors beyond kMaxShown
+  Location first_hidden_;  // where the first of them is
   std::map<std::string, OverrideEntry> overrides_;
   std::map<std::string, std::shared_ptr<const TypeEntry>, std::less<>> local_types_;
   std::set<std::string> included_;
@@ -1040,80 +1344,49 @@ class Loader {
 
 TaskConfig load_root(const std::string& text, const std::string& shown, const fs::path& dir, const fs::path& file,
                      const Registry& registry, const LoadOptions& options) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError({Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e)}});
-  } catch (const YAML::Exception& e) {
-    throw ConfigError({Diagnostic{Location{shown, 0, 0}, "YAML: " + e.msg}});
-  }
+  std::vector<Diagnostic> d;
+  const auto root = parse_yaml(text, shown, d);
+  if (!root) throw ConfigError(d);
   Loader loader(registry, options);
   try {
-    return loader.load(root, Source{shown, dir}, file);
+    return loader.load(*root, Source{shown, dir}, file);
   } catch (const ConfigError&) {
     throw;
   } catch (const YAML::Exception& e) {
-    auto d = loader.diags();
-    d.push_back(Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, "YAML: " + e.msg});
-    throw ConfigError(d);
-  }
-}
-
-// Guards the YAML parser's recursion: deeply nested flow collections would exhaust the stack.
-void check_nesting(const std::string& text, const std::string& shown) {
-  int depth = 0, line = 1, col = 0;
-  for (char ch : text) {
-    ++col;
-    if (ch == '\n') { ++line; col = 0; }
-    if (ch == '[' || ch == '{') {
-      if (++depth > 64) throw ConfigError({Diagnostic{Location{shown, line, col}, "nesting deeper than 64 levels"}});
-    } else if ((ch == ']' || ch == '}') && depth > 0) {
-      --depth;
-    }
+    auto all = loader.diags();
+    all.push_back(Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, "YAML: " + e.msg});
+    throw ConfigError(all);
   }
 }
 
 }  // namespace
 
 TaskConfig load_task(const fs::path& file, const Registry& registry, const LoadOptions& options) {
-  std::ifstream in(file, std::ios::binary);
+  std::string problem;
+  const std::string text = read_text(file, problem);
+  if (!problem.empty()) throw ConfigError({Diagnostic{Location{file.string(), 0, 0}, "the task file " + problem}});
   std::error_code ec;
-  if (!in || fs::is_directory(file, ec))
-    throw ConfigError({Diagnostic{Location{file.string(), 0, 0}, "cannot read the task file (does it exist?)"}});
-  std::stringstream ss;
-  ss << in.rdbuf();
   const fs::path abs = fs::absolute(file, ec);
-  check_nesting(ss.str(), file.string());
-  return load_root(ss.str(), file.string(), abs.parent_path(), abs, registry, options);
+  return load_root(text, file.string(), abs.parent_path(), abs, registry, options);
 }
 
 TaskConfig load_task_text(const std::string& text, const std::string& name, const fs::path& dir, const Registry& registry,
                           const LoadOptions& options) {
-  check_nesting(text, name);
   return load_root(text, name, dir, {}, registry, options);
 }
 
 void register_composite_file(Registry& registry, const fs::path& file) {
-  YAML::Node root;
   const std::string shown = file.string();
-  try {
-    std::string text;
-    {
-      std::ifstream in(file, std::ios::binary);
-      std::stringstream ss;
-      ss << in.rdbuf();
-      text = ss.str();
-    }
-    check_nesting(text, shown);
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError({Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e)}});
-  }
-  if (!root.IsMap() || !root["composite"]) throw ConfigError({Diagnostic{Location{shown, 0, 0}, "not a composite definition (no 'composite:' key)"}});
-  auto def = std::make_shared<CompositeDef>(CompositeDef{fs::absolute(file), shown, root});
-  Loader loader(registry, {});
+  std::string problem;
+  const std::string text = read_text(file, problem);
+  if (!problem.empty()) throw ConfigError({Diagnostic{Location{shown, 0, 0}, "the composite file " + problem}});
   std::vector<Diagnostic> d;
+  const auto root = parse_yaml(text, shown, d);
+  if (!root) throw ConfigError(d);
+  if (!root->IsMap() || !(*root)["composite"]) throw ConfigError({Diagnostic{Location{shown, 0, 0}, "not a composite definition (no 'composite:' key)"}});
+  auto def = std::make_shared<CompositeDef>(CompositeDef{fs::absolute(file), shown, *root});
+  check_mappings(def->root, Source{shown, def->file.parent_path()}, d);
+  Loader loader(registry, {});
   Spec spec = loader.composite_spec_public(*def, d);
   if (!d.empty()) throw ConfigError(d);
   registry.add_composite(std::move(spec), def, shown);

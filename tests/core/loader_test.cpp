@@ -1,6 +1,12 @@
 // Task files are checked completely before anything runs; errors say where and what.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include <fba/task.hpp>
 #include <fba/task_config.hpp>
 
 #include "test_components.hpp"
@@ -27,6 +33,45 @@ connections:
   - source.out -> pass.in
   - pass.out -> sink.in
 )";
+
+namespace fs = std::filesystem;
+
+// A folder of its own for each test, removed at the end.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::path(testing::TempDir()) / "fba_loader_XXXXXX").string();
+    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  fs::path write(const std::string& name, const std::string& text) const {
+    std::ofstream(path_ / name, std::ios::binary) << text;
+    return path_ / name;
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::vector<fba::Diagnostic> diagnostics_of_file(const fs::path& file, const fba::LoadOptions& options = {}) {
+  try {
+    fba::load_task(file, fba::test::registry(), options);
+  } catch (const fba::ConfigError& e) {
+    return e.diagnostics();
+  }
+  return {};
+}
+
+std::string errors_of_file(const fs::path& file) {
+  std::string s;
+  for (const auto& d : diagnostics_of_file(file)) s += d.str() + "\n";
+  return s;
+}
 
 }  // namespace
 
@@ -199,4 +244,140 @@ on:
   EXPECT_NE(dot.find("subgraph \"cluster_relay\""), std::string::npos) << dot;
   EXPECT_NE(dot.find("style=dashed"), std::string::npos) << dot;
   EXPECT_NE(dot.find("\"stop: success\""), std::string::npos) << dot;
+}
+
+TEST(Loader, ATaskFileMustBeARegularFileAndSaysWhatItIsInstead) {
+  TempDir dir;
+  EXPECT_NE(errors_of_file(dir.path()).find("the task file is a directory; expected a regular file"), std::string::npos);
+  EXPECT_NE(errors_of_file("/dev/zero").find("/dev/zero: error: the task file is a character device"), std::string::npos);
+  const fs::path fifo = dir.path() / "task.fifo";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  // Opening a FIFO for reading would wait for a writer forever: the check comes first.
+  EXPECT_NE(errors_of_file(fifo).find("the task file is a FIFO (a pipe)"), std::string::npos);
+  EXPECT_NE(errors_of_file(dir.path() / "missing.yaml").find("the task file does not exist"), std::string::npos);
+}
+
+TEST(Loader, ATaskFileOverFourMebibytesIsRefusedBeforeItIsRead) {
+  TempDir dir;
+  const fs::path big = dir.write("big.yaml", "components:\n");
+  fs::resize_file(big, (4u << 20) + 1);  // sparse: no disk or memory spent
+  EXPECT_NE(errors_of_file(big).find("is 4194305 bytes; task and composite files are limited to 4 MiB (4194304 bytes)"), std::string::npos);
+}
+
+TEST(Loader, AnIncludedFifoOrDeviceSaysWhatItIs) {
+  TempDir dir;
+  ASSERT_EQ(mkfifo((dir.path() / "c.fifo").c_str(), 0600), 0);
+  const auto task = dir.write("t.yaml", "include: [c.fifo, /dev/zero]\ncomponents:\n  a: { type: examples.counter }\n");
+  const std::string e = errors_of_file(task);
+  EXPECT_NE(e.find("t.yaml:1:11: error: included file 'c.fifo' is a FIFO (a pipe)"), std::string::npos) << e;
+  EXPECT_NE(e.find("t.yaml:1:19: error: included file '/dev/zero' is a character device"), std::string::npos) << e;
+}
+
+TEST(Loader, AnIncludeCycleIsOneErrorWithoutFollowOnErrors) {
+  TempDir dir;
+  const char* composite = "composite: x.%s\ninclude: %s.yaml\ninputs:\n  in: inner.in\noutputs:\n  out: inner.out\ncomponents:\n  inner: { type: x.%s }\n";
+  char a[256], b[256];
+  std::snprintf(a, sizeof a, composite, "a", "b", "b");
+  std::snprintf(b, sizeof b, composite, "b", "a", "a");
+  dir.write("a.yaml", a);
+  dir.write("b.yaml", b);
+  const auto task = dir.write("t.yaml", R"(include: a.yaml
+components:
+  src: { type: examples.counter }
+  r: { type: x.a }
+  sink: { type: examples.sink }
+connections:
+  - src.out -> r.in
+  - r.out -> sink.in
+)");
+  const auto d = diagnostics_of_file(task);
+  ASSERT_EQ(d.size(), 1u) << errors_of_file(task);
+  EXPECT_NE(d[0].message.find("include cycle: 'a.yaml' includes itself"), std::string::npos) << d[0].str();
+  const auto itself = dir.write("self.yaml", "include: self.yaml\ncomponents:\n  a: { type: examples.counter }\n");
+  EXPECT_NE(errors_of_file(itself).find("include cycle: 'self.yaml' includes itself"), std::string::npos) << errors_of_file(itself);
+}
+
+TEST(Loader, CompositeParametersAreRangeCheckedWhereverTheyAreSubstituted) {
+  TempDir dir;
+  dir.write("ticker.yaml", R"(composite: x.ticker
+params:
+  period: { type: double, default: 1 }
+  restarts: { type: int, default: 1 }
+  capacity: { type: int, default: 1 }
+outputs:
+  out: pass.out
+components:
+  src: { type: examples.counter, trigger: { policy: periodic, period: "${period}" }, on_error: { policy: restart, max_restarts: "${restarts}" } }
+  pass: { type: examples.passthrough }
+connections:
+  - { from: src.out, to: pass.in, capacity: "${capacity}" }
+)");
+  const auto task = dir.write("t.yaml", R"(include: ticker.yaml
+components:
+  t: { type: x.ticker, params: { period: 1e10, restarts: 1000001, capacity: 4294967296 } }
+)");
+  const std::string e = errors_of_file(task);
+  EXPECT_NE(e.find("ticker.yaml:9:71: error: period must be in (0, 1000000000] seconds; found 10000000000"), std::string::npos) << e;
+  EXPECT_NE(e.find("ticker.yaml:9:129: error: max_restarts must be in [0, 1000000]; found 1000001"), std::string::npos) << e;
+  EXPECT_NE(e.find("ticker.yaml:12:45: error: capacity must be in [1, 1000000]; found 4294967296"), std::string::npos) << e;
+}
+
+TEST(Loader, OverridesGoThroughTheSameChecksWithSetAsTheirPlace) {
+  fba::LoadOptions o;
+  o.overrides = {{"source.count=3"}, {"source.count=4"}};
+  EXPECT_NE(errors_of(kChain, o).find("--set source.count=4: error: 'source.count' is set twice on the command line (also by --set source.count=3)"),
+            std::string::npos)
+      << errors_of(kChain, o);
+  o.overrides = {{"source.count={a: 1, a: 2}"}};
+  EXPECT_NE(errors_of(kChain, o).find("--set source.count={a: 1, a: 2}: error: key 'a' is given twice in one mapping"), std::string::npos)
+      << errors_of(kChain, o);
+  o.overrides = {{"source.rate=1000001"}};
+  EXPECT_NE(errors_of(kChain, o).find("--set source.rate=1000001: error: parameter 'rate' must be in [0, 1000000]; found 1000001"),
+            std::string::npos)
+      << errors_of(kChain, o);
+}
+
+TEST(Loader, DeliveredEventsAreTypedAtCheckTime) {
+  // Typed like its input, a passthrough that receives events sends fba.Event.
+  const auto e = errors_of(R"(
+components:
+  src: { type: examples.counter }
+  pass: { type: examples.passthrough }
+  c: { type: test.countdown }
+connections:
+  - pass.out -> c.in
+on:
+  src.finished: { deliver: pass.in }
+)");
+  EXPECT_NE(e.find("test.yaml:7:5: error: type mismatch: 'pass.out' carries 'fba.Event' but 'c.in' takes 'fba.Int'"), std::string::npos) << e;
+  const auto task = load(R"(
+components:
+  src: { type: examples.counter, params: { count: 3 } }
+  pass: { type: examples.passthrough }
+on:
+  src.finished: { deliver: pass.in }
+)");
+  EXPECT_EQ(task.find("pass")->output_types.at("out")->name, "fba.Event");
+}
+
+TEST(Loader, ATaskThatPassesTheCheckRunsWithEventsDeliveredToAnAnyInput) {
+  // The check passed and the run failed: the unconnected output was typed 'any' at run time.
+  fba::RunOptions o;
+  o.executor = fba::ExecutorKind::Deterministic;
+  o.timeout_s = 60;
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 3 } }
+  pass: { type: examples.passthrough }
+on:
+  src.finished: { deliver: pass.in }
+)"),
+                 o);
+  const auto r = task.run();
+  EXPECT_EQ(r.exit_code(), 0) << r.reason;
+}
+
+TEST(Loader, RawControlBytesAreEscapedInMessages) {
+  const auto e = errors_of("components:\n  a: { type: \"ex\\0am\\x1bple\" }\n");
+  EXPECT_NE(e.find("unknown component type 'ex\\x00am\\x1bple'"), std::string::npos) << e;
 }

@@ -1,7 +1,8 @@
 #!/bin/sh
 # Usage: run.sh BUILD_DIR SECONDS
 # Fuzzes the task loader for SECONDS on a scratch copy of the seed corpus (the seeds in git stay
-# as they are). Exits non-zero on a finding; libFuzzer writes its input to BUILD_DIR/fuzz-findings/.
+# as they are). Exits non-zero on a finding; libFuzzer writes its input to BUILD_DIR/fuzz-findings/,
+# and this script copies it into the seed corpus as a regression case.
 set -eu
 if [ $# -ne 2 ]; then
   echo "usage: $0 BUILD_DIR SECONDS" >&2
@@ -20,5 +21,15 @@ trap 'rm -rf "$work"' EXIT
 cp "$here"/corpus/* "$work"/
 mkdir -p "$build/fuzz-findings"
 # -timeout: an input that takes 10 s is a hang, and a finding too.
+status=0
 "$fuzzer" -max_total_time="$seconds" -timeout=10 -dict="$here/yaml.dict" -print_final_stats=1 \
-  -artifact_prefix="$build/fuzz-findings/" "$work"
+  -artifact_prefix="$build/fuzz-findings/" "$work" || status=$?
+# A finding joins the seed corpus, which the ctest fuzz_task_loader_seeds replays on every run:
+# once fixed, it stays fixed. Commit it with the fix.
+for f in "$build"/fuzz-findings/crash-* "$build"/fuzz-findings/timeout-* "$build"/fuzz-findings/oom-* \
+         "$build"/fuzz-findings/leak-*; do
+  [ -e "$f" ] || continue
+  cp "$f" "$here/corpus/finding-$(basename "$f")"
+  echo "$0: saved $f as tests/fuzz/corpus/finding-$(basename "$f")" >&2
+done
+exit $status

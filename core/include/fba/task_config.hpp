@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -57,6 +58,8 @@ struct ComponentConfig {
   ErrorPolicy on_error = ErrorPolicy::Stop;
   int max_restarts = 0;
   bool dedicated_thread = false;
+  // Each output's data type as resolved by the check: declared, or that of the input it follows.
+  std::map<std::string, const TypeInfo*> output_types;
   Location where;
 };
 
