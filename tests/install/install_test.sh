@@ -50,12 +50,13 @@ oot=$work/oot-build
 # (a) ------------------------------------------------------------------------------------------
 step "cmake --install $build --prefix $prefix"
 run "$work/install.log" "$cmake" --install "$build" --prefix "$prefix" ||
-  fail "cmake --install failed; every installed target must be built first (ninja -C $build)" "$work/install.log"
+  fail "cmake --install failed; every installed target must be built first (ninja -C $build fba_programs)" "$work/install.log"
 prefix=$(cd "$prefix" && pwd -P)  # /proc/self/exe reports the real path
 
 step "install layout: programs, plugins, headers, CMake package"
-for f in bin/fba-run bin/fba-inspect \
-         "$libdir/libfba.so" "$libdir/fba/plugins/fba-examples.so" "$libdir/fba/plugins/relay.yaml" \
+for f in bin/fba-run bin/fba-inspect bin/fba-plugin-manifest \
+         "$libdir/libfba.so" "$libdir/fba/plugins/fba-examples.so" "$libdir/fba/plugins/fba-examples.manifest.json" \
+         "$libdir/fba/plugins/relay.yaml" \
          include/fba/component.hpp include/fba/spec.hpp include/fba/plugin.hpp include/fba/testing.hpp \
          include/fba/registry.hpp include/fba/version.hpp \
          "$libdir/cmake/fba/fbaConfig.cmake" "$libdir/cmake/fba/fbaConfigVersion.cmake" \
@@ -88,6 +89,7 @@ step "build examples/out-of-tree-plugin"
 run "$work/oot-build.log" "$cmake" --build "$oot" --parallel 2 ||
   fail "the out-of-tree example does not build against the installed package" "$work/oot-build.log"
 [ -f "$oot/fba-demo.so" ] || fail "the build made no $oot/fba-demo.so"
+[ -f "$oot/fba-demo.manifest.json" ] || fail "the build wrote no manifest $oot/fba-demo.manifest.json (fba::plugin-manifest)" "$work/oot-build.log"
 [ -x "$oot/scale_test" ] || fail "the build made no $oot/scale_test (was GTest found?)" "$work/oot-configure.log"
 
 # (c) ------------------------------------------------------------------------------------------
@@ -139,6 +141,8 @@ step "cmake --install the out-of-tree plugin into $prefix; fba-run finds it with
 run "$work/oot-install.log" "$cmake" --install "$oot" --prefix "$prefix" ||
   fail "cmake --install of the out-of-tree build failed" "$work/oot-install.log"
 [ -f "$prefix/$libdir/fba/plugins/fba-demo.so" ] || fail "fba-demo.so was not installed to $prefix/$libdir/fba/plugins" "$work/oot-install.log"
+[ -f "$prefix/$libdir/fba/plugins/fba-demo.manifest.json" ] ||
+  fail "fba-demo.manifest.json was not installed beside fba-demo.so" "$work/oot-install.log"
 run "$work/run-installed.log" "$prefix/bin/fba-run" --timeout 120 "$example/scale.yaml" ||
   fail "fba-run does not find the installed demo plugin (exit $?)" "$work/run-installed.log"
 
