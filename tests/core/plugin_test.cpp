@@ -75,11 +75,11 @@ void edit_manifest(const fs::path& so, const std::function<void(fba::detail::Man
   std::ofstream(fba::detail::manifest_path(so)) << fba::detail::manifest_json(m);
 }
 
-// The fba plugins (files in the build's plugin folder) mapped into this process.
-std::set<std::string> mapped_plugins() {
+// The files of a folder that are mapped into this process.
+std::set<std::string> mapped_plugins(const fs::path& folder) {
   std::set<std::string> out;
   std::ifstream maps("/proc/self/maps");
-  const std::string dir = fs::canonical(FBA_TEST_PLUGIN_DIR).string() + "/";
+  const std::string dir = fs::canonical(folder).string() + "/";
   for (std::string line; std::getline(maps, line);)
     if (auto at = line.find(dir); at != std::string::npos) out.insert(line.substr(at + dir.size()));
   return out;
@@ -266,12 +266,17 @@ TEST(Plugin, ABrokenPluginFailsOnlyTheTasksThatNeedIt) {
 }
 
 TEST(Plugin, CheckingATaskMapsOnlyThePluginsItUses) {
+  // A plugin folder of its own: the examples, and two plugins the task does not use.
+  const fs::path dir = temp_dir();
+  copy_plugin(examples(), dir);
+  copy_plugin(bad("static_marker"), dir);
+  copy_plugin(bad("blob_large"), dir);
   fba::Registry r;
-  EXPECT_TRUE(r.load_path({FBA_TEST_PLUGIN_DIR}).empty());
-  const auto plugins = r.plugins();
-  ASSERT_GE(plugins.size(), 2u) << "the test needs more plugins than the task uses";
+  EXPECT_TRUE(r.load_path({dir}).empty());
+  EXPECT_EQ(r.plugins().size(), 3u);
+  EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{});
   fba::load_task(fs::path(FBA_TASKS_DIR) / "examples/chain.yaml", r);
-  EXPECT_EQ(mapped_plugins(), std::set<std::string>{"fba-examples.so"});
+  EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{"fba-examples.so"});
 }
 
 TEST(Plugin, TwoLayoutsOfOneDataTypeAreRefusedNamingBothPlugins) {
