@@ -105,6 +105,19 @@ if grep -qF "$build/$libdir/fba/plugins" "$work/inspect-all.log"; then
   fail "the installed fba-inspect looks into the build tree's plugins" "$work/inspect-all.log"
 fi
 
+step "fba-inspect shows data types, --version, and refuses a plugin folder that does not exist"
+grep -qF "fba.Int  (size 8, alignment 8, version 1, <fba/packet.hpp>)" "$work/inspect-all.log" ||
+  fail "the installed fba-inspect does not list the data type fba.Int with its layout" "$work/inspect-all.log"
+run "$work/inspect-int.log" "$prefix/bin/fba-inspect" fba.Int || fail "fba-inspect fba.Int failed" "$work/inspect-int.log"
+grep -qF "layout: size 8, alignment 8, version 1" "$work/inspect-int.log" ||
+  fail "fba-inspect fba.Int does not show its layout" "$work/inspect-int.log"
+run "$work/inspect-version.log" "$prefix/bin/fba-inspect" --version || fail "fba-inspect --version failed" "$work/inspect-version.log"
+grep -q '^fba-inspect [0-9]' "$work/inspect-version.log" || fail "fba-inspect --version prints no version" "$work/inspect-version.log"
+run "$work/inspect-nonexistent.log" "$prefix/bin/fba-inspect" -p "$work/no-such-folder"
+status=$?
+[ $status -eq 2 ] || fail "fba-inspect -p <missing folder>: expected exit 2, got $status" "$work/inspect-nonexistent.log"
+grep -qF "is not a folder" "$work/inspect-nonexistent.log" || fail "fba-inspect -p <missing folder> does not say so" "$work/inspect-nonexistent.log"
+
 # (d) ------------------------------------------------------------------------------------------
 step "fba-inspect --plugin-path $oot demo.scale"
 run "$work/inspect-scale.log" "$prefix/bin/fba-inspect" --plugin-path "$oot" demo.scale ||
