@@ -1,7 +1,8 @@
 # fba_add_plugin(<name> <sources...> [LIBRARIES <targets...>])
 #
 # Builds a plugin shared object "fba-<name>.so" from component sources (each registers its
-# components with FBA_COMPONENT), with the ABI entry point generated here. In the fba tree it
+# components with FBA_COMPONENT), with the ABI entry point generated here, and its manifest
+# "fba-<name>.manifest.json" beside it (fba reads that, not the .so, until a task uses the plugin). In the fba tree it
 # lands where fba-run finds it; out of the tree it lands in the build folder (load it with
 # --plugin-path or FBA_PLUGIN_PATH) and installs to <prefix>/<libdir>/fba/plugins.
 # The CMake target is fba_plugin_<name> (for $<TARGET_FILE:fba_plugin_<name>> in tests).
@@ -23,7 +24,18 @@ function(fba_add_plugin name)
     OUTPUT_NAME "fba-${name}"
     CXX_VISIBILITY_PRESET hidden
     VISIBILITY_INLINES_HIDDEN ON)
-  target_link_options(${target} PRIVATE "LINKER:--no-undefined")
+  # The build id ties the manifest to this exact build of the .so.
+  target_link_options(${target} PRIVATE "LINKER:--no-undefined" "LINKER:--build-id")
+  # The manifest: what the plugin offers and its ABI record, read by fba without running the
+  # plugin's code. Written after every link; a sanitizer's leak report at the tool's exit is
+  # not the plugin's fault, so leak checking is off for it.
+  add_custom_command(TARGET ${target} POST_BUILD
+    COMMAND ${CMAKE_COMMAND} -E env ASAN_OPTIONS=detect_leaks=0 $<TARGET_FILE:fba::plugin-manifest> $<TARGET_FILE:${target}>
+    COMMENT "Writing the manifest of plugin ${name}"
+    VERBATIM)
+  if(TARGET fba_plugin_manifest)  # in the fba tree
+    add_dependencies(${target} fba_plugin_manifest)
+  endif()
   if(NOT DEFINED FBA_PLUGIN_INSTALL_DIR)
     include(GNUInstallDirs)
     set(FBA_PLUGIN_INSTALL_DIR ${CMAKE_INSTALL_LIBDIR}/fba/plugins)
@@ -37,6 +49,7 @@ function(fba_add_plugin name)
   # Installed to <libdir>/fba/plugins, it finds libfba and the other fba libraries in <libdir>.
   set_target_properties(${target} PROPERTIES INSTALL_RPATH "$ORIGIN/../..")
   install(TARGETS ${target} LIBRARY DESTINATION ${FBA_PLUGIN_INSTALL_DIR})
+  install(FILES $<TARGET_FILE_DIR:${target}>/fba-${name}.manifest.json DESTINATION ${FBA_PLUGIN_INSTALL_DIR})
 endfunction()
 
 # fba_add_composite(<file.yaml>...): ships composite definitions beside the plugins, where

@@ -284,11 +284,10 @@ int run(int argc, char** argv) {
   std::vector<fs::path> extra(plugin_dirs.begin(), plugin_dirs.end());
   for (const auto& d : extra)
     if (!fs::is_directory(d)) return usage_error("--plugin-path '" + d.string() + "' is not a folder");
-  const auto plugin_errors = registry.load_path(fba::plugin_search_path(extra));
-  if (!plugin_errors.empty()) {
-    for (const auto& e : plugin_errors) std::cerr << "fba-run: plugin " << e.file() << ": " << e.reason() << "\n";
-    return kConfigError;
-  }
+  // Reads the plugins' manifests only; a plugin is loaded when the task uses one of its types, so a
+  // broken plugin fails only the tasks that need it (load_task says so); here it is a warning.
+  for (const auto& e : registry.load_path(fba::plugin_search_path(extra)))
+    std::cerr << "fba-run: warning: plugin " << e.file() << ": " << e.reason() << "\n";
   if (interrupted_early(status)) return status;
 
   fba::LoadOptions load;
@@ -298,6 +297,9 @@ int run(int argc, char** argv) {
     config = fba::load_task(task_file, registry, load);
   } catch (const fba::ConfigError& e) {
     for (const auto& d : e.diagnostics()) std::cerr << d.str() << "\n";
+    return kConfigError;
+  } catch (const fba::PluginError& e) {
+    std::cerr << task_file.string() << ": the task needs plugin " << e.file() << ", which cannot be used: " << e.reason() << "\n";
     return kConfigError;
   }
   if (vm.count("dot")) {

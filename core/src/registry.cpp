@@ -6,44 +6,182 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <mutex>
 #include <set>
 #include <sstream>
 
+#include <spdlog/spdlog.h>
+
+#include "elf_file.hpp"
+#include "fba/log.hpp"
 #include "fba/plugin.hpp"
 #include "fba/task_config.hpp"
+#include "plugin_manifest.hpp"
 
 namespace fba {
 
 namespace fs = std::filesystem;
 
+namespace detail {
+// A plugin known from its manifest; loaded (dlopen'ed) on first use.
+struct PluginSlot {
+  std::string file;
+  Manifest manifest;
+  std::mutex mutex;    // guards what follows: find() loads from any thread
+  std::string error;   // why it cannot be used
+  bool loaded = false;
+  std::map<std::string, std::shared_ptr<const TypeEntry>, std::less<>> entries;
+};
+}  // namespace detail
+
 namespace {
-// Under a sanitizer, leaks are reported at exit; a plugin unloaded by then leaves the report's
-// frames unnamed, so sanitizer builds keep plugins mapped (objects still release them).
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr int kKeepMapped = RTLD_NODELETE;
-#else
-constexpr int kKeepMapped = 0;
-#endif
+
+using detail::PluginSlot;
+
+// Runs the plugin's code for the first time: dlopen, its static initialisers, its specs. Every
+// check that can be made from the files was made before (Registry::add_plugin).
+void load_code(PluginSlot& slot, bool describe = false) {
+  const std::string& f = slot.file;
+  // Named before dlopen, so a crash inside it (a static initialiser) is attributable.
+  make_logger("plugins")->debug("loading plugin {}", f);  // a fresh logger: the level may have changed
+  dlerror();
+  // Never unloaded: payloads, their deleters and components from it may live anywhere.
+  void* handle = dlopen(f.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
+  if (!handle) {
+    const char* err = dlerror();
+    throw std::runtime_error(std::string("cannot be loaded: ") + (err ? err : "unknown dlopen error"));
+  }
+  auto lib = std::make_shared<const Library>(handle, f);
+
+  // The record compiled into the plugin must say what its manifest said.
+  const auto* info = static_cast<const PluginInfo*>(lib->symbol(kPluginInfoSymbol));
+  if (!info)
+    throw std::runtime_error(std::string("is not an fba plugin: the symbol '") + kPluginInfoSymbol +
+                             "' is missing (build it with fba_add_plugin)");
+  if (info->magic != kPluginMagic || info->abi_version != slot.manifest.abi_version || !info->build_abi ||
+      slot.manifest.build_abi != info->build_abi)
+    throw std::runtime_error("its ABI record does not match its manifest " + detail::manifest_path(f).string() +
+                             ": rebuild the plugin to rewrite the manifest");
+  auto components = reinterpret_cast<PluginComponentsFn>(lib->symbol(kPluginComponentsSymbol));
+  if (!components) throw std::runtime_error(std::string("the symbol '") + kPluginComponentsSymbol + "' is missing");
+  const auto* entries = components();
+  if (!entries || entries->empty()) throw std::runtime_error("registers no component types (no FBA_COMPONENT in its sources)");
+
+  // Layouts registered while reading its specs are this plugin's.
+  TypeOriginScope origin(f);
+  std::map<std::string, std::shared_ptr<const TypeEntry>, std::less<>> made;
+  for (const auto& e : *entries) {
+    std::shared_ptr<const TypeEntry> entry;
+    try {
+      entry = Registry::make_entry(e.spec(), e.make, f, lib);
+    } catch (const std::exception& ex) {
+      throw std::runtime_error(std::string("declares an invalid component: ") + ex.what());
+    }
+    const std::string name = entry->spec.type_name();
+    if (!made.emplace(name, std::move(entry)).second) throw std::runtime_error("registers component type '" + name + "' twice");
+  }
+  if (describe) {
+    slot.entries = std::move(made);
+    return;
+  }
+  std::set<std::string> listed;
+  for (const auto& t : slot.manifest.types) listed.insert(t.name);
+  for (const auto& [name, _] : made)
+    if (!listed.count(name))
+      throw std::runtime_error("registers component type '" + name + "', which its manifest does not list: rebuild the plugin");
+  for (const auto& name : listed)
+    if (!made.count(name)) throw std::runtime_error("does not register component type '" + name + "', which its manifest lists");
+  slot.entries = std::move(made);
+}
+
+// Loads the slot once; throws PluginError when it cannot be used.
+void ensure_loaded(PluginSlot& slot) {
+  std::lock_guard lock(slot.mutex);
+  if (slot.error.empty() && !slot.loaded) {
+    try {
+      load_code(slot);
+      slot.loaded = true;
+    } catch (const std::exception& e) {
+      slot.error = e.what();
+    }
+  }
+  if (!slot.error.empty()) throw PluginError(slot.file, slot.error);
+}
+
 }  // namespace
 
-Library::~Library() {
-  if (handle_) dlclose(handle_);
+namespace detail {
+Manifest describe_plugin(const fs::path& file) {
+  PluginSlot slot;
+  slot.file = file.string();
+  slot.manifest.build_id = check_elf(file).build_id;
+  {
+    // The record first, on its own: a plugin for another ABI is described, not run further.
+    dlerror();
+    void* handle = dlopen(slot.file.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
+    if (!handle) {
+      const char* err = dlerror();
+      throw std::runtime_error(std::string("cannot be loaded: ") + (err ? err : "unknown dlopen error"));
+    }
+    const auto* info = static_cast<const PluginInfo*>(dlsym(handle, kPluginInfoSymbol));
+    if (!info)
+      throw std::runtime_error(std::string("is not an fba plugin: the symbol '") + kPluginInfoSymbol + "' is missing");
+    slot.manifest.magic = info->magic;
+    slot.manifest.abi_version = info->abi_version;
+    slot.manifest.name = info->name ? info->name : "";
+    slot.manifest.fba_version = info->fba_version ? info->fba_version : "";
+    slot.manifest.build_abi = info->build_abi ? info->build_abi : "";
+    if (info->magic != kPluginMagic || info->abi_version != kAbiVersion) return slot.manifest;
+  }
+  // Every type it registers, as its manifest will list them.
+  load_code(slot, /*describe=*/true);
+  std::set<std::string> seen;
+  for (const auto& [name, entry] : slot.entries) {
+    slot.manifest.types.push_back({name, to_string(entry->spec.kind()), spec_json(entry->spec)});
+    for (auto& d : data_types_of(entry->spec))
+      if (seen.insert(d.name).second) slot.manifest.data_types.push_back(std::move(d));
+  }
+  return slot.manifest;
 }
+}  // namespace detail
 
 void* Library::symbol(const char* name) const { return dlsym(handle_, name); }
 
-void Registry::add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library) {
+Registry::Registry() = default;
+Registry::~Registry() = default;
+Registry::Registry(Registry&&) noexcept = default;
+Registry& Registry::operator=(Registry&&) noexcept = default;
+
+std::shared_ptr<const TypeEntry> Registry::make_entry(Spec spec, Factory make, std::string origin,
+                                                      std::shared_ptr<const Library> library) {
   spec.validate();
-  const std::string name = spec.type_name();
-  if (auto it = types_.find(name); it != types_.end())
-    throw std::logic_error("component type '" + name + "' is registered twice: by " + it->second->origin + " and by " + origin);
-  types_.emplace(name, std::make_shared<const TypeEntry>(TypeEntry{std::move(spec), make, nullptr, std::move(library), std::move(origin)}));
+  return std::make_shared<const TypeEntry>(TypeEntry{std::move(spec), make, nullptr, std::move(library), std::move(origin)});
+}
+
+bool Registry::has_type(std::string_view name, std::string* origin) const {
+  if (auto it = types_.find(name); it != types_.end()) {
+    if (origin) *origin = it->second->origin;
+    return true;
+  }
+  if (auto it = plugin_types_.find(name); it != plugin_types_.end()) {
+    if (origin) *origin = it->second->file;
+    return true;
+  }
+  return false;
+}
+
+void Registry::add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library) {
+  auto entry = make_entry(std::move(spec), make, std::move(origin), std::move(library));
+  const std::string& name = entry->spec.type_name();
+  if (std::string first; has_type(name, &first))
+    throw std::logic_error("component type '" + name + "' is registered twice: by " + first + " and by " + entry->origin);
+  types_.emplace(name, std::move(entry));
 }
 
 void Registry::add_composite(Spec spec, std::shared_ptr<const CompositeDef> def, std::string origin) {
   const std::string name = spec.type_name();
-  if (auto it = types_.find(name); it != types_.end())
-    throw std::logic_error("component type '" + name + "' is registered twice: by " + it->second->origin + " and by " + origin);
+  if (std::string first; has_type(name, &first))
+    throw std::logic_error("component type '" + name + "' is registered twice: by " + first + " and by " + origin);
   types_.emplace(name, std::make_shared<const TypeEntry>(TypeEntry{std::move(spec), nullptr, std::move(def), nullptr, std::move(origin)}));
 }
 
@@ -51,58 +189,79 @@ void Registry::add_builtin(const std::vector<detail::ComponentEntry>& entries, c
   for (const auto& e : entries) add(e.spec(), e.make, origin);
 }
 
-void Registry::load_plugin(const fs::path& file) {
-  const std::string f = file.string();
+std::shared_ptr<PluginSlot> Registry::add_plugin(const fs::path& file) {
+  auto slot = std::make_shared<PluginSlot>();
+  slot->file = file.string();
+  const std::string& f = slot->file;
+  plugins_.push_back(slot);
+  const auto refuse = [&](const std::string& why) {
+    slot->error = why;
+    // Its types stay known, so a task that uses one is told why it cannot be used.
+    for (const auto& t : slot->manifest.types)
+      if (!has_type(t.name)) plugin_types_.emplace(t.name, slot);
+    throw PluginError(f, why);
+  };
+  // The file itself first: a directory, a dangling link, a truncated or foreign .so.
+  detail::ElfFile elf;
+  try {
+    elf = detail::check_elf(file);
+  } catch (const std::exception& e) {
+    refuse(e.what());
+  }
+  const fs::path mf = detail::manifest_path(file);
   std::error_code ec;
-  if (!fs::is_regular_file(file, ec)) throw PluginError(f, "no such file");
-  dlerror();
-  void* handle = dlopen(f.c_str(), RTLD_NOW | RTLD_LOCAL | kKeepMapped);
-  if (!handle) {
-    const char* err = dlerror();
-    throw PluginError(f, std::string("cannot be loaded: ") + (err ? err : "unknown dlopen error"));
+  if (!fs::exists(mf, ec))
+    refuse("has no manifest " + mf.filename().string() +
+           " beside it, so it is not loaded: fba reads what a plugin offers, and checks its ABI, before running any of "
+           "its code. Build it with fba_add_plugin(), which writes the manifest");
+  try {
+    slot->manifest = detail::read_manifest(mf);
+  } catch (const std::exception& e) {
+    refuse(e.what());
   }
-  auto lib = std::make_shared<const Library>(handle, f);
+  const detail::Manifest& m = slot->manifest;
+  // The ABI record, checked before any of the plugin's code runs.
+  if (m.magic != kPluginMagic) refuse("is not an fba plugin: its manifest has a wrong magic number");
+  if (m.abi_version != kAbiVersion)
+    refuse("was built for fba plugin ABI " + std::to_string(m.abi_version) + " (fba " + m.fba_version + "); this fba " FBA_VERSION
+           " needs ABI " + std::to_string(kAbiVersion) + ": rebuild the plugin against this fba");
+  if (m.build_abi != FBA_BUILD_ABI_TAG)
+    refuse("was built with C++ library ABI '" + m.build_abi + "', this fba uses '" FBA_BUILD_ABI_TAG "'");
+  if (m.build_id != elf.build_id)
+    refuse("its manifest " + mf.filename().string() + " describes another build of it (build id " +
+           (m.build_id.empty() ? "none" : m.build_id) + ", the file has " + (elf.build_id.empty() ? "none" : elf.build_id) +
+           "): the manifest is stale; rebuild the plugin");
+  if (m.types.empty()) refuse("registers no component types (its manifest lists none)");
 
-  // The ABI record is read before any of the plugin's code is called.
-  const auto* info = static_cast<const PluginInfo*>(lib->symbol(kPluginInfoSymbol));
-  if (!info)
-    throw PluginError(f, std::string("is not an fba plugin: the symbol '") + kPluginInfoSymbol +
-                             "' is missing (build it with fba_add_plugin)");
-  if (info->magic != kPluginMagic) throw PluginError(f, "is not an fba plugin: its plugin record has a wrong magic number");
-  if (info->abi_version != kAbiVersion)
-    throw PluginError(f, "was built for fba plugin ABI " + std::to_string(info->abi_version) + " (fba " +
-                             (info->fba_version ? info->fba_version : "?") + "); this fba " FBA_VERSION " needs ABI " +
-                             std::to_string(kAbiVersion) + ": rebuild the plugin against this fba");
-  if (!info->build_abi || std::strcmp(info->build_abi, FBA_BUILD_ABI_TAG) != 0)
-    throw PluginError(f, std::string("was built with C++ library ABI '") + (info->build_abi ? info->build_abi : "?") +
-                             "', this fba uses '" FBA_BUILD_ABI_TAG "'");
-  auto components = reinterpret_cast<PluginComponentsFn>(lib->symbol(kPluginComponentsSymbol));
-  if (!components)
-    throw PluginError(f, std::string("the symbol '") + kPluginComponentsSymbol + "' is missing");
-  const auto* entries = components();
-  if (!entries || entries->empty()) throw PluginError(f, "registers no component types (no FBA_COMPONENT in its sources)");
-
-  // All or nothing: check every spec and name before registering any.
-  std::vector<Spec> specs;
-  for (const auto& e : *entries) {
-    try {
-      specs.push_back(e.spec());
-      specs.back().validate();
-    } catch (const std::exception& ex) {
-      throw PluginError(f, std::string("declares an invalid component: ") + ex.what());
+  // Names and data-type layouts against everything registered before it.
+  std::set<std::string> names;
+  for (const auto& t : m.types) {
+    if (std::string first; has_type(t.name, &first))
+      refuse("registers component type '" + t.name + "', which " + first + " registered already");
+    if (!names.insert(t.name).second) refuse("registers component type '" + t.name + "' twice");
+  }
+  for (const auto& d : m.data_types) {
+    if (!d.layout.known()) continue;
+    if (const TypeInfo* known = find_type(d.name); known && known->layout.known() && known->layout != d.layout)
+      refuse("uses data type '" + d.name + "' with " + to_string(d.layout) + ", but " +
+             (known->origin.empty() ? "this fba" : known->origin) + " defines it with " + to_string(known->layout) +
+             ": rebuild the plugins against the same definition of '" + d.name + "'");
+    for (const auto& other : plugins_) {
+      if (other == slot || !other->error.empty()) continue;
+      for (const auto& od : other->manifest.data_types)
+        if (od.name == d.name && od.layout.known() && od.layout != d.layout)
+          refuse("uses data type '" + d.name + "' with " + to_string(d.layout) + ", but " + other->file + " uses it with " +
+                 to_string(od.layout) + ": rebuild both against the same definition of '" + d.name + "'");
     }
-    const std::string& name = specs.back().type_name();
-    if (auto it = types_.find(name); it != types_.end())
-      throw PluginError(f, "registers component type '" + name + "', which " + it->second->origin + " registered already");
-    for (std::size_t i = 0; i + 1 < specs.size(); ++i)
-      if (specs[i].type_name() == name) throw PluginError(f, "registers component type '" + name + "' twice");
   }
-  PluginRecord record{f, info->name ? info->name : "?", info->fba_version ? info->fba_version : "?", {}};
-  for (std::size_t i = 0; i < specs.size(); ++i) {
-    record.types.push_back(specs[i].type_name());
-    add(std::move(specs[i]), (*entries)[i].make, f, lib);
-  }
-  plugins_.push_back(std::move(record));
+  for (const auto& t : m.types) plugin_types_.emplace(t.name, slot);
+  return slot;
+}
+
+void Registry::load_plugin(const fs::path& file) {
+  for (const auto& slot : plugins_)
+    if (slot->file == file.string() && slot->error.empty()) return ensure_loaded(*slot);
+  ensure_loaded(*add_plugin(file));
 }
 
 std::vector<PluginError> Registry::load_path(const std::vector<fs::path>& dirs) {
@@ -117,10 +276,11 @@ std::vector<PluginError> Registry::load_path(const std::vector<fs::path>& dirs) 
     std::sort(files.begin(), files.end());
     for (const auto& p : files) {
       auto canonical = fs::weakly_canonical(p, ec);
+      if (ec) canonical = p;  // a symbolic link that loops: reported by add_plugin
       if (!seen.insert(canonical).second) continue;
       if (p.extension() == ".so") {
         try {
-          load_plugin(p);
+          add_plugin(p);
         } catch (const PluginError& e) {
           errors.push_back(e);
         }
@@ -150,13 +310,71 @@ std::vector<PluginError> Registry::load_path(const std::vector<fs::path>& dirs) 
 }
 
 std::shared_ptr<const TypeEntry> Registry::find(std::string_view type_name) const {
-  auto it = types_.find(type_name);
-  return it == types_.end() ? nullptr : it->second;
+  if (auto it = types_.find(type_name); it != types_.end()) return it->second;
+  auto it = plugin_types_.find(type_name);
+  if (it == plugin_types_.end()) return nullptr;
+  PluginSlot& slot = *it->second;
+  try {
+    ensure_loaded(slot);
+  } catch (const PluginError& e) {
+    throw PluginError(e.file(), e.reason() + " (it provides component type '" + std::string(type_name) + "')");
+  }
+  return slot.entries.at(std::string(type_name));
 }
 
 std::vector<const TypeEntry*> Registry::types() const {
   std::vector<const TypeEntry*> out;
   for (const auto& [_, t] : types_) out.push_back(t.get());
+  for (const auto& slot : plugins_) {
+    std::lock_guard lock(slot->mutex);
+    if (slot->loaded)
+      for (const auto& [_, t] : slot->entries) out.push_back(t.get());
+  }
+  return out;
+}
+
+std::vector<std::string> Registry::type_names() const {
+  std::vector<std::string> out;
+  for (const auto& [name, _] : types_) out.push_back(name);
+  for (const auto& [name, _] : plugin_types_) out.push_back(name);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string Registry::interface_json(std::string_view type_name) const {
+  if (auto it = types_.find(type_name); it != types_.end()) return detail::spec_json(it->second->spec);
+  if (auto it = plugin_types_.find(type_name); it != plugin_types_.end())
+    for (const auto& t : it->second->manifest.types)
+      if (t.name == type_name) return t.interface;
+  return "";
+}
+
+std::vector<PluginRecord> Registry::plugins() const {
+  std::vector<PluginRecord> out;
+  for (const auto& slot : plugins_) {
+    std::lock_guard lock(slot->mutex);
+    PluginRecord r{slot->file, slot->manifest.name, slot->manifest.fba_version, {}, slot->error, slot->loaded};
+    for (const auto& t : slot->manifest.types) r.types.push_back(t.name);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::vector<DataTypeRecord> Registry::data_types() const {
+  std::map<std::string, DataTypeRecord, std::less<>> by_name;
+  // The built-in types are listed even when no plugin on the path uses them.
+  type_of<std::int64_t>(), type_of<double>(), type_of<std::string>(), type_of<Event>();
+  for (const TypeInfo* t : registered_types())
+    if (t != any_type()) by_name[t->name] = DataTypeRecord{t->name, t->doc, t->header, t->layout, {}};
+  for (const auto& slot : plugins_)
+    for (const auto& d : slot->manifest.data_types) {
+      auto& r = by_name[d.name];
+      if (r.name.empty()) r = DataTypeRecord{d.name, d.doc, d.header, d.layout, {}};
+      if (!r.layout.known()) r.layout = d.layout;
+      r.used_by.push_back(slot->file);
+    }
+  std::vector<DataTypeRecord> out;
+  for (auto& [_, r] : by_name) out.push_back(std::move(r));
   return out;
 }
 
@@ -176,7 +394,7 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
 
 std::vector<std::string> Registry::closest(std::string_view type_name, std::size_t n) const {
   std::vector<std::pair<std::size_t, std::string>> scored;
-  for (const auto& [name, _] : types_) scored.emplace_back(edit_distance(type_name, name), name);
+  for (const auto& name : type_names()) scored.emplace_back(edit_distance(type_name, name), name);
   std::sort(scored.begin(), scored.end());
   std::vector<std::string> out;
   for (auto& [d, name] : scored)

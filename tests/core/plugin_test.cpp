@@ -1,13 +1,25 @@
-// Plugins are checked before use and refused with the file and the reason.
+// Plugins are checked from their files (manifest, ELF header) before any of their code runs,
+// loaded only when a task uses them, and refused with the file and the reason.
 #include <dlfcn.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <atomic>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <set>
 
+#include <fba/plugin.hpp>
 #include <fba/registry.hpp>
 #include <fba/task.hpp>
+#include <fba/task_config.hpp>
 
+#include "elf_file.hpp"
+#include "plugin_manifest.hpp"
 #include "test_components.hpp"
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -24,22 +36,144 @@ std::string refusal(const std::string& file, fba::Registry& r) {
 std::string bad(const std::string& name) { return std::string(FBA_BAD_PLUGIN_DIR) + "/" + name + ".so"; }
 std::string examples() { return std::string(FBA_TEST_PLUGIN_DIR) + "/fba-examples.so"; }
 
-}  // namespace
-
-TEST(Plugin, ASharedObjectWithoutTheRecordIsRefused) {
-  fba::Registry r;
-  EXPECT_NE(refusal(bad("no_symbol"), r).find("is not an fba plugin: the symbol 'fba_plugin_info' is missing"), std::string::npos);
+// A fresh folder per test.
+fs::path temp_dir() {
+  static std::atomic<int> n{0};
+  const auto* info = testing::UnitTest::GetInstance()->current_test_info();
+  fs::path d = fs::path(testing::TempDir()) / ("fba_plugin_" + std::to_string(getpid()) + "_" + info->name() + "_" + std::to_string(n++));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
 }
 
-TEST(Plugin, AnotherAbiVersionIsRefusedBeforeAnyOfItsCodeRuns) {
+// Copies a plugin (and its manifest, if it has one) into `dir`; returns the copy.
+fs::path copy_plugin(const fs::path& so, const fs::path& dir) {
+  fs::copy_file(so, dir / so.filename());
+  const fs::path m = fba::detail::manifest_path(so);
+  if (fs::exists(m)) fs::copy_file(m, dir / m.filename());
+  return dir / so.filename();
+}
+
+// A manifest for a plugin that fba_add_plugin did not build: a valid record for this fba,
+// with one component type, edited by the test.
+void write_manifest(const fs::path& so, const std::function<void(fba::detail::Manifest&)>& edit = {}) {
+  fba::detail::Manifest m;
+  m.magic = fba::kPluginMagic;
+  m.abi_version = fba::kAbiVersion;
+  m.fba_version = FBA_VERSION;
+  m.build_abi = FBA_BUILD_ABI_TAG;
+  m.name = so.stem().string();
+  m.build_id = fba::detail::check_elf(so).build_id;
+  m.types.push_back({"test." + m.name, "filter", R"({"type": "test.)" + m.name + R"(", "kind": "filter"})"});
+  if (edit) edit(m);
+  std::ofstream(fba::detail::manifest_path(so)) << fba::detail::manifest_json(m);
+}
+
+void edit_manifest(const fs::path& so, const std::function<void(fba::detail::Manifest&)>& edit) {
+  auto m = fba::detail::read_manifest(fba::detail::manifest_path(so));
+  edit(m);
+  std::ofstream(fba::detail::manifest_path(so)) << fba::detail::manifest_json(m);
+}
+
+// The files of a folder that are mapped into this process.
+std::set<std::string> mapped_plugins(const fs::path& folder) {
+  std::set<std::string> out;
+  std::ifstream maps("/proc/self/maps");
+  const std::string dir = fs::canonical(folder).string() + "/";
+  for (std::string line; std::getline(maps, line);)
+    if (auto at = line.find(dir); at != std::string::npos) out.insert(line.substr(at + dir.size()));
+  return out;
+}
+
+class MarkerEnv {
+ public:
+  explicit MarkerEnv(const fs::path& marker) { setenv("FBA_TEST_MARKER", marker.c_str(), 1); }
+  ~MarkerEnv() { unsetenv("FBA_TEST_MARKER"); }
+};
+
+}  // namespace
+
+TEST(Plugin, AnotherAbiVersionInTheManifestIsRefusedBeforeAnyOfItsCodeRuns) {
+  const fs::path dir = temp_dir();
+  const fs::path so = copy_plugin(bad("static_marker"), dir);
+  edit_manifest(so, [](auto& m) { m.abi_version = 999; m.fba_version = "9.9.9"; });
+  const fs::path marker = dir / "marker";
+  MarkerEnv env(marker);
+  fba::Registry r;
+  const auto why = refusal(so.string(), r);
+  EXPECT_NE(why.find("was built for fba plugin ABI 999 (fba 9.9.9)"), std::string::npos) << why;
+  EXPECT_FALSE(fs::exists(marker)) << "the plugin's static initialiser ran before its ABI was checked";
+}
+
+TEST(Plugin, TheMarkerPluginLeavesItsMarkWhenItIsLoaded) {
+  // The counterpart of the test above: the mark does appear when the plugin's code runs.
+  const fs::path dir = temp_dir();
+  const fs::path so = copy_plugin(bad("static_marker"), dir);
+  const fs::path marker = dir / "marker";
+  MarkerEnv env(marker);
+  fba::Registry r;
+  EXPECT_TRUE(r.load_path({dir}).empty());
+  EXPECT_FALSE(fs::exists(marker)) << "load_path ran plugin code";
+  ASSERT_NE(r.find("test.marker"), nullptr);
+  EXPECT_TRUE(fs::exists(marker));
+}
+
+TEST(Plugin, AnAbiRecordFromTheBuildToolIsChecked) {
+  // wrong_abi's own record says ABI 999; fba-plugin-manifest copied it into the manifest.
   fba::Registry r;
   const auto why = refusal(bad("wrong_abi"), r);
   EXPECT_NE(why.find("was built for fba plugin ABI 999 (fba 9.9.9)"), std::string::npos) << why;
 }
 
-TEST(Plugin, AnUndefinedReferenceIsNamed) {
+TEST(Plugin, ASharedObjectWithoutAManifestIsRefusedAndNotRun) {
+  const fs::path dir = temp_dir();
+  const fs::path so = copy_plugin(bad("static_marker"), dir);
+  fs::remove(fba::detail::manifest_path(so));
+  const fs::path marker = dir / "marker";
+  MarkerEnv env(marker);
   fba::Registry r;
-  const auto why = refusal(bad("undefined_reference"), r);
+  const auto why = refusal(so.string(), r);
+  EXPECT_NE(why.find("has no manifest static_marker.manifest.json"), std::string::npos) << why;
+  EXPECT_FALSE(fs::exists(marker));
+}
+
+TEST(Plugin, AStaleManifestIsRefused) {
+  const fs::path dir = temp_dir();
+  const fs::path so = copy_plugin(bad("static_marker"), dir);
+  edit_manifest(so, [](auto& m) { m.build_id = "0123"; });
+  fba::Registry r;
+  const auto why = refusal(so.string(), r);
+  EXPECT_NE(why.find("describes another build of it (build id 0123"), std::string::npos) << why;
+}
+
+TEST(Plugin, AManifestThatIsNoJsonSaysWhere) {
+  const fs::path dir = temp_dir();
+  const fs::path so = copy_plugin(bad("static_marker"), dir);
+  std::ofstream(fba::detail::manifest_path(so)) << "{ \"fba_plugin_manifest\": 1, ";
+  fba::Registry r;
+  const auto why = refusal(so.string(), r);
+  EXPECT_NE(why.find("static_marker.manifest.json is not valid JSON"), std::string::npos) << why;
+}
+
+TEST(Plugin, ASharedObjectWithoutTheRecordIsRefused) {
+  const fs::path so = copy_plugin(bad("no_symbol"), temp_dir());
+  write_manifest(so);
+  fba::Registry r;
+  ASSERT_EQ(r.load_path({so.parent_path()}).size(), 0u);  // its manifest is fine; its code is not run yet
+  try {
+    r.find("test.no_symbol");
+    FAIL() << "no error";
+  } catch (const fba::PluginError& e) {
+    EXPECT_NE(e.reason().find("is not an fba plugin: the symbol 'fba_plugin_info' is missing"), std::string::npos) << e.reason();
+    EXPECT_NE(e.reason().find("it provides component type 'test.no_symbol'"), std::string::npos) << e.reason();
+  }
+}
+
+TEST(Plugin, AnUndefinedReferenceIsNamed) {
+  const fs::path so = copy_plugin(bad("undefined_reference"), temp_dir());
+  write_manifest(so);
+  fba::Registry r;
+  const auto why = refusal(so.string(), r);
   EXPECT_NE(why.find("cannot be loaded"), std::string::npos) << why;
   EXPECT_NE(why.find("fba_test_function_nobody_defines"), std::string::npos) << why;
 }
@@ -53,16 +187,58 @@ TEST(Plugin, ATypeRegisteredTwiceNamesBothFiles) {
 }
 
 TEST(Plugin, APluginWithoutComponentsIsRefused) {
+  const fs::path so = copy_plugin(bad("no_components"), temp_dir());
+  write_manifest(so);
   fba::Registry r;
-  EXPECT_NE(refusal(bad("no_components"), r).find("registers no component types"), std::string::npos);
+  EXPECT_NE(refusal(so.string(), r).find("registers no component types"), std::string::npos);
 }
 
 TEST(Plugin, AFileThatIsNoSharedObjectIsRefused) {
-  const std::string file = testing::TempDir() + "garbage.so";
-  std::ofstream(file) << "this is not ELF";
+  const fs::path dir = temp_dir();
   fba::Registry r;
-  EXPECT_NE(refusal(file, r).find("cannot be loaded"), std::string::npos);
-  EXPECT_NE(refusal(testing::TempDir() + "missing.so", r).find("no such file"), std::string::npos);
+  std::ofstream(dir / "garbage.so") << "this is not ELF";
+  EXPECT_NE(refusal((dir / "garbage.so").string(), r).find("no ELF file"), std::string::npos);
+  EXPECT_NE(refusal((dir / "missing.so").string(), r).find("no such file"), std::string::npos);
+}
+
+TEST(Plugin, OddFilesOnThePluginPathSayWhatTheyAre) {
+  const fs::path dir = temp_dir();
+  fs::create_directory(dir / "x.so");
+  std::ofstream(dir / "empty.so").close();
+  fs::create_symlink(dir / "nowhere.so", dir / "dangling.so");
+  fs::create_symlink(dir / "loop_b.so", dir / "loop_a.so");
+  fs::create_symlink(dir / "loop_a.so", dir / "loop_b.so");
+  {
+    // The first 1000 bytes of a real plugin: a copy that was cut short.
+    std::ifstream in(bad("static_marker"), std::ios::binary);
+    std::string head(1000, '\0');
+    in.read(head.data(), 1000);
+    std::ofstream(dir / "truncated.so", std::ios::binary) << head;
+  }
+  fba::Registry r;
+  std::map<std::string, std::string> why;
+  for (const auto& e : r.load_path({dir})) why[fs::path(e.file()).filename().string()] = e.reason();
+  EXPECT_NE(why["x.so"].find("is a directory, not a plugin file"), std::string::npos) << why["x.so"];
+  EXPECT_NE(why["empty.so"].find("is an empty file (0 bytes)"), std::string::npos) << why["empty.so"];
+  EXPECT_NE(why["dangling.so"].find("is a dangling symbolic link to"), std::string::npos) << why["dangling.so"];
+  EXPECT_NE(why["loop_a.so"].find("symbolic link that loops"), std::string::npos) << why["loop_a.so"];
+  EXPECT_NE(why["truncated.so"].find("is truncated"), std::string::npos) << why["truncated.so"];
+}
+
+TEST(Plugin, APluginForAnotherArchitectureSaysWhich) {
+  const fs::path dir = temp_dir();
+  std::string bytes;
+  {
+    std::ifstream in(bad("static_marker"), std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const std::uint16_t aarch64 = 183;  // EM_AARCH64, at offset 18 of the ELF header (little-endian here)
+  bytes[18] = static_cast<char>(aarch64 & 0xff);
+  bytes[19] = static_cast<char>(aarch64 >> 8);
+  std::ofstream(dir / "arm.so", std::ios::binary) << bytes;
+  fba::Registry r;
+  const auto why = refusal((dir / "arm.so").string(), r);
+  EXPECT_NE(why.find("was built for aarch64; this fba runs on x86-64"), std::string::npos) << why;
 }
 
 TEST(Plugin, LoadPathReportsEveryFailureAndKeepsTheGoodOnes) {
@@ -70,6 +246,87 @@ TEST(Plugin, LoadPathReportsEveryFailureAndKeepsTheGoodOnes) {
   const auto errors = r.load_path({FBA_TEST_PLUGIN_DIR, FBA_BAD_PLUGIN_DIR});
   EXPECT_GE(errors.size(), 5u);
   EXPECT_NE(r.find("examples.passthrough"), nullptr);
+}
+
+TEST(Plugin, ABrokenPluginFailsOnlyTheTasksThatNeedIt) {
+  const fs::path dir = temp_dir();
+  const fs::path so = copy_plugin(bad("static_marker"), dir);
+  edit_manifest(so, [](auto& m) { m.abi_version = 999; });
+  fba::Registry r;
+  EXPECT_EQ(r.load_path({FBA_TEST_PLUGIN_DIR, dir}).size(), 1u);
+  const auto ok = fba::load_task_text("components:\n  c: { type: examples.counter, params: { count: 3 } }\n", "t.yaml", ".", r);
+  EXPECT_EQ(ok.components.size(), 1u);
+  try {
+    fba::load_task_text("components:\n  m: { type: test.marker }\n", "t.yaml", ".", r);
+    FAIL() << "a task using the broken plugin was accepted";
+  } catch (const fba::PluginError& e) {
+    EXPECT_EQ(e.file(), so.string());
+    EXPECT_NE(e.reason().find("ABI 999"), std::string::npos) << e.reason();
+  }
+}
+
+TEST(Plugin, CheckingATaskMapsOnlyThePluginsItUses) {
+  // A plugin folder of its own: the examples, and two plugins the task does not use.
+  const fs::path dir = temp_dir();
+  copy_plugin(examples(), dir);
+  copy_plugin(bad("static_marker"), dir);
+  copy_plugin(bad("blob_large"), dir);
+  fba::Registry r;
+  EXPECT_TRUE(r.load_path({dir}).empty());
+  EXPECT_EQ(r.plugins().size(), 3u);
+  EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{});
+  fba::load_task(fs::path(FBA_TASKS_DIR) / "examples/chain.yaml", r);
+  EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{"fba-examples.so"});
+}
+
+TEST(Plugin, TwoLayoutsOfOneDataTypeAreRefusedNamingBothPlugins) {
+  const fs::path dir = temp_dir();
+  const fs::path large = copy_plugin(bad("blob_large"), dir);
+  const fs::path small = copy_plugin(bad("blob_small"), dir);  // sorted after blob_large: refused
+  fba::Registry r;
+  const auto errors = r.load_path({dir});
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0].file(), small.string());
+  const auto& why = errors[0].reason();
+  EXPECT_NE(why.find("uses data type 'test.Blob' with size 8, alignment 8, version 1, but " + large.string() +
+                     " uses it with size 16, alignment 8, version 1"),
+            std::string::npos) << why;
+  // A task that uses the first one still loads; one that uses the other is refused.
+  EXPECT_NO_THROW(fba::load_task_text("components:\n  b: { type: test.blob_large }\n", "t.yaml", ".", r));
+  EXPECT_THROW(fba::load_task_text("components:\n  b: { type: test.blob_small }\n", "t.yaml", ".", r), fba::PluginError);
+}
+
+TEST(Plugin, ADataTypeRegisteredWithAnotherLayoutIsAnErrorNamingBoth) {
+  fba::register_type("test.Twice", "doc", fba::TypeLayout{8, 8, 1});
+  try {
+    fba::TypeOriginScope origin("second.so");
+    fba::register_type("test.Twice", "doc", fba::TypeLayout{8, 8, 2});
+    FAIL() << "no error";
+  } catch (const std::logic_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("size 8, alignment 8, version 1 in the program"), std::string::npos) << what;
+    EXPECT_NE(what.find("size 8, alignment 8, version 2 in second.so"), std::string::npos) << what;
+  }
+}
+
+TEST(Plugin, EveryDataTypeHasItsLayout) {
+  const fba::TypeInfo* t = fba::type_of<std::int64_t>();
+  EXPECT_EQ(t->layout, (fba::TypeLayout{8, 8, 1}));
+  EXPECT_EQ(t->header, "fba/packet.hpp");
+}
+
+TEST(Plugin, TheManifestDescribesEveryTypeAndItsDataTypes) {
+  const auto m = fba::detail::read_manifest(fba::detail::manifest_path(examples()));
+  EXPECT_EQ(m.name, "examples");
+  EXPECT_EQ(m.abi_version, fba::kAbiVersion);
+  EXPECT_EQ(m.build_id, fba::detail::check_elf(examples()).build_id);
+  EXPECT_FALSE(m.build_id.empty());
+  fba::Registry r;
+  r.load_plugin(examples());
+  for (const auto& t : m.types) EXPECT_EQ(t.interface, fba::detail::spec_json(r.find(t.name)->spec)) << t.name;
+  bool has_int = false;
+  for (const auto& d : m.data_types) has_int |= d.name == "fba.Int" && d.layout == fba::TypeLayout{8, 8, 1};
+  EXPECT_TRUE(has_int);
 }
 
 TEST(Plugin, TheLibraryStaysLoadedWhileAComponentFromItLives) {

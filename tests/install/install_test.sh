@@ -50,12 +50,13 @@ oot=$work/oot-build
 # (a) ------------------------------------------------------------------------------------------
 step "cmake --install $build --prefix $prefix"
 run "$work/install.log" "$cmake" --install "$build" --prefix "$prefix" ||
-  fail "cmake --install failed; every installed target must be built first (ninja -C $build)" "$work/install.log"
+  fail "cmake --install failed; every installed target must be built first (ninja -C $build fba_programs)" "$work/install.log"
 prefix=$(cd "$prefix" && pwd -P)  # /proc/self/exe reports the real path
 
 step "install layout: programs, plugins, headers, CMake package"
-for f in bin/fba-run bin/fba-inspect \
-         "$libdir/libfba.so" "$libdir/fba/plugins/fba-examples.so" "$libdir/fba/plugins/relay.yaml" \
+for f in bin/fba-run bin/fba-inspect bin/fba-plugin-manifest \
+         "$libdir/libfba.so" "$libdir/fba/plugins/fba-examples.so" "$libdir/fba/plugins/fba-examples.manifest.json" \
+         "$libdir/fba/plugins/relay.yaml" \
          include/fba/component.hpp include/fba/spec.hpp include/fba/plugin.hpp include/fba/testing.hpp \
          include/fba/registry.hpp include/fba/version.hpp \
          "$libdir/cmake/fba/fbaConfig.cmake" "$libdir/cmake/fba/fbaConfigVersion.cmake" \
@@ -88,6 +89,7 @@ step "build examples/out-of-tree-plugin"
 run "$work/oot-build.log" "$cmake" --build "$oot" --parallel 2 ||
   fail "the out-of-tree example does not build against the installed package" "$work/oot-build.log"
 [ -f "$oot/fba-demo.so" ] || fail "the build made no $oot/fba-demo.so"
+[ -f "$oot/fba-demo.manifest.json" ] || fail "the build wrote no manifest $oot/fba-demo.manifest.json (fba::plugin-manifest)" "$work/oot-build.log"
 [ -x "$oot/scale_test" ] || fail "the build made no $oot/scale_test (was GTest found?)" "$work/oot-configure.log"
 
 # (c) ------------------------------------------------------------------------------------------
@@ -102,6 +104,19 @@ done
 if grep -qF "$build/$libdir/fba/plugins" "$work/inspect-all.log"; then
   fail "the installed fba-inspect looks into the build tree's plugins" "$work/inspect-all.log"
 fi
+
+step "fba-inspect shows data types, --version, and refuses a plugin folder that does not exist"
+grep -qF "fba.Int  (size 8, alignment 8, version 1, <fba/packet.hpp>)" "$work/inspect-all.log" ||
+  fail "the installed fba-inspect does not list the data type fba.Int with its layout" "$work/inspect-all.log"
+run "$work/inspect-int.log" "$prefix/bin/fba-inspect" fba.Int || fail "fba-inspect fba.Int failed" "$work/inspect-int.log"
+grep -qF "layout: size 8, alignment 8, version 1" "$work/inspect-int.log" ||
+  fail "fba-inspect fba.Int does not show its layout" "$work/inspect-int.log"
+run "$work/inspect-version.log" "$prefix/bin/fba-inspect" --version || fail "fba-inspect --version failed" "$work/inspect-version.log"
+grep -q '^fba-inspect [0-9]' "$work/inspect-version.log" || fail "fba-inspect --version prints no version" "$work/inspect-version.log"
+run "$work/inspect-nonexistent.log" "$prefix/bin/fba-inspect" -p "$work/no-such-folder"
+status=$?
+[ $status -eq 2 ] || fail "fba-inspect -p <missing folder>: expected exit 2, got $status" "$work/inspect-nonexistent.log"
+grep -qF "is not a folder" "$work/inspect-nonexistent.log" || fail "fba-inspect -p <missing folder> does not say so" "$work/inspect-nonexistent.log"
 
 # (d) ------------------------------------------------------------------------------------------
 step "fba-inspect --plugin-path $oot demo.scale"
@@ -139,6 +154,8 @@ step "cmake --install the out-of-tree plugin into $prefix; fba-run finds it with
 run "$work/oot-install.log" "$cmake" --install "$oot" --prefix "$prefix" ||
   fail "cmake --install of the out-of-tree build failed" "$work/oot-install.log"
 [ -f "$prefix/$libdir/fba/plugins/fba-demo.so" ] || fail "fba-demo.so was not installed to $prefix/$libdir/fba/plugins" "$work/oot-install.log"
+[ -f "$prefix/$libdir/fba/plugins/fba-demo.manifest.json" ] ||
+  fail "fba-demo.manifest.json was not installed beside fba-demo.so" "$work/oot-install.log"
 run "$work/run-installed.log" "$prefix/bin/fba-run" --timeout 120 "$example/scale.yaml" ||
   fail "fba-run does not find the installed demo plugin (exit $?)" "$work/run-installed.log"
 

@@ -1,4 +1,6 @@
-// fba-inspect: what the plugins on the search path provide, in the spirit of gst-inspect.
+// fba-inspect: what the plugins on the search path provide, in the spirit of gst-inspect. It reads
+// the plugins' manifests and runs no plugin code (only composites load the plugins they use).
+#include <filesystem>
 #include <iostream>
 
 #include <boost/program_options.hpp>
@@ -12,94 +14,88 @@ using nlohmann::json;
 
 namespace {
 
-json value_json(const fba::Value& v) {
-  return std::visit([](const auto& x) { return json(x); }, v);
-}
+constexpr int kError = 2;
 
-json port_json(const fba::PortSpec& p, bool input) {
-  json j{{"name", p.name}, {"type", p.same_as.empty() ? p.type->name : "same as input '" + p.same_as + "'"}, {"doc", p.doc}};
-  if (input) j["required"] = p.required;
-  return j;
-}
-
-json type_json(const fba::TypeEntry& t) {
-  const fba::Spec& s = t.spec;
-  json j{{"type", s.type_name()}, {"kind", fba::to_string(s.kind())}, {"doc", s.doc()}, {"origin", t.origin}};
-  j["trigger"] = fba::to_string(s.default_trigger().policy);
-  if (s.is_blocking()) j["thread"] = "dedicated";
-  j["inputs"] = json::array();
-  for (const auto& p : s.inputs()) j["inputs"].push_back(port_json(p, true));
-  j["outputs"] = json::array();
-  for (const auto& p : s.outputs()) j["outputs"].push_back(port_json(p, false));
-  j["params"] = json::array();
-  for (const auto& p : s.params()) {
-    json pj{{"name", p.name}, {"type", fba::to_string(p.type)}, {"required", p.required()}, {"doc", p.doc}};
-    if (p.default_value) pj["default"] = value_json(*p.default_value);
-    if (p.min) pj["min"] = *p.min;
-    if (p.max) pj["max"] = *p.max;
-    if (!p.choices.empty()) pj["choices"] = p.choices;
-    j["params"].push_back(pj);
-  }
-  j["events"] = json::array();
-  for (const auto& e : s.events()) j["events"].push_back({{"name", e.name}, {"doc", e.doc}});
+// A component type's interface, with what fba-inspect adds to it: where it comes from and the
+// events every component has.
+json type_json(const fba::Registry& registry, const std::string& name, const std::string& origin) {
+  json j = json::parse(registry.interface_json(name));
+  j["origin"] = origin;
   j["events"].push_back({{"name", "error"}, {"doc", "built-in: the component failed; payload: the reason"}});
   j["events"].push_back({{"name", "finished"}, {"doc", "built-in: the component produced its last sample"}});
-  if (!s.stage_names().empty()) {
-    j["stages"] = s.stage_names();
-    json tr = json::array();
-    for (const auto& [a, b] : s.transitions()) tr.push_back({a, b});
-    j["transitions"] = tr;
-  }
   return j;
 }
 
-void print_type(const fba::TypeEntry& t) {
-  const fba::Spec& s = t.spec;
-  std::cout << s.type_name() << " (" << fba::to_string(s.kind()) << ")\n  " << s.doc() << "\n  from: " << t.origin
-            << "\n  trigger: " << fba::to_string(s.default_trigger().policy) << (s.is_blocking() ? ", own thread (blocking)" : "")
-            << "\n";
-  auto ports = [](const char* title, const std::vector<fba::PortSpec>& v, bool input) {
+json data_type_json(const fba::DataTypeRecord& d) {
+  json j{{"name", d.name}, {"doc", d.doc}, {"header", d.header}, {"used_by", d.used_by}};
+  if (d.layout.known()) j["layout"] = {{"size", d.layout.size}, {"align", d.layout.align}, {"version", d.layout.version}};
+  return j;
+}
+
+std::string value_text(const json& v) {
+  if (v.is_string()) return v.get<std::string>();
+  return v.dump();
+}
+
+void print_type(const json& t) {
+  std::cout << t["type"].get<std::string>() << " (" << t["kind"].get<std::string>() << ")\n  " << t["doc"].get<std::string>()
+            << "\n  from: " << t["origin"].get<std::string>() << "\n  trigger: " << t["trigger"].get<std::string>()
+            << (t.value("blocking", false) ? ", own thread (blocking)" : "") << "\n";
+  auto ports = [](const char* title, const json& v, bool input) {
     std::cout << "\n  " << title << ":\n";
     if (v.empty()) std::cout << "    (none)\n";
     for (const auto& p : v)
-      std::cout << "    " << p.name << "  " << (p.same_as.empty() ? p.type->name : "same type as input '" + p.same_as + "'")
-                << (input && !p.required ? "  (optional)" : "") << "\n      " << p.doc << "\n";
+      std::cout << "    " << p["name"].get<std::string>() << "  "
+                << (p.contains("type") ? p["type"].get<std::string>() : "same type as input '" + p["same_as"].get<std::string>() + "'")
+                << (input && !p.value("required", true) ? "  (optional)" : "") << "\n      " << p["doc"].get<std::string>() << "\n";
   };
-  ports("inputs", s.inputs(), true);
-  ports("outputs", s.outputs(), false);
+  ports("inputs", t["inputs"], true);
+  ports("outputs", t["outputs"], false);
   std::cout << "\n  parameters:\n";
-  if (s.params().empty()) std::cout << "    (none)\n";
-  for (const auto& p : s.params()) {
-    std::cout << "    " << p.name << "  " << fba::to_string(p.type);
-    if (p.default_value) std::cout << ", default " << fba::to_string(*p.default_value);
+  if (t["params"].empty()) std::cout << "    (none)\n";
+  for (const auto& p : t["params"]) {
+    std::cout << "    " << p["name"].get<std::string>() << "  " << p["type"].get<std::string>();
+    if (p.contains("default")) std::cout << ", default " << value_text(p["default"]);
     else std::cout << ", required";
-    if (p.min || p.max)
-      std::cout << ", range [" << (p.min ? fba::to_string(fba::Value(*p.min)) : "-inf") << ", " << (p.max ? fba::to_string(fba::Value(*p.max)) : "inf") << "]";
-    if (!p.choices.empty()) {
+    if (p.contains("min") || p.contains("max"))
+      std::cout << ", range [" << (p.contains("min") ? fba::to_string(fba::Value(p["min"].get<double>())) : "-inf") << ", "
+                << (p.contains("max") ? fba::to_string(fba::Value(p["max"].get<double>())) : "inf") << "]";
+    if (p.contains("choices")) {
       std::cout << ", one of:";
-      for (const auto& c : p.choices) std::cout << " " << c;
+      for (const auto& c : p["choices"]) std::cout << " " << c.get<std::string>();
     }
-    std::cout << "\n      " << p.doc << "\n";
+    std::cout << "\n      " << p["doc"].get<std::string>() << "\n";
   }
   std::cout << "\n  events:\n";
-  for (const auto& e : s.events()) std::cout << "    " << e.name << "\n      " << e.doc << "\n";
+  for (const auto& e : t["events"])
+    if (e["doc"].get<std::string>().rfind("built-in:", 0) != 0)
+      std::cout << "    " << e["name"].get<std::string>() << "\n      " << e["doc"].get<std::string>() << "\n";
   std::cout << "    error, finished  (built-in)\n";
-  if (!s.stage_names().empty()) {
+  if (t.contains("stages")) {
     std::cout << "\n  stages:";
-    for (const auto& st : s.stage_names()) std::cout << " " << st;
+    for (const auto& st : t["stages"]) std::cout << " " << st.get<std::string>();
     std::cout << "\n  transitions:";
-    for (const auto& [a, b] : s.transitions()) std::cout << " " << a << "->" << b;
+    for (const auto& tr : t["transitions"]) std::cout << " " << tr[0].get<std::string>() << "->" << tr[1].get<std::string>();
     std::cout << "\n";
   }
+}
+
+void print_data_type(const fba::DataTypeRecord& d) {
+  std::cout << d.name << " (data type)\n  " << d.doc << "\n  layout: " << fba::to_string(d.layout) << "\n";
+  if (!d.header.empty()) std::cout << "  declared in: <" << d.header << ">\n";
+  std::cout << "  used by:";
+  if (d.used_by.empty()) std::cout << " (no plugin on the path)";
+  for (const auto& f : d.used_by) std::cout << "\n    " << f;
+  std::cout << "\n";
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  po::options_description visible("Usage: fba-inspect [options] [TYPE]\n\nLists the plugins and component types found, or "
-                                  "shows one type's interface.\n\nOptions");
+  po::options_description visible("Usage: fba-inspect [options] [TYPE]\n\nLists the plugins, component types and data types "
+                                  "found, or shows one component type's interface or one data type.\n\nOptions");
   std::vector<std::string> plugin_dirs;
-  visible.add_options()("help,h", "show this help")("json", "print JSON for programs")(
+  visible.add_options()("help,h", "show this help")("version", "print the version")("json", "print JSON for programs")(
       "plugin-path,p", po::value(&plugin_dirs)->composing(), "add a plugin folder (repeatable; also FBA_PLUGIN_PATH)");
   po::options_description all;
   all.add(visible).add_options()("type", po::value<std::string>());
@@ -110,25 +106,51 @@ int main(int argc, char** argv) {
     po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
     po::notify(vm);
   } catch (const po::error& e) {
-    std::cerr << "fba-inspect: " << e.what() << "\n";
-    return 2;
+    std::cerr << "fba-inspect: " << e.what() << "\nTry 'fba-inspect --help'.\n";
+    return kError;
   }
   if (vm.count("help")) {
     std::cout << visible << "\n";
     return 0;
   }
+  if (vm.count("version")) {
+    std::cout << "fba-inspect " FBA_VERSION "\n";
+    return 0;
+  }
   const bool as_json = vm.count("json") > 0;
-  fba::Registry registry;
   std::vector<std::filesystem::path> extra(plugin_dirs.begin(), plugin_dirs.end());
+  for (const auto& d : extra) {
+    std::error_code ec;
+    if (!std::filesystem::is_directory(d, ec)) {
+      std::cerr << "fba-inspect: --plugin-path '" << d.string() << "' is not a folder\nTry 'fba-inspect --help'.\n";
+      return kError;
+    }
+  }
+  fba::Registry registry;
   const auto search = fba::plugin_search_path(extra);
   const auto errors = registry.load_path(search);
   for (const auto& e : errors) std::cerr << "fba-inspect: plugin " << e.file() << ": " << e.reason() << "\n";
+  const auto plugins = registry.plugins();
+  const auto data_types = registry.data_types();
+  auto origin_of = [&](const std::string& type) {
+    for (const auto& p : plugins)
+      for (const auto& t : p.types)
+        if (t == type) return p.file;
+    for (const auto* t : registry.types())
+      if (t->spec.type_name() == type) return t->origin;
+    return std::string();
+  };
 
   if (vm.count("type")) {
     const std::string name = vm["type"].as<std::string>();
-    const auto t = registry.find(name);
-    if (!t) {
-      std::cerr << "fba-inspect: no component type '" << name << "'";
+    for (const auto& d : data_types)
+      if (d.name == name) {
+        if (as_json) std::cout << data_type_json(d).dump(2) << "\n";
+        else print_data_type(d);
+        return 0;
+      }
+    if (registry.interface_json(name).empty()) {
+      std::cerr << "fba-inspect: no component type or data type '" << name << "'";
       const auto near = registry.closest(name);
       if (!near.empty()) {
         std::cerr << "; did you mean";
@@ -136,22 +158,32 @@ int main(int argc, char** argv) {
         std::cerr << "?";
       }
       std::cerr << "\n";
-      return 2;
+      return kError;
     }
-    if (as_json) std::cout << type_json(*t).dump(2) << "\n";
-    else print_type(*t);
-    return errors.empty() ? 0 : 2;
+    const json t = type_json(registry, name, origin_of(name));
+    if (as_json) std::cout << t.dump(2) << "\n";
+    else print_type(t);
+    for (const auto& p : plugins)
+      if (p.file == t["origin"] && !p.error.empty()) return kError;  // shown, but its plugin cannot be used
+    return 0;
   }
 
+  const auto names = registry.type_names();
   if (as_json) {
     json j;
     j["version"] = FBA_VERSION;
     j["search_path"] = json::array();
     for (const auto& d : search) j["search_path"].push_back(d.string());
     j["plugins"] = json::array();
-    for (const auto& p : registry.plugins()) j["plugins"].push_back({{"file", p.file}, {"name", p.name}, {"fba_version", p.version}, {"types", p.types}});
+    for (const auto& p : plugins) {
+      json pj{{"file", p.file}, {"name", p.name}, {"fba_version", p.version}, {"types", p.types}, {"loaded", p.loaded}};
+      if (!p.error.empty()) pj["error"] = p.error;
+      j["plugins"].push_back(pj);
+    }
     j["types"] = json::array();
-    for (const auto* t : registry.types()) j["types"].push_back(type_json(*t));
+    for (const auto& n : names) j["types"].push_back(type_json(registry, n, origin_of(n)));
+    j["data_types"] = json::array();
+    for (const auto& d : data_types) j["data_types"].push_back(data_type_json(d));
     j["errors"] = json::array();
     for (const auto& e : errors) j["errors"].push_back({{"file", e.file()}, {"reason", e.reason()}});
     std::cout << j.dump(2) << "\n";
@@ -159,14 +191,24 @@ int main(int argc, char** argv) {
     std::cout << "Plugin search path:\n";
     for (const auto& d : search) std::cout << "  " << d.string() << "\n";
     std::cout << "\nPlugins:\n";
-    for (const auto& p : registry.plugins()) {
-      std::cout << "  " << p.name << "  (" << p.file << ", fba " << p.version << ")\n";
-      for (const auto& t : p.types) std::cout << "    " << t << "  " << fba::to_string(registry.find(t)->spec.kind()) << "\n";
+    for (const auto& p : plugins) {
+      std::cout << "  " << (p.name.empty() ? std::filesystem::path(p.file).filename().string() : p.name) << "  (" << p.file;
+      if (!p.version.empty()) std::cout << ", fba " << p.version;
+      std::cout << ")" << (p.error.empty() ? "" : "  BROKEN: " + p.error) << "\n";
+      for (const auto& t : p.types) {
+        const json j = json::parse(registry.interface_json(t));
+        std::cout << "    " << t << "  " << j["kind"].get<std::string>() << "\n";
+      }
     }
     std::cout << "\nComposites:\n";
     for (const auto* t : registry.types())
       if (t->composite) std::cout << "  " << t->spec.type_name() << "  (" << t->origin << ")\n";
-    std::cout << "\n" << registry.types().size() << " component types. 'fba-inspect TYPE' shows one.\n";
+    std::cout << "\nData types:\n";
+    for (const auto& d : data_types)
+      std::cout << "  " << d.name << "  (" << fba::to_string(d.layout) << (d.header.empty() ? "" : ", <" + d.header + ">")
+                << ")\n      " << d.doc << "\n";
+    std::cout << "\n" << names.size() << " component types, " << data_types.size()
+              << " data types. 'fba-inspect TYPE' shows one.\n";
   }
-  return errors.empty() ? 0 : 2;
+  return errors.empty() ? 0 : kError;
 }

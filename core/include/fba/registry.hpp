@@ -1,5 +1,14 @@
 // Component types by name: from plugins (shared objects), composites (YAML) and, in tests,
 // from the program itself.
+//
+// Plugins are lazy. Registry::load_path reads each plugin's manifest ("fba-x.manifest.json",
+// written beside "fba-x.so" at build time) and the ELF header of the .so, and checks the ABI
+// record, the file and the data-type layouts from them, without running any of the plugin's
+// code. A plugin is dlopen'ed only when a type it provides is looked up with find(), that is,
+// when a task (or its check) uses it; so a broken plugin fails only the tasks that need it. A
+// .so without a manifest is refused with a message saying so: fba never runs code it has not
+// checked first. Plugins are never unloaded (RTLD_NODELETE), so nothing made by a plugin (a
+// component, a payload and its deleter) can outlive its code.
 #pragma once
 
 #include <filesystem>
@@ -10,17 +19,20 @@
 #include <vector>
 
 #include "fba/component.hpp"
+#include "fba/data_type.hpp"
 #include "fba/spec.hpp"
 
 namespace fba {
 
 struct CompositeDef;  // task_config.hpp
+namespace detail {
+struct PluginSlot;  // registry.cpp
+}
 
-// A loaded shared object; every component created from it keeps it loaded.
+// A loaded shared object. It stays mapped for the life of the process (see above).
 class Library {
  public:
   explicit Library(void* handle, std::string file) : handle_(handle), file_(std::move(file)) {}
-  ~Library();
   Library(const Library&) = delete;
   Library& operator=(const Library&) = delete;
   void* symbol(const char* name) const;
@@ -46,6 +58,15 @@ struct PluginRecord {
   std::string name;
   std::string version;
   std::vector<std::string> types;
+  std::string error;    // why it cannot be used; empty when it can
+  bool loaded = false;  // dlopen'ed (a task used it)
+};
+
+// A data type known from the program or from a plugin's manifest.
+struct DataTypeRecord {
+  std::string name, doc, header;
+  TypeLayout layout;
+  std::vector<std::string> used_by;  // plugin files whose ports use it
 };
 
 // A plugin that cannot be used: names the file and the reason.
@@ -62,29 +83,51 @@ class PluginError : public std::runtime_error {
 
 class Registry {
  public:
+  Registry();
+  ~Registry();
+  Registry(Registry&&) noexcept;
+  Registry& operator=(Registry&&) noexcept;
+
   // Validates the spec; a name registered twice is an error naming both origins.
   void add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library = {});
+  // The single place that checks a spec and makes its entry: add() and plugin loading use it.
+  static std::shared_ptr<const TypeEntry> make_entry(Spec spec, Factory make, std::string origin,
+                                                     std::shared_ptr<const Library> library);
   void add_composite(Spec spec, std::shared_ptr<const CompositeDef> def, std::string origin);
   // Registers what FBA_COMPONENT collected in this program (tests, static builds).
   void add_builtin(const std::vector<detail::ComponentEntry>& entries, const std::string& origin = "built-in");
 
-  // Loads one plugin; throws PluginError.
+  // Checks one plugin from its manifest and loads it now; throws PluginError.
   void load_plugin(const std::filesystem::path& file);
-  // Loads every plugin (*.so) and composite (*.yaml) in the folders, in order; returns the
-  // failures instead of stopping at the first, so a user sees all of them.
+  // Reads every plugin's manifest (*.so) and every composite (*.yaml) in the folders, in order;
+  // returns the failures instead of stopping at the first, so a user sees all of them. Loads
+  // no plugin code, except the plugins whose types a composite uses.
   std::vector<PluginError> load_path(const std::vector<std::filesystem::path>& dirs);
 
   // Tasks hold their types (specs, factories, libraries) themselves: a task outlives the
-  // registry it was loaded from.
+  // registry it was loaded from. Loads the type's plugin on first use; throws PluginError when
+  // that plugin cannot be used. nullptr for an unknown name.
   std::shared_ptr<const TypeEntry> find(std::string_view type_name) const;
+  // Built-in, composite and already loaded plugin types (plugins() lists the others).
   std::vector<const TypeEntry*> types() const;
-  const std::vector<PluginRecord>& plugins() const { return plugins_; }
+  // Every known type name, including those of plugins not loaded yet.
+  std::vector<std::string> type_names() const;
+  // A type's interface as JSON (see fba-inspect --json), from its plugin's manifest when the
+  // plugin is not loaded; empty for an unknown name. Never loads a plugin.
+  std::string interface_json(std::string_view type_name) const;
+  std::vector<PluginRecord> plugins() const;
+  std::vector<DataTypeRecord> data_types() const;
   // Known type names closest to a misspelt one, for "did you mean".
   std::vector<std::string> closest(std::string_view type_name, std::size_t n = 3) const;
 
  private:
+  // Reads and checks a plugin's manifest and file; registers its types as not loaded yet.
+  std::shared_ptr<detail::PluginSlot> add_plugin(const std::filesystem::path& file);
+  bool has_type(std::string_view name, std::string* origin = nullptr) const;
+
   std::map<std::string, std::shared_ptr<const TypeEntry>, std::less<>> types_;
-  std::vector<PluginRecord> plugins_;
+  std::map<std::string, std::shared_ptr<detail::PluginSlot>, std::less<>> plugin_types_;
+  std::vector<std::shared_ptr<detail::PluginSlot>> plugins_;
 };
 
 // FBA_PLUGIN_PATH (colon-separated), then extra folders, then the plugins installed beside the
