@@ -124,6 +124,29 @@ connections:
   }
 }
 
+TEST(DataPath, AnAllTriggersUnmatchedSamplesAreCountedAsDroppedNotDelivered) {
+  // At 100 Hz and 50 Hz on the virtual clock, every second sample of a has no partner.
+  fba::Task task(load(R"(
+components:
+  a: { type: examples.counter, params: { count: 20, rate: 100 } }
+  b: { type: examples.counter, params: { count: 10, rate: 50 } }
+  pair: { type: test.pair }
+  sink: { type: examples.sink }
+connections:
+  - a.out -> pair.a
+  - b.out -> pair.b
+  - pair.sum -> sink.in
+)"),
+                 with(ExecutorKind::Deterministic));
+  const auto r = task.run();
+  ASSERT_EQ(r.outcome, Outcome::Success) << r.reason;
+  expect_every_sample_accounted_for(r);
+  EXPECT_EQ(connection(r, "pair.a").pushed, 20u);
+  EXPECT_EQ(connection(r, "pair.a").delivered, 10u);
+  EXPECT_EQ(connection(r, "pair.a").dropped + connection(r, "pair.a").left, 10u);
+  EXPECT_EQ(connection(r, "pair.b").delivered, 10u);
+}
+
 TEST(DataPath, SummaryListsPushedDeliveredDroppedAndLeft) {
   fba::Task task(load(R"(
 components:
