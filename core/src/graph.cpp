@@ -757,8 +757,9 @@ void Graph::check_idle() {
       for (Buffer* b : out->consumers)
         if (b->full()) waits.push_back("held back by the full lossless queue " + b->from + " -> " + b->to);
     if (waits.empty() && n->periodic() && !n->ticking.load())
-      waits.push_back("its next tick would come after " + std::to_string(static_cast<long long>(kMaxDurationS)) +
-                      " s, beyond the run's clock (period " + std::to_string(n->trigger.period_s) + " s)");
+      waits.push_back((std::ostringstream() << "its period of " << n->trigger.period_s << " s is beyond the run's clock (at most "
+                                            << kMaxDurationS << " s): it will not tick again")
+                          .str());
     if (waits.empty())
       for (auto& in : n->input_states)
         if (in->buffer && in->buffer->empty() && !in->closed()) waits.push_back("waiting on input '" + in->spec->name + "'");
