@@ -346,6 +346,8 @@ class Loader {
   // A lossless queue of this many samples is already more memory than most hosts should give one
   // connection; more is a mistake (an extra zero) rather than a design.
   static constexpr std::int64_t kMaxCapacity = 1000000;
+  // A byte budget per connection (0: none); 1 TiB is far beyond any host, so more is a typo.
+  static constexpr std::int64_t kMaxBytesBudget = std::int64_t{1} << 40;
   // Periods are int64 nanoseconds at run time; this keeps every deadline far from overflow.
   static constexpr double kMaxPeriodSeconds = 1e9;
 
@@ -1026,7 +1028,7 @@ class Loader {
 
     // Connections.
     if (const YAML::Node conns = body["connections"]) {
-      if (!conns.IsSequence()) error(at(src, conns), std::string("connections: a list of 'a.out -> b.in' (or {from, to, buffer, capacity, feedback}); found ") + node_kind(conns));
+      if (!conns.IsSequence()) error(at(src, conns), std::string("connections: a list of 'a.out -> b.in' (or {from, to, buffer, capacity, max_bytes, feedback}); found ") + node_kind(conns));
       else
         for (const auto& n : conns) read_connection(n, src, prefix, bindings, task);
     }
@@ -1120,7 +1122,7 @@ class Loader {
       from = trim(s.substr(0, arrow));
       to = trim(s.substr(arrow + 2));
     } else if (n.IsMap()) {
-      check_keys(n, src, {"from", "to", "buffer", "capacity", "feedback"});
+      check_keys(n, src, {"from", "to", "buffer", "capacity", "max_bytes", "feedback"});
       // Checked before reset(), which throws on a missing key.
       if (!n["from"] || !n["to"]) {
         error(c.where, "a connection needs from: component.output and to: component.input");
@@ -1139,13 +1141,15 @@ class Loader {
       }
       if (const YAML::Node cap = n["capacity"])
         if (const auto v = substituted(cap, bindings, src)) c.capacity = static_cast<std::size_t>(integer(*v, cap, src, "capacity", 1, kMaxCapacity));
+      if (const YAML::Node mb = n["max_bytes"])
+        if (const auto v = substituted(mb, bindings, src)) c.max_bytes = static_cast<std::size_t>(integer(*v, mb, src, "max_bytes", 0, kMaxBytesBudget));
       if (const YAML::Node fb = n["feedback"]) {
         const std::string f = text_of(fb, bindings, src, "feedback");
         if (f == "true") c.feedback = true;
         else if (f != "false") error(at(src, fb), "feedback is true or false; found '" + f + "'");
       }
     } else {
-      error(c.where, std::string("a connection is 'a.out -> b.in' or {from, to, buffer, capacity, feedback}; found ") + node_kind(n));
+      error(c.where, std::string("a connection is 'a.out -> b.in' or {from, to, buffer, capacity, max_bytes, feedback}; found ") + node_kind(n));
       return;
     }
     auto a = endpoint(from, from_node, src, prefix);

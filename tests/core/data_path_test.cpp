@@ -326,18 +326,35 @@ TEST(DataPath, DurationsBeyondTheClockRangeSaturate) {
 }
 
 TEST_P(DataPathBoth, APeriodBeyondTheClockRangeNeverTicksAgain) {
-  // rate 1e-10: a period of 1e10 s, past int64 nanoseconds. One tick at the start, then none.
-  fba::Task task(load(R"(
+  // A task file cannot ask for such a period (the loader and set_trigger refuse more than 1e9 s),
+  // but a configuration built in code can: a period of 1e10 s is past int64 nanoseconds. One
+  // tick at the start, then none, and the stall says why.
+  auto config = load(R"(
 components:
-  src: { type: examples.counter, params: { count: 5, rate: 1e-10 } }
+  src: { type: examples.counter, params: { count: 5 } }
   sink: { type: examples.sink }
 connections: [ src.out -> sink.in ]
-)"),
-                 with(GetParam()));
+)");
+  config.components[0].trigger = fba::Trigger{fba::TriggerPolicy::Periodic, 1e10};
+  fba::Task task(config, with(GetParam()));
   const auto r = task.run();
   EXPECT_EQ(component(r, "sink").samples_in, 1u);
   EXPECT_EQ(r.outcome, Outcome::RuntimeError);
   EXPECT_NE(r.reason.find("stalled"), std::string::npos) << r.reason;
+}
+
+TEST(DataPath, ARateWhosePeriodIsBeyondTheDocumentedRangeIsRefused) {
+  try {
+    fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 5, rate: 1e-10 } }
+  sink: { type: examples.sink }
+connections: [ src.out -> sink.in ]
+)"));
+    FAIL() << "rate 1e-10 was accepted";
+  } catch (const fba::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("(0, 1000000000] seconds"), std::string::npos) << e.what();
+  }
 }
 
 TEST_P(DataPathBoth, ATimeoutBeyondTheClockRangeMeansNoLimit) {

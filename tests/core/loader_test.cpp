@@ -146,6 +146,28 @@ connections:
   EXPECT_NE(e.find("type mismatch: 'a.out' carries 'fba.Int' but 'l.events' takes 'fba.Event'"), std::string::npos) << e;
 }
 
+TEST(Loader, AConnectionsByteBudgetIsReadAndRangeChecked) {
+  const auto config = load(R"(
+components:
+  a: { type: examples.counter }
+  s: { type: examples.sink }
+connections:
+  - { from: a.out, to: s.in, buffer: lossless, capacity: 4, max_bytes: 4096 }
+)");
+  ASSERT_EQ(config.connections.size(), 1u);
+  EXPECT_EQ(config.connections[0].max_bytes, 4096u);
+  EXPECT_EQ(config.connections[0].capacity, 4u);
+  const auto e = errors_of(R"(
+components:
+  a: { type: examples.counter }
+  s: { type: examples.sink }
+connections:
+  - { from: a.out, to: s.in, max_bytes: -1 }
+)");
+  EXPECT_NE(e.find("max_bytes"), std::string::npos) << e;
+  EXPECT_NE(e.find("found -1"), std::string::npos) << e;
+}
+
 TEST(Loader, AnInputTakesOneConnection) {
   const auto e = errors_of(R"(
 components:
