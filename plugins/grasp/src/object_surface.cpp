@@ -142,6 +142,20 @@ ObjectSurface::Placement ObjectSurface::place(const GraspContact& approximate) c
   return out;
 }
 
+SurfaceSampling sample_for_synthesis(const ObjectSurface& surface, std::size_t count, std::uint64_t seed) {
+  if (count < 3) throw std::invalid_argument("surface sampling: expected at least 3 samples, found " + std::to_string(count));
+  std::mt19937_64 rng(seed);
+  SurfaceSampling out;
+  out.neighbour_radius = 2.5 * std::sqrt(surface.area() / static_cast<double>(count));
+  out.samples.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const GraspContact c = surface.sample(rng);
+    out.samples.push_back({c.position, -c.normal});
+  }
+  estimate_curvature(out.samples, out.neighbour_radius);
+  return out;
+}
+
 double quantile(std::vector<double> values, double q) {
   if (values.empty()) return 0;
   std::sort(values.begin(), values.end());

@@ -201,16 +201,10 @@ class SynthesisOnYcb : public testing::TestWithParam<const char*> {};
 TEST_P(SynthesisOnYcb, BestGraspIsForceClosureOnTheTrueSurface) {
   const auto mesh = geometry::load_mesh(std::filesystem::path(FBA_SHARED_DATA_DIR) / "ycb" / GetParam() / "model.obj");
   const ObjectSurface surface(mesh);
-  std::mt19937_64 rng(11);
-  const double spacing = std::sqrt(surface.area() / 3000);
-  std::vector<SurfaceSample> samples;
-  for (int i = 0; i < 3000; ++i) {
-    const GraspContact c = surface.sample(rng);
-    samples.push_back({c.position, -c.normal});
-  }
-  estimate_curvature(samples, 2.5 * spacing);
+  const SurfaceSampling sampling = sample_for_synthesis(surface, 3000, 11);
   SynthesisParams p;
-  p.neighbour_radius = 2.5 * spacing;
+  p.neighbour_radius = sampling.neighbour_radius;
+  const auto& samples = sampling.samples;
   const SynthesisResult r = synthesise(samples, p);
   ASSERT_FALSE(r.candidates.empty()) << GetParam();
   std::vector<double> eps;

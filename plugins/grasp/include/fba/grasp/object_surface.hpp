@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "fba/grasp/grasp_quality.hpp"
+#include "fba/grasp/synthesis.hpp"
 #include "fba/types/grasp.hpp"
 #include "fba/types/mesh.hpp"
 
@@ -72,6 +73,15 @@ struct RandomBaseline {
 // grasp should beat (the grasp issue's "random contact sets").
 RandomBaseline random_baseline(const ObjectSurface& surface, std::size_t sets, std::uint64_t seed,
                                const QualityParams& params = {});
+
+// What synthesis would see of this object if its model were perfect: `count` samples drawn
+// uniformly by area (seeded) with outward normals and curvature estimated over neighbour_radius,
+// which is 2.5 times the mean sample spacing: pass it on as SynthesisParams::neighbour_radius.
+struct SurfaceSampling {
+  std::vector<SurfaceSample> samples;
+  double neighbour_radius = 0;
+};
+SurfaceSampling sample_for_synthesis(const ObjectSurface& surface, std::size_t count, std::uint64_t seed);
 
 // The q-quantile (0..1) of values by linear interpolation between order statistics; 0 when empty.
 double quantile(std::vector<double> values, double q);
