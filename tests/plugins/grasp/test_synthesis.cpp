@@ -94,7 +94,7 @@ TEST(GraspSynthesis, CylinderBestGraspHasThreeContactsAroundTheAxis) {
     EXPECT_NEAR(angle_deg(a, b), 120.0, 15.0);
   }
   // Approach from above, near the axis: perpendicular to the contacts' plane, which the plane
-  // alignment keeps within 20 degrees of level on a cylinder's side.
+  // alignment (10 degrees by default) keeps near level on a cylinder's side.
   EXPECT_LT(g.approach.z(), -std::cos(20.0 * kPi / 180));
   // The pregrasp opens wider than the contacts are apart, within the hand's range.
   const Eigen::Vector3d mid = (g.contacts[1].position + g.contacts[2].position) / 2;
@@ -196,17 +196,22 @@ TEST(GraspSynthesis, BadInputIsAClearError) {
 
 // The best synthesised grasp on samples of each YCB mesh, put on the true surface, measured by
 // the independent quality measure.
-class SynthesisOnYcb : public testing::TestWithParam<const char*> {};
+struct YcbCase {
+  const char* mesh;
+  double random_p99;  // independent figure from ../shared/data/README.md; 0: none published
+};
+
+class SynthesisOnYcb : public testing::TestWithParam<YcbCase> {};
 
 TEST_P(SynthesisOnYcb, BestGraspIsForceClosureOnTheTrueSurface) {
-  const auto mesh = geometry::load_mesh(std::filesystem::path(FBA_SHARED_DATA_DIR) / "ycb" / GetParam() / "model.obj");
+  const auto mesh = geometry::load_mesh(std::filesystem::path(FBA_SHARED_DATA_DIR) / "ycb" / GetParam().mesh / "model.obj");
   const ObjectSurface surface(mesh);
   const SurfaceSampling sampling = sample_for_synthesis(surface, 3000, 11);
   SynthesisParams p;
   p.neighbour_radius = sampling.neighbour_radius;
   const auto& samples = sampling.samples;
   const SynthesisResult r = synthesise(samples, p);
-  ASSERT_FALSE(r.candidates.empty()) << GetParam();
+  ASSERT_FALSE(r.candidates.empty()) << GetParam().mesh;
   std::vector<double> eps;
   int fc = 0;
   for (const auto& c : r.candidates) {
@@ -217,16 +222,20 @@ TEST_P(SynthesisOnYcb, BestGraspIsForceClosureOnTheTrueSurface) {
     eps.push_back(q.epsilon);
   }
   std::printf("%s: best FC %d eps %.4f (S1 %.2f S3 %.2f S4 %.2f); top %zu: FC share %.2f, median eps %.4f\n",
-              GetParam(), eps[0] > 0, eps[0], r.candidates[0].grasp.scores.symmetry,
+              GetParam().mesh, eps[0] > 0, eps[0], r.candidates[0].grasp.scores.symmetry,
               r.candidates[0].grasp.scores.safety_margin, r.candidates[0].grasp.scores.curvature, eps.size(),
               static_cast<double>(fc) / eps.size(), quantile(eps, 0.5));
-  EXPECT_GT(eps[0], 0.0) << GetParam() << ": the best grasp is not force closure";
+  EXPECT_GT(eps[0], 0.0) << GetParam().mesh << ": the best grasp is not force closure";
   // The target for selected grasps: at least 90% force closure on the true mesh.
-  EXPECT_GE(static_cast<double>(fc) / eps.size(), 0.9) << GetParam();
+  EXPECT_GE(static_cast<double>(fc) / eps.size(), 0.9) << GetParam().mesh;
+  // ... and their median epsilon above the 99th percentile of random contact sets.
+  if (GetParam().random_p99 > 0) EXPECT_GT(quantile(eps, 0.5), GetParam().random_p99) << GetParam().mesh;
 }
 
 INSTANTIATE_TEST_SUITE_P(Ycb, SynthesisOnYcb,
-                         testing::Values("YcbMustardBottle", "YcbMasterChefCan", "YcbBanana", "YcbCrackerBox"));
+                         testing::Values(YcbCase{"YcbMustardBottle", 0.036}, YcbCase{"YcbMasterChefCan", 0.071},
+                                         YcbCase{"YcbBanana", 0.020}, YcbCase{"YcbCrackerBox", 0.0}),
+                         [](const auto& info) { return std::string(info.param.mesh); });
 
 }  // namespace
 }  // namespace fba::grasp
