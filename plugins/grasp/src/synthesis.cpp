@@ -19,7 +19,13 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 class NeighbourGrid {
  public:
   NeighbourGrid(std::span<const SurfaceSample> s, double r) : samples_(s), r_(r) {
-    for (std::size_t i = 0; i < s.size(); ++i) cells_[key(cell(s[i].position))].push_back(i);
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      // Cell indices must fit the key's 21 bits per axis (and an int): metres over a sane radius.
+      if (!((s[i].position.cwiseAbs() / r).maxCoeff() < 1e6))
+        throw std::invalid_argument("grasp synthesis: sample " + std::to_string(i) + " lies more than 10^6 neighbour radii (" +
+                                    std::to_string(r) + " m) from the origin; expected metres and a radius near the sample spacing");
+      cells_[key(cell(s[i].position))].push_back(i);
+    }
   }
   std::vector<std::size_t> within(std::size_t i) const {
     std::vector<std::size_t> out;

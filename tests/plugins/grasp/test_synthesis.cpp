@@ -192,6 +192,10 @@ TEST(GraspSynthesis, BadInputIsAClearError) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("aperture range"), std::string::npos) << e.what();
   }
+  SynthesisParams tiny;
+  tiny.neighbour_radius = 1e-12;
+  s[1].position = {1.0, 0, 0};
+  EXPECT_THROW(synthesise(s, tiny), std::invalid_argument);
 }
 
 // The best synthesised grasp on samples of each YCB mesh, put on the true surface, measured by
