@@ -7,6 +7,8 @@
 //   fba-evaluate model --model carved.ply [--mesh truth.obj] [--images set] --depth 6
 //       (a) with --mesh: voxel IoU and carved-away count of the model against the mesh;
 //       (b) with --images: re-projection IoU of the model onto each silhouette of the image set.
+//   fba-evaluate grasp --mesh M.obj --summary run/summary.json | --random 1000 | --synthesise
+//       Grasp quality on the true surface (grasp.cpp; see its --help).
 #include <cstdio>
 #include <iostream>
 #include <numeric>
@@ -147,10 +149,16 @@ int run_model(const std::vector<std::string>& args) {
 
 }  // namespace
 
+// The grasp subcommand lives in grasp.cpp (grasp quality on the true surface).
+namespace fba::evaluate {
+int run_grasp(const std::vector<std::string>& args);
+}
+
 int main(int argc, char** argv) {
   const std::string usage =
       "usage: fba-evaluate synthetic --mesh M.obj [M2.obj ...] [--views 8] [--depth 6] [options]\n"
       "       fba-evaluate model --model carved.ply [--mesh truth.obj] [--images set] [--depth 6]\n"
+      "       fba-evaluate grasp --mesh M.obj (--summary run/summary.json | --random 1000 | --synthesise)\n"
       "       fba-evaluate <command> --help\n";
   if (argc < 2) {
     std::cerr << usage;
@@ -161,6 +169,7 @@ int main(int argc, char** argv) {
   try {
     if (command == "synthetic") return run_synthetic(args);
     if (command == "model") return run_model(args);
+    if (command == "grasp") return evaluate::run_grasp(args);
     if (command == "--help" || command == "-h") {
       std::cout << usage;
       return 0;

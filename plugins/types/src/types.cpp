@@ -1,6 +1,7 @@
 // Registers the shared types by name when the library loads, so fba-inspect and the task
 // checker know them even before a component that produces them is created.
 #include "fba/types/frame.hpp"
+#include "fba/types/grasp.hpp"
 #include "fba/types/mesh.hpp"
 #include "fba/types/octree.hpp"
 #include "fba/types/pose.hpp"
@@ -15,6 +16,7 @@ namespace {
   fba::type_of<fba::Octree>();
   fba::type_of<fba::RegionsOfInterest>();
   fba::type_of<fba::TriangleMesh>();
+  fba::type_of<fba::Grasp>();
   return true;
 }();
 }  // namespace

@@ -1,0 +1,110 @@
+// Grasp synthesis from surface samples (Recatala et al., criteria of Chinellato et al. 2005):
+// graspable regions, candidate three-finger grasps a hand can reach (a thumb opposing two
+// fingers), scored by S1 symmetry, S3 safety margin and S4 curvature, ranked. Independent of how
+// the samples were obtained (octree, silhouettes, or a mesh in tests).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "fba/types/grasp.hpp"
+
+namespace fba::grasp {
+
+struct SurfaceSample {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world, metres
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();    // outward; normalised on input
+  double curvature = 0;    // mean curvature, 1/m: positive convex, negative concave, 0 flat
+  bool uncertain = false;  // the model is not yet sure of this part of the surface
+};
+
+// The hand: a three-fingered gripper whose thumb opposes two fingers side by side.
+struct HandGeometry {
+  double finger_width = 0.02;  // metres; two fingers closer than this collide
+  // Distance from the thumb's contact to the midpoint of the fingers' contacts, metres.
+  double aperture_min = 0.02;
+  double aperture_max = 0.15;
+  // Distance between the two fingers' contacts, metres (at least finger_width).
+  double spread_min = 0.02;
+  double spread_max = 0.10;
+};
+
+struct SynthesisParams {
+  HandGeometry hand;
+  // Samples closer than this are neighbours: about twice the sample spacing.
+  double neighbour_radius = 0.01;
+  // Neighbours whose normals differ by more than this are on two sides of an edge: not one region.
+  double max_normal_step_deg = 30;
+  // |curvature| above this is a sharp feature, never a graspable region; 0 means 2 / finger_width
+  // (a radius of curvature below half a finger).
+  double sharp_curvature = 0;
+  // S4 maps curvature -scale .. 0 .. +scale (1/m) linearly to 1 .. 0.5 .. 0: slightly concave best.
+  double curvature_scale = 25;
+  // S3: a contact this far (metres) from its region's boundary scores 1; 0 means finger_width.
+  double safety_reference = 0;
+  // Opposition: the thumb pushes within thumb_alignment_deg of the thumb-to-fingers axis, each
+  // finger within finger_alignment_deg of the opposite direction (60 degrees is three contacts
+  // 120 degrees apart), and the fingers' resultant within balance_deg of it, so that their sideways
+  // pushes cancel. Each contact's normal lies within plane_alignment_deg of the contacts' plane:
+  // three forces in equilibrium are coplanar. The defaults use under half the friction cone's half
+  // angle (atan 0.5 = 27 degrees), leaving the rest for positioning and model errors; on the YCB
+  // meshes, looser values (25 / 20 / 20) halve the median epsilon of the selected grasps.
+  double thumb_alignment_deg = 12;
+  double finger_alignment_deg = 65;
+  double balance_deg = 10;
+  double plane_alignment_deg = 10;
+  double weight_symmetry = 1;
+  double weight_safety = 1;
+  double weight_curvature = 1;
+  // The object's centre for S1; default the mean of the samples.
+  std::optional<Eigen::Vector3d> object_centre;
+  // Of the two approach directions perpendicular to the contacts' plane, the one closer to this
+  // (default from above: the object stands on a table).
+  Eigen::Vector3d preferred_approach{0, 0, -1};
+  // Bounds on the search: thumbs tried, finger positions per thumb, candidates returned.
+  std::size_t max_thumbs = 80;
+  std::size_t max_fingers = 300;
+  std::size_t max_candidates = 20;
+};
+
+// A connected patch of graspable samples (not sharp, normals continuous).
+struct GraspRegion {
+  std::vector<std::size_t> samples;  // indices into the input
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // mean outward normal (unit, or zero if they cancel)
+  double mean_curvature = 0;
+  double uncertain_share = 0;  // share of its samples flagged uncertain
+  Eigen::AlignedBox3d box;     // bounds of its samples
+};
+
+struct GraspCandidate {
+  Grasp grasp;                          // contacts (thumb first), approach, pregrasp, scores
+  std::array<std::size_t, 3> samples{}; // the contact samples, thumb first
+  std::array<std::size_t, 3> regions{}; // their regions
+  bool uncertain = false;               // a contact touches an uncertain sample
+};
+
+struct SynthesisResult {
+  std::vector<GraspRegion> regions;
+  std::vector<GraspCandidate> candidates;  // best total first, at most max_candidates, distinct
+  // Regions where more views would help (any uncertain sample), most uncertain area first.
+  std::vector<std::size_t> uncertain_regions;
+  std::vector<double> boundary_distance;   // per input sample: distance to its region's boundary (m), 0 if none
+};
+
+// Throws std::invalid_argument for empty or non-finite samples, a zero normal, or parameters out of
+// range, naming the value found.
+SynthesisResult synthesise(std::span<const SurfaceSample> samples, const SynthesisParams& params = {});
+
+// Fills each sample's curvature from its neighbours within radius: the mean over neighbours q of
+// -2 (q - p).n / |q - p|^2, which is the mean curvature on a smooth surface (1/R on a sphere,
+// 1/(2R) on a cylinder) and large across an edge. Samples with no neighbour get 0.
+void estimate_curvature(std::span<SurfaceSample> samples, double radius);
+
+}  // namespace fba::grasp

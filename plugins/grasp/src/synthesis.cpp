@@ -1,0 +1,345 @@
+#include "fba/grasp/synthesis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <numeric>
+#include <queue>
+#include <random>
+#include <string>
+#include <unordered_map>
+
+namespace fba::grasp {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// Uniform grid of cell size r: neighbours within r are in the 27 surrounding cells.
+class NeighbourGrid {
+ public:
+  NeighbourGrid(std::span<const SurfaceSample> s, double r) : samples_(s), r_(r) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      // Cell indices must fit the key's 21 bits per axis (and an int): metres over a sane radius.
+      if (!((s[i].position.cwiseAbs() / r).maxCoeff() < 1e6))
+        throw std::invalid_argument("grasp synthesis: sample " + std::to_string(i) + " lies more than 10^6 neighbour radii (" +
+                                    std::to_string(r) + " m) from the origin; expected metres and a radius near the sample spacing");
+      cells_[key(cell(s[i].position))].push_back(i);
+    }
+  }
+  std::vector<std::size_t> within(std::size_t i) const {
+    std::vector<std::size_t> out;
+    const Eigen::Vector3i c = cell(samples_[i].position);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it == cells_.end()) continue;
+          for (std::size_t j : it->second)
+            if (j != i && (samples_[j].position - samples_[i].position).squaredNorm() <= r_ * r_) out.push_back(j);
+        }
+    return out;
+  }
+
+ private:
+  Eigen::Vector3i cell(const Eigen::Vector3d& p) const { return (p / r_).array().floor().cast<int>(); }
+  static std::uint64_t key(const Eigen::Vector3i& c) {
+    return (static_cast<std::uint64_t>(c.x() & 0x1fffff) << 42) | (static_cast<std::uint64_t>(c.y() & 0x1fffff) << 21) |
+           static_cast<std::uint64_t>(c.z() & 0x1fffff);
+  }
+  std::span<const SurfaceSample> samples_;
+  double r_;
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
+};
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("grasp synthesis: " + what);
+}
+
+std::string num(double v) { return std::to_string(v); }
+
+void check_params(const SynthesisParams& p) {
+  const HandGeometry& h = p.hand;
+  require(h.finger_width > 0, "hand.finger_width must be > 0, found " + num(h.finger_width));
+  require(h.aperture_min >= 0 && h.aperture_max > h.aperture_min,
+          "hand aperture range must satisfy 0 <= min < max, found " + num(h.aperture_min) + " .. " + num(h.aperture_max));
+  require(h.spread_min >= 0 && h.spread_max > h.spread_min && h.spread_max >= h.finger_width,
+          "hand spread range must satisfy 0 <= min < max and max >= finger_width, found " + num(h.spread_min) +
+              " .. " + num(h.spread_max));
+  require(p.neighbour_radius > 0, "neighbour_radius must be > 0, found " + num(p.neighbour_radius));
+  require(p.max_normal_step_deg > 0 && p.max_normal_step_deg <= 180,
+          "max_normal_step_deg must be in (0, 180], found " + num(p.max_normal_step_deg));
+  require(p.sharp_curvature >= 0, "sharp_curvature must be >= 0, found " + num(p.sharp_curvature));
+  require(p.curvature_scale > 0, "curvature_scale must be > 0, found " + num(p.curvature_scale));
+  require(p.safety_reference >= 0, "safety_reference must be >= 0, found " + num(p.safety_reference));
+  require(p.thumb_alignment_deg > 0 && p.thumb_alignment_deg <= 90,
+          "thumb_alignment_deg must be in (0, 90], found " + num(p.thumb_alignment_deg));
+  require(p.finger_alignment_deg > 0 && p.finger_alignment_deg <= 90,
+          "finger_alignment_deg must be in (0, 90], found " + num(p.finger_alignment_deg));
+  require(p.balance_deg > 0 && p.balance_deg <= 90, "balance_deg must be in (0, 90], found " + num(p.balance_deg));
+  require(p.plane_alignment_deg > 0 && p.plane_alignment_deg <= 90,
+          "plane_alignment_deg must be in (0, 90], found " + num(p.plane_alignment_deg));
+  require(p.weight_symmetry >= 0 && p.weight_safety >= 0 && p.weight_curvature >= 0 &&
+              p.weight_symmetry + p.weight_safety + p.weight_curvature > 0,
+          "criterion weights must be >= 0 and not all 0");
+  require(!p.object_centre || p.object_centre->allFinite(), "object_centre is not finite");
+  require(p.preferred_approach.allFinite() && p.preferred_approach.norm() > 0, "preferred_approach must be non-zero");
+  require(p.max_thumbs > 0 && p.max_fingers > 1 && p.max_candidates > 0, "search bounds must be positive");
+}
+
+std::vector<SurfaceSample> normalised_input(std::span<const SurfaceSample> in) {
+  require(!in.empty(), "no surface samples (expected at least 3)");
+  std::vector<SurfaceSample> out(in.begin(), in.end());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    auto& s = out[i];
+    require(s.position.allFinite() && std::isfinite(s.curvature),
+            "sample " + std::to_string(i) + " has a non-finite position or curvature");
+    require(s.normal.allFinite() && s.normal.norm() > 1e-12, "sample " + std::to_string(i) + " has a zero normal");
+    s.normal.normalize();
+  }
+  return out;
+}
+
+double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+}  // namespace
+
+void estimate_curvature(std::span<SurfaceSample> samples, double radius) {
+  require(radius > 0, "curvature radius must be > 0, found " + num(radius));
+  const NeighbourGrid grid(samples, radius);
+  std::vector<double> k(samples.size(), 0.0);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Eigen::Vector3d n = samples[i].normal.normalized();
+    double sum = 0;
+    int count = 0;
+    for (std::size_t j : grid.within(i)) {
+      const Eigen::Vector3d d = samples[j].position - samples[i].position;
+      const double d2 = d.squaredNorm();
+      if (d2 < 1e-6 * radius * radius) continue;  // a duplicate says nothing about the bending
+      sum += -2.0 * d.dot(n) / d2;
+      ++count;
+    }
+    k[i] = count ? sum / count : 0.0;
+  }
+  for (std::size_t i = 0; i < samples.size(); ++i) samples[i].curvature = k[i];
+}
+
+SynthesisResult synthesise(std::span<const SurfaceSample> input, const SynthesisParams& p) {
+  check_params(p);
+  const std::vector<SurfaceSample> s = normalised_input(input);
+  const HandGeometry& hand = p.hand;
+  const double sharp = p.sharp_curvature > 0 ? p.sharp_curvature : 2.0 / hand.finger_width;
+  const double safety_ref = p.safety_reference > 0 ? p.safety_reference : hand.finger_width;
+  const std::size_t n = s.size();
+  const NeighbourGrid grid(s, p.neighbour_radius);
+  std::vector<std::vector<std::size_t>> nb(n);
+  for (std::size_t i = 0; i < n; ++i) nb[i] = grid.within(i);
+
+  // Regions: connected graspable samples whose normals turn gently.
+  const double max_step = p.max_normal_step_deg * kDeg;
+  std::vector<bool> graspable(n);
+  for (std::size_t i = 0; i < n; ++i) graspable[i] = std::abs(s[i].curvature) <= sharp;
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> region_of(n, kNone);
+  SynthesisResult result;
+  for (std::size_t seed = 0; seed < n; ++seed) {
+    if (!graspable[seed] || region_of[seed] != kNone) continue;
+    const std::size_t r = result.regions.size();
+    GraspRegion region;
+    std::vector<std::size_t> stack{seed};
+    region_of[seed] = r;
+    while (!stack.empty()) {
+      const std::size_t i = stack.back();
+      stack.pop_back();
+      region.samples.push_back(i);
+      for (std::size_t j : nb[i])
+        if (graspable[j] && region_of[j] == kNone && angle_between(s[i].normal, s[j].normal) <= max_step) {
+          region_of[j] = r;
+          stack.push_back(j);
+        }
+    }
+    double k = 0, unsure = 0;
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    for (std::size_t i : region.samples) {
+      region.centroid += s[i].position;
+      normal += s[i].normal;
+      k += s[i].curvature;
+      unsure += s[i].uncertain ? 1 : 0;
+      region.box.extend(s[i].position);
+    }
+    const double m = static_cast<double>(region.samples.size());
+    region.centroid /= m;
+    region.normal = normal.norm() > 1e-9 * m ? normal.normalized() : Eigen::Vector3d::Zero();
+    region.mean_curvature = k / m;
+    region.uncertain_share = unsure / m;
+    result.regions.push_back(std::move(region));
+  }
+
+  // Safety margin: distance within the region to its boundary, where a sample borders another
+  // region, an ungraspable sample, or no samples at all (its neighbours all lie to one side).
+  std::vector<double> dist(n, std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, std::size_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (region_of[i] == kNone) continue;
+    bool boundary = nb[i].size() < 3;
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+    for (std::size_t j : nb[i]) {
+      if (region_of[j] != region_of[i]) boundary = true;
+      offset += s[j].position - s[i].position;
+    }
+    if (!nb[i].empty()) {
+      offset /= static_cast<double>(nb[i].size());
+      offset -= offset.dot(s[i].normal) * s[i].normal;
+      if (offset.norm() > 0.35 * p.neighbour_radius) boundary = true;  // a one-sided neighbourhood
+    }
+    if (boundary) {
+      dist[i] = 0;
+      queue.push({0.0, i});
+    }
+  }
+  while (!queue.empty()) {
+    const auto [d, i] = queue.top();
+    queue.pop();
+    if (d > dist[i]) continue;
+    for (std::size_t j : nb[i]) {
+      if (region_of[j] != region_of[i]) continue;
+      const double nd = d + (s[j].position - s[i].position).norm();
+      if (nd < dist[j]) {
+        dist[j] = nd;
+        queue.push({nd, j});
+      }
+    }
+  }
+  result.boundary_distance.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    result.boundary_distance[i] = region_of[i] == kNone ? 0.0 : std::min(dist[i], 1e3);  // closed region: no boundary
+
+  std::vector<std::size_t> order(result.regions.size());
+  std::iota(order.begin(), order.end(), 0);
+  for (std::size_t r : order)
+    if (result.regions[r].uncertain_share > 0) result.uncertain_regions.push_back(r);
+  std::stable_sort(result.uncertain_regions.begin(), result.uncertain_regions.end(), [&](std::size_t a, std::size_t b) {
+    const auto& ra = result.regions[a];
+    const auto& rb = result.regions[b];
+    return ra.uncertain_share * ra.samples.size() > rb.uncertain_share * rb.samples.size();
+  });
+
+  // Candidates: a thumb opposing two fingers, within the hand's reach.
+  std::vector<std::size_t> pool;
+  for (std::size_t i = 0; i < n; ++i)
+    if (region_of[i] != kNone) pool.push_back(i);
+  if (pool.size() < 3) return result;
+  std::mt19937 rng(0);  // a fixed shuffle: an even, reproducible subset of the surface
+  std::shuffle(pool.begin(), pool.end(), rng);
+  const std::vector<std::size_t> thumbs(pool.begin(), pool.begin() + std::min(pool.size(), p.max_thumbs));
+
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  if (p.object_centre) {
+    centre = *p.object_centre;
+  } else {
+    for (const auto& x : s) centre += x.position / static_cast<double>(n);
+  }
+  const double cos_thumb = std::cos(p.thumb_alignment_deg * kDeg);
+  const double cos_finger = std::cos(p.finger_alignment_deg * kDeg);
+  const double balance = p.balance_deg * kDeg;
+  const double sin_plane = std::sin(p.plane_alignment_deg * kDeg);
+  const double reach = std::hypot(hand.aperture_max, hand.spread_max / 2);
+  const double min_spread = std::max(hand.spread_min, hand.finger_width);
+  const Eigen::Vector3d preferred = p.preferred_approach.normalized();
+  const double weights = p.weight_symmetry + p.weight_safety + p.weight_curvature;
+  auto s4 = [&](std::size_t i) { return std::clamp(0.5 - 0.5 * s[i].curvature / p.curvature_scale, 0.0, 1.0); };
+  auto s3 = [&](std::size_t i) { return std::min(1.0, result.boundary_distance[i] / safety_ref); };
+
+  std::vector<GraspCandidate> all;
+  for (std::size_t t : thumbs) {
+    const Eigen::Vector3d tp = s[t].position;
+    const Eigen::Vector3d tn = -s[t].normal;  // inward: where the thumb pushes
+    // Finger positions the thumb can oppose: in reach, facing back towards the thumb.
+    std::vector<std::size_t> fingers;
+    for (std::size_t f : pool) {
+      if (fingers.size() >= p.max_fingers) break;
+      const Eigen::Vector3d d = tp - s[f].position;
+      const double len = d.norm();
+      if (len < hand.aperture_min || len > reach) continue;
+      if (-s[f].normal.dot(d / len) < cos_finger) continue;
+      if (tn.dot(-d / len) < cos_thumb * 0.5) continue;  // loose: the exact axis needs both fingers
+      fingers.push_back(f);
+    }
+    for (std::size_t a = 0; a < fingers.size(); ++a) {
+      for (std::size_t b = a + 1; b < fingers.size(); ++b) {
+        const std::size_t f1 = fingers[a], f2 = fingers[b];
+        const Eigen::Vector3d p1 = s[f1].position, p2 = s[f2].position;
+        const double spread = (p1 - p2).norm();
+        if (spread < min_spread || spread > hand.spread_max) continue;
+        const Eigen::Vector3d mid = (p1 + p2) / 2;
+        const double aperture = (mid - tp).norm();
+        if (aperture < hand.aperture_min || aperture > hand.aperture_max) continue;
+        const Eigen::Vector3d axis = (mid - tp) / aperture;
+        if (tn.dot(axis) < cos_thumb) continue;
+        if (-s[f1].normal.dot(-axis) < cos_finger || -s[f2].normal.dot(-axis) < cos_finger) continue;
+        // The fingers' sideways pushes cancel: their resultant opposes the thumb.
+        const Eigen::Vector3d resultant = -s[f1].normal - s[f2].normal;
+        if (angle_between(resultant, -axis) > balance) continue;
+        if (std::abs((p1 - p2).dot(axis)) > 0.5 * spread) continue;  // side by side, not one behind the other
+        const Eigen::Vector3d plane = (p1 - tp).cross(p2 - tp);
+        if (plane.norm() < 1e-12) continue;
+        const Eigen::Vector3d normal = plane.normalized();
+        // Three forces in equilibrium lie in one plane: each contact must be able to push within it.
+        if (std::abs(s[t].normal.dot(normal)) > sin_plane || std::abs(s[f1].normal.dot(normal)) > sin_plane ||
+            std::abs(s[f2].normal.dot(normal)) > sin_plane)
+          continue;
+
+        // S1: angles around the object's centre (projected on the contacts' plane) near 120
+        // degrees, and the triangle's centre near the object's.
+        const Eigen::Vector3d c = centre - (centre - tp).dot(normal) * normal;
+        const std::array<Eigen::Vector3d, 3> v = {tp - c, p1 - c, p2 - c};
+        double deviation = 0;
+        for (int k = 0; k < 3; ++k)
+          deviation = std::max(deviation, std::abs(angle_between(v[k], v[(k + 1) % 3]) / kDeg - 120.0));
+        const double radius = (v[0].norm() + v[1].norm() + v[2].norm()) / 3;
+        const double off_centre = ((tp + p1 + p2) / 3 - centre).norm();
+        const double symmetry =
+            std::max(0.0, 1 - deviation / 120.0) * std::max(0.0, 1 - off_centre / std::max(radius, 1e-12));
+        const double safety = std::min({s3(t), s3(f1), s3(f2)});
+        const double curvature = (s4(t) + s4(f1) + s4(f2)) / 3;
+
+        GraspCandidate cand;
+        Grasp& g = cand.grasp;
+        g.contacts = {GraspContact{tp, tn}, GraspContact{p1, -s[f1].normal}, GraspContact{p2, -s[f2].normal}};
+        g.approach = normal.dot(preferred) >= 0 ? normal : Eigen::Vector3d(-normal);
+        g.spread = spread;
+        g.aperture = std::min(aperture + hand.finger_width, hand.aperture_max + hand.finger_width);
+        g.scores = {symmetry, safety, curvature,
+                    (p.weight_symmetry * symmetry + p.weight_safety * safety + p.weight_curvature * curvature) / weights};
+        cand.samples = {t, f1, f2};
+        cand.regions = {region_of[t], region_of[f1], region_of[f2]};
+        for (std::size_t i : cand.samples) {
+          cand.uncertain = cand.uncertain || s[i].uncertain;
+          for (std::size_t j : nb[i]) cand.uncertain = cand.uncertain || s[j].uncertain;
+        }
+        all.push_back(std::move(cand));
+      }
+    }
+  }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const auto& a, const auto& b) { return a.grasp.scores.total > b.grasp.scores.total; });
+  // Distinct candidates: one whose contacts all lie within a finger's width of a better one's
+  // (fingers swapped or not) adds nothing.
+  auto same = [&](const GraspCandidate& a, const GraspCandidate& b) {
+    auto near = [&](int i, int j) {
+      return (a.grasp.contacts[i].position - b.grasp.contacts[j].position).norm() < hand.finger_width;
+    };
+    return near(0, 0) && ((near(1, 1) && near(2, 2)) || (near(1, 2) && near(2, 1)));
+  };
+  for (auto& c : all) {
+    if (result.candidates.size() >= p.max_candidates) break;
+    if (std::none_of(result.candidates.begin(), result.candidates.end(), [&](const auto& k) { return same(c, k); }))
+      result.candidates.push_back(std::move(c));
+  }
+  return result;
+}
+
+}  // namespace fba::grasp

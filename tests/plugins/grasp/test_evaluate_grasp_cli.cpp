@@ -1,0 +1,119 @@
+// fba-evaluate grasp from the shell: a grasp in summary.json on a true mesh, random sets, and
+// clear errors for bad input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "fba/geometry/mesh_io.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+Result run(const std::string& args) {
+  Result r;
+  FILE* p = popen((std::string("'") + FBA_EVALUATE + "' grasp " + args + " 2>&1").c_str(), "r");
+  if (!p) return r;
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+  const int status = pclose(p);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+class EvaluateGraspCli : public testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(testing::TempDir()) / ("fba-evaluate-grasp-" + std::to_string(getpid()) + "-" +
+                                           testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    // A 10 cm cube centred on the origin.
+    fba::geometry::write_ply(fba::geometry::make_box({-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05}), mesh());
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string mesh() const { return (dir_ / "cube.ply").string(); }
+  std::string summary(const std::string& grasp) const {
+    const fs::path p = dir_ / "summary.json";
+    std::ofstream(p) << R"({"outcome": "success", "grasp": )" << grasp << "}";
+    return p.string();
+  }
+  fs::path dir_;
+};
+
+TEST_F(EvaluateGraspCli, AGraspOnOpposingFacesIsForceClosureAndBeatsRandomSets) {
+  // Thumb on -x, two fingers on +x, given a little off the surface: they are placed on it.
+  const std::string s = summary(R"({"contacts": [
+      {"position": [-0.051, 0.0, 0.0], "normal": [1, 0, 0]},
+      {"position": [0.052, 0.02, 0.0], "normal": [-1, 0, 0]},
+      {"position": [0.052, -0.02, 0.0], "normal": [-1, 0, 0]}]})");
+  const Result r = run("--mesh " + mesh() + " --summary " + s + " --random 300");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("moved 1.00 mm along its normal"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("grasp: force closure yes"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("random 300 sets: force closure"), std::string::npos) << r.output;
+}
+
+TEST_F(EvaluateGraspCli, AGraspOnOneFaceIsNotForceClosureAndExitsOne) {
+  const std::string s = summary(R"({"contacts": [
+      {"position": [0.05, 0.0, 0.0], "normal": [-1, 0, 0]},
+      {"position": [0.05, 0.02, 0.01], "normal": [-1, 0, 0]},
+      {"position": [0.05, -0.02, 0.01], "normal": [-1, 0, 0]}]})");
+  const Result r = run("--mesh " + mesh() + " --summary " + s + " --random 0");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("grasp: force closure no, epsilon 0.0000"), std::string::npos) << r.output;
+}
+
+TEST_F(EvaluateGraspCli, RandomSetsGiveTheirFigures) {
+  const Result r = run("--mesh " + mesh() + " --random 200");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("random FC"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("cube.ply"), std::string::npos) << r.output;
+}
+
+TEST_F(EvaluateGraspCli, BadInputIsAClearErrorWithStatusTwo) {
+  Result r = run("--mesh " + (dir_ / "missing.obj").string() + " --random 10");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("file does not exist"), std::string::npos) << r.output;
+
+  r = run("--mesh " + mesh() + " --summary " + summary(R"({"contacts": []})"));
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("grasp.contacts: expected an array of 3 contacts"), std::string::npos) << r.output;
+
+  std::ofstream(dir_ / "nograsp.json") << R"({"outcome": "failure"})";
+  r = run("--mesh " + mesh() + " --summary " + (dir_ / "nograsp.json").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("has no \"grasp\" object"), std::string::npos) << r.output;
+
+  std::ofstream(dir_ / "broken.json") << "{ not json";
+  r = run("--mesh " + mesh() + " --summary " + (dir_ / "broken.json").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("is not valid JSON"), std::string::npos) << r.output;
+
+  r = run("--mesh " + mesh() + " --random 0");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("nothing to evaluate"), std::string::npos) << r.output;
+
+  r = run("--mesh " + mesh() + " --random 10 --mesh-pose 1 2");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--mesh-pose: expected 6 numbers"), std::string::npos) << r.output;
+}
+
+TEST_F(EvaluateGraspCli, HelpDocumentsTheSummaryShape) {
+  const Result r = run("--help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.output.find("\"contacts\": [ {\"position\": [x, y, z], \"normal\": [x, y, z]}"), std::string::npos)
+      << r.output;
+}
+
+}  // namespace

@@ -1,0 +1,151 @@
+// The grasp-quality measure against cases whose answer is known by hand.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include <Eigen/Geometry>
+
+#include "fba/grasp/grasp_quality.hpp"
+
+namespace fba::grasp {
+namespace {
+
+// Contacts around a cylinder of radius r about z at height 0, with inward (radial) normals.
+std::vector<GraspContact> around_cylinder(double r, std::initializer_list<double> degrees) {
+  std::vector<GraspContact> c;
+  for (double d : degrees) {
+    const double a = d * std::numbers::pi / 180.0;
+    const Eigen::Vector3d radial(std::cos(a), std::sin(a), 0.0);
+    c.push_back({r * radial, -radial});
+  }
+  return c;
+}
+
+// Support of the wrench set in direction u: the hull reaches max_i u.w_i there, and the inscribed
+// ball cannot reach further, so epsilon <= support(u) for every unit u.
+double support(const Eigen::Matrix<double, 6, Eigen::Dynamic>& w, const Eigen::Matrix<double, 6, 1>& u) {
+  return (u.transpose() * w).maxCoeff();
+}
+
+TEST(GraspQuality, ThreeContactsAt120DegreesAroundACylinderAreForceClosure) {
+  const double r = 0.04;
+  const auto contacts = around_cylinder(r, {0, 120, 240});
+  const GraspQuality q = evaluate_grasp(contacts, Eigen::Vector3d::Zero(), r);
+  ASSERT_TRUE(q.force_closure);
+  // Upper bound by hand: a pure force along the axis is resisted only by friction, whose largest
+  // axial component on a cone edge is mu (unit normal component), so epsilon <= mu = 0.5. So is a
+  // pure torque about the axis: r * mu / r_max = mu with r_max = r.
+  EXPECT_GT(q.epsilon, 0.0);
+  EXPECT_LE(q.epsilon, 0.5 + 1e-12);
+  // The same bound in every sampled direction (the hull's support), tight within the sampling.
+  const auto w = contact_wrenches(contacts, Eigen::Vector3d::Zero(), r);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g;
+  double tightest = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 20000; ++i) {
+    Eigen::Matrix<double, 6, 1> u;
+    for (int k = 0; k < 6; ++k) u(k) = g(rng);
+    tightest = std::min(tightest, support(w, u.normalized()));
+  }
+  EXPECT_LE(q.epsilon, tightest + 1e-12);
+}
+
+TEST(GraspQuality, EpsilonGrowsWithFriction) {
+  const auto contacts = around_cylinder(0.04, {0, 120, 240});
+  const double low = evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04, {0.3, 8}).epsilon;
+  const double high = evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04, {0.8, 8}).epsilon;
+  EXPECT_GT(low, 0.0);
+  EXPECT_GT(high, low);
+}
+
+TEST(GraspQuality, WithoutFrictionThreePointContactsAreNotForceClosure) {
+  // Frictionless point contacts need at least 7 in 3-D; three cannot resist an axial force.
+  const auto contacts = around_cylinder(0.04, {0, 120, 240});
+  EXPECT_FALSE(evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04, {0.0, 8}).force_closure);
+}
+
+TEST(GraspQuality, TwoCoplanarParallelContactsAreNotForceClosure) {
+  // Two contacts on one face of a box, pushing the same way: nothing opposes them.
+  const std::vector<GraspContact> contacts = {{{0.05, 0.0, 0.0}, {-1, 0, 0}}, {{0.05, 0.02, 0.01}, {-1, 0, 0}}};
+  const GraspQuality q = evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.1);
+  EXPECT_FALSE(q.force_closure);
+  EXPECT_EQ(q.epsilon, 0.0);
+}
+
+TEST(GraspQuality, ThreeContactsOnOneSideAreNotForceClosure) {
+  const std::vector<GraspContact> contacts = {
+      {{0.05, 0.0, 0.0}, {-1, 0, 0}}, {{0.05, 0.02, 0.01}, {-1, 0, 0}}, {{0.05, -0.02, 0.01}, {-1, 0, 0}}};
+  EXPECT_FALSE(evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.1).force_closure);
+}
+
+TEST(GraspQuality, TwoOpposedPointContactsCannotResistTorqueAboutTheirAxis) {
+  // Point contacts with friction exert no torque about the line through both.
+  const auto contacts = around_cylinder(0.04, {0, 180});
+  EXPECT_FALSE(evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04).force_closure);
+}
+
+TEST(GraspQuality, ThreeContactsWithinHalfACircleAreNotForceClosure) {
+  // All inward normals in one open half-plane: their positive combinations cannot sum to zero
+  // once friction is too small to turn them (mu = 0.1 at 0, 60, 120 degrees).
+  const auto contacts = around_cylinder(0.04, {0, 60, 120});
+  EXPECT_FALSE(evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04, {0.1, 8}).force_closure);
+}
+
+TEST(GraspQuality, EpsilonIsInvariantToARigidMotionOfTheWholeGrasp) {
+  auto contacts = around_cylinder(0.04, {0, 110, 250});
+  contacts[1].position.z() = 0.01;
+  const Eigen::Vector3d com(0.001, -0.002, 0.003);
+  const double before = evaluate_grasp(contacts, com, 0.05).epsilon;
+  ASSERT_GT(before, 0.0);
+  const Eigen::Isometry3d t = Eigen::Translation3d(0.3, -1.2, 0.7) *
+                              Eigen::AngleAxisd(1.1, Eigen::Vector3d(0.2, -0.5, 0.8).normalized());
+  for (auto& c : contacts) {
+    c.position = t * c.position;
+    c.normal = t.linear() * c.normal;
+  }
+  EXPECT_NEAR(evaluate_grasp(contacts, t * com, 0.05).epsilon, before, 1e-9);
+}
+
+TEST(GraspQuality, NormalLengthDoesNotMatter) {
+  auto contacts = around_cylinder(0.04, {0, 120, 240});
+  const double unit = evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04).epsilon;
+  for (auto& c : contacts) c.normal *= 3.0;
+  EXPECT_NEAR(evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04).epsilon, unit, 1e-12);
+}
+
+TEST(GraspQuality, CoincidentContactsAreAClearError) {
+  auto contacts = around_cylinder(0.04, {0, 120, 240});
+  contacts[2].position = contacts[0].position;
+  try {
+    evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04);
+    FAIL() << "expected GraspQualityError";
+  } catch (const GraspQualityError& e) {
+    EXPECT_NE(std::string(e.what()).find("contacts 0 and 2 coincide"), std::string::npos) << e.what();
+  }
+}
+
+TEST(GraspQuality, ZeroNormalIsAClearError) {
+  auto contacts = around_cylinder(0.04, {0, 120, 240});
+  contacts[1].normal.setZero();
+  try {
+    evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04);
+    FAIL() << "expected GraspQualityError";
+  } catch (const GraspQualityError& e) {
+    EXPECT_NE(std::string(e.what()).find("contact 1 needs a non-zero inward normal"), std::string::npos) << e.what();
+  }
+}
+
+TEST(GraspQuality, BadParametersAreClearErrors) {
+  const auto contacts = around_cylinder(0.04, {0, 120, 240});
+  EXPECT_THROW(evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.0), GraspQualityError);
+  EXPECT_THROW(evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04, {-0.5, 8}), GraspQualityError);
+  EXPECT_THROW(evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04, {0.5, 2}), GraspQualityError);
+  EXPECT_THROW(evaluate_grasp(std::span(contacts).first(1), Eigen::Vector3d::Zero(), 0.04), GraspQualityError);
+  EXPECT_THROW(evaluate_grasp(contacts, Eigen::Vector3d(NAN, 0, 0), 0.04), GraspQualityError);
+}
+
+}  // namespace
+}  // namespace fba::grasp
