@@ -184,6 +184,12 @@ void on_crash(int sig, siginfo_t*, void*) {
     say(state().phase.load());
   }
   say("; attempting the actuators' safe states (best effort)\n");
+  // What follows may block on a lock the crashed code held: an alarm ends it in any case.
+  struct sigaction give_up {};
+  give_up.sa_handler = [](int) { _exit(kRuntimeError); };
+  sigemptyset(&give_up.sa_mask);
+  sigaction(SIGALRM, &give_up, nullptr);
+  alarm(10);
   auto& st = state();
   if (fba::Task* task = st.task.load()) task->emergency_safe_states();
   std::string reason = std::string("fatal signal ") + strsignal(sig);

@@ -142,7 +142,9 @@ class ThreadedExecutor final : public Executor {
 
   bool join(double grace_s) override {
     wake_all();
-    const std::uint32_t total = static_cast<std::uint32_t>(workers_.size() + dedicated_.size());
+    std::uint32_t total = 0;  // the threads that were started
+    for (auto& w : workers_) total += w.joinable() ? 1 : 0;
+    for (auto& d : dedicated_) total += d->thread.joinable() ? 1 : 0;
     const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(grace_s));
     while (exited_.load() < total && Clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     const bool all = exited_.load() >= total;
@@ -262,7 +264,7 @@ class DeterministicExecutor final : public Executor {
   explicit DeterministicExecutor(Graph& g) : g_(g) {}
 
   void enqueue(Node* n) override { queue_.push_back(n); }
-  std::int64_t now_ns() const override { return virtual_ns_; }
+  std::int64_t now_ns() const override { return virtual_ns_.load(std::memory_order_relaxed); }
   void wake_all() override {
     std::lock_guard lock(mutex_);
     cv_.notify_all();
@@ -337,7 +339,7 @@ class DeterministicExecutor final : public Executor {
       }
       const Timer t = timers.top();
       timers.pop();
-      virtual_ns_ = std::max(virtual_ns_, t.deadline_ns);
+      virtual_ns_.store(std::max(virtual_ns_.load(std::memory_order_relaxed), t.deadline_ns), std::memory_order_relaxed);
       t.node->tick_pending.store(true);
       g_.notify(t.node);
       timers.push(Timer{t.deadline_ns + period_ns(*t.node), t.order, t.node});
@@ -346,7 +348,7 @@ class DeterministicExecutor final : public Executor {
 
   Graph& g_;
   std::deque<Node*> queue_;
-  std::int64_t virtual_ns_ = 0;
+  std::atomic<std::int64_t> virtual_ns_{0};  // read by the stopping thread too (interrupt errors)
   std::thread thread_;
   std::mutex mutex_;
   std::condition_variable cv_;

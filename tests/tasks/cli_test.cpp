@@ -67,6 +67,23 @@ connections: [ src.out -> bad.in, bad.out -> sink.in ]
   EXPECT_NE(r.output.find("component 'bad' (examples.faulty) failed: injected fault"), std::string::npos) << r.output;
 }
 
+TEST(Cli, ARestartThatRecoveredSucceedsAndTheLastLineCountsTheLostSamples) {
+  const fs::path out = temp_dir("restart");
+  const auto f = write_task("restart.yaml", R"(
+components:
+  src: { type: examples.counter, params: { count: 12 } }
+  bad: { type: examples.faulty, params: { fail_after: 5 }, on_error: { policy: restart, max_restarts: 2 } }
+  act: { type: test.misbehaving_actuator }
+connections: [ src.out -> bad.in, bad.out -> act.in ]
+)");
+  const auto r = fba_run({f, "--output-dir", out.string(), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR});
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("; 2 sample(s) lost to 2 restart(s)"), std::string::npos) << r.output;
+  const auto summary = nlohmann::json::parse(read_file(out / "summary.json"));
+  EXPECT_EQ(summary["lost_to_restarts"], 2);
+  EXPECT_EQ(summary["components"]["bad"]["lost_to_restarts"], 2);
+}
+
 TEST(Cli, TimeoutExitsThree) {
   const auto r = fba_run({write_task("long.yaml", kLong), "--timeout", "0.2"});
   EXPECT_EQ(r.status, 3);

@@ -6,6 +6,7 @@
 // segfault, block_process (ignores interrupt), block_safe_state (actuator), exit_zero,
 // never_finish (sensor: free-running, produces nothing). "none" behaves.
 // FBA_TEST_EXIT_IN_STATIC_INIT=1 in the environment makes the plugin call exit(0) while loading.
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -52,8 +53,9 @@ class Misbehaviour {
     if (mode_ == "throw_exception") throw std::runtime_error("misbehaving on purpose");
     if (mode_ == "throw_int") throw 42;
     if (mode_ == "segfault") {
-      volatile int* null = nullptr;
-      *null = 1;
+      // A real fault that the sanitizers do not take first (a null store is UB that UBSan stops at).
+      void* page = mmap(nullptr, 4096, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      *static_cast<volatile int*>(page) = 1;
     }
     if (mode_ == "block_process") block_forever();
     if (mode_ == "exit_zero") std::exit(0);
