@@ -96,9 +96,16 @@ class ThreadedExecutor final : public Executor {
     // A thread that cannot be created stops the run with the reason; the ones that were are
     // joined (or left) by join() like the others.
     try {
-      for (int i = 0; i < threads_; ++i) workers_.emplace_back([this] { prepare_thread_for_crash_reports(); worker(); });
+      for (int i = 0; i < threads_; ++i)
+        workers_.emplace_back([this] {
+          prepare_thread_for_crash_reports();
+          worker();
+        });
       for (auto& d : dedicated_)
-        d->thread = std::thread([this, d = d.get()] { prepare_thread_for_crash_reports(); dedicated(*d); });
+        d->thread = std::thread([this, d = d.get()] {
+          prepare_thread_for_crash_reports();
+          dedicated(*d);
+        });
       timer_thread_ = std::thread([this] { timers(); });
     } catch (const std::system_error& e) {
       g_.request_stop(Outcome::RuntimeError, std::string("could not start the executor's threads: ") + e.what());
@@ -106,7 +113,8 @@ class ThreadedExecutor final : public Executor {
 
     const bool limited = g_.timeout_s > 0;
     const auto deadline = g_.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(g_.timeout_s));
-    const auto stall = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.001, g_.options.stall_warning_s)));
+    const auto stall = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(std::max(0.001, g_.options.stall_warning_s)));
     auto progress = g_.progress.load();
     auto quiet_since = Clock::now();
     std::unique_lock lock(main_mutex_);
@@ -145,15 +153,18 @@ class ThreadedExecutor final : public Executor {
     std::uint32_t total = 0;  // the threads that were started
     for (auto& w : workers_) total += w.joinable() ? 1 : 0;
     for (auto& d : dedicated_) total += d->thread.joinable() ? 1 : 0;
-    const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(grace_s));
+    const auto until =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(grace_s));
     while (exited_.load() < total && Clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     const bool all = exited_.load() >= total;
     // Which thread is stuck is not known here, only that one is: the graph names the component
     // call. A thread left behind holds the graph, which then is never destroyed.
     auto finish = [all](std::thread& t) {
       if (!t.joinable()) return;
-      if (all) t.join();
-      else t.detach();
+      if (all)
+        t.join();
+      else
+        t.detach();
     };
     for (auto& w : workers_) finish(w);
     for (auto& d : dedicated_) finish(d->thread);
@@ -286,7 +297,8 @@ class DeterministicExecutor final : public Executor {
       g_.request_stop(Outcome::RuntimeError, std::string("could not start the executor's thread: ") + e.what());
       return;
     }
-    const auto deadline = g_.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(g_.timeout_s));
+    const auto deadline =
+        g_.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(g_.timeout_s));
     std::unique_lock lock(mutex_);
     auto woken = [this] { return done_ || g_.stopping(); };
     while (!woken()) {
@@ -305,8 +317,10 @@ class DeterministicExecutor final : public Executor {
     std::unique_lock lock(mutex_);
     const bool done = cv_.wait_for(lock, std::chrono::duration<double>(grace_s), [this] { return done_; });
     lock.unlock();
-    if (done) thread_.join();
-    else thread_.detach();
+    if (done)
+      thread_.join();
+    else
+      thread_.detach();
     return done;
   }
 
@@ -339,7 +353,8 @@ class DeterministicExecutor final : public Executor {
       }
       const Timer t = timers.top();
       timers.pop();
-      virtual_ns_.store(std::max(virtual_ns_.load(std::memory_order_relaxed), t.deadline_ns), std::memory_order_relaxed);
+      virtual_ns_.store(std::max(virtual_ns_.load(std::memory_order_relaxed), t.deadline_ns),
+                        std::memory_order_relaxed);
       t.node->tick_pending.store(true);
       g_.notify(t.node);
       timers.push(Timer{t.deadline_ns + period_ns(*t.node), t.order, t.node});

@@ -102,7 +102,8 @@ TEST(Cli, SigintAndSigtermStopInOrderWith130And143) {
     const std::string summary = read_file(out / "summary.json");
     EXPECT_NE(summary.find("\"outcome\": \"interrupted\""), std::string::npos) << summary;
     EXPECT_NE(summary.find("\"phase\": "), std::string::npos) << summary;
-    EXPECT_NE(summary.find(sig == SIGINT ? "interrupted by SIGINT" : "interrupted by SIGTERM"), std::string::npos) << summary;
+    EXPECT_NE(summary.find(sig == SIGINT ? "interrupted by SIGINT" : "interrupted by SIGTERM"), std::string::npos)
+        << summary;
   }
 }
 
@@ -130,8 +131,8 @@ Misbehaved misbehave(std::vector<std::string> args, const std::string& task = kM
                      const std::vector<std::string>& env = {}) {
   Misbehaved m;
   m.out = temp_dir("misbehaving");
-  args.insert(args.begin(), {write_task("misbehaving.yaml", task), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
-                             m.out.string(), "--stop-grace", "0.2"});
+  args.insert(args.begin(), {write_task("misbehaving.yaml", task), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR,
+                             "--output-dir", m.out.string(), "--stop-grace", "0.2"});
   m.run = fba_run(args, env);
   m.summary = nlohmann::json::parse(read_file(m.out / "summary.json"), nullptr, false);
   if (m.summary.is_discarded()) m.summary = nullptr;
@@ -153,7 +154,9 @@ TEST(CliMisbehaving, AnExceptionFromProcessExitsThreeNamingTheComponent) {
 TEST(CliMisbehaving, ANonExceptionFromProcessExitsThreeNamingTheComponentAndTheCall) {
   const auto m = misbehave({"--set", "bad.mode=throw_int"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
-  EXPECT_EQ(reason(m), "component 'bad' (test.misbehaving) threw a non-exception (not derived from std::exception) from process()");
+  EXPECT_EQ(
+      reason(m),
+      "component 'bad' (test.misbehaving) threw a non-exception (not derived from std::exception) from process()");
   EXPECT_TRUE(m.safe_state);
 }
 
@@ -163,7 +166,8 @@ TEST(CliMisbehaving, AConstructorThrowingAnIntIsAConfigurationErrorAndEarlierAct
   ASSERT_TRUE(m.summary.is_object()) << m.run.output;
   EXPECT_EQ(m.summary["outcome"], "configuration_error");
   EXPECT_EQ(m.summary["phase"], "constructing");
-  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) refused its configuration: it threw a non-exception"), std::string::npos)
+  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) refused its configuration: it threw a non-exception"),
+            std::string::npos)
       << reason(m);
   EXPECT_TRUE(m.safe_state);  // 'act' was constructed first
 }
@@ -171,7 +175,8 @@ TEST(CliMisbehaving, AConstructorThrowingAnIntIsAConfigurationErrorAndEarlierAct
 TEST(CliMisbehaving, ASegfaultExitsThreeNamingTheComponentAfterTheSafeStates) {
   const auto m = misbehave({"--set", "bad.mode=segfault"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
-  EXPECT_NE(m.run.output.find("fatal signal SIGSEGV in component 'bad' (test.misbehaving) during process()"), std::string::npos)
+  EXPECT_NE(m.run.output.find("fatal signal SIGSEGV in component 'bad' (test.misbehaving) during process()"),
+            std::string::npos)
       << m.run.output;
   EXPECT_NE(reason(m).find("in component 'bad' (test.misbehaving) during process()"), std::string::npos) << reason(m);
   EXPECT_TRUE(m.safe_state);
@@ -181,7 +186,8 @@ TEST(CliMisbehaving, AProcessThatNeverReturnsIsNamedAndTheRunStillEnds) {
   const auto m = misbehave({"--set", "bad.mode=block_process", "--timeout", "0.3"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
   ASSERT_TRUE(m.summary.is_object()) << m.run.output;
-  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) did not return from process()"), std::string::npos) << reason(m);
+  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) did not return from process()"), std::string::npos)
+      << reason(m);
   ASSERT_EQ(m.summary["stuck"].size(), 1u);
   EXPECT_EQ(m.summary["stuck"][0]["component"], "bad");
   EXPECT_EQ(m.summary["stuck"][0]["call"], "process()");
@@ -192,7 +198,8 @@ TEST(CliMisbehaving, ASafeStateThatNeverReturnsIsNamedAndTheRunStillEnds) {
   const auto m = misbehave({"--set", "act.mode=block_safe_state", "--set", "src.count=5"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
   ASSERT_TRUE(m.summary.is_object()) << m.run.output;
-  EXPECT_NE(reason(m).find("component 'act' (test.misbehaving_actuator) did not return from safe_state()"), std::string::npos)
+  EXPECT_NE(reason(m).find("component 'act' (test.misbehaving_actuator) did not return from safe_state()"),
+            std::string::npos)
       << reason(m);
   EXPECT_EQ(m.summary["safe_states"]["act"]["status"], "did not return");
   EXPECT_TRUE(m.safe_state);
@@ -201,7 +208,8 @@ TEST(CliMisbehaving, ASafeStateThatNeverReturnsIsNamedAndTheRunStillEnds) {
 TEST(CliMisbehaving, ExitZeroFromProcessExitsThreeNamingTheComponent) {
   const auto m = misbehave({"--set", "bad.mode=exit_zero"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
-  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) called exit() from process()"), std::string::npos) << reason(m);
+  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) called exit() from process()"), std::string::npos)
+      << reason(m);
   EXPECT_TRUE(m.safe_state);
 }
 
@@ -231,7 +239,8 @@ connections: [ src.out -> act.in ]
 TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
   for (int sig : {SIGINT, SIGTERM}) {
     const fs::path out = temp_dir("sig-running");
-    Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir", out.string()});
+    Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+               out.string()});
     ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
     p.signal(sig);
     const auto r = p.wait();
@@ -245,8 +254,8 @@ TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
 
 TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) {
   const fs::path out = temp_dir("second-sigint");
-  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir", out.string(), "--set",
-             "bad.mode=block_process", "--stop-grace", "600"});
+  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+             out.string(), "--set", "bad.mode=block_process", "--stop-grace", "600"});
   ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
   p.signal(SIGINT);
   ASSERT_TRUE(p.wait_for_output("SIGINT received")) << p.output();
@@ -288,13 +297,15 @@ TEST(Cli, ASummaryThatCannotBeWrittenFailsTheRun) {
   fs::create_directory(dir / "summary.json");
   auto r = fba_run({task("chain.yaml"), "--output-dir", dir.string()});
   EXPECT_EQ(r.status, 3) << r.output;
-  EXPECT_NE(r.output.find("could not write the summary " + (dir / "summary.json").string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("could not write the summary " + (dir / "summary.json").string()), std::string::npos)
+      << r.output;
 
   const fs::path full = temp_dir("summary-full");
   fs::create_symlink("/dev/full", full / "summary.json");
   r = fba_run({task("chain.yaml"), "--output-dir", full.string()});
   EXPECT_EQ(r.status, 3) << r.output;
-  EXPECT_NE(r.output.find((full / "summary.json").string() + ": No space left on device"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find((full / "summary.json").string() + ": No space left on device"), std::string::npos)
+      << r.output;
 }
 
 TEST(Cli, CheckValidatesWithoutRunning) {

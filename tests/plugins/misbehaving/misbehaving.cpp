@@ -26,9 +26,11 @@ namespace {
 
 fba::Spec with_mode(fba::Spec spec) {
   return std::move(spec)
-      .param("mode", std::string("none"), "how to misbehave: none, throw_exception, throw_int, throw_in_constructor_int, "
-                                          "segfault, block_process, block_safe_state, exit_zero, never_finish")
-      .param("after", 0, "good invocations before misbehaving").range(0, std::nullopt);
+      .param("mode", std::string("none"),
+             "how to misbehave: none, throw_exception, throw_int, throw_in_constructor_int, "
+             "segfault, block_process, block_safe_state, exit_zero, never_finish")
+      .param("after", 0, "good invocations before misbehaving")
+      .range(0, std::nullopt);
 }
 
 // Blocks the calling thread for good: neither interrupt() nor anything else ends it.
@@ -38,9 +40,12 @@ fba::Spec with_mode(fba::Spec spec) {
 
 class Misbehaviour {
  public:
-  explicit Misbehaviour(fba::Context& ctx) : mode_(ctx.param<std::string>("mode")), after_(ctx.param<std::int64_t>("after")) {
-    static const char* const kModes[] = {"none", "throw_exception", "throw_int", "throw_in_constructor_int", "segfault",
-                                         "block_process", "block_safe_state", "exit_zero", "never_finish"};
+  explicit Misbehaviour(fba::Context& ctx)
+      : mode_(ctx.param<std::string>("mode")), after_(ctx.param<std::int64_t>("after")) {
+    static const char* const kModes[] = {
+        "none",        "throw_exception", "throw_int",        "throw_in_constructor_int",
+        "segfault",    "block_process",   "block_safe_state", "exit_zero",
+        "never_finish"};
     bool known = false;
     for (const char* m : kModes) known |= mode_ == m;
     if (!known) throw std::invalid_argument("unknown mode '" + mode_ + "'");
@@ -91,9 +96,11 @@ class MisbehavingSensor final : public fba::Component {
   static fba::Spec spec() {
     return with_mode(fba::Spec::sensor("test.misbehaving_sensor", "Emits count integers; misbehaves as its mode says.")
                          .output<std::int64_t>("out", "0, 1, 2, ...")
-                         .param("count", 10, "integers to emit before finishing").range(0, std::nullopt));
+                         .param("count", 10, "integers to emit before finishing")
+                         .range(0, std::nullopt));
   }
-  explicit MisbehavingSensor(fba::Context& ctx) : ctx_(ctx), m_(ctx), out_(ctx.output("out")), count_(ctx.param<std::int64_t>("count")) {}
+  explicit MisbehavingSensor(fba::Context& ctx)
+      : ctx_(ctx), m_(ctx), out_(ctx.output("out")), count_(ctx.param<std::int64_t>("count")) {}
   void process() override {
     if (m_.mode() == "never_finish") return;  // free-running, produces nothing, never finishes
     m_.maybe();
@@ -114,12 +121,14 @@ class MisbehavingSensor final : public fba::Component {
 class MisbehavingActuator final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return with_mode(fba::Spec::actuator("test.misbehaving_actuator", "Consumes integers; marks its safe state in a file.")
-                         .input<std::int64_t>("in", "integers"));
+    return with_mode(
+        fba::Spec::actuator("test.misbehaving_actuator", "Consumes integers; marks its safe state in a file.")
+            .input<std::int64_t>("in", "integers"));
   }
   explicit MisbehavingActuator(fba::Context& ctx) : ctx_(ctx), m_(ctx) {}
   void process() override {
-    if (!running_ && !ctx_.output_dir().empty()) std::ofstream(ctx_.output_dir() / ("running." + ctx_.name())) << "running\n";
+    if (!running_ && !ctx_.output_dir().empty())
+      std::ofstream(ctx_.output_dir() / ("running." + ctx_.name())) << "running\n";
     running_ = true;
     m_.maybe();
   }
