@@ -43,9 +43,9 @@ const char* signal_name(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGT
 
 // What the watcher, the exit handler and the crash handler need to know about the run.
 struct State {
-  std::mutex mutex;                       // orders the task's publication against the first signal
+  std::mutex mutex;                           // orders the task's publication against the first signal
   std::atomic<const char*> phase{"loading"};  // loading, constructing, running
-  std::atomic<int> signal{0};             // the first SIGINT or SIGTERM
+  std::atomic<int> signal{0};                 // the first SIGINT or SIGTERM
   std::atomic<const char*> signal_phase{nullptr};
   std::atomic<int> signals{0};
   std::atomic<fba::Task*> task{nullptr};  // set once constructed
@@ -142,7 +142,8 @@ void on_unexpected_exit() {
   auto& st = state();
   if (st.returning.load() || st.exit_taken.exchange(true)) return;
   const fba::ActiveCall call = fba::active_call();
-  std::string who = call.component ? std::string("component '") + call.component + "' (" + call.type + ") called exit() from " + call.call
+  std::string who = call.component ? std::string("component '") + call.component + "' (" + call.type +
+                                         ") called exit() from " + call.call
                                    : std::string("a plugin called exit() while ") + st.phase.load();
   std::fprintf(stderr, "fba-run: unexpected exit: %s; the run fails\n", who.c_str());
   fba::Task* task = st.task.load();
@@ -184,10 +185,17 @@ void on_crash(int sig, siginfo_t*, void*) {
     say(state().phase.load());
   }
   say("; attempting the actuators' safe states (best effort)\n");
+  // What follows may block on a lock the crashed code held: an alarm ends it in any case.
+  struct sigaction give_up {};
+  give_up.sa_handler = [](int) { _exit(kRuntimeError); };
+  sigemptyset(&give_up.sa_mask);
+  sigaction(SIGALRM, &give_up, nullptr);
+  alarm(10);
   auto& st = state();
   if (fba::Task* task = st.task.load()) task->emergency_safe_states();
   std::string reason = std::string("fatal signal ") + strsignal(sig);
-  if (call.component) reason += std::string(" in component '") + call.component + "' (" + call.type + ") during " + call.call;
+  if (call.component)
+    reason += std::string(" in component '") + call.component + "' (" + call.type + ") during " + call.call;
   auto r = early_result(fba::Outcome::RuntimeError, reason);
   if (fba::Task* task = st.task.load()) r.reason += "; safe states: " + task->safe_states_so_far();
   write_summary(r);
@@ -210,7 +218,8 @@ void install_crash_handlers() {
 int run(int argc, char** argv) {
   auto& st = state();
   po::options_description visible(
-      "Usage: fba-run [options] TASK.yaml\n\nRuns a task. Exit status: 0 success, 1 failure event, 2 configuration error, "
+      "Usage: fba-run [options] TASK.yaml\n\nRuns a task. Exit status: 0 success, 1 failure event, 2 configuration "
+      "error, "
       "3 runtime error (also a timeout, a component that did not return after the stop, a summary that could not be "
       "written), 130 interrupted by SIGINT, 143 by SIGTERM.\n\nOptions");
   std::vector<std::string> sets, plugin_dirs;
@@ -218,20 +227,17 @@ int run(int argc, char** argv) {
   double timeout = 0;
   double stop_grace = fba::RunOptions{}.stop_grace_s;
   int threads = 0;
-  visible.add_options()
-      ("help,h", "show this help")
-      ("version", "print the version")
-      ("check", "check the task and exit (nothing runs)")
-      ("dot", "print the task graph as Graphviz DOT and exit")
-      ("set,s", po::value(&sets)->composing(), "override a parameter: component.param=value (repeatable)")
-      ("plugin-path,p", po::value(&plugin_dirs)->composing(), "add a plugin folder (repeatable; also FBA_PLUGIN_PATH)")
-      ("output-dir,o", po::value(&output_dir), "write the run's artefacts (summary.json, images, models) here")
-      ("timeout,t", po::value(&timeout), "stop the run after this many seconds (exit 3)")
-      ("stop-grace", po::value(&stop_grace),
-       "seconds that components get to return after a stop, and each actuator's safe state (default 5)")
-      ("executor,e", po::value(&executor), "threaded or deterministic (overrides the task file)")
-      ("threads", po::value(&threads), "worker threads of the threaded executor (default: one per core)")
-      ("log-level", po::value(&log_level), "trace, debug, info, warn, error, critical, off");
+  visible.add_options()("help,h", "show this help")("version", "print the version")(
+      "check", "check the task and exit (nothing runs)")("dot", "print the task graph as Graphviz DOT and exit")(
+      "set,s", po::value(&sets)->composing(), "override a parameter: component.param=value (repeatable)")(
+      "plugin-path,p", po::value(&plugin_dirs)->composing(), "add a plugin folder (repeatable; also FBA_PLUGIN_PATH)")(
+      "output-dir,o", po::value(&output_dir), "write the run's artefacts (summary.json, images, models) here")(
+      "timeout,t", po::value(&timeout), "stop the run after this many seconds (exit 3)")(
+      "stop-grace", po::value(&stop_grace),
+      "seconds that components get to return after a stop, and each actuator's safe state (default 5)")(
+      "executor,e", po::value(&executor), "threaded or deterministic (overrides the task file)")(
+      "threads", po::value(&threads), "worker threads of the threaded executor (default: one per core)")(
+      "log-level", po::value(&log_level), "trace, debug, info, warn, error, critical, off");
   po::options_description hidden;
   hidden.add_options()("task", po::value<std::string>(), "task file");
   po::options_description all;
@@ -256,7 +262,8 @@ int run(int argc, char** argv) {
   }
   if (!vm.count("task")) return usage_error("no task file given");
   if (timeout < 0) return usage_error("--timeout must be >= 0 seconds");
-  if (!(stop_grace >= 0 && std::isfinite(stop_grace))) return usage_error("--stop-grace must be a finite number of seconds >= 0");
+  if (!(stop_grace >= 0 && std::isfinite(stop_grace)))
+    return usage_error("--stop-grace must be a finite number of seconds >= 0");
   fba::RunOptions options;
   if (!executor.empty()) {
     if (executor == "threaded") options.executor = fba::ExecutorKind::Threaded;
@@ -378,7 +385,8 @@ void block_stop_signals_early(int, char**, char**) {
   sigaddset(&signals, SIGTERM);
   sigprocmask(SIG_BLOCK, &signals, nullptr);
 }
-[[gnu::section(".preinit_array"), gnu::used]] void (*const block_stop_signals_entry)(int, char**, char**) = block_stop_signals_early;
+[[gnu::section(".preinit_array"), gnu::used]] void (*const block_stop_signals_entry)(int, char**,
+                                                                                     char**) = block_stop_signals_early;
 
 }  // namespace
 

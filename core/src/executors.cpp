@@ -169,8 +169,10 @@ class ThreadedExecutor final : public Executor {
     // call. A thread left behind holds the graph, which then is never destroyed.
     auto finish = [all](std::thread& t) {
       if (!t.joinable()) return;
-      if (all) t.join();
-      else t.detach();
+      if (all)
+        t.join();
+      else
+        t.detach();
     };
     for (auto& w : workers_) finish(w);
     for (auto& d : dedicated_) finish(d->thread);
@@ -294,7 +296,7 @@ class DeterministicExecutor final : public Executor {
   explicit DeterministicExecutor(Graph& g) : g_(g) {}
 
   void enqueue(Node* n) override { queue_.push_back(n); }
-  std::int64_t now_ns() const override { return virtual_ns_; }
+  std::int64_t now_ns() const override { return virtual_ns_.load(std::memory_order_relaxed); }
   void wake_all() override {
     std::lock_guard lock(mutex_);
     cv_.notify_all();
@@ -336,8 +338,10 @@ class DeterministicExecutor final : public Executor {
     std::unique_lock lock(mutex_);
     const bool done = cv_.wait_for(lock, std::chrono::duration<double>(grace_s), [this] { return done_; });
     lock.unlock();
-    if (done) thread_.join();
-    else thread_.detach();
+    if (done)
+      thread_.join();
+    else
+      thread_.detach();
     return done;
   }
 
@@ -370,7 +374,8 @@ class DeterministicExecutor final : public Executor {
       }
       const Timer t = timers.top();
       timers.pop();
-      virtual_ns_ = std::max(virtual_ns_, t.deadline_ns);
+      virtual_ns_.store(std::max(virtual_ns_.load(std::memory_order_relaxed), t.deadline_ns),
+                        std::memory_order_relaxed);
       t.node->tick_pending.store(true);
       g_.notify(t.node);
       const std::int64_t next = add_ns(t.deadline_ns, period_ns(*t.node));
@@ -381,7 +386,7 @@ class DeterministicExecutor final : public Executor {
 
   Graph& g_;
   std::deque<Node*> queue_;
-  std::int64_t virtual_ns_ = 0;
+  std::atomic<std::int64_t> virtual_ns_{0};  // read by the stopping thread too (interrupt errors)
   std::thread thread_;
   std::mutex mutex_;
   std::condition_variable cv_;

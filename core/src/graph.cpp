@@ -261,8 +261,10 @@ SafeStateResult Node::safe_state() {
   r.message = catch_all("safe_state()", [&] { c->safe_state(); });
   r.status = r.message.empty() ? "reached" : "failed";
   safe_state_progress.store(r.message.empty() ? 2 : 3);
-  if (r.message.empty()) logger->info("safe state reached");
-  else logger->error("could not reach a safe state: {}", describe(r.message));
+  if (r.message.empty())
+    logger->info("safe state reached");
+  else
+    logger->error("could not reach a safe state: {}", describe(r.message));
   return r;
 }
 
@@ -391,8 +393,10 @@ void Node::invoke() {
   const std::uint64_t emitted = samples_emitted();
   // `component` is only replaced on this thread (a restart), so it is read here without the lock.
   const std::string error = guarded("process()", [&] { component->process(); });
-  if (!error.empty()) fail(error, taken);
-  else if (samples_emitted() != emitted) graph.progress.fetch_add(1, std::memory_order_relaxed);
+  if (!error.empty())
+    fail(error, taken);
+  else if (samples_emitted() != emitted)
+    graph.progress.fetch_add(1, std::memory_order_relaxed);
   if (finish_requested && !finished.load()) on_finish();
 }
 
@@ -419,8 +423,8 @@ void Node::fail(std::string_view what, std::uint64_t lost) {
     old.reset();  // the old instance releases its devices before the new one opens them
     const std::string error = catch_all("its constructor", [&] { construct(); });
     if (!error.empty())
-      graph.request_stop(Outcome::RuntimeError, "component '" + config.name + "' (" + spec.type_name() +
-                                                    ") could not be restarted: " + error);
+      graph.request_stop(Outcome::RuntimeError,
+                         "component '" + config.name + "' (" + spec.type_name() + ") could not be restarted: " + error);
     return;
   }
   std::string why = describe(reason);
@@ -573,8 +577,9 @@ void Graph::construct() {
     Watchdog safe;
     for (auto& a : nodes)
       if (a->spec.kind() == Kind::Actuator && a->current_component()) safe.start([a = a.get()] { a->safe_state(); });
-    safe.wait_until(std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                          std::chrono::duration<double>(std::max(0.0, options.stop_grace_s))));
+    safe.wait_until(std::chrono::steady_clock::now() +
+                    std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                        std::chrono::duration<double>(std::max(0.0, options.stop_grace_s))));
     throw ConfigError({Diagnostic{n->config.where, "component '" + n->config.name + "' (" + n->spec.type_name() +
                                                        ") refused its configuration: " + error}});
   }
@@ -601,8 +606,10 @@ Watchdog::~Watchdog() {
   }
   for (std::size_t i = 0; i < threads_.size(); ++i) {
     if (!threads_[i].joinable()) continue;
-    if (done[i]) threads_[i].join();
-    else threads_[i].detach();  // it holds `shared_` (and whatever f holds), never this object
+    if (done[i])
+      threads_[i].join();
+    else
+      threads_[i].detach();  // it holds `shared_` (and whatever f holds), never this object
   }
 }
 
@@ -887,7 +894,8 @@ RunResult Graph::run() {
 
 std::vector<StuckCall> Graph::stop() {
   using Clock = std::chrono::steady_clock;
-  const auto grace = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, options.stop_grace_s)));
+  const auto grace =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, options.stop_grace_s)));
   // Ask running (and blocking) components to return. interrupt() may block too: each call gets
   // a thread of its own, so a stuck one is only reported.
   Watchdog interrupts;
@@ -919,7 +927,8 @@ std::vector<StuckCall> Graph::stop() {
   for (auto& n : nodes)
     if (const char* call = n->call.load()) stuck.push_back({n->config.name, n->spec.type_name(), call});
   for (std::size_t i = 0; i < interrupted.size(); ++i)
-    if (!interrupts.returned(i)) stuck.push_back({interrupted[i]->config.name, interrupted[i]->spec.type_name(), "interrupt()"});
+    if (!interrupts.returned(i))
+      stuck.push_back({interrupted[i]->config.name, interrupted[i]->spec.type_name(), "interrupt()"});
   std::vector<SafeStateResult> safe_states;
   for (std::size_t i = 0; i < actuators.size(); ++i) {
     if (safe.returned(i)) {
@@ -927,7 +936,8 @@ std::vector<StuckCall> Graph::stop() {
       continue;
     }
     stuck.push_back({actuators[i]->config.name, actuators[i]->spec.type_name(), "safe_state()"});
-    safe_states.push_back({actuators[i]->config.name, "did not return", "safe_state() did not return within the stop grace"});
+    safe_states.push_back(
+        {actuators[i]->config.name, "did not return", "safe_state() did not return within the stop grace"});
   }
   if (!joined && stuck.empty()) stuck.push_back({"", "", "a runtime thread"});
   if (!stuck.empty()) abandoned.store(true);
@@ -944,8 +954,10 @@ std::vector<StuckCall> Graph::stop() {
     std::string why;
     for (const auto& c : stuck) {
       if (!why.empty()) why += "; ";
-      if (c.component.empty()) why += "a runtime thread did not return";
-      else why += "component '" + c.component + "' (" + c.type + ") did not return from " + c.call;
+      if (c.component.empty())
+        why += "a runtime thread did not return";
+      else
+        why += "component '" + c.component + "' (" + c.type + ") did not return from " + c.call;
     }
     char grace_text[32];
     std::snprintf(grace_text, sizeof grace_text, "%g", options.stop_grace_s);

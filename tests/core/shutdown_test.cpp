@@ -46,7 +46,8 @@ class Stuck final : public fba::Component {
 class HangingSafeState final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::actuator("test.hanging_safe_state", "Its safe_state() never returns.").input<std::int64_t>("in", "anything");
+    return fba::Spec::actuator("test.hanging_safe_state", "Its safe_state() never returns.")
+        .input<std::int64_t>("in", "anything");
   }
   explicit HangingSafeState(fba::Context&) {}
   void process() override {}
@@ -59,7 +60,8 @@ class HangingSafeState final : public fba::Component {
 class CountedActuator final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::actuator("test.counted_actuator", "Counts calls of safe_state().").optional_input<std::int64_t>("in", "anything");
+    return fba::Spec::actuator("test.counted_actuator", "Counts calls of safe_state().")
+        .optional_input<std::int64_t>("in", "anything");
   }
   explicit CountedActuator(fba::Context&) {}
   void process() override {}
@@ -72,7 +74,8 @@ class IntThrower final : public fba::Component {
   static fba::Spec spec() {
     return fba::Spec::actuator("test.int_thrower", "Throws 42 from one call.")
         .input<std::int64_t>("in", "anything")
-        .param("from", "process", "process, end_of_stream, safe_state, constructor, or restart (process, then the constructor)");
+        .param("from", "process",
+               "process, end_of_stream, safe_state, constructor, or restart (process, then the constructor)");
   }
   explicit IntThrower(fba::Context& ctx) : from_(ctx.param<std::string>("from")) {
     const int n = g_constructions.fetch_add(1);
@@ -140,7 +143,9 @@ class AlwaysFails final : public fba::Component {
 class Idle final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::sensor("test.idle", "Runs and produces nothing.").output<std::int64_t>("out", "nothing").trigger({fba::TriggerPolicy::Free, 0});
+    return fba::Spec::sensor("test.idle", "Runs and produces nothing.")
+        .output<std::int64_t>("out", "nothing")
+        .trigger({fba::TriggerPolicy::Free, 0});
   }
   explicit Idle(fba::Context&) {}
   void process() override { std::this_thread::yield(); }
@@ -165,7 +170,8 @@ fba::RunOptions options(ExecutorKind e, double grace_s = 0.1) {
   return o;
 }
 
-bool has_event(const fba::RunResult& r, const std::string& source, const std::string& name, const std::string& payload_part = "") {
+bool has_event(const fba::RunResult& r, const std::string& source, const std::string& name,
+               const std::string& payload_part = "") {
   for (const auto& e : r.events)
     if (e.source == source && e.name == name && e.payload.find(payload_part) != std::string::npos) return true;
   return false;
@@ -205,7 +211,8 @@ connections: [ src.out -> stuck.in, src.out -> sink.in ]
   EXPECT_EQ(r.stuck[0].component, "stuck");
   EXPECT_EQ(r.stuck[0].type, "test.stuck");
   EXPECT_EQ(r.stuck[0].call, "process()");
-  EXPECT_NE(r.reason.find("component 'stuck' (test.stuck) did not return from process()"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("component 'stuck' (test.stuck) did not return from process()"), std::string::npos)
+      << r.reason;
   EXPECT_NE(r.reason.find("stopped by the test"), std::string::npos) << r.reason;
   ASSERT_NE(safe_state_of(r, "sink"), nullptr);
   EXPECT_EQ(safe_state_of(r, "sink")->status, "reached");
@@ -228,7 +235,8 @@ connections: [ src.out -> hang.in, src.out -> sink.in ]
   ASSERT_EQ(r.stuck.size(), 1u);
   EXPECT_EQ(r.stuck[0].component, "hang");
   EXPECT_EQ(r.stuck[0].call, "safe_state()");
-  EXPECT_NE(r.reason.find("component 'hang' (test.hanging_safe_state) did not return from safe_state()"), std::string::npos)
+  EXPECT_NE(r.reason.find("component 'hang' (test.hanging_safe_state) did not return from safe_state()"),
+            std::string::npos)
       << r.reason;
   ASSERT_NE(safe_state_of(r, "hang"), nullptr);
   EXPECT_EQ(safe_state_of(r, "hang")->status, "did not return");
@@ -241,13 +249,16 @@ TEST_P(Shutdown, ANonExceptionFromProcessOrEndOfStreamNamesTheComponentAndTheCal
     fba::Task task(load(R"(
 components:
   src: { type: examples.counter, params: { count: 3 } }
-  t: { type: test.int_thrower, params: { from: )" + call + R"( } }
+  t: { type: test.int_thrower, params: { from: )" +
+                        call + R"( } }
 connections: [ src.out -> t.in ]
 )"),
                    options(GetParam()));
     const auto r = task.run();
     EXPECT_EQ(r.outcome, Outcome::RuntimeError);
-    EXPECT_EQ(r.reason, "component 't' (test.int_thrower) threw a non-exception (not derived from std::exception) from " + call + "()");
+    EXPECT_EQ(
+        r.reason,
+        "component 't' (test.int_thrower) threw a non-exception (not derived from std::exception) from " + call + "()");
     ASSERT_NE(safe_state_of(r, "t"), nullptr);
     EXPECT_EQ(safe_state_of(r, "t")->status, "reached");
   }
@@ -263,7 +274,8 @@ connections: [ src.out -> t.in ]
                  options(GetParam()));
   const auto r = task.run();
   EXPECT_EQ(r.outcome, Outcome::RuntimeError);
-  EXPECT_NE(r.reason.find("component 't' could not reach a safe state: threw a non-exception (not derived from std::exception) from safe_state()"),
+  EXPECT_NE(r.reason.find("component 't' could not reach a safe state: threw a non-exception (not derived from "
+                          "std::exception) from safe_state()"),
             std::string::npos)
       << r.reason;
   ASSERT_NE(safe_state_of(r, "t"), nullptr);
@@ -301,10 +313,11 @@ connections: [ src.out -> t.in ]
     FAIL() << "the constructor's throw was not reported";
   } catch (const fba::ConfigError& e) {
     ASSERT_FALSE(e.diagnostics().empty());
-    EXPECT_NE(e.diagnostics()[0].message.find(
-                  "component 't' (test.int_thrower) refused its configuration: it threw a non-exception (not derived from "
-                  "std::exception) from its constructor"),
-              std::string::npos)
+    EXPECT_NE(
+        e.diagnostics()[0].message.find(
+            "component 't' (test.int_thrower) refused its configuration: it threw a non-exception (not derived from "
+            "std::exception) from its constructor"),
+        std::string::npos)
         << e.diagnostics()[0].message;
   }
   EXPECT_EQ(g_safe_states.load(), safe_before + 1);
@@ -322,7 +335,8 @@ connections: [ src.out -> t.in ]
   const auto r = task.run();
   EXPECT_EQ(r.outcome, Outcome::RuntimeError);
   EXPECT_EQ(r.reason,
-            "component 't' (test.int_thrower) could not be restarted: threw a non-exception (not derived from std::exception) "
+            "component 't' (test.int_thrower) could not be restarted: threw a non-exception (not derived from "
+            "std::exception) "
             "from its constructor");
 }
 
@@ -399,6 +413,8 @@ connections: [ src.out -> sink.in ]
 }
 
 INSTANTIATE_TEST_SUITE_P(Executors, Shutdown, ::testing::Values(ExecutorKind::Threaded, ExecutorKind::Deterministic),
-                         [](const auto& info) { return info.param == ExecutorKind::Threaded ? "Threaded" : "Deterministic"; });
+                         [](const auto& info) {
+                           return info.param == ExecutorKind::Threaded ? "Threaded" : "Deterministic";
+                         });
 
 }  // namespace

@@ -67,6 +67,23 @@ connections: [ src.out -> bad.in, bad.out -> sink.in ]
   EXPECT_NE(r.output.find("component 'bad' (examples.faulty) failed: injected fault"), std::string::npos) << r.output;
 }
 
+TEST(Cli, ARestartThatRecoveredSucceedsAndTheLastLineCountsTheLostSamples) {
+  const fs::path out = temp_dir("restart");
+  const auto f = write_task("restart.yaml", R"(
+components:
+  src: { type: examples.counter, params: { count: 12 } }
+  bad: { type: examples.faulty, params: { fail_after: 5 }, on_error: { policy: restart, max_restarts: 2 } }
+  act: { type: test.misbehaving_actuator }
+connections: [ src.out -> bad.in, bad.out -> act.in ]
+)");
+  const auto r = fba_run({f, "--output-dir", out.string(), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR});
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("; 2 sample(s) lost to 2 restart(s)"), std::string::npos) << r.output;
+  const auto summary = nlohmann::json::parse(read_file(out / "summary.json"));
+  EXPECT_EQ(summary["lost_to_restarts"], 2);
+  EXPECT_EQ(summary["components"]["bad"]["lost_to_restarts"], 2);
+}
+
 TEST(Cli, TimeoutExitsThree) {
   const auto r = fba_run({write_task("long.yaml", kLong), "--timeout", "0.2"});
   EXPECT_EQ(r.status, 3);
@@ -85,7 +102,8 @@ TEST(Cli, SigintAndSigtermStopInOrderWith130And143) {
     const std::string summary = read_file(out / "summary.json");
     EXPECT_NE(summary.find("\"outcome\": \"interrupted\""), std::string::npos) << summary;
     EXPECT_NE(summary.find("\"phase\": "), std::string::npos) << summary;
-    EXPECT_NE(summary.find(sig == SIGINT ? "interrupted by SIGINT" : "interrupted by SIGTERM"), std::string::npos) << summary;
+    EXPECT_NE(summary.find(sig == SIGINT ? "interrupted by SIGINT" : "interrupted by SIGTERM"), std::string::npos)
+        << summary;
   }
 }
 
@@ -113,8 +131,8 @@ Misbehaved misbehave(std::vector<std::string> args, const std::string& task = kM
                      const std::vector<std::string>& env = {}) {
   Misbehaved m;
   m.out = temp_dir("misbehaving");
-  args.insert(args.begin(), {write_task("misbehaving.yaml", task), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
-                             m.out.string(), "--stop-grace", "0.2"});
+  args.insert(args.begin(), {write_task("misbehaving.yaml", task), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR,
+                             "--output-dir", m.out.string(), "--stop-grace", "0.2"});
   m.run = fba_run(args, env);
   m.summary = nlohmann::json::parse(read_file(m.out / "summary.json"), nullptr, false);
   if (m.summary.is_discarded()) m.summary = nullptr;
@@ -136,7 +154,9 @@ TEST(CliMisbehaving, AnExceptionFromProcessExitsThreeNamingTheComponent) {
 TEST(CliMisbehaving, ANonExceptionFromProcessExitsThreeNamingTheComponentAndTheCall) {
   const auto m = misbehave({"--set", "bad.mode=throw_int"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
-  EXPECT_EQ(reason(m), "component 'bad' (test.misbehaving) threw a non-exception (not derived from std::exception) from process()");
+  EXPECT_EQ(
+      reason(m),
+      "component 'bad' (test.misbehaving) threw a non-exception (not derived from std::exception) from process()");
   EXPECT_TRUE(m.safe_state);
 }
 
@@ -146,7 +166,8 @@ TEST(CliMisbehaving, AConstructorThrowingAnIntIsAConfigurationErrorAndEarlierAct
   ASSERT_TRUE(m.summary.is_object()) << m.run.output;
   EXPECT_EQ(m.summary["outcome"], "configuration_error");
   EXPECT_EQ(m.summary["phase"], "constructing");
-  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) refused its configuration: it threw a non-exception"), std::string::npos)
+  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) refused its configuration: it threw a non-exception"),
+            std::string::npos)
       << reason(m);
   EXPECT_TRUE(m.safe_state);  // 'act' was constructed first
 }
@@ -154,7 +175,8 @@ TEST(CliMisbehaving, AConstructorThrowingAnIntIsAConfigurationErrorAndEarlierAct
 TEST(CliMisbehaving, ASegfaultExitsThreeNamingTheComponentAfterTheSafeStates) {
   const auto m = misbehave({"--set", "bad.mode=segfault"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
-  EXPECT_NE(m.run.output.find("fatal signal SIGSEGV in component 'bad' (test.misbehaving) during process()"), std::string::npos)
+  EXPECT_NE(m.run.output.find("fatal signal SIGSEGV in component 'bad' (test.misbehaving) during process()"),
+            std::string::npos)
       << m.run.output;
   EXPECT_NE(reason(m).find("in component 'bad' (test.misbehaving) during process()"), std::string::npos) << reason(m);
   EXPECT_TRUE(m.safe_state);
@@ -164,7 +186,8 @@ TEST(CliMisbehaving, AProcessThatNeverReturnsIsNamedAndTheRunStillEnds) {
   const auto m = misbehave({"--set", "bad.mode=block_process", "--timeout", "0.3"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
   ASSERT_TRUE(m.summary.is_object()) << m.run.output;
-  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) did not return from process()"), std::string::npos) << reason(m);
+  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) did not return from process()"), std::string::npos)
+      << reason(m);
   ASSERT_EQ(m.summary["stuck"].size(), 1u);
   EXPECT_EQ(m.summary["stuck"][0]["component"], "bad");
   EXPECT_EQ(m.summary["stuck"][0]["call"], "process()");
@@ -175,7 +198,8 @@ TEST(CliMisbehaving, ASafeStateThatNeverReturnsIsNamedAndTheRunStillEnds) {
   const auto m = misbehave({"--set", "act.mode=block_safe_state", "--set", "src.count=5"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
   ASSERT_TRUE(m.summary.is_object()) << m.run.output;
-  EXPECT_NE(reason(m).find("component 'act' (test.misbehaving_actuator) did not return from safe_state()"), std::string::npos)
+  EXPECT_NE(reason(m).find("component 'act' (test.misbehaving_actuator) did not return from safe_state()"),
+            std::string::npos)
       << reason(m);
   EXPECT_EQ(m.summary["safe_states"]["act"]["status"], "did not return");
   EXPECT_TRUE(m.safe_state);
@@ -184,7 +208,8 @@ TEST(CliMisbehaving, ASafeStateThatNeverReturnsIsNamedAndTheRunStillEnds) {
 TEST(CliMisbehaving, ExitZeroFromProcessExitsThreeNamingTheComponent) {
   const auto m = misbehave({"--set", "bad.mode=exit_zero"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
-  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) called exit() from process()"), std::string::npos) << reason(m);
+  EXPECT_NE(reason(m).find("component 'bad' (test.misbehaving) called exit() from process()"), std::string::npos)
+      << reason(m);
   EXPECT_TRUE(m.safe_state);
 }
 
@@ -214,7 +239,8 @@ connections: [ src.out -> act.in ]
 TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
   for (int sig : {SIGINT, SIGTERM}) {
     const fs::path out = temp_dir("sig-running");
-    Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir", out.string()});
+    Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+               out.string()});
     ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
     p.signal(sig);
     const auto r = p.wait();
@@ -228,8 +254,8 @@ TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
 
 TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) {
   const fs::path out = temp_dir("second-sigint");
-  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir", out.string(), "--set",
-             "bad.mode=block_process", "--stop-grace", "600"});
+  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+             out.string(), "--set", "bad.mode=block_process", "--stop-grace", "600"});
   ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
   p.signal(SIGINT);
   ASSERT_TRUE(p.wait_for_output("SIGINT received")) << p.output();
@@ -271,13 +297,15 @@ TEST(Cli, ASummaryThatCannotBeWrittenFailsTheRun) {
   fs::create_directory(dir / "summary.json");
   auto r = fba_run({task("chain.yaml"), "--output-dir", dir.string()});
   EXPECT_EQ(r.status, 3) << r.output;
-  EXPECT_NE(r.output.find("could not write the summary " + (dir / "summary.json").string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("could not write the summary " + (dir / "summary.json").string()), std::string::npos)
+      << r.output;
 
   const fs::path full = temp_dir("summary-full");
   fs::create_symlink("/dev/full", full / "summary.json");
   r = fba_run({task("chain.yaml"), "--output-dir", full.string()});
   EXPECT_EQ(r.status, 3) << r.output;
-  EXPECT_NE(r.output.find((full / "summary.json").string() + ": No space left on device"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find((full / "summary.json").string() + ": No space left on device"), std::string::npos)
+      << r.output;
 }
 
 TEST(Cli, CheckValidatesWithoutRunning) {

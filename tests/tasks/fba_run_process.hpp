@@ -40,7 +40,8 @@ inline std::string read_file(const fs::path& p) {
 // A folder of its own for each test (and each call within it).
 inline fs::path temp_dir(const std::string& name) {
   static int counter = 0;
-  const fs::path p = fs::path(testing::TempDir()) / ("fba-cli-" + std::to_string(getpid()) + "-" + std::to_string(++counter) + "-" + name);
+  const fs::path p = fs::path(testing::TempDir()) /
+                     ("fba-cli-" + std::to_string(getpid()) + "-" + std::to_string(++counter) + "-" + name);
   fs::remove_all(p);
   fs::create_directories(p);
   return p;
@@ -53,7 +54,8 @@ class Process {
   // child. Before fba-run's first instruction the dynamic loader runs for a few milliseconds,
   // and a signal there ends any program by the default action; fba-run blocks them itself from
   // its first instruction on (.preinit_array), so this only closes the loader's window.
-  explicit Process(std::vector<std::string> args, const std::vector<std::string>& env = {}, bool signals_blocked = false) {
+  explicit Process(std::vector<std::string> args, const std::vector<std::string>& env = {},
+                   bool signals_blocked = false) {
     log_ = temp_dir("log") / "output.txt";
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
@@ -96,7 +98,8 @@ class Process {
     for (;;) {
       if (output().find(text) != std::string::npos) return true;
       siginfo_t info{};
-      if (waitid(P_PID, pid_, &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid == pid_) return output().find(text) != std::string::npos;
+      if (waitid(P_PID, pid_, &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid == pid_)
+        return output().find(text) != std::string::npos;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
   }

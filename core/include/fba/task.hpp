@@ -78,9 +78,11 @@ struct RunResult {
   std::vector<StuckCall> stuck;
   std::vector<SafeStateResult> safe_states;
   std::uint64_t lost_to_restarts = 0;  // the components' total
-  std::string phase;  // where fba-run was when it ended: loading, constructing, running
-  int signal = 0;     // the signal that interrupted the run, if any: its exit status is 128 + signal
-  int exit_code() const { return outcome == Outcome::Interrupted && signal > 0 ? 128 + signal : fba::exit_code(outcome); }
+  std::string phase;                   // where fba-run was when it ended: loading, constructing, running
+  int signal = 0;                      // the signal that interrupted the run, if any: its exit status is 128 + signal
+  int exit_code() const {
+    return outcome == Outcome::Interrupted && signal > 0 ? 128 + signal : fba::exit_code(outcome);
+  }
 };
 
 // The component call running on the calling thread, for crash and exit reports; null fields

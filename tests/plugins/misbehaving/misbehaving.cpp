@@ -6,6 +6,7 @@
 // segfault, block_process (ignores interrupt), block_safe_state (actuator), exit_zero,
 // never_finish (sensor: free-running, produces nothing). "none" behaves.
 // FBA_TEST_EXIT_IN_STATIC_INIT=1 in the environment makes the plugin call exit(0) while loading.
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -25,9 +26,11 @@ namespace {
 
 fba::Spec with_mode(fba::Spec spec) {
   return std::move(spec)
-      .param("mode", std::string("none"), "how to misbehave: none, throw_exception, throw_int, throw_in_constructor_int, "
-                                          "segfault, block_process, block_safe_state, exit_zero, never_finish")
-      .param("after", 0, "good invocations before misbehaving").range(0, std::nullopt);
+      .param("mode", std::string("none"),
+             "how to misbehave: none, throw_exception, throw_int, throw_in_constructor_int, "
+             "segfault, block_process, block_safe_state, exit_zero, never_finish")
+      .param("after", 0, "good invocations before misbehaving")
+      .range(0, std::nullopt);
 }
 
 // Blocks the calling thread for good: neither interrupt() nor anything else ends it.
@@ -37,9 +40,12 @@ fba::Spec with_mode(fba::Spec spec) {
 
 class Misbehaviour {
  public:
-  explicit Misbehaviour(fba::Context& ctx) : mode_(ctx.param<std::string>("mode")), after_(ctx.param<std::int64_t>("after")) {
-    static const char* const kModes[] = {"none", "throw_exception", "throw_int", "throw_in_constructor_int", "segfault",
-                                         "block_process", "block_safe_state", "exit_zero", "never_finish"};
+  explicit Misbehaviour(fba::Context& ctx)
+      : mode_(ctx.param<std::string>("mode")), after_(ctx.param<std::int64_t>("after")) {
+    static const char* const kModes[] = {
+        "none",        "throw_exception", "throw_int",        "throw_in_constructor_int",
+        "segfault",    "block_process",   "block_safe_state", "exit_zero",
+        "never_finish"};
     bool known = false;
     for (const char* m : kModes) known |= mode_ == m;
     if (!known) throw std::invalid_argument("unknown mode '" + mode_ + "'");
@@ -52,8 +58,9 @@ class Misbehaviour {
     if (mode_ == "throw_exception") throw std::runtime_error("misbehaving on purpose");
     if (mode_ == "throw_int") throw 42;
     if (mode_ == "segfault") {
-      volatile int* null = nullptr;
-      *null = 1;
+      // A real fault that the sanitizers do not take first (a null store is UB that UBSan stops at).
+      void* page = mmap(nullptr, 4096, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      *static_cast<volatile int*>(page) = 1;
     }
     if (mode_ == "block_process") block_forever();
     if (mode_ == "exit_zero") std::exit(0);
@@ -89,9 +96,11 @@ class MisbehavingSensor final : public fba::Component {
   static fba::Spec spec() {
     return with_mode(fba::Spec::sensor("test.misbehaving_sensor", "Emits count integers; misbehaves as its mode says.")
                          .output<std::int64_t>("out", "0, 1, 2, ...")
-                         .param("count", 10, "integers to emit before finishing").range(0, std::nullopt));
+                         .param("count", 10, "integers to emit before finishing")
+                         .range(0, std::nullopt));
   }
-  explicit MisbehavingSensor(fba::Context& ctx) : ctx_(ctx), m_(ctx), out_(ctx.output("out")), count_(ctx.param<std::int64_t>("count")) {}
+  explicit MisbehavingSensor(fba::Context& ctx)
+      : ctx_(ctx), m_(ctx), out_(ctx.output("out")), count_(ctx.param<std::int64_t>("count")) {}
   void process() override {
     if (m_.mode() == "never_finish") return;  // free-running, produces nothing, never finishes
     m_.maybe();
@@ -112,12 +121,14 @@ class MisbehavingSensor final : public fba::Component {
 class MisbehavingActuator final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return with_mode(fba::Spec::actuator("test.misbehaving_actuator", "Consumes integers; marks its safe state in a file.")
-                         .input<std::int64_t>("in", "integers"));
+    return with_mode(
+        fba::Spec::actuator("test.misbehaving_actuator", "Consumes integers; marks its safe state in a file.")
+            .input<std::int64_t>("in", "integers"));
   }
   explicit MisbehavingActuator(fba::Context& ctx) : ctx_(ctx), m_(ctx) {}
   void process() override {
-    if (!running_ && !ctx_.output_dir().empty()) std::ofstream(ctx_.output_dir() / ("running." + ctx_.name())) << "running\n";
+    if (!running_ && !ctx_.output_dir().empty())
+      std::ofstream(ctx_.output_dir() / ("running." + ctx_.name())) << "running\n";
     running_ = true;
     m_.maybe();
   }
