@@ -92,7 +92,7 @@ ElfFile check_elf(const fs::path& file) {
   unsigned char ident[EI_NIDENT] = {};
   const bool whole_ident = r.read(0, ident, std::min<std::uintmax_t>(r.size, EI_NIDENT));
   if (std::memcmp(ident, ELFMAG, std::min<std::size_t>(SELFMAG, r.size)) != 0)
-    throw std::runtime_error("is not a shared object: it is no ELF file (no ELF magic number at its start)");
+    throw std::runtime_error("is not an ELF shared object (no ELF magic number at its start)");
   if (!whole_ident) throw std::runtime_error(truncated(r.size, "the ELF identification", EI_NIDENT));
   const Elf64_Ehdr& own = own_header();
   if (ident[EI_CLASS] != own.e_ident[EI_CLASS])

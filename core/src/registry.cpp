@@ -260,7 +260,7 @@ std::shared_ptr<PluginSlot> Registry::add_plugin(const fs::path& file) {
 
 void Registry::load_plugin(const fs::path& file) {
   for (const auto& slot : plugins_)
-    if (slot->file == file.string() && slot->error.empty()) return ensure_loaded(*slot);
+    if (slot->file == file.string()) return ensure_loaded(*slot);  // found on the path before
   ensure_loaded(*add_plugin(file));
 }
 
