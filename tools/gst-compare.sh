@@ -39,7 +39,7 @@ per_hop() {
   local one fifty
   one=$(gst_run 1 "$2" "$1")
   fifty=$(gst_run 50 "$2" "$1")
-  echo "$one $fifty" | awk -v n="$2" '{printf "%.1f %.1f", ($3 - $1) / 49 / n, ($4 - $2) / 49 / n}'
+  echo "$one $fifty" | awk -v n="$2" '{printf "%.1f %.1f\n", ($3 - $1) / 49 / n, ($4 - $2) / 49 / n}'
 }
 
 # gst_latency K N -> "median_us p99_us" end to end, from the latency tracer, N buffers at 1 kHz
@@ -53,7 +53,7 @@ gst_latency() {
     sed -n 's/.*latency, src-element-id.*time=(guint64)\([0-9]*\).*/\1/p' | sort -n |
     awk '{v[NR] = $1} END {
            if (NR == 0) { print "no latency records" > "/dev/stderr"; exit 1 }
-           printf "%.1f %.1f", v[int(NR / 2) + 1] / 1000, v[int(NR * 99 / 100) + 1] / 1000 }'
+           printf "%.1f %.1f\n", v[int(NR / 2) + 1] / 1000, v[int(NR * 99 / 100) + 1] / 1000 }'
 }
 
 ratio() { echo "$1 $2" | awk '{printf "%.3f", $1 / $2}'; }
