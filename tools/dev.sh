@@ -4,7 +4,9 @@
 #   tools/dev.sh test   install what is missing, build and run every test: plain, under
 #                       AddressSanitizer + UndefinedBehaviorSanitizer, the runtime's
 #                       concurrency tests under ThreadSanitizer, and the task-loader fuzzer
-# Builds go to build/<config>; FBA_JOBS sets the parallelism (default: all cores).
+# Builds go to build/<config>; FBA_JOBS sets the parallelism (default: all cores). With ccache
+# installed every build goes through it, so a second run recompiles only what changed.
+# FBA_FUZZ_SECONDS (default 30) bounds the fuzzer's exploration.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 top=$PWD
@@ -15,7 +17,7 @@ packages=(
   libyaml-cpp-dev libboost-program-options-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   libeigen3-dev libopencv-dev libassimp-dev libqhull-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  gstreamer1.0-tools gstreamer1.0-plugins-base graphviz bc
+  gstreamer1.0-tools gstreamer1.0-plugins-base graphviz bc ccache
 )
 
 install_packages() {
@@ -32,12 +34,29 @@ install_packages() {
   fi
 }
 
+launcher=()
+if command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  # Paths relative to the checkout: another clone of the project hits the same cache entries.
+  export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$top}
+fi
+
 # configure <name> [cmake args...]
 configure() {
   local name=$1
   shift
-  cmake -S "$top" -B "build/$name" -G Ninja "$@" >"build/$name.configure.log" 2>&1 ||
+  cmake -S "$top" -B "build/$name" -G Ninja "${launcher[@]}" "$@" >"build/$name.configure.log" 2>&1 ||
     { cat "build/$name.configure.log"; exit 1; }
+}
+
+# stage <title>: prints the title, and the previous stage's wall time, so CI logs show where time goes.
+stage_start=$SECONDS
+stage_name=""
+stage() {
+  [ -z "$stage_name" ] || echo "== $stage_name: $((SECONDS - stage_start)) s"
+  stage_name=$1
+  stage_start=$SECONDS
+  [ -z "$1" ] || echo "== $1"
 }
 
 build() { cmake --build "build/$1" --parallel "$jobs" "${@:2}"; }
@@ -62,32 +81,51 @@ case "$cmd" in
     ;;
   test)
     install_packages
-    echo "== plain build and tests"
+    stage "plain build and tests"
     configure release -DCMAKE_BUILD_TYPE=RelWithDebInfo
     build release
     run_tests release
 
-    echo "== AddressSanitizer + UndefinedBehaviorSanitizer"
+    # The sanitizer builds compile only what their tests run (fba_tests: every target under tests/,
+    # with fba-run, fba-evaluate and the plugins as dependencies). Their vision tests carve smaller
+    # problems than the plain build's (FBA_TEST_SANITIZED), which keeps the full-size targets.
+    stage "AddressSanitizer + UndefinedBehaviorSanitizer"
     # -O2 with sanitizers: the vision tests carve real data, which -O0 would make slow.
     configure asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFBA_SANITIZE=address,undefined -DFBA_BUILD_BENCHMARKS=OFF
-    build asan
+    build asan --target fba_tests
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       LSAN_OPTIONS=suppressions=$top/tests/lsan.supp \
       run_tests asan -LE "install|benchmark"
 
-    echo "== ThreadSanitizer: the runtime's concurrency tests"
+    stage "ThreadSanitizer: the runtime's concurrency tests"
     configure tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFBA_SANITIZE=thread -DFBA_BUILD_VISION=OFF -DFBA_BUILD_BENCHMARKS=OFF
     build tsan --target fba_core_tests fba_task_tests
     TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 run_tests tsan -L "core|tasks"
 
-    if [ -f tests/fuzz/run.sh ]; then
-      echo "== fuzzing the task loader"
-      CC=clang CXX=clang++ configure fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_VISION=OFF \
-        -DFBA_SANITIZE=fuzzer-no-link,address,undefined \
-        -DFBA_BUILD_BENCHMARKS=OFF
-      build fuzz --target fuzz_task_loader
-      bash tests/fuzz/run.sh build/fuzz "${FBA_FUZZ_SECONDS:-60}"
+    stage "fuzzing the task loader: every corpus input once, then a bounded exploration"
+    CC=clang CXX=clang++ configure fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_VISION=OFF \
+      -DFBA_SANITIZE=fuzzer-no-link,address,undefined \
+      -DFBA_BUILD_BENCHMARKS=OFF
+    build fuzz --target fuzz_task_loader
+    # A regression check: every input that ever crashed the loader stays in the corpus.
+    run_tests fuzz -L fuzz
+    # Exploration finds new inputs only now and then; what it finds joins the corpus (commit it with
+    # the fix, and the check above keeps it fixed), and the run fails.
+    findings=build/fuzz/fuzz-findings
+    rm -rf "$findings"
+    if ! bash tests/fuzz/run.sh build/fuzz "${FBA_FUZZ_SECONDS:-30}"; then
+      for f in "$findings"/*; do
+        [ -f "$f" ] || continue
+        cp "$f" "tests/fuzz/corpus/$(basename "$f")"
+        echo "== new corpus input tests/fuzz/corpus/$(basename "$f"):"
+        cat -v "$f" | head -c 4000
+        echo
+      done
+      echo "== the fuzzer found an input that breaks the task loader (see above)" >&2
+      exit 1
     fi
+    stage ""
+    echo "== all tests passed in $SECONDS s"
     ;;
   *)
     echo "usage: tools/dev.sh run [TASK.yaml] | test" >&2

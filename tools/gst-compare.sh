@@ -1,59 +1,97 @@
 #!/usr/bin/env bash
-# Runs the same chains in GStreamer and in fba, in one run, and prints the cost per extra
-# element/hop and the ratios.
+# Runs the same chains in GStreamer and in fba, in one run, like with like, and prints wall and CPU
+# time per extra element/hop, end-to-end latency at 1 kHz, and the ratios.
 #   tools/gst-compare.sh [BUILD_DIR]      (default build/release)
-# GStreamer: fakesrc num-buffers=N ! identity x K ! fakesink, in one thread, and with a queue
-# before each identity (one thread per queue). fba: tools/runtime-benchmark, K passthroughs.
+# One thread:          GStreamer fakesrc ! identity x K ! fakesink      vs fba's deterministic executor.
+# A thread per element: GStreamer fakesrc ! (queue ! identity) x K ! fakesink
+#                                                    vs fba with every component `thread: dedicated`.
+# fba's pooled threaded executor (components share the workers) has no GStreamer counterpart and is
+# reported on its own line. CPU time is the process's user + system time, all threads.
+# Latency: GStreamer's own latency tracer (source pad to sink pad, every buffer) on a 1 kHz live
+# source through 10 queue ! identity pairs, against fba's 10 dedicated hops fed at 1 kHz.
 set -euo pipefail
 build=${1:-build/release}
 bench=$build/bin/fba-runtime-benchmark
 command -v gst-launch-1.0 >/dev/null || { echo "gst-launch-1.0 missing: apt-get install gstreamer1.0-tools" >&2; exit 2; }
 [ -x "$bench" ] || { echo "$bench missing: build first (tools/dev.sh test or cmake --build $build)" >&2; exit 2; }
 
-# seconds for one gst-launch run; best of 3
-gst_time() {
-  local k=$1 n=$2 element=$3 best=""
+# gst_run K N ELEMENT -> "wall_ns cpu_ns" of the best (by wall time) of 3 runs of
+# fakesrc num-buffers=N ! ELEMENT x K ! fakesink
+gst_run() {
+  local k=$1 n=$2 element=$3 best_wall="" best_cpu=""
   local pipeline="fakesrc num-buffers=$n"
   for ((i = 0; i < k; i++)); do pipeline+=" ! $element"; done
   pipeline+=" ! fakesink"
-  for rep in 1 2 3; do
-    local t0 t1
-    t0=$(date +%s%N)
+  for _ in 1 2 3; do
+    local times wall cpu
+    # bash's time keyword: real, user and system seconds of the child, on stderr.
     # shellcheck disable=SC2086
-    gst-launch-1.0 -q $pipeline >/dev/null
-    t1=$(date +%s%N)
-    local t=$((t1 - t0))
-    if [ -z "$best" ] || [ "$t" -lt "$best" ]; then best=$t; fi
+    times=$( { TIMEFORMAT='%R %U %S'; time gst-launch-1.0 -q $pipeline >/dev/null 2>&1; } 2>&1)
+    wall=$(echo "$times" | awk '{printf "%d", $1 * 1e9}')
+    cpu=$(echo "$times" | awk '{printf "%d", ($2 + $3) * 1e9}')
+    if [ -z "$best_wall" ] || [ "$wall" -lt "$best_wall" ]; then best_wall=$wall best_cpu=$cpu; fi
   done
-  echo "$best"
+  echo "$best_wall $best_cpu"
 }
 
-per_hop() {  # element n -> ns per extra element from K=1 to K=50
-  local t1 t50
-  t1=$(gst_time 1 "$2" "$1")
-  t50=$(gst_time 50 "$2" "$1")
-  echo "scale=1; ($t50 - $t1) / 49 / $2" | bc
+# per_hop ELEMENT N -> "wall_ns cpu_ns" per extra element from K=1 to K=50, per buffer
+per_hop() {
+  local one fifty
+  one=$(gst_run 1 "$2" "$1")
+  fifty=$(gst_run 50 "$2" "$1")
+  echo "$one $fifty" | awk -v n="$2" '{printf "%.1f %.1f\n", ($3 - $1) / 49 / n, ($4 - $2) / 49 / n}'
 }
+
+# gst_latency K N -> "median_us p99_us" end to end, from the latency tracer, N buffers at 1 kHz
+gst_latency() {
+  local k=$1 n=$2
+  local pipeline="videotestsrc is-live=true num-buffers=$n pattern=black ! video/x-raw,width=16,height=16,framerate=1000/1"
+  for ((i = 0; i < k; i++)); do pipeline+=" ! queue ! identity"; done
+  pipeline+=" ! fakesink"
+  # shellcheck disable=SC2086
+  GST_TRACERS=latency GST_DEBUG=GST_TRACER:7 GST_DEBUG_NO_COLOR=1 gst-launch-1.0 -q $pipeline 2>&1 >/dev/null |
+    sed -n 's/.*latency, src-element-id.*time=(guint64)\([0-9]*\).*/\1/p' | sort -n |
+    awk '{v[NR] = $1} END {
+           if (NR == 0) { print "no latency records" > "/dev/stderr"; exit 1 }
+           printf "%.1f %.1f\n", v[int(NR / 2) + 1] / 1000, v[int(NR * 99 / 100) + 1] / 1000 }'
+}
+
+ratio() { echo "$1 $2" | awk '{printf "%.3f", $1 / $2}'; }
 
 echo "== GStreamer $(gst-launch-1.0 --version | head -1 | awk '{print $NF}')"
-gst_one=$(per_hop identity 200000)
-gst_queue=$(per_hop "queue ! identity" 50000)
-echo "gst per extra identity, one thread:          $gst_one ns"
-echo "gst per extra queue+identity, threads:       $gst_queue ns"
+read -r gst_one gst_one_cpu < <(per_hop identity 200000)
+read -r gst_queue gst_queue_cpu < <(per_hop "queue ! identity" 50000)
+read -r gst_lat gst_lat_p99 < <(gst_latency 10 2000)
+printf '%-58s %10s ns wall %10s ns CPU\n' "gst per extra identity, one thread:" "$gst_one" "$gst_one_cpu"
+printf '%-58s %10s ns wall %10s ns CPU\n' "gst per extra queue ! identity, a thread each:" "$gst_queue" "$gst_queue_cpu"
+printf '%-58s %10s us median %7s us p99\n' "gst latency, 10 queue ! identity, 1 kHz, end to end:" "$gst_lat" "$gst_lat_p99"
 
 echo "== fba ($bench)"
 json=$("$bench" --json)
-get() { echo "$json" | sed -n "s/.*\"$1\": \([0-9.]*\).*/\1/p"; }
+get() {
+  local v
+  v=$(echo "$json" | sed -n "s/.*\"$1\": \([-0-9.]*\).*/\1/p")
+  [ -n "$v" ] || { echo "no '$1' in the benchmark's output" >&2; exit 1; }
+  echo "$v"
+}
 fba_det=$(get "deterministic per extra hop (K=1..50)")
-fba_thr=$(get "threaded per extra hop (K=1..50)")
-fba_lat=$(get "threaded latency K=10 median per hop (1 kHz)")
+fba_det_cpu=$(get "deterministic CPU per extra hop (K=1..50)")
+fba_ded=$(get "dedicated per extra hop (K=1..50)")
+fba_ded_cpu=$(get "dedicated CPU per extra hop (K=1..50)")
+fba_pool=$(get "pooled per extra hop (K=1..50)")
+fba_pool_cpu=$(get "pooled CPU per extra hop (K=1..50)")
+fba_lat=$(get "dedicated latency K=10 median end to end (1 kHz)")
+fba_lat_p99=$(get "dedicated latency K=10 p99 end to end (1 kHz)")
+fba_pool_lat=$(get "pooled latency K=10 median end to end (1 kHz)")
 fba_build=$(get "build a task of 1000 components")
-echo "fba per extra hop, deterministic executor:   $fba_det ns"
-echo "fba per extra hop, threaded, lossless:       $fba_thr ns"
-echo "fba median latency per threaded hop, 1 kHz:  $fba_lat us"
-echo "fba build of a 1000-component task:          $fba_build ms"
+printf '%-58s %10s ns wall %10s ns CPU\n' "fba per extra hop, deterministic (one thread):" "$fba_det" "$fba_det_cpu"
+printf '%-58s %10s ns wall %10s ns CPU\n' "fba per extra hop, thread: dedicated (a thread each):" "$fba_ded" "$fba_ded_cpu"
+printf '%-58s %10s ns wall %10s ns CPU\n' "fba per extra hop, pooled executor (no gst counterpart):" "$fba_pool" "$fba_pool_cpu"
+printf '%-58s %10s us median %7s us p99\n' "fba latency, 10 dedicated hops, 1 kHz, end to end:" "$fba_lat" "$fba_lat_p99"
+printf '%-58s %10s us median\n' "fba latency, 10 pooled hops, 1 kHz, end to end:" "$fba_pool_lat"
+printf '%-58s %10s ms\n' "fba build of a 1000-component task:" "$fba_build"
 
-echo "== ratios (fba / GStreamer; target: <= 1 in one thread, <= 0.33 across threads)"
-echo "one thread:    $(echo "scale=3; $fba_det / $gst_one" | bc)"
-echo "across threads: $(echo "scale=3; $fba_thr / $gst_queue" | bc)"
-echo "latency per threaded hop vs GStreamer's ~15 us: $(echo "scale=3; $fba_lat / 15" | bc)   (target: under 5 us)"
+echo "== ratios, fba / GStreamer (below 1: fba costs less)"
+printf '%-58s %10s wall %10s CPU\n' "one thread (deterministic / identity):" "$(ratio "$fba_det" "$gst_one")" "$(ratio "$fba_det_cpu" "$gst_one_cpu")"
+printf '%-58s %10s wall %10s CPU\n' "a thread per element (dedicated / queue ! identity):" "$(ratio "$fba_ded" "$gst_queue")" "$(ratio "$fba_ded_cpu" "$gst_queue_cpu")"
+printf '%-58s %10s median\n' "latency, 10 threaded hops at 1 kHz (dedicated / queue):" "$(ratio "$fba_lat" "$gst_lat")"

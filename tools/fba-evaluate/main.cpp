@@ -9,6 +9,10 @@
 //       (b) with --images: re-projection IoU of the model onto each silhouette of the image set.
 //   fba-evaluate grasp --mesh M.obj --summary run/summary.json | --random 1000 | --synthesise
 //       Grasp quality on the true surface (grasp.cpp; see its --help).
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <numeric>
@@ -26,6 +30,54 @@ namespace po = boost::program_options;
 using namespace fba;
 
 namespace {
+
+// A command line that asks for nothing sensible: reported as boost's own parse errors are, with
+// exit status 2, like a bad task file.
+struct ArgumentError : po::error {
+  using po::error::error;
+};
+
+// The shortest text that reads back as v: a range message must not round 1000001 to 1e+06.
+std::string number(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+// --name must be a number in [lo, hi] (which also refuses NaN).
+void check_range(const std::string& name, double v, double lo, double hi) {
+  if (!(v >= lo && v <= hi))
+    throw ArgumentError("--" + name + " must be in [" + number(lo) + ", " + number(hi) + "]; found " + number(v));
+}
+
+// The finest level a dense voxel grid can take: 2^(3*10) voxels is already 1 GiB.
+constexpr int kMaxDepth = 10;
+
+// Parses `args` with boost's GNU-style rules, except that "-0.08" is a (negative) value, not an
+// option: boost's single-dash options are turned off, -h is read as --help, and any other word
+// after a single dash is refused here (else a multi-token option such as --mesh would take it).
+po::variables_map parse(std::vector<std::string> args, const po::options_description& opts) {
+  for (auto& a : args) {
+    if (a == "-h") a = "--help";
+    else if (a.size() > 1 && a[0] == '-' && a[1] != '-' && !std::isdigit(static_cast<unsigned char>(a[1])) && a[1] != '.')
+      throw ArgumentError("unrecognised option '" + a + "'");
+  }
+  po::variables_map vm;
+  po::store(po::command_line_parser(args)
+                .options(opts)
+                .style(po::command_line_style::unix_style ^ po::command_line_style::allow_short)
+                .run(),
+            vm);
+  return vm;
+}
+
+// An option of the mesh comparison (a) given without --mesh would be silently ignored.
+void check_needs_mesh(const po::variables_map& vm, const std::string& mesh, std::initializer_list<const char*> names) {
+  if (!mesh.empty()) return;
+  for (const char* n : names)
+    if (vm.count(n) && !vm[n].defaulted())
+      throw ArgumentError(std::string("--") + n + " applies to the comparison with a mesh: give --mesh as well");
+}
 
 void print_summary(const char* what, const std::vector<double>& v) {
   if (v.empty()) return;
@@ -51,13 +103,19 @@ int run_synthetic(const std::vector<std::string>& args) {
       ("tolerance", po::value(&p.silhouette_tolerance)->default_value(p.silhouette_tolerance),
        "carver silhouette tolerance, pixels")
       ("save", po::value(&save_dir), "write renders, masks, carved and true models (PLY) here");
-  po::variables_map vm;
-  po::store(po::command_line_parser(args).options(opts).run(), vm);
+  po::variables_map vm = parse(args, opts);
   if (vm.count("help")) {
     std::cout << opts << "\n";
     return 0;
   }
   po::notify(vm);
+  check_range("views", p.views, 1, 1000);
+  check_range("depth", p.depth, 1, kMaxDepth);
+  check_range("min-elevation", p.min_elevation_deg, -90, 90);
+  check_range("max-elevation", p.max_elevation_deg, p.min_elevation_deg, 90);
+  check_range("margin", p.margin, 0, 10);
+  check_range("threads", p.threads, 0, 256);
+  check_range("tolerance", p.silhouette_tolerance, 0, 1000);
   p.table_clip = !vm.count("no-table-clip");
   p.save_dir = save_dir;
 
@@ -97,13 +155,25 @@ int run_model(const std::vector<std::string>& args) {
       ("margin", po::value(&margin)->default_value(margin), "see --bounds")
       ("no-table-clip", "do not drop voxels below the mesh's lowest point")
       ("images", po::value(&images), "(b) an image set (Middlebury *_par.txt or fba YAML)");
-  po::variables_map vm;
-  po::store(po::command_line_parser(args).options(opts).run(), vm);
+  po::variables_map vm = parse(args, opts);
   if (vm.count("help")) {
     std::cout << opts << "\n";
     return 0;
   }
   po::notify(vm);
+  check_range("depth", depth, 1, kMaxDepth);
+  check_range("margin", margin, 0, 10);
+  if (!bounds.empty()) {
+    if (bounds.size() != 6)
+      throw ArgumentError("--bounds needs 6 numbers (xmin ymin zmin xmax ymax zmax); found " + std::to_string(bounds.size()));
+    for (int i = 0; i < 3; ++i) {
+      const char axis = static_cast<char>('x' + i);
+      if (!std::isfinite(bounds[i]) || !std::isfinite(bounds[i + 3]) || !(bounds[i] < bounds[i + 3]))
+        throw ArgumentError(std::string("--bounds: ") + axis + "min must be below " + axis + "max, both finite; found " +
+                            number(bounds[i]) + " and " + number(bounds[i + 3]));
+    }
+  }
+  check_needs_mesh(vm, mesh_path, {"depth", "bounds", "margin", "no-table-clip"});
   const TriangleMesh model = geometry::load_mesh(model_path);
   std::printf("model %s: %zu triangles\n", model_path.c_str(), model.triangles.size());
 
@@ -112,7 +182,6 @@ int run_model(const std::vector<std::string>& args) {
     const auto box = geometry::mesh_bounds(truth_mesh);
     Eigen::AlignedBox3d cube;
     if (!bounds.empty()) {
-      if (bounds.size() != 6) throw std::invalid_argument("--bounds needs 6 numbers");
       cube = geometry::cube_around(Eigen::AlignedBox3d(Eigen::Vector3d(bounds[0], bounds[1], bounds[2]),
                                                        Eigen::Vector3d(bounds[3], bounds[4], bounds[5])),
                                    0.0);
@@ -175,6 +244,9 @@ int main(int argc, char** argv) {
       return 0;
     }
     std::cerr << "fba-evaluate: unknown command '" << command << "'\n" << usage;
+    return 2;
+  } catch (const po::error& e) {
+    std::cerr << "fba-evaluate " << command << ": " << e.what() << " (see fba-evaluate " << command << " --help)\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "fba-evaluate: " << e.what() << "\n";

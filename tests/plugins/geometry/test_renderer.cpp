@@ -1,4 +1,3 @@
-#include <chrono>
 #include <cmath>
 #include <numbers>
 
@@ -173,21 +172,12 @@ TEST(Renderer, NoiseIsSeededAndRepeatable) {
   EXPECT_EQ(cv::norm(a.depth, clean.depth, cv::NORM_INF), 0.0);
 }
 
-TEST(Renderer, YcbMeshAt640x480IsFast) {
+// Its speed is measured in renderer_benchmark.cpp (a test asserts no time: the machine is shared).
+TEST(Renderer, YcbMeshAt640x480CoversItsProjection) {
   const TriangleMesh mesh = load_mesh(test::ycb_mesh("YcbMustardBottle"));
   const auto box = mesh_bounds(mesh);
   const auto cam = camera_at(box.center() + Eigen::Vector3d(0.35, 0.1, 0.2), box.center());
-  double best_ms = 1e9;
-  RenderResult out;
-  for (int i = 0; i < 5; ++i) {  // best of 5: the machine is shared
-    const auto t0 = std::chrono::steady_clock::now();
-    out = render(mesh, cam);
-    const auto t1 = std::chrono::steady_clock::now();
-    best_ms = std::min(best_ms, std::chrono::duration<double, std::milli>(t1 - t0).count());
-  }
-  RecordProperty("render_ms", std::to_string(best_ms));
-  std::printf("render 640x480, %zu triangles: %.2f ms\n", mesh.triangles.size(), best_ms);
-  EXPECT_LT(best_ms, 50.0);
+  const RenderResult out = render(mesh, cam);
   EXPECT_GT(cv::countNonZero(out.mask), 5000);
 }
 

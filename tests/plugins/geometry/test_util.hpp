@@ -1,10 +1,10 @@
 // Helpers shared by the geometry tests.
 #pragma once
 
-#include <atomic>
 #include <filesystem>
 #include <string>
-#include <unistd.h>
+
+#include "support/temp_dir.hpp"
 
 namespace fba::geometry::test {
 
@@ -17,23 +17,6 @@ inline std::filesystem::path ycb_mesh(const std::string& name) {
 inline const char* const kYcbNames[] = {"YcbMustardBottle", "YcbMasterChefCan", "YcbBanana",
                                         "YcbCrackerBox"};
 
-// A fresh directory under the system temp dir, removed on destruction.
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    path_ = std::filesystem::temp_directory_path() /
-            ("fba-geometry-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using fba::test::TempDir;
 
 }  // namespace fba::geometry::test

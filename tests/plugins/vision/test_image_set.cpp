@@ -5,9 +5,9 @@
 #include <gtest/gtest.h>
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <unistd.h>
 
 #include "fba/vision/image_set.hpp"
+#include "support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace fba::vision;
@@ -16,27 +16,7 @@ namespace {
 
 const std::string kDino = std::string(FBA_SHARED_DATA_DIR) + "/middlebury-dino";
 
-// A fresh directory per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    path_ = fs::temp_directory_path() /
-            ("fba-vision-test-" + std::to_string(::getpid()) + "-" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string file(const std::string& name, const std::string& text = {}) const {
-    const std::string p = (path_ / name).string();
-    if (!text.empty()) std::ofstream(p) << text;
-    return p;
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using fba::test::TempDir;
 
 // Runs f, which must throw FormatError; returns its message.
 template <class F>

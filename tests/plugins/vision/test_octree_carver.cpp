@@ -6,7 +6,6 @@
 #include <memory>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/voxelize.hpp"
@@ -14,6 +13,7 @@
 #include "fba/vision/image_set.hpp"
 #include "fba/vision/octree_carver.hpp"
 #include "fba/vision/reference_carve.hpp"
+#include "support/temp_dir.hpp"
 
 using namespace fba::vision;
 
@@ -268,18 +268,30 @@ TEST(RoiCriterion, RefinesOnlyNodesThatIntersectTheRegion) {
 
 // The target, with the default (conservative) leaf test. At depth 8 the model reaches
 // mean 0.978: a finest voxel projects to ~2 px, and the model's outline lies up to half a voxel
-// plus the tolerance outside the silhouette; depth 9 halves the voxel.
-TEST(DinoReprojection, IoUTargetsMetAtDepth9) {
+// plus the tolerance outside the silhouette; depth 9 halves the voxel. Under the sanitizers, which
+// make a depth-9 carve take minutes, the same check runs at depth 7 with the mean that depth
+// reaches (measured: mean 0.9701, min 0.9541); the full targets stay with the plain build.
+#if FBA_TEST_SANITIZED
+constexpr int kDinoDepth = 7;
+constexpr double kDinoMeanIoU = 0.965, kDinoMinIoU = 0.95;
+#else
+constexpr int kDinoDepth = 9;
+constexpr double kDinoMeanIoU = 0.98, kDinoMinIoU = 0.95;
+#endif
+
+TEST(DinoReprojection, IoUTargetsMetAtTheTestDepth) {
   CarverParams p;
-  p.max_depth = 9;
+  p.max_depth = kDinoDepth;
   const auto t = fast_carve(dino(), kDinoBox, p);
   double sum = 0, lo = 1;
   for (const auto& v : dino()) {
     const double iou = mask_iou(reproject_mask(*t, v.frame->camera), v.mask);
     sum += iou, lo = std::min(lo, iou);
   }
-  EXPECT_GE(sum / dino().size(), 0.98);
-  EXPECT_GE(lo, 0.95);
+  RecordProperty("reprojection_iou_mean", std::to_string(sum / dino().size()));
+  RecordProperty("reprojection_iou_min", std::to_string(lo));
+  EXPECT_GE(sum / dino().size(), kDinoMeanIoU);
+  EXPECT_GE(lo, kDinoMinIoU);
 }
 
 TEST(Bounds, EstimatedFromViewingConesContainsTheDino) {
@@ -309,13 +321,13 @@ TEST(OctreeOutput, SurfaceMeshPlyAndReprojectionOfOneCube) {
     const Eigen::Vector3f a = mesh.vertices[tri[0]], b = mesh.vertices[tri[1]], c = mesh.vertices[tri[2]];
     EXPECT_GT((b - a).cross(c - a).dot((a + b + c) / 3 - root.centre), 0);
   }
-  const std::string ply = (std::filesystem::temp_directory_path() / ("fba-cube-" + std::to_string(::getpid()) + ".ply")).string();
+  const fba::test::TempDir dir;
+  const std::string ply = dir.file("cube.ply");
   write_ply(t, ply);
   std::ifstream in(ply);
   std::string first;
   std::getline(in, first);
   EXPECT_EQ(first, "ply");
-  std::filesystem::remove(ply);
   // Seen from the origin along +z the cube's front face spans +-0.1/0.9 * f.
   fba::CameraModel cam;
   cam.width = cam.height = 101;

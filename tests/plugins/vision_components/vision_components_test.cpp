@@ -13,6 +13,7 @@
 #include <fba/types/silhouette.hpp>
 
 #include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using fba::testing::ComponentHarness;
@@ -74,8 +75,8 @@ TEST(ImageSet, AMissingFileIsAConfigurationError) {
 // A real video file through OpenCV's VideoCapture, with a calibration file in OpenCV's own
 // format and a pose input: every frame carries intrinsics, distortion and the pose.
 TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
-  const fs::path dir = fs::path(testing::TempDir()) / "camera_test";
-  fs::create_directories(dir);
+  const fba::test::TempDir temp;
+  const fs::path& dir = temp.path();
   const std::string video = (dir / "dino.avi").string();
   {
     cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 5, cv::Size(640, 480));

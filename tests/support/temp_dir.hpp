@@ -1,0 +1,55 @@
+// A temporary folder of its own for each test: created unique (mkdtemp) under GoogleTest's temporary
+// directory, named after the running test so a leftover is easy to trace, and removed with what it
+// holds when the object goes out of scope. Tests that run in parallel, in several builds at once, or
+// several times in one process never share a file.
+#pragma once
+
+#include <stdlib.h>
+
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+
+#include <gtest/gtest.h>
+
+namespace fba::test {
+
+class TempDir {
+ public:
+  TempDir() {
+    std::string name = "fba";
+    if (const auto* info = ::testing::UnitTest::GetInstance()->current_test_info())
+      name += std::string("-") + info->test_suite_name() + "-" + info->name();
+    for (char& c : name)  // parameterised tests have '/' in their names
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+    std::string pattern = (std::filesystem::path(::testing::TempDir()) / (name + "-XXXXXX")).string();
+    if (!::mkdtemp(pattern.data()))
+      throw std::runtime_error("cannot create a temporary folder " + pattern + ": " + std::strerror(errno));
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+  // The path of `name` inside the folder, as a string; with `text`, the file is written first.
+  std::string file(const std::string& name, const std::string& text = {}) const {
+    const std::string p = (path_ / name).string();
+    if (!text.empty() && !(std::ofstream(p) << text))
+      throw std::runtime_error("cannot write the temporary file " + p);
+    return p;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace fba::test
