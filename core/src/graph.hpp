@@ -17,6 +17,7 @@
 #include "fba/component.hpp"
 #include "fba/task.hpp"
 #include "fba/task_config.hpp"
+#include "fba/thread_pool.hpp"
 
 namespace fba::detail {
 
@@ -169,6 +170,8 @@ class Graph {
   void record_event(const Event& e);
   void deliver(const EventRule& rule, const Event& e);
   std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
+  // Created on first use, with as many threads as the executor has workers.
+  ThreadPool& thread_pool();
   RunResult run();
   std::vector<Event> events() {
     std::lock_guard lock(result_mutex_);
@@ -191,8 +194,11 @@ class Graph {
   std::atomic<int> live_periodic{0};
   std::chrono::steady_clock::time_point started;
   double timeout_s = 0;
+  int worker_threads = 2;
 
  private:
+  std::mutex pool_mutex_;
+  std::unique_ptr<ThreadPool> pool_;
   Node& node(const std::string& name);
   std::atomic<bool> stopping_{false};
   std::mutex result_mutex_;

@@ -32,8 +32,19 @@ Library::~Library() {
 
 void* Library::symbol(const char* name) const { return dlsym(handle_, name); }
 
-void Registry::add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library) {
+namespace {
+// A blocking component waits in process() on a device: without interrupt() nothing could
+// unblock it, and shutdown would hang.
+void check_interrupt(const Spec& spec, bool implements_interrupt) {
+  if (spec.is_blocking() && !implements_interrupt)
+    throw std::logic_error("type '" + spec.type_name() +
+                           "' is declared blocking() but does not implement interrupt(), so a stop could not unblock it");
+}
+}  // namespace
+
+void Registry::add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library, bool implements_interrupt) {
   spec.validate();
+  check_interrupt(spec, implements_interrupt);
   const std::string name = spec.type_name();
   if (auto it = types_.find(name); it != types_.end())
     throw std::logic_error("component type '" + name + "' is registered twice: by " + it->second->origin + " and by " + origin);
@@ -48,7 +59,7 @@ void Registry::add_composite(Spec spec, std::shared_ptr<const CompositeDef> def,
 }
 
 void Registry::add_builtin(const std::vector<detail::ComponentEntry>& entries, const std::string& origin) {
-  for (const auto& e : entries) add(e.spec(), e.make, origin);
+  for (const auto& e : entries) add(e.spec(), e.make, origin, nullptr, e.implements_interrupt);
 }
 
 void Registry::load_plugin(const fs::path& file) {
@@ -88,6 +99,7 @@ void Registry::load_plugin(const fs::path& file) {
     try {
       specs.push_back(e.spec());
       specs.back().validate();
+      check_interrupt(specs.back(), e.implements_interrupt);
     } catch (const std::exception& ex) {
       throw PluginError(f, std::string("declares an invalid component: ") + ex.what());
     }
@@ -100,7 +112,7 @@ void Registry::load_plugin(const fs::path& file) {
   PluginRecord record{f, info->name ? info->name : "?", info->fba_version ? info->fba_version : "?", {}};
   for (std::size_t i = 0; i < specs.size(); ++i) {
     record.types.push_back(specs[i].type_name());
-    add(std::move(specs[i]), (*entries)[i].make, f, lib);
+    add(std::move(specs[i]), (*entries)[i].make, f, lib, (*entries)[i].implements_interrupt);
   }
   plugins_.push_back(std::move(record));
 }

@@ -62,8 +62,10 @@ class PluginError : public std::runtime_error {
 
 class Registry {
  public:
-  // Validates the spec; a name registered twice is an error naming both origins.
-  void add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library = {});
+  // Validates the spec; a name registered twice is an error naming both origins, and so is a
+  // blocking type that does not implement Component::interrupt().
+  void add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library = {},
+           bool implements_interrupt = false);
   void add_composite(Spec spec, std::shared_ptr<const CompositeDef> def, std::string origin);
   // Registers what FBA_COMPONENT collected in this program (tests, static builds).
   void add_builtin(const std::vector<detail::ComponentEntry>& entries, const std::string& origin = "built-in");
