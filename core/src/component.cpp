@@ -32,6 +32,16 @@ void deliver(detail::OutputState& s, Packet&& p) {
     if (b->consumer) s.node->graph.notify(b->consumer);
   }
 }
+
+// A filter's output carries the capture time of what this invocation took in: the newest stamp
+// among its inputs; none taken (a tick, end of stream): now. A sensor captures now.
+std::int64_t default_stamp(const Node& n) {
+  if (n.is_sensor) return n.graph.now_ns();
+  std::int64_t stamp = -1;
+  for (const Input& in : n.inputs)
+    if (in.has()) stamp = std::max(stamp, in.packet().header().stamp_ns);
+  return stamp >= 0 ? stamp : n.graph.now_ns();
+}
 }  // namespace
 
 void Output::send(Packet p, std::int64_t stamp_ns) {
@@ -39,7 +49,7 @@ void Output::send(Packet p, std::int64_t stamp_ns) {
   check_type(s, p);
   Header& h = p.header();
   h.seq = s.next_seq++;
-  h.stamp_ns = stamp_ns >= 0 ? stamp_ns : s.node->graph.now_ns();
+  h.stamp_ns = stamp_ns >= 0 ? stamp_ns : default_stamp(*s.node);
   h.producer = &s.producer;
   deliver(s, std::move(p));
 }
@@ -56,47 +66,47 @@ void Output::forward(Packet&& p) {
 const std::string& Context::name() const { return node_.config.name; }
 const Spec& Context::spec() const { return node_.spec; }
 
-Input& Context::input(std::string_view name) {
-  for (std::size_t i = 0; i < node_.input_states.size(); ++i)
-    if (node_.input_states[i]->spec->name == name) return node_.inputs[i];
-  throw std::logic_error("component type '" + node_.spec.type_name() + "' declares no input '" + std::string(name) + "'");
+void Context::plugin_bug(const std::string& what) const {
+  throw PluginBug("plugin bug in " + node_.config.type->origin + " (type '" + node_.spec.type_name() + "'): " + what);
 }
 
-Output& Context::output(std::string_view name) {
-  for (std::size_t i = 0; i < node_.output_states.size(); ++i)
-    if (node_.output_states[i]->spec->name == name) return node_.outputs[i];
-  throw std::logic_error("component type '" + node_.spec.type_name() + "' declares no output '" + std::string(name) + "'");
+Input& Context::input(std::string_view name, const TypeInfo* type) {
+  for (std::size_t i = 0; i < node_.input_states.size(); ++i) {
+    const PortSpec& ps = *node_.input_states[i]->spec;
+    if (ps.name != name) continue;
+    if (ps.type != type)
+      plugin_bug("uses input '" + ps.name + "' as '" + type->name + "'; its spec declares '" + ps.type->name + "'");
+    return node_.inputs[i];
+  }
+  plugin_bug("uses input '" + std::string(name) + "', which its spec does not declare");
 }
 
-const Value& Context::value(std::string_view name, ParamType expected) const {
-  const ParamSpec* ps = node_.spec.find_param(name);
-  if (!ps)
-    throw std::logic_error("component type '" + node_.spec.type_name() + "' declares no parameter '" + std::string(name) + "'");
-  const bool compatible = ps->type == expected || (ps->type == ParamType::Path && expected == ParamType::String);
-  if (!compatible)
-    throw std::logic_error("parameter '" + std::string(name) + "' of '" + node_.spec.type_name() + "' is " +
-                           to_string(ps->type) + ", read as " + to_string(expected));
-  auto it = node_.config.params.find(std::string(name));
-  if (it == node_.config.params.end())
-    throw std::logic_error("parameter '" + std::string(name) + "' has no value");  // the loader fills every one
-  return it->second;
+Output& Context::output(std::string_view name, const TypeInfo* type, std::string_view like) {
+  for (std::size_t i = 0; i < node_.output_states.size(); ++i) {
+    const PortSpec& ps = *node_.output_states[i]->spec;
+    if (ps.name != name) continue;
+    if (ps.type != type || ps.same_as != like)
+      plugin_bug("uses output '" + ps.name + "' with another type than its spec declares");
+    return node_.outputs[i];
+  }
+  plugin_bug("uses output '" + std::string(name) + "', which its spec does not declare");
 }
 
-std::filesystem::path Context::path(std::string_view name) const {
-  return std::get<std::string>(value(name, ParamType::String));
+ParamValues Context::params() const { return ParamValues(node_.spec, node_.config.params, node_.config.type->origin); }
+
+void Context::emit(const EventOut& e, std::string payload) {
+  if (!node_.spec.find_event(e.name)) plugin_bug("emits event '" + std::string(e.name) + "', which its spec does not declare");
+  node_.emit_event(e.name, std::move(payload));
 }
 
-void Context::emit_event(std::string_view name, std::string payload) {
-  if (!node_.spec.find_event(name) && name != "error" && name != "finished")
-    throw std::logic_error("component type '" + node_.spec.type_name() + "' declares no event '" + std::string(name) + "'");
-  node_.emit_event(name, std::move(payload));
-}
+void Context::emit_event(std::string_view name, std::string payload) { node_.emit_event(name, std::move(payload)); }
 
 void Context::finish() { node_.finish_requested = true; }
 std::int64_t Context::now_ns() const { return node_.graph.now_ns(); }
 spdlog::logger& Context::log() const { return *node_.logger; }
 const std::filesystem::path& Context::output_dir() const { return node_.graph.options.output_dir; }
 const std::filesystem::path& Context::task_dir() const { return node_.graph.task_dir; }
+ThreadPool& Context::thread_pool() const { return node_.graph.thread_pool(); }
 
 void Context::set_trigger(Trigger t) {
   if (!node_.constructing) throw std::logic_error("set_trigger is only allowed in a component's constructor");

@@ -557,6 +557,7 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
   }
   executor_ = kind == ExecutorKind::Deterministic ? make_deterministic_executor(*this)
                                                   : make_threaded_executor(*this, threads);
+  worker_threads = threads > 0 ? threads : static_cast<int>(std::max(2u, std::thread::hardware_concurrency()));
   timeout_s = options.timeout_s;
 }
 
@@ -567,6 +568,8 @@ void Graph::construct() {
       n->construct();
     } catch (const ConfigError&) {
       throw;
+    } catch (const PluginBug& e) {  // the component's code is wrong, not the task file
+      throw ConfigError({Diagnostic{Location{n->config.type->origin, 0, 0}, e.what()}});
     } catch (const std::exception& e) {
       error = e.what();
     } catch (...) {
@@ -835,6 +838,12 @@ std::vector<Packet>& Graph::tap(const std::string& port, std::size_t keep) {
       return taps.back();
     }
   throw std::invalid_argument("component '" + n.config.name + "' has no output '" + port.substr(dot + 1) + "'");
+}
+
+ThreadPool& Graph::thread_pool() {
+  std::lock_guard lock(pool_mutex_);
+  if (!pool_) pool_ = std::make_unique<ThreadPool>(worker_threads);
+  return *pool_;
 }
 
 RunResult Graph::run() {

@@ -19,6 +19,7 @@
 #include "fba/component.hpp"
 #include "fba/task.hpp"
 #include "fba/task_config.hpp"
+#include "fba/thread_pool.hpp"
 
 namespace fba::detail {
 
@@ -228,6 +229,8 @@ class Graph {
   // The node's periodic ticks are over (finished, or its next tick would never come).
   void end_ticks(Node* n);
   std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
+  // Created on first use, with as many threads as the executor has workers.
+  ThreadPool& thread_pool();
   RunResult run();
   void emergency_safe_states() noexcept;
   std::string safe_states_so_far() const;
@@ -253,8 +256,11 @@ class Graph {
   std::atomic<bool> abandoned{false};
   std::chrono::steady_clock::time_point started;
   double timeout_s = 0;
+  int worker_threads = 2;
 
  private:
+  std::mutex pool_mutex_;
+  std::unique_ptr<ThreadPool> pool_;
   Node& node(const std::string& name);
   // After the executor stopped: interrupts, joins within the grace, and safe states; returns
   // the calls that did not return.

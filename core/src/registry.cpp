@@ -73,7 +73,7 @@ void load_code(PluginSlot& slot, bool describe = false) {
   for (const auto& e : *entries) {
     std::shared_ptr<const TypeEntry> entry;
     try {
-      entry = Registry::make_entry(e.spec(), e.make, f, lib);
+      entry = Registry::make_entry(e.spec(), e.make, f, lib, e.implements_interrupt);
     } catch (const std::exception& ex) {
       throw std::runtime_error(std::string("declares an invalid component: ") + ex.what());
     }
@@ -153,8 +153,13 @@ Registry::Registry(Registry&&) noexcept = default;
 Registry& Registry::operator=(Registry&&) noexcept = default;
 
 std::shared_ptr<const TypeEntry> Registry::make_entry(Spec spec, Factory make, std::string origin,
-                                                      std::shared_ptr<const Library> library) {
+                                                      std::shared_ptr<const Library> library, bool implements_interrupt) {
   spec.validate();
+  // A blocking component waits in process() on a device: without interrupt() nothing could
+  // unblock it, and shutdown would hang.
+  if (spec.is_blocking() && !implements_interrupt)
+    throw std::logic_error("type '" + spec.type_name() +
+                           "' is declared blocking() but does not implement interrupt(), so a stop could not unblock it");
   return std::make_shared<const TypeEntry>(TypeEntry{std::move(spec), make, nullptr, std::move(library), std::move(origin)});
 }
 
@@ -170,8 +175,9 @@ bool Registry::has_type(std::string_view name, std::string* origin) const {
   return false;
 }
 
-void Registry::add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library) {
-  auto entry = make_entry(std::move(spec), make, std::move(origin), std::move(library));
+void Registry::add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library,
+                   bool implements_interrupt) {
+  auto entry = make_entry(std::move(spec), make, std::move(origin), std::move(library), implements_interrupt);
   const std::string& name = entry->spec.type_name();
   if (std::string first; has_type(name, &first))
     throw std::logic_error("component type '" + name + "' is registered twice: by " + first + " and by " + entry->origin);
@@ -186,7 +192,7 @@ void Registry::add_composite(Spec spec, std::shared_ptr<const CompositeDef> def,
 }
 
 void Registry::add_builtin(const std::vector<detail::ComponentEntry>& entries, const std::string& origin) {
-  for (const auto& e : entries) add(e.spec(), e.make, origin);
+  for (const auto& e : entries) add(e.spec(), e.make, origin, nullptr, e.implements_interrupt);
 }
 
 std::shared_ptr<PluginSlot> Registry::add_plugin(const fs::path& file) {

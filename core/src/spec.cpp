@@ -5,6 +5,8 @@
 #include <set>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 namespace fba {
 
 const char* to_string(Kind k) {
@@ -32,8 +34,8 @@ Spec::Spec(Kind kind, std::string type_name, std::string doc)
   trigger_.policy = kind == Kind::Sensor ? TriggerPolicy::Free : TriggerPolicy::Any;
 }
 
-Spec& Spec::input(std::string name, const TypeInfo* type, std::string doc) {
-  inputs_.push_back(PortSpec{std::move(name), type, {}, true, std::move(doc)});
+Spec& Spec::input(std::string name, const TypeInfo* type, std::string doc, bool required) {
+  inputs_.push_back(PortSpec{std::move(name), type, {}, required, std::move(doc)});
   return *this;
 }
 
@@ -42,9 +44,8 @@ Spec& Spec::output(std::string name, const TypeInfo* type, std::string doc) {
   return *this;
 }
 
-Spec& Spec::output_like(std::string name, std::string input_name, std::string doc) {
-  outputs_.push_back(PortSpec{std::move(name), any_type(), std::move(input_name), true, std::move(doc)});
-  return *this;
+void Spec::add_one(const OutLike& h) {
+  outputs_.push_back(PortSpec{std::string(h.name), any_type(), std::string(h.like), true, std::string(h.doc)});
 }
 
 Spec& Spec::param(std::string name, ParamType type, std::optional<Value> default_value, std::string doc) {
@@ -57,26 +58,10 @@ Spec& Spec::param(std::string name, ParamType type, std::optional<Value> default
   return *this;
 }
 
-Spec& Spec::path_param(std::string name, std::optional<std::string> default_value, std::string doc) {
-  std::optional<Value> v;
-  if (default_value) v = Value(*default_value);
-  return param(std::move(name), ParamType::Path, std::move(v), std::move(doc));
-}
-
-ParamSpec& Spec::last_param(const char* what) {
-  if (params_.empty()) throw std::logic_error(type_name_ + ": " + what + " given before any parameter");
-  return params_.back();
-}
-
 Spec& Spec::range(std::optional<double> min, std::optional<double> max) {
-  auto& p = last_param("range()");
-  p.min = min;
-  p.max = max;
-  return *this;
-}
-
-Spec& Spec::choices(std::vector<std::string> allowed) {
-  last_param("choices()").choices = std::move(allowed);
+  if (params_.empty()) throw std::logic_error(type_name_ + ": range() given before any parameter");
+  params_.back().min = min;
+  params_.back().max = max;
   return *this;
 }
 
@@ -113,6 +98,52 @@ const EventSpec* Spec::find_event(std::string_view name) const {
   return nullptr;
 }
 
+const Value& ParamValues::value(std::string_view name, ParamType type) const {
+  const ParamSpec* ps = spec_.find_param(name);
+  const std::string where = "plugin bug in " + std::string(origin_.empty() ? "?" : origin_) + " (type '" + spec_.type_name() + "'): ";
+  if (!ps) throw PluginBug(where + "reads parameter '" + std::string(name) + "', which its spec does not declare");
+  if (ps->type != type)
+    throw PluginBug(where + "reads parameter '" + std::string(name) + "' as " + to_string(type) + "; its spec declares " +
+                    to_string(ps->type));
+  auto it = values_.find(ps->name);
+  if (it == values_.end()) throw std::logic_error("parameter '" + ps->name + "' has no value");  // the loader fills every one
+  return it->second;
+}
+
+namespace {
+double number(const std::map<std::string, Value>& values, const std::string& name) {
+  const Value& v = values.at(name);
+  if (const auto* i = std::get_if<std::int64_t>(&v)) return static_cast<double>(*i);
+  return std::get<double>(v);
+}
+}  // namespace
+
+std::vector<Spec::Problem> Spec::check_params(const std::map<std::string, Value>& values, std::string_view origin) const {
+  std::vector<Problem> problems;
+  for (const auto& p : params_) {
+    auto it = values.find(p.name);
+    if (p.sizes.empty() || it == values.end()) continue;
+    const auto* list = std::get_if<std::vector<double>>(&it->second);
+    if (!list || std::find(p.sizes.begin(), p.sizes.end(), list->size()) != p.sizes.end()) continue;
+    std::vector<std::string> allowed;
+    for (auto n : p.sizes) allowed.push_back(std::to_string(n));
+    problems.push_back({p.name, fmt::format("parameter '{}' must have {} numbers; found {}", p.name, fmt::join(allowed, " or "),
+                                            list->size())});
+  }
+  if (!problems.empty()) return problems;  // the checks may rely on the lengths
+  const ParamValues view(*this, values, origin);
+  for (const auto& c : checks_) {
+    if (c.check) {
+      if (std::string message = c.check(view); !message.empty()) problems.push_back({c.param, std::move(message)});
+      continue;
+    }
+    const double x = number(values, c.param), y = number(values, c.other);
+    const bool ok = std::string_view(c.op) == "<" ? x < y : x <= y;
+    if (!ok) problems.push_back({c.param, fmt::format("parameter '{}' ({}) must be {} parameter '{}' ({})", c.param, x, c.op, c.other, y)});
+  }
+  return problems;
+}
+
 bool is_valid_name(std::string_view name) {
   return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
 }
@@ -130,7 +161,7 @@ void Spec::validate() const {
   for (const auto& p : outputs_) {
     if (!p.same_as.empty() && !find_input(p.same_as))
       fail("output '" + p.name + "' follows the type of input '" + p.same_as + "', which is not declared");
-    if (p.same_as.empty() && p.type == any_type()) fail("output '" + p.name + "' needs a type (or output_like)");
+    if (p.same_as.empty() && p.type == any_type()) fail("output '" + p.name + "' needs a type (or is an OutLike)");
   }
   if (kind_ == Kind::Sensor)
     for (const auto& p : inputs_)
@@ -147,6 +178,9 @@ void Spec::validate() const {
       auto in_range = [&](double x) { return (!p.min || x >= *p.min) && (!p.max || x <= *p.max); };
       if (auto* i = std::get_if<std::int64_t>(&v); i && !in_range(static_cast<double>(*i))) fail("default of '" + p.name + "' is out of its range");
       if (auto* d = std::get_if<double>(&v); d && !in_range(*d)) fail("default of '" + p.name + "' is out of its range");
+      if (auto* l = std::get_if<std::vector<double>>(&v); l && !p.sizes.empty() &&
+                                                          std::find(p.sizes.begin(), p.sizes.end(), l->size()) == p.sizes.end())
+        fail("default of '" + p.name + "' has a length its size() does not allow");
       if (auto* s = std::get_if<std::string>(&v); s && !p.choices.empty()) {
         bool ok = false;
         for (auto& c : p.choices) ok |= c == *s;
@@ -164,6 +198,9 @@ void Spec::validate() const {
     for (auto& s : stage_names_) { fa |= s == a; fb |= s == b; }
     if (!fa || !fb) fail("transition " + a + " -> " + b + " names an undeclared stage");
   }
+  for (const auto& c : checks_)
+    for (const auto* n : {&c.param, &c.other})
+      if (!n->empty() && !find_param(*n)) fail("a check is about parameter '" + *n + "', which is not declared");
   if (trigger_.policy == TriggerPolicy::Periodic && !(trigger_.period_s > 0)) fail("a periodic trigger needs a period > 0");
 }
 

@@ -876,6 +876,22 @@ class Loader {
     return out;
   }
 
+  // The spec's checks of the resolved values (list lengths, cross-parameter rules): reported at
+  // the parameter they are about when the file sets it, else at the component.
+  void check_params(const ComponentConfig& cc, const YAML::Node& params, const Source& src) {
+    if (cc.params.size() != cc.type->spec.params().size()) return;  // a value is missing: reported already
+    std::vector<Spec::Problem> problems;
+    try {
+      problems = cc.type->spec.check_params(cc.params, cc.type->origin);
+    } catch (const PluginBug& e) {
+      error(Location{cc.type->origin, 0, 0}, e.what());
+    }
+    for (const auto& p : problems) {
+      const YAML::Node given = !p.param.empty() && params && params.IsMap() ? params[p.param] : YAML::Node();
+      error(given ? at(src, given) : cc.where, "component '" + cc.name + "' (" + cc.type->spec.type_name() + "): " + p.message);
+    }
+  }
+
   // --- expansion ---------------------------------------------------------------------------
 
   Endpoint resolve(const Endpoint& e, bool input) const {
@@ -1016,6 +1032,7 @@ class Loader {
         cc.where = where;
         cc.trigger = te->spec.default_trigger();
         cc.params = read_params(full, te->spec, c["params"], src, bindings, where);
+        check_params(cc, c["params"], src);
         if (const YAML::Node t = c["trigger"]) read_trigger(t, src, bindings, cc);
         if (const YAML::Node e = c["on_error"]) read_error_policy(e, src, bindings, cc);
         if (const YAML::Node t = c["thread"]) {

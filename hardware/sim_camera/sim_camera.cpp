@@ -17,56 +17,63 @@ constexpr double kDegree = M_PI / 180.0;
 
 class SimCamera final : public fba::Component {
  public:
+  static constexpr fba::OptionalIn<fba::Pose> kPose{"pose", "render from this camera pose (world_from_camera), one frame per pose"};
+  static constexpr fba::Out<fba::Frame> kFrame{"frame", "the rendered image with its intrinsics and pose"};
+  static constexpr fba::Param<std::filesystem::path> kMesh{
+      "mesh", fba::required, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up"};
+  static constexpr auto kWidth = fba::Param<int>("width", 640, "image width, pixels").range(16, 8192);
+  static constexpr auto kHeight = fba::Param<int>("height", 480, "image height, pixels").range(16, 8192);
+  static constexpr auto kFx = fba::Param<double>("fx", 600.0, "focal length, pixels").at_least(1);
+  static constexpr auto kFy = fba::Param<double>("fy", 0.0, "vertical focal length, pixels; 0: same as fx").at_least(0);
+  static constexpr auto kViewpoints =
+      fba::Param<std::string>("viewpoints", "hemisphere", "without a pose input: where the views are").choices({"hemisphere", "ring"});
+  static constexpr auto kViews = fba::Param<int>("views", 8, "number of viewpoints").range(1, 10000);
+  static constexpr auto kMinElevation = fba::Param<double>("min_elevation", 0.0, "degrees above the horizon (hemisphere)").range(-90, 90);
+  static constexpr auto kMaxElevation =
+      fba::Param<double>("max_elevation", 90.0, "degrees above the horizon (hemisphere); the ring's elevation").range(-90, 90);
+  static constexpr auto kDistance =
+      fba::Param<double>("distance", 0.0, "metres from the object's centre; 0: far enough to frame it").at_least(0);
+  static constexpr auto kObjectGrey = fba::Param<int>("object_grey", 210, "object brightness before shading").range(0, 255);
+  static constexpr auto kBackgroundGrey = fba::Param<int>("background_grey", 25, "background brightness").range(0, 255);
+  static constexpr auto kNoise = fba::Param<double>("noise", 0.0, "sensor noise, standard deviation in grey levels").range(0, 100);
+  static constexpr fba::Param<std::int64_t> kSeed{"seed", 1, "noise seed"};
+
   static fba::Spec spec() {
     return fba::Spec::sensor("sim.camera", "Renders an object mesh as a calibrated camera would see it (the twin of vision.camera).")
-        .optional_input<fba::Pose>("pose", "render from this camera pose (world_from_camera), one frame per pose")
-        .output<fba::Frame>("frame", "the rendered image with its intrinsics and pose")
-        .path_param("mesh", std::nullopt, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up")
-        .param("width", 640, "image width, pixels").range(16, 8192)
-        .param("height", 480, "image height, pixels").range(16, 8192)
-        .param("fx", 600.0, "focal length, pixels").range(1, std::nullopt)
-        .param("fy", 0.0, "vertical focal length, pixels; 0: same as fx").range(0, std::nullopt)
-        .param("viewpoints", "hemisphere", "without a pose input: where the views are").choices({"hemisphere", "ring"})
-        .param("views", 8, "number of viewpoints").range(1, 10000)
-        .param("min_elevation", 0.0, "degrees above the horizon (hemisphere)").range(-90, 90)
-        .param("max_elevation", 90.0, "degrees above the horizon (hemisphere); the ring's elevation").range(-90, 90)
-        .param("distance", 0.0, "metres from the object's centre; 0: far enough to frame it").range(0, std::nullopt)
-        .param("object_grey", 210, "object brightness before shading").range(0, 255)
-        .param("background_grey", 25, "background brightness").range(0, 255)
-        .param("noise", 0.0, "sensor noise, standard deviation in grey levels").range(0, 100)
-        .param("seed", 1, "noise seed");
+        .add(kPose, kFrame, kMesh, kWidth, kHeight, kFx, kFy, kViewpoints, kViews, kMinElevation, kMaxElevation, kDistance,
+             kObjectGrey, kBackgroundGrey, kNoise, kSeed)
+        .add(kMinElevation <= kMaxElevation);
   }
 
-  explicit SimCamera(fba::Context& ctx)
-      : ctx_(ctx), pose_(ctx.input("pose")), out_(ctx.output("frame")), mesh_name_(ctx.path("mesh").stem().string()) {
-    auto loaded = fba::geometry::load_mesh_with_warnings(ctx.path("mesh"));
+  explicit SimCamera(fba::Context& ctx) : ctx_(ctx), mesh_name_(ctx(kMesh).stem().string()) {
+    auto loaded = fba::geometry::load_mesh_with_warnings(ctx(kMesh));
     for (const auto& w : loaded.warnings) ctx.log().info("{}", w);
     mesh_ = std::move(loaded.mesh);
-    const int w = ctx.param<int>("width"), h = ctx.param<int>("height");
-    const double fx = ctx.param<double>("fx"), fy = ctx.param<double>("fy") > 0 ? ctx.param<double>("fy") : fx;
+    const int w = ctx(kWidth), h = ctx(kHeight);
+    const double fx = ctx(kFx), fy = ctx(kFy) > 0 ? ctx(kFy) : fx;
     camera_ = fba::geometry::make_camera(w, h, fx, fy, (w - 1) / 2.0, (h - 1) / 2.0);
     const auto bounds = fba::geometry::mesh_bounds(mesh_);
     const Eigen::Vector3d centre = bounds.center();
-    double distance = ctx.param<double>("distance");
+    double distance = ctx(kDistance);
     if (distance == 0) distance = fba::geometry::framing_distance(bounds, w, h, std::min(fx, fy));
-    const int n = ctx.param<int>("views");
-    const double lo = ctx.param<double>("min_elevation") * kDegree, hi = ctx.param<double>("max_elevation") * kDegree;
-    views_ = ctx.param<std::string>("viewpoints") == "ring" ? fba::geometry::ring_views(n, hi, distance, centre)
-                                                            : fba::geometry::hemisphere_views(n, lo, hi, distance, centre);
-    look_.object_colour = cv::Vec3b::all(static_cast<unsigned char>(ctx.param<int>("object_grey")));
-    look_.background_top = look_.background_bottom = cv::Vec3b::all(static_cast<unsigned char>(ctx.param<int>("background_grey")));
+    const int n = ctx(kViews);
+    const double lo = ctx(kMinElevation) * kDegree, hi = ctx(kMaxElevation) * kDegree;
+    views_ = ctx(kViewpoints) == "ring" ? fba::geometry::ring_views(n, hi, distance, centre)
+                                        : fba::geometry::hemisphere_views(n, lo, hi, distance, centre);
+    look_.object_colour = cv::Vec3b::all(static_cast<unsigned char>(ctx(kObjectGrey)));
+    look_.background_top = look_.background_bottom = cv::Vec3b::all(static_cast<unsigned char>(ctx(kBackgroundGrey)));
     look_.ambient = 0.35;
     look_.diffuse = 0.65;
-    look_.noise_sigma = ctx.param<double>("noise");
-    look_.seed = static_cast<std::uint64_t>(ctx.param<std::int64_t>("seed"));
-    if (pose_.connected()) ctx.set_trigger({fba::TriggerPolicy::Any, 0});
+    look_.noise_sigma = ctx(kNoise);
+    look_.seed = static_cast<std::uint64_t>(ctx(kSeed));
+    if (ctx(kPose).connected()) ctx.set_trigger({fba::TriggerPolicy::Any, 0});
     ctx.log().info("{}: {} triangles, {} viewpoints at {:.3f} m", mesh_name_, mesh_.triangles.size(), views_.size(), distance);
   }
 
   void process() override {
     fba::CameraModel camera = camera_;
-    if (pose_.connected()) {
-      camera.camera_from_world = pose_.get<fba::Pose>().world_from_frame.inverse();
+    if (const auto pose = ctx_(kPose); pose.connected()) {
+      camera.camera_from_world = pose.get().world_from_frame.inverse();
     } else {
       camera.camera_from_world = views_[next_++];
       if (next_ == views_.size()) ctx_.finish();
@@ -78,14 +85,13 @@ class SimCamera final : public fba::Component {
     frame->has_pose = true;
     frame->stamp = static_cast<double>(ctx_.now_ns()) * 1e-9;
     frame->source = "sim_" + mesh_name_;
-    frame->index = static_cast<int>(out_.count());
-    out_.emit(std::shared_ptr<const fba::Frame>(std::move(frame)));
+    auto out = ctx_(kFrame);
+    frame->index = static_cast<int>(out.count());
+    out.emit(std::shared_ptr<const fba::Frame>(std::move(frame)));
   }
 
  private:
   fba::Context& ctx_;
-  fba::Input& pose_;
-  fba::Output& out_;
   const std::string mesh_name_;
   fba::TriangleMesh mesh_;
   fba::CameraModel camera_;

@@ -5,17 +5,17 @@ namespace {
 
 class Faulty final : public fba::Component {
  public:
+  static constexpr fba::AnyIn kIn{"in", "samples of any type"};
+  static constexpr fba::OutLike kOut{"out", kIn, "the samples before the failure"};
+  static constexpr auto kFailAfter = fba::Param<std::int64_t>("fail_after", 5, "samples forwarded before it throws").at_least(0);
+  static constexpr fba::Param<std::string> kMessage{"message", "injected fault", "the exception's text"};
+
   static fba::Spec spec() {
     return fba::Spec::filter("examples.faulty", "Forwards samples; throws on the sample after `fail_after` of them.")
-        .any_input("in", "samples of any type")
-        .output_like("out", "in", "the samples before the failure")
-        .param("fail_after", 5, "samples forwarded before it throws").range(0, std::nullopt)
-        .param("message", "injected fault", "the exception's text");
+        .add(kIn, kOut, kFailAfter, kMessage);
   }
 
-  explicit Faulty(fba::Context& ctx)
-      : in_(ctx.input("in")), out_(ctx.output("out")), fail_after_(ctx.param<std::int64_t>("fail_after")),
-        message_(ctx.param<std::string>("message")) {}
+  explicit Faulty(fba::Context& ctx) : in_(ctx(kIn)), out_(ctx(kOut)), fail_after_(ctx(kFailAfter)), message_(ctx(kMessage)) {}
 
   void process() override {
     if (forwarded_ == fail_after_) throw std::runtime_error(message_);

@@ -8,7 +8,7 @@
 using fba::testing::ComponentHarness;
 
 TEST(Harness, CounterEmitsItsRangeThenFinishes) {
-  ComponentHarness h(fba::test::registry(), "examples.counter", {{"count", "3"}, {"start", "7"}});
+  ComponentHarness h(fba::test::registry(), "examples.counter", {{"count", 3}, {"start", 7}});
   EXPECT_EQ(h.run(), 3);
   EXPECT_EQ(h.values<std::int64_t>("out"), (std::vector<std::int64_t>{7, 8, 9}));
   EXPECT_TRUE(h.finished());
@@ -36,7 +36,7 @@ TEST(Harness, EndOfStreamFinishesAFilter) {
 }
 
 TEST(Harness, SinkReportsAGapAndFails) {
-  ComponentHarness h(fba::test::registry(), "examples.sink", {{"expected", "5"}});
+  ComponentHarness h(fba::test::registry(), "examples.sink", {{"expected", 5}});
   h.push_packet("in", fba::Packet::make<std::int64_t>(std::make_shared<const std::int64_t>(0), {0, 0, nullptr}));
   h.push_packet("in", fba::Packet::make<std::int64_t>(std::make_shared<const std::int64_t>(2), {2, 0, nullptr}));
   h.run();
@@ -48,7 +48,7 @@ TEST(Harness, SinkReportsAGapAndFails) {
 }
 
 TEST(Harness, SinkEmitsDoneAtTheExpectedCount) {
-  ComponentHarness h(fba::test::registry(), "examples.sink", {{"expected", "2"}});
+  ComponentHarness h(fba::test::registry(), "examples.sink", {{"expected", 2}});
   h.push<std::int64_t>("in", 10);
   h.push<std::int64_t>("in", 11);
   h.run();
@@ -66,7 +66,90 @@ TEST(Harness, WrongInputTypeIsRefused) {
 }
 
 TEST(Harness, ParametersAreCheckedAsInATaskFile) {
-  EXPECT_THROW(ComponentHarness(fba::test::registry(), "examples.counter", {{"count", "-1"}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(fba::test::registry(), "examples.counter", {{"count", -1}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(fba::test::registry(), "examples.counter", {{"count", 2.5}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(fba::test::registry(), "examples.counter", {{"count", "5"}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(fba::test::registry(), "examples.counter", {{"cuont", 5}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(fba::test::registry(), "test.reader", {{"file", "harness_test.cpp"}, {"mode", "words"}}),
+               fba::ConfigError);
+}
+
+TEST(Harness, AnIntIsTakenForADoubleParameter) {
+  ComponentHarness h(fba::test::registry(), "examples.sink", {{"delay", 0}});
+  h.push<std::int64_t>("in", 1);
+  EXPECT_EQ(h.run(), 1);
+}
+
+TEST(Harness, TextParametersNeedNoQuoting) {
+  ComponentHarness h(fba::test::registry(), "examples.faulty", {{"fail_after", 0}, {"message", "a: b, [c] # d"}});
+  h.push<std::int64_t>("in", 1);
+  h.run();
+  EXPECT_NE(h.failure().find("a: b, [c] # d"), std::string::npos) << h.failure();
+}
+
+TEST(Harness, PushesAreStampedWithTheHarnessClock) {
+  ComponentHarness h(fba::test::registry(), "examples.passthrough");
+  h.push<std::int64_t>("in", 1);
+  h.advance(250);
+  h.push<std::int64_t>("in", 2);
+  h.set_time(1000);
+  h.push<std::int64_t>("in", 3, 700);
+  h.run();
+  const auto& out = h.packets("out");
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(out[0].header().stamp_ns, 0);
+  EXPECT_EQ(out[1].header().stamp_ns, 250);
+  EXPECT_EQ(out[2].header().stamp_ns, 700);
+  EXPECT_THROW(h.set_time(999), std::invalid_argument);
+}
+
+TEST(Harness, ASensorStampsWithTheClockAndAPeriodicTickAdvancesIt) {
+  ComponentHarness h(fba::test::registry(), "examples.counter", {{"count", 3}, {"rate", 10.0}});
+  h.set_time(5'000);
+  EXPECT_EQ(h.run(), 0);  // periodic: nothing before a tick
+  h.tick();
+  h.tick();
+  EXPECT_EQ(h.run(), 1);  // two ticks pending are one
+  h.tick();
+  EXPECT_EQ(h.run(), 1);
+  const auto& out = h.packets("out");
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[0].header().stamp_ns, 5'000 + 200'000'000);
+  EXPECT_EQ(out[1].header().stamp_ns, 5'000 + 300'000'000);
+}
+
+TEST(Harness, TypedHandlesPushAndRead) {
+  constexpr fba::In<std::int64_t> kIn{"in", ""};
+  constexpr fba::Out<std::int64_t> kOut{"out", ""};
+  ComponentHarness h(fba::test::registry(), "test.countdown");
+  h.push(kIn, std::int64_t{5});
+  h.push(kIn, std::int64_t{0});
+  h.run();
+  EXPECT_EQ(h.values(kOut), (std::vector<std::int64_t>{4}));
+}
+
+TEST(PluginBug, AnUndeclaredParameterIsReportedAtThePluginNotTheTaskFile) {
+  try {
+    ComponentHarness h(fba::test::registry(), "test.forgetful");
+    FAIL() << "constructed";
+  } catch (const fba::ConfigError& e) {
+    ASSERT_EQ(e.diagnostics().size(), 1u);
+    const auto& d = e.diagnostics()[0];
+    EXPECT_EQ(d.where.file, "the test program");
+    EXPECT_EQ(d.where.line, 0);
+    EXPECT_EQ(d.message,
+              "plugin bug in the test program (type 'test.forgetful'): reads parameter 'undeclared', which its spec does not declare");
+  }
+}
+
+TEST(PluginBug, AParameterReadWithAnotherTypeIsAPluginBug) {
+  try {
+    ComponentHarness h(fba::test::registry(), "test.mistyped");
+    FAIL() << "constructed";
+  } catch (const fba::ConfigError& e) {
+    EXPECT_EQ(e.diagnostics().at(0).message,
+              "plugin bug in the test program (type 'test.mistyped'): reads parameter 'factor' as int; its spec declares double");
+  }
 }
 
 TEST(Harness, AnIllegalStageTransitionIsAFailure) {

@@ -11,157 +11,142 @@ namespace {
 // Two inputs; with trigger 'all' it pairs samples of equal stamp and emits their sum.
 class Pair final : public fba::Component {
  public:
+  static constexpr fba::In<std::int64_t> kA{"a", "left"};
+  static constexpr fba::In<std::int64_t> kB{"b", "right"};
+  static constexpr fba::Out<std::int64_t> kSum{"sum", "a + b, or whichever came"};
   static fba::Spec spec() {
-    return fba::Spec::filter("test.pair", "Sums one sample from each input.")
-        .input<std::int64_t>("a", "left")
-        .input<std::int64_t>("b", "right")
-        .output<std::int64_t>("sum", "a + b, or whichever came")
-        .trigger({fba::TriggerPolicy::All, 0});
+    return fba::Spec::filter("test.pair", "Sums one sample from each input.").add(kA, kB, kSum).trigger({fba::TriggerPolicy::All, 0});
   }
-  explicit Pair(fba::Context& ctx) : a_(ctx.input("a")), b_(ctx.input("b")), out_(ctx.output("sum")) {}
+  explicit Pair(fba::Context& ctx) : ctx_(ctx) {}
   void process() override {
     std::int64_t s = 0;
-    if (a_.has()) s += a_.get<std::int64_t>();
-    if (b_.has()) s += b_.get<std::int64_t>();
-    out_.emit<std::int64_t>(s);
+    if (ctx_(kA).has()) s += ctx_(kA).get();
+    if (ctx_(kB).has()) s += ctx_(kB).get();
+    ctx_(kSum).emit(s);
   }
 
  private:
-  fba::Input& a_;
-  fba::Input& b_;
-  fba::Output& out_;
+  fba::Context& ctx_;
 };
 
 // A sensor that never produces unless asked: for stall detection.
 class Silent final : public fba::Component {
  public:
+  static constexpr fba::OptionalIn<std::int64_t> kRequest{"request", "a request"};
+  static constexpr fba::Out<std::int64_t> kOut{"out", "one sample per request"};
   static fba::Spec spec() {
     return fba::Spec::sensor("test.silent", "Emits one sample per request; never finishes by itself.")
-        .optional_input<std::int64_t>("request", "a request")
-        .output<std::int64_t>("out", "one sample per request")
+        .add(kRequest, kOut)
         .trigger({fba::TriggerPolicy::Any, 0});
   }
-  explicit Silent(fba::Context& ctx) : in_(ctx.input("request")), out_(ctx.output("out")) {}
-  void process() override { out_.emit<std::int64_t>(in_.get<std::int64_t>()); }
+  explicit Silent(fba::Context& ctx) : ctx_(ctx) {}
+  void process() override { ctx_(kOut).emit(ctx_(kRequest).get()); }
 
  private:
-  fba::Input& in_;
-  fba::Output& out_;
+  fba::Context& ctx_;
 };
 
 // Forwards whichever input has a sample: the join point of a feedback loop.
 class Merge final : public fba::Component {
  public:
-  static fba::Spec spec() {
-    return fba::Spec::filter("test.merge", "Forwards samples from either input.")
-        .input<std::int64_t>("a", "first")
-        .optional_input<std::int64_t>("b", "second (the feedback edge in loop tests)")
-        .output<std::int64_t>("out", "every sample from a and b");
-  }
-  explicit Merge(fba::Context& ctx) : a_(ctx.input("a")), b_(ctx.input("b")), out_(ctx.output("out")) {}
+  static constexpr fba::In<std::int64_t> kA{"a", "first"};
+  static constexpr fba::OptionalIn<std::int64_t> kB{"b", "second (the feedback edge in loop tests)"};
+  static constexpr fba::Out<std::int64_t> kOut{"out", "every sample from a and b"};
+  static fba::Spec spec() { return fba::Spec::filter("test.merge", "Forwards samples from either input.").add(kA, kB, kOut); }
+  explicit Merge(fba::Context& ctx) : ctx_(ctx) {}
   void process() override {
-    if (a_.has()) out_.emit<std::int64_t>(a_.get<std::int64_t>());
-    if (b_.has()) out_.emit<std::int64_t>(b_.get<std::int64_t>());
+    if (ctx_(kA).has()) ctx_(kOut).emit(ctx_(kA).get());
+    if (ctx_(kB).has()) ctx_(kOut).emit(ctx_(kB).get());
   }
 
  private:
-  fba::Input& a_;
-  fba::Input& b_;
-  fba::Output& out_;
+  fba::Context& ctx_;
 };
 
 // Emits value-1 while positive: with Merge, a loop that ends by itself.
 class Countdown final : public fba::Component {
  public:
-  static fba::Spec spec() {
-    return fba::Spec::filter("test.countdown", "Emits value - 1 while the value is positive.")
-        .input<std::int64_t>("in", "a value")
-        .output<std::int64_t>("out", "the value minus one");
-  }
-  explicit Countdown(fba::Context& ctx) : in_(ctx.input("in")), out_(ctx.output("out")) {}
+  static constexpr fba::In<std::int64_t> kIn{"in", "a value"};
+  static constexpr fba::Out<std::int64_t> kOut{"out", "the value minus one"};
+  static fba::Spec spec() { return fba::Spec::filter("test.countdown", "Emits value - 1 while the value is positive.").add(kIn, kOut); }
+  explicit Countdown(fba::Context& ctx) : ctx_(ctx) {}
   void process() override {
-    const auto v = in_.get<std::int64_t>();
-    if (v > 0) out_.emit<std::int64_t>(v - 1);
+    const auto v = ctx_(kIn).get();
+    if (v > 0) ctx_(kOut).emit(v - 1);
   }
 
  private:
-  fba::Input& in_;
-  fba::Output& out_;
+  fba::Context& ctx_;
 };
 
 // Receives events delivered by task rules and emits their names.
 class EventLog final : public fba::Component {
  public:
-  static fba::Spec spec() {
-    return fba::Spec::filter("test.event_log", "Turns delivered events into strings.")
-        .input<fba::Event>("events", "events delivered by rules")
-        .output<std::string>("names", "source.name of each event");
-  }
-  explicit EventLog(fba::Context& ctx) : in_(ctx.input("events")), out_(ctx.output("names")) {}
+  static constexpr fba::In<fba::Event> kEvents{"events", "events delivered by rules"};
+  static constexpr fba::Out<std::string> kNames{"names", "source.name of each event"};
+  static fba::Spec spec() { return fba::Spec::filter("test.event_log", "Turns delivered events into strings.").add(kEvents, kNames); }
+  explicit EventLog(fba::Context& ctx) : ctx_(ctx) {}
   void process() override {
-    const auto& e = in_.get<fba::Event>();
-    out_.emit<std::string>(e.source + "." + e.name);
+    const auto& e = ctx_(kEvents).get();
+    ctx_(kNames).emit(e.source + "." + e.name);
   }
 
  private:
-  fba::Input& in_;
-  fba::Output& out_;
+  fba::Context& ctx_;
 };
 
 // Stages: idle -> working -> done, driven by the value it receives.
 class Staged final : public fba::Component {
  public:
+  static constexpr fba::In<std::int64_t> kIn{"in", "1: start work, 2: finish, 3: an illegal jump back to idle"};
+  static constexpr fba::Out<std::int64_t> kOut{"out", "the sample"};
   static fba::Spec spec() {
     return fba::Spec::filter("test.staged", "Moves through its stages as samples arrive.")
-        .input<std::int64_t>("in", "1: start work, 2: finish, 3: an illegal jump back to idle")
-        .output<std::int64_t>("out", "the sample")
+        .add(kIn, kOut)
         .stages({"idle", "working", "done"}, {{"idle", "working"}, {"working", "done"}});
   }
-  explicit Staged(fba::Context& ctx) : in_(ctx.input("in")), out_(ctx.output("out")), stages_(ctx) {}
+  explicit Staged(fba::Context& ctx) : ctx_(ctx), stages_(ctx) {}
   void process() override {
-    const auto v = in_.get<std::int64_t>();
+    const auto v = ctx_(kIn).get();
     stages_.go(v == 1 ? "working" : v == 2 ? "done" : "idle");
-    out_.emit<std::int64_t>(v);
+    ctx_(kOut).emit(v);
   }
 
  private:
-  fba::Input& in_;
-  fba::Output& out_;
+  fba::Context& ctx_;
   fba::Stages stages_;
 };
 
 // Path and choice parameters, for the loader's tests.
 class Reader final : public fba::Component {
  public:
-  static fba::Spec spec() {
-    return fba::Spec::sensor("test.reader", "Emits the size of a file.")
-        .output<std::int64_t>("size", "bytes")
-        .path_param("file", std::nullopt, "the file to read")
-        .param("mode", "bytes", "what to count").choices({"bytes", "lines"});
-  }
-  explicit Reader(fba::Context& ctx) : ctx_(ctx), out_(ctx.output("size")) {}
+  static constexpr fba::Out<std::int64_t> kSize{"size", "bytes"};
+  static constexpr fba::Param<std::filesystem::path> kFile{"file", fba::required, "the file to read"};
+  static constexpr auto kMode = fba::Param<std::string>("mode", "bytes", "what to count").choices({"bytes", "lines"});
+  static fba::Spec spec() { return fba::Spec::sensor("test.reader", "Emits the size of a file.").add(kSize, kFile, kMode); }
+  explicit Reader(fba::Context& ctx) : ctx_(ctx) {}
   void process() override {
-    out_.emit<std::int64_t>(static_cast<std::int64_t>(std::filesystem::file_size(ctx_.path("file"))));
+    ctx_(kSize).emit(static_cast<std::int64_t>(std::filesystem::file_size(ctx_(kFile))));
     ctx_.finish();
   }
 
  private:
   fba::Context& ctx_;
-  fba::Output& out_;
 };
 
 // Emits one event with a payload of the given size, then finishes: payload limits.
 class Shout final : public fba::Component {
  public:
+  static constexpr fba::Out<std::int64_t> kOut{"out", "nothing"};
+  static constexpr fba::Param<std::int64_t> kBytes = fba::Param<std::int64_t>{"bytes", 0, "the payload's size"}.at_least(0);
+  static constexpr fba::EventOut kSaid{"said", "the payload: `bytes` times 'y'"};
   static fba::Spec spec() {
     return fba::Spec::sensor("test.shout", "Emits one event 'said' with a payload of `bytes` bytes, then finishes.")
-        .output<std::int64_t>("out", "nothing")
-        .param("bytes", 0, "the payload's size").range(0, std::nullopt)
-        .event("said", "the payload: `bytes` times 'y'");
+        .add(kOut, kBytes, kSaid);
   }
-  explicit Shout(fba::Context& ctx) : ctx_(ctx), bytes_(ctx.param<std::int64_t>("bytes")) {}
+  explicit Shout(fba::Context& ctx) : ctx_(ctx), bytes_(ctx(kBytes)) {}
   void process() override {
-    ctx_.emit_event("said", std::string(static_cast<std::size_t>(bytes_), 'y'));
+    ctx_.emit(kSaid, std::string(static_cast<std::size_t>(bytes_), 'y'));
     ctx_.finish();
   }
 
@@ -173,10 +158,9 @@ class Shout final : public fba::Component {
 // An actuator whose process() blocks until interrupt(): shutdown must not hang on it.
 class Blocker final : public fba::Component {
  public:
+  static constexpr fba::AnyIn kIn{"in", "anything"};
   static fba::Spec spec() {
-    return fba::Spec::actuator("test.blocker", "Blocks in process() until interrupted, like a device read.")
-        .any_input("in", "anything")
-        .blocking();
+    return fba::Spec::actuator("test.blocker", "Blocks in process() until interrupted, like a device read.").add(kIn).blocking();
   }
   explicit Blocker(fba::Context&) {}
   void process() override {
@@ -195,6 +179,27 @@ class Blocker final : public fba::Component {
   bool interrupted_ = false;
 };
 
+// Plugin bugs: reads a parameter its spec does not declare (the handle was left out of spec()).
+class Forgetful final : public fba::Component {
+ public:
+  static constexpr fba::Out<std::int64_t> kOut{"out", "nothing"};
+  static constexpr fba::Param<std::int64_t> kUndeclared{"undeclared", 1, "not in spec()"};
+  static fba::Spec spec() { return fba::Spec::sensor("test.forgetful", "Reads a parameter it did not declare.").add(kOut); }
+  explicit Forgetful(fba::Context& ctx) { ctx(kUndeclared); }
+  void process() override {}
+};
+
+// Two handles of one name with different types: declared as double, read as an int.
+class Mistyped final : public fba::Component {
+ public:
+  static constexpr fba::Out<std::int64_t> kOut{"out", "nothing"};
+  static constexpr fba::Param<double> kFactor{"factor", 2.0, "a double"};
+  static constexpr fba::Param<std::int64_t> kFactorAsInt{"factor", 2, "the same name, as an int"};
+  static fba::Spec spec() { return fba::Spec::sensor("test.mistyped", "Reads a double parameter as an int.").add(kOut, kFactor); }
+  explicit Mistyped(fba::Context& ctx) { ctx(kFactorAsInt); }
+  void process() override {}
+};
+
 }  // namespace
 
 FBA_COMPONENT(Pair);
@@ -206,6 +211,8 @@ FBA_COMPONENT(Staged);
 FBA_COMPONENT(Reader);
 FBA_COMPONENT(Blocker);
 FBA_COMPONENT(Shout);
+FBA_COMPONENT(Forgetful);
+FBA_COMPONENT(Mistyped);
 
 namespace fba::test {
 

@@ -34,10 +34,9 @@ std::vector<std::int64_t> g_latencies_ns;
 
 class LatencySink final : public fba::Component {
  public:
-  static fba::Spec spec() {
-    return fba::Spec::actuator("bench.latency_sink", "Records how long each sample took to arrive.").any_input("in", "samples");
-  }
-  explicit LatencySink(fba::Context& ctx) : ctx_(ctx), in_(ctx.input("in")) {}
+  static constexpr fba::AnyIn kIn{"in", "samples"};
+  static fba::Spec spec() { return fba::Spec::actuator("bench.latency_sink", "Records how long each sample took to arrive.").add(kIn); }
+  explicit LatencySink(fba::Context& ctx) : ctx_(ctx), in_(ctx(kIn)) {}
   void process() override {
     const auto latency = ctx_.now_ns() - in_.packet().header().stamp_ns;
     std::lock_guard lock(g_latency_mutex);

@@ -1,20 +1,21 @@
-// What a component author writes against: one class with a static spec(), a constructor
-// taking the Context, and process(). Registration is one line: FBA_COMPONENT(MyFilter).
+// What a component author writes against: one class that declares its ports, parameters and
+// events once, as typed constants, builds spec() from them, and reaches them through the
+// Context with the same constants. Registration is one line: FBA_COMPONENT(MyFilter).
 //
-//   class Passthrough final : public fba::Component {
+//   class Scale final : public fba::Component {
 //    public:
-//     static fba::Spec spec() {
-//       return fba::Spec::filter("examples.passthrough", "Forwards each sample unchanged.")
-//           .any_input("in", "samples to forward")
-//           .output_like("out", "in", "the same samples, headers untouched");
-//     }
-//     explicit Passthrough(fba::Context& ctx) : in_(ctx.input("in")), out_(ctx.output("out")) {}
-//     void process() override { out_.forward(in_.packet()); }
+//     static constexpr fba::In<std::int64_t> kIn{"in", "the integers to scale"};
+//     static constexpr fba::Out<std::int64_t> kOut{"out", "each integer times factor"};
+//     static constexpr auto kFactor = fba::Param<std::int64_t>("factor", 2, "the factor").range(-1000, 1000);
+//     static fba::Spec spec() { return fba::Spec::filter("demo.scale", "Multiplies integers.").add(kIn, kOut, kFactor); }
+//
+//     explicit Scale(fba::Context& ctx) : ctx_(ctx), factor_(ctx(kFactor)) {}
+//     void process() override { ctx_(kOut).emit(ctx_(kIn).get() * factor_); }
 //    private:
-//     fba::Input& in_;
-//     fba::Output& out_;
+//     fba::Context& ctx_;
+//     const std::int64_t factor_;
 //   };
-//   FBA_COMPONENT(Passthrough);
+//   FBA_COMPONENT(Scale);
 #pragma once
 
 #include <cstdint>
@@ -49,10 +50,14 @@ class Component {
   virtual void end_of_stream() {}
   // Actuators: bring the device to a safe state. Called on every way out of a run.
   virtual void safe_state() {}
-  // Unblock a process() that waits on a device, so that shutdown never hangs.
+  // Unblock a process() that waits on a device, so that shutdown never hangs. Called from
+  // another thread while process() may be running; a type declared blocking must implement it.
   virtual void interrupt() {}
 };
 
+class ThreadPool;
+
+// An input port, untyped (AnyIn gives this one); In<T> gives an InputOf<T> over it.
 class Input {
  public:
   const std::string& name() const;
@@ -65,8 +70,6 @@ class Input {
   }
   template <class T>
   const T& get() const { return packet().get<T>(); }
-  template <class T>
-  std::shared_ptr<const T> share() const { return packet().share<T>(); }
   // Hands this invocation's sample over (to Output::forward, without touching its reference
   // count); latest() no longer holds it afterwards.
   Packet take() {
@@ -82,22 +85,44 @@ class Input {
 
  private:
   friend class detail::Node;
+  friend class Output;
   detail::InputState* state_ = nullptr;
   Packet current_;  // this invocation's sample when has_, else the newest one before it
   bool has_ = false;
 };
 
+// An input of type T, from ctx(kIn): the loader has checked the connection's type already.
+template <class T>
+class InputOf {
+ public:
+  explicit InputOf(Input& in) : in_(&in) {}
+  const std::string& name() const { return in_->name(); }
+  bool connected() const { return in_->connected(); }
+  bool has() const { return in_->has(); }
+  const T& get() const { return in_->get<T>(); }
+  // The sample's data, shared (to keep it beyond this invocation without a copy).
+  std::shared_ptr<const T> share() const { return in_->packet().share<T>(); }
+  const Packet& packet() const { return in_->packet(); }
+  Packet take() { return in_->take(); }
+  // The newest value received, even in an earlier invocation; nullptr if none.
+  const T* latest() const {
+    const Packet* p = in_->latest();
+    return p ? &p->get<T>() : nullptr;
+  }
+  bool closed() const { return in_->closed(); }
+
+ private:
+  Input* in_;
+};
+
+// An output port, untyped (OutLike gives this one); Out<T> gives an OutputOf<T> over it.
+//
+// Time stamps: a sample carries the capture time of what it was made from. Unless given, the
+// stamp is the newest one among the inputs taken in this invocation, or the executor's clock
+// when none was (a sensor, a periodic tick, end of stream).
 class Output {
  public:
   const std::string& name() const;
-  template <class T>
-  void emit(std::shared_ptr<const T> value, std::int64_t stamp_ns = -1) {
-    send(Packet::make<T>(std::move(value)), stamp_ns);
-  }
-  template <class T>
-  void emit(T value, std::int64_t stamp_ns = -1) {
-    emit(std::shared_ptr<const T>(std::make_shared<T>(std::move(value))), stamp_ns);
-  }
   // Sends a received sample on unchanged: same data, same header, no copy of the data.
   void forward(const Packet& p);
   // The same, handing the sample over: the cheapest hop (see Input::take).
@@ -111,26 +136,44 @@ class Output {
   detail::OutputState* state_ = nullptr;
 };
 
+template <class T>
+class OutputOf {
+ public:
+  explicit OutputOf(Output& out) : out_(&out) {}
+  const std::string& name() const { return out_->name(); }
+  void emit(std::shared_ptr<const T> value, std::int64_t stamp_ns = -1) {
+    out_->send(Packet::make<T>(std::move(value)), stamp_ns);
+  }
+  void emit(T value, std::int64_t stamp_ns = -1) { emit(std::shared_ptr<const T>(std::make_shared<T>(std::move(value))), stamp_ns); }
+  std::uint64_t count() const { return out_->count(); }
+
+ private:
+  Output* out_;
+};
+
 class Context {
  public:
   explicit Context(detail::Node& node) : node_(node) {}
 
   const std::string& name() const;
   const Spec& spec() const;
-  Input& input(std::string_view name);
-  Output& output(std::string_view name);
 
+  // The component's ports and parameters, through the handles its spec was built from. A
+  // handle the spec does not declare (or declares with another type) throws PluginBug.
   template <class T>
-  T param(std::string_view name) const {
-    static_assert(is_param_type_v<T> || std::is_same_v<T, int>, "unsupported parameter type");
-    if constexpr (std::is_same_v<T, int>) return static_cast<int>(std::get<std::int64_t>(value(name, ParamType::Int)));
-    else return std::get<T>(value(name, param_type_of<T>()));
-  }
-  // A path parameter, resolved against the task file's folder.
-  std::filesystem::path path(std::string_view name) const;
+  InputOf<T> operator()(const In<T>& h) { return InputOf<T>(input(h.name, type_of<T>())); }
+  template <class T>
+  InputOf<T> operator()(const OptionalIn<T>& h) { return InputOf<T>(input(h.name, type_of<T>())); }
+  Input& operator()(const AnyIn& h) { return input(h.name, any_type()); }
+  template <class T>
+  OutputOf<T> operator()(const Out<T>& h) { return OutputOf<T>(output(h.name, type_of<T>(), {})); }
+  Output& operator()(const OutLike& h) { return output(h.name, any_type(), h.like); }
+  template <class T>
+  T operator()(const Param<T>& p) const { return params()(p); }
+  ParamValues params() const;
 
   // Emits a declared event; the task's rules decide what it does.
-  void emit_event(std::string_view name, std::string payload = {});
+  void emit(const EventOut& e, std::string payload = {});
   // A sensor has produced its last sample.
   void finish();
   // Current time on the executor's clock (virtual under the deterministic executor).
@@ -139,13 +182,20 @@ class Context {
   // Where the run writes artefacts; empty when it writes none.
   const std::filesystem::path& output_dir() const;
   const std::filesystem::path& task_dir() const;
+  // The task's threads for data-parallel work (carving, rendering): shared by every component,
+  // sized like the executor, so components do not each start a thread per core.
+  ThreadPool& thread_pool() const;
   // Overrides the trigger, during construction only (a counter with a rate runs periodically).
   void set_trigger(Trigger t);
   // Set by Stages; reported in summaries.
   void set_stage(const std::string& stage);
 
  private:
-  const Value& value(std::string_view name, ParamType expected) const;
+  friend class Stages;
+  Input& input(std::string_view name, const TypeInfo* type);
+  Output& output(std::string_view name, const TypeInfo* type, std::string_view like);
+  void emit_event(std::string_view name, std::string payload);
+  [[noreturn]] void plugin_bug(const std::string& what) const;
   detail::Node& node_;
 };
 
@@ -167,7 +217,12 @@ namespace detail {
 struct ComponentEntry {
   Spec (*spec)();
   std::unique_ptr<Component> (*make)(Context&);
+  bool implements_interrupt;  // a blocking type must (Registry::add checks)
 };
+template <class T>
+constexpr bool overrides_interrupt() {
+  return !std::is_same_v<decltype(&T::interrupt), decltype(&Component::interrupt)>;
+}
 // One list per shared object (hidden visibility): a plugin hands its own list to the core.
 [[gnu::visibility("hidden")]] inline std::vector<ComponentEntry>& plugin_entries() {
   static std::vector<ComponentEntry> entries;
@@ -186,5 +241,6 @@ struct ComponentEntry {
            {&T::spec,                                                                     \
             [](::fba::Context& ctx) -> std::unique_ptr<::fba::Component> {                \
               return std::make_unique<T>(ctx);                                            \
-            }}),                                                                          \
+            },                                                                            \
+            ::fba::detail::overrides_interrupt<T>()}),                                    \
        true)

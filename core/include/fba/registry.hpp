@@ -88,11 +88,13 @@ class Registry {
   Registry(Registry&&) noexcept;
   Registry& operator=(Registry&&) noexcept;
 
-  // Validates the spec; a name registered twice is an error naming both origins.
-  void add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library = {});
+  // Validates the spec; a name registered twice is an error naming both origins, and so is a
+  // blocking type that does not implement Component::interrupt().
+  void add(Spec spec, Factory make, std::string origin, std::shared_ptr<const Library> library = {},
+           bool implements_interrupt = false);
   // The single place that checks a spec and makes its entry: add() and plugin loading use it.
   static std::shared_ptr<const TypeEntry> make_entry(Spec spec, Factory make, std::string origin,
-                                                     std::shared_ptr<const Library> library);
+                                                     std::shared_ptr<const Library> library, bool implements_interrupt);
   void add_composite(Spec spec, std::shared_ptr<const CompositeDef> def, std::string origin);
   // Registers what FBA_COMPONENT collected in this program (tests, static builds).
   void add_builtin(const std::vector<detail::ComponentEntry>& entries, const std::string& origin = "built-in");

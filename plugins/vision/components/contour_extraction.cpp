@@ -13,39 +13,43 @@ namespace {
 
 class ContourExtraction final : public fba::Component {
  public:
+  static constexpr fba::In<fba::Frame> kFrame{"frame", "a camera frame"};
+  static constexpr fba::Out<fba::Silhouette> kSilhouette{"silhouette", "the target's mask, contour and per-point curvature; the frame's time stamp"};
+  static constexpr auto kMethod = fba::Param<std::string>("method", "fixed", "binarisation").choices({"fixed", "otsu"});
+  static constexpr auto kThreshold = fba::Param<double>("threshold", 0.19, "fixed: foreground above this share of full scale").range(0, 1);
+  static constexpr fba::Param<bool> kDarkObject{"dark_object", false, "the object is darker than the background"};
+  static constexpr auto kDilate = fba::Param<int>("dilate", 10, "pixels of dilation after thresholding (closes shadow gaps)").range(0, 100);
+  static constexpr auto kErode = fba::Param<int>("erode", 7, "pixels of erosion after dilation").range(0, 100);
+  static constexpr auto kOpen = fba::Param<int>("open", 0, "pixels of morphological opening (removes specks)").range(0, 100);
+  static constexpr auto kClose = fba::Param<int>("close", 0, "pixels of morphological closing (fills cracks)").range(0, 100);
+  static constexpr auto kMinArea = fba::Param<double>("min_area", 200.0, "smallest target area, pixels").at_least(0);
+  static constexpr auto kMaxAreaFraction =
+      fba::Param<double>("max_area_fraction", 0.95, "largest target area as a share of the image (larger is background)").range(0, 1);
+  static constexpr auto kCurvatureWindow =
+      fba::Param<int>("curvature_window", 10, "contour points on each side used for curvature").range(1, 1000);
+  static constexpr fba::EventOut kNoTarget{"no_target", "no contour passed the selection, or the image was empty or unreadable; payload: why"};
+  static constexpr fba::EventOut kLeavesFrame{"leaves_frame", "the target touches the image border on this view; payload: the frame's source and index"};
+
   static fba::Spec spec() {
     return fba::Spec::filter("vision.contour_extraction",
                              "Binarises a frame, cleans it up, selects the target's contour and describes its outline.")
-        .input<fba::Frame>("frame", "a camera frame")
-        .output<fba::Silhouette>("silhouette", "the target's mask, contour and per-point curvature")
-        .param("method", "fixed", "binarisation").choices({"fixed", "otsu"})
-        .param("threshold", 0.19, "fixed: foreground above this share of full scale").range(0, 1)
-        .param("dark_object", false, "the object is darker than the background")
-        .param("dilate", 10, "pixels of dilation after thresholding (closes shadow gaps)").range(0, 100)
-        .param("erode", 7, "pixels of erosion after dilation").range(0, 100)
-        .param("open", 0, "pixels of morphological opening (removes specks)").range(0, 100)
-        .param("close", 0, "pixels of morphological closing (fills cracks)").range(0, 100)
-        .param("min_area", 200.0, "smallest target area, pixels").range(0, std::nullopt)
-        .param("max_area_fraction", 0.95, "largest target area as a share of the image (larger is background)").range(0, 1)
-        .param("curvature_window", 10, "contour points on each side used for curvature").range(1, 1000)
-        .event("no_target", "no contour passed the selection, or the image was empty or unreadable; payload: why")
-        .event("leaves_frame", "the target touches the image border on this view; payload: the frame's source and index");
+        .add(kFrame, kSilhouette, kMethod, kThreshold, kDarkObject, kDilate, kErode, kOpen, kClose, kMinArea, kMaxAreaFraction,
+             kCurvatureWindow, kNoTarget, kLeavesFrame);
   }
 
-  explicit ContourExtraction(fba::Context& ctx) : ctx_(ctx), in_(ctx.input("frame")), out_(ctx.output("silhouette")) {
+  explicit ContourExtraction(fba::Context& ctx) : ctx_(ctx) {
     auto& b = params_.binarise;
-    b.method = ctx.param<std::string>("method") == "otsu" ? fba::vision::BinariseParams::Method::Otsu
-                                                           : fba::vision::BinariseParams::Method::Fixed;
-    b.threshold = ctx.param<double>("threshold");
-    b.dark_object = ctx.param<bool>("dark_object");
-    b.dilate_px = ctx.param<int>("dilate");
-    b.erode_px = ctx.param<int>("erode");
-    b.open_px = ctx.param<int>("open");
-    b.close_px = ctx.param<int>("close");
+    b.method = ctx(kMethod) == "otsu" ? fba::vision::BinariseParams::Method::Otsu : fba::vision::BinariseParams::Method::Fixed;
+    b.threshold = ctx(kThreshold);
+    b.dark_object = ctx(kDarkObject);
+    b.dilate_px = ctx(kDilate);
+    b.erode_px = ctx(kErode);
+    b.open_px = ctx(kOpen);
+    b.close_px = ctx(kClose);
     auto& s = params_.selection;
-    s.min_area_px = ctx.param<double>("min_area");
-    s.max_area_fraction = ctx.param<double>("max_area_fraction");
-    s.curvature_window = ctx.param<int>("curvature_window");
+    s.min_area_px = ctx(kMinArea);
+    s.max_area_fraction = ctx(kMaxAreaFraction);
+    s.curvature_window = ctx(kCurvatureWindow);
     if (!ctx.output_dir().empty()) {
       overlay_dir_ = ctx.output_dir() / "contours";
       std::filesystem::create_directories(overlay_dir_);
@@ -53,17 +57,18 @@ class ContourExtraction final : public fba::Component {
   }
 
   void process() override {
-    const auto frame = in_.share<fba::Frame>();
+    const auto frame = ctx_(kFrame).share();
     auto result = fba::vision::extract_silhouette(frame, params_);
     const std::string name = view_name(*frame);
     if (!result.ok()) {
       ctx_.log().warn("{}: {}", name, result.error);
-      ctx_.emit_event("no_target", name + ": " + result.error);
+      ctx_.emit(kNoTarget, name + ": " + result.error);
       return;
     }
-    if (result.silhouette->touches_border) ctx_.emit_event("leaves_frame", name);
+    if (result.silhouette->touches_border) ctx_.emit(kLeavesFrame, name);
     if (!overlay_dir_.empty()) write_overlay(*result.silhouette, name);
-    out_.emit(std::make_shared<const fba::Silhouette>(std::move(*result.silhouette)));
+    // Stamped with the frame's capture time (the default: the input's stamp), not now.
+    ctx_(kSilhouette).emit(std::make_shared<const fba::Silhouette>(std::move(*result.silhouette)));
   }
 
  private:
@@ -84,8 +89,6 @@ class ContourExtraction final : public fba::Component {
   }
 
   fba::Context& ctx_;
-  fba::Input& in_;
-  fba::Output& out_;
   fba::vision::ExtractionParams params_;
   std::filesystem::path overlay_dir_;
 };

@@ -12,34 +12,37 @@ namespace {
 
 class ImageSetSensor final : public fba::Component {
  public:
+  static constexpr fba::OptionalIn<fba::Pose> kRequest{
+      "request", "a wanted camera pose (world_from_camera): serves the nearest unserved view"};
+  static constexpr fba::Out<fba::Frame> kFrame{"frame", "an image with intrinsics and the camera pose it was taken from"};
+  static constexpr fba::Param<std::filesystem::path> kFile{
+      "file", fba::required, "the set: a Middlebury *_par.txt or an fba image-set YAML (docs/image-set-format.md)"};
+  static constexpr fba::Param<bool> kGoodOnly{
+      "good_only", true, "Middlebury: keep only the views listed in *_good_silhouette_images.txt beside the file"};
+  static constexpr auto kLimit = fba::Param<std::int64_t>("limit", 0, "serve at most this many views; 0 for all").at_least(0);
+  static constexpr fba::EventOut kExhausted{"exhausted", "a view was requested but every view has been served"};
+
   static fba::Spec spec() {
-    return fba::Spec::sensor("vision.image_set",
-                             "Serves a calibrated image set (Middlebury *_par.txt or fba YAML) as camera frames.")
-        .optional_input<fba::Pose>("request", "a wanted camera pose (world_from_camera): serves the nearest unserved view")
-        .output<fba::Frame>("frame", "an image with intrinsics and the camera pose it was taken from")
-        .path_param("file", std::nullopt, "the set: a Middlebury *_par.txt or an fba image-set YAML (docs/image-set-format.md)")
-        .param("good_only", true, "Middlebury: keep only the views listed in *_good_silhouette_images.txt beside the file")
-        .param("limit", 0, "serve at most this many views; 0 for all").range(0, std::nullopt)
-        .event("exhausted", "a view was requested but every view has been served");
+    return fba::Spec::sensor("vision.image_set", "Serves a calibrated image set (Middlebury *_par.txt or fba YAML) as camera frames.")
+        .add(kRequest, kFrame, kFile, kGoodOnly, kLimit, kExhausted);
   }
 
   explicit ImageSetSensor(fba::Context& ctx)
-      : ctx_(ctx), request_(ctx.input("request")), out_(ctx.output("frame")),
-        set_(fba::vision::ImageSet::load(ctx.path("file").string(), ctx.param<bool>("good_only"))) {
-    const auto limit = ctx.param<std::int64_t>("limit");
+      : ctx_(ctx), set_(fba::vision::ImageSet::load(ctx(kFile).string(), ctx(kGoodOnly))) {
+    const auto limit = ctx(kLimit);
     count_ = limit > 0 ? std::min<std::size_t>(static_cast<std::size_t>(limit), set_.size()) : set_.size();
-    if (count_ == 0) throw std::runtime_error("the image set " + ctx.path("file").string() + " has no views");
+    if (count_ == 0) throw std::runtime_error("the image set " + ctx(kFile).string() + " has no views");
     // On request, one view per request; otherwise every view in order, as fast as taken.
-    if (request_.connected()) ctx.set_trigger({fba::TriggerPolicy::Any, 0});
-    ctx.log().info("{} views from {}", count_, ctx.path("file").string());
+    if (ctx(kRequest).connected()) ctx.set_trigger({fba::TriggerPolicy::Any, 0});
+    ctx.log().info("{} views from {}", count_, ctx(kFile).string());
   }
 
   void process() override {
     std::size_t index = served_.size();
-    if (request_.connected()) {
-      const auto next = set_.nearest_unserved_view(request_.get<fba::Pose>().world_from_frame, served_);
+    if (const auto request = ctx_(kRequest); request.connected()) {
+      const auto next = set_.nearest_unserved_view(request.get().world_from_frame, served_);
       if (!next || served_.size() >= count_) {
-        ctx_.emit_event("exhausted", std::to_string(served_.size()) + " views served");
+        ctx_.emit(kExhausted, std::to_string(served_.size()) + " views served");
         ctx_.finish();
         return;
       }
@@ -48,14 +51,12 @@ class ImageSetSensor final : public fba::Component {
     served_.insert(index);
     auto frame = std::make_shared<fba::Frame>(set_.load_frame(index));
     frame->stamp = static_cast<double>(ctx_.now_ns()) * 1e-9;
-    out_.emit(std::shared_ptr<const fba::Frame>(std::move(frame)));
+    ctx_(kFrame).emit(std::shared_ptr<const fba::Frame>(std::move(frame)));
     if (served_.size() >= count_) ctx_.finish();
   }
 
  private:
   fba::Context& ctx_;
-  fba::Input& request_;
-  fba::Output& out_;
   const fba::vision::ImageSet set_;
   std::size_t count_ = 0;
   std::set<std::size_t> served_;

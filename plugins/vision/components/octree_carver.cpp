@@ -19,40 +19,55 @@ namespace {
 
 class OctreeCarverFilter final : public fba::Component {
  public:
+  static constexpr fba::In<fba::Silhouette> kSilhouette{"silhouette", "a silhouette with its calibrated frame"};
+  static constexpr fba::OptionalIn<fba::RegionsOfInterest> kRegions{
+      "regions", "where grasping needs detail (the grasp-specific criterion)"};
+  static constexpr fba::Out<fba::Octree> kOctree{"octree", "the model after each update (immutable)"};
+  static constexpr auto kMaxDepth = fba::Param<int>("max_depth", 6, "deepest level of the octree (the root is level 0)").range(1, 12);
+  static constexpr auto kMinNodeSize = fba::Param<double>("min_node_size", 0.0, "metres: nodes this small or smaller are not split").at_least(0);
+  static constexpr auto kOccupancyThreshold = fba::Param<double>(
+      "occupancy_threshold", 0.0, "generic criterion: split a node whose silhouette occupancy is above this (and below 1)").range(0, 1);
+  static inline const auto kBounds =
+      fba::Param<std::vector<double>>("bounds", {}, "root box [xmin, ymin, zmin, xmax, ymax, zmax] in metres; empty: estimated from the first silhouettes")
+          .size({0, 6});
+  static constexpr auto kBoundsViews =
+      fba::Param<int>("bounds_views", 3, "silhouettes used to estimate the root box when bounds is empty").range(2, 100);
+  static constexpr auto kBoundsMargin =
+      fba::Param<double>("bounds_margin", 0.05, "estimated box grown by this share of its size on every side").range(0, 1);
+  // The carver library starts its own threads; once it takes a parallel_for (H6's rewrite), it
+  // gets ctx.thread_pool() instead and this parameter goes.
+  static constexpr auto kThreads = fba::Param<int>("threads", 0, "carving threads; 0 for one per core").range(0, 256);
+  static constexpr fba::EventOut kBoundsEstimated{"bounds_estimated", "the root box was estimated from the first silhouettes; payload: the box"};
+  static constexpr fba::EventOut kUpdated{"updated", "a view was integrated; payload: views, nodes visited and refined so far"};
+
   static fba::Spec spec() {
     return fba::Spec::filter("vision.octree_carver",
                              "Carves an octree model from silhouettes; refines where the occupancy or the grasp regions ask for it.")
-        .input<fba::Silhouette>("silhouette", "a silhouette with its calibrated frame")
-        .optional_input<fba::RegionsOfInterest>("regions", "where grasping needs detail (the grasp-specific criterion)")
-        .output<fba::Octree>("octree", "the model after each update (immutable)")
-        .param("max_depth", 6, "deepest level of the octree (the root is level 0)").range(1, 12)
-        .param("min_node_size", 0.0, "metres: nodes this small or smaller are not split").range(0, std::nullopt)
-        .param("occupancy_threshold", 0.0, "generic criterion: split a node whose silhouette occupancy is above this (and below 1)").range(0, 1)
-        .param("bounds", std::vector<double>{}, "root box [xmin, ymin, zmin, xmax, ymax, zmax] in metres; empty: estimated from the first silhouettes")
-        .param("bounds_views", 3, "silhouettes used to estimate the root box when bounds is empty").range(2, 100)
-        .param("bounds_margin", 0.05, "estimated box grown by this share of its size on every side").range(0, 1)
-        .param("threads", 0, "carving threads; 0 for one per core").range(0, 256)
-        .event("bounds_estimated", "the root box was estimated from the first silhouettes; payload: the box")
-        .event("updated", "a view was integrated; payload: views, nodes visited and refined so far");
+        .add(kSilhouette, kRegions, kOctree, kMaxDepth, kMinNodeSize, kOccupancyThreshold, kBounds, kBoundsViews, kBoundsMargin,
+             kThreads, kBoundsEstimated, kUpdated)
+        .check(kBounds, [](const fba::ParamValues& p) {
+          const auto b = p(kBounds);
+          if (!b.empty() && !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
+            return std::string("bounds must be [xmin, ymin, zmin, xmax, ymax, zmax] with each min < its max");
+          return std::string();
+        });
   }
 
+  // The parameters were checked by the loader (the spec's checks): nothing left to refuse here.
   explicit OctreeCarverFilter(fba::Context& ctx)
-      : ctx_(ctx), silhouette_(ctx.input("silhouette")), regions_(ctx.input("regions")), out_(ctx.output("octree")),
-        carver_(params(ctx)), bounds_views_(static_cast<std::size_t>(ctx.param<int>("bounds_views"))),
-        margin_(ctx.param<double>("bounds_margin")) {
-    const auto b = ctx.param<std::vector<double>>("bounds");
-    if (!b.empty()) {
-      if (b.size() != 6 || !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
-        throw std::invalid_argument("bounds must be [xmin, ymin, zmin, xmax, ymax, zmax] with min < max");
+      : ctx_(ctx), carver_(params(ctx)), bounds_views_(static_cast<std::size_t>(ctx(kBoundsViews))), margin_(ctx(kBoundsMargin)) {
+    if (const auto b = ctx(kBounds); !b.empty()) {
       carver_.set_bounds(Eigen::AlignedBox3d(Eigen::Vector3d(b[0], b[1], b[2]), Eigen::Vector3d(b[3], b[4], b[5])));
       has_bounds_ = true;
     }
   }
 
   void process() override {
-    if (regions_.has()) carver_.set_regions_of_interest(regions_.get<fba::RegionsOfInterest>());
-    if (silhouette_.has()) {
-      const auto& s = silhouette_.get<fba::Silhouette>();
+    const auto regions = ctx_(kRegions);
+    const auto silhouette = ctx_(kSilhouette);
+    if (regions.has()) carver_.set_regions_of_interest(regions.get());
+    if (silhouette.has()) {
+      const auto& s = silhouette.get();
       if (!first_camera_) first_camera_ = s.frame->camera;
       if (!has_bounds_) {
         pending_.push_back(s);  // the root box comes from the first few views together
@@ -60,13 +75,13 @@ class OctreeCarverFilter final : public fba::Component {
         const auto box = fba::vision::OctreeCarver::estimate_bounds(pending_, margin_);
         carver_.set_bounds(box);
         has_bounds_ = true;
-        ctx_.emit_event("bounds_estimated", fmt(box));
+        ctx_.emit(kBoundsEstimated, fmt(box));
         carver_.add_views(pending_);
         pending_.clear();
       } else {
         carver_.add_view(s);
       }
-    } else if (!has_bounds_ || !regions_.has()) {
+    } else if (!has_bounds_ || !regions.has()) {
       return;
     }
     publish();
@@ -113,10 +128,10 @@ class OctreeCarverFilter final : public fba::Component {
 
   static fba::vision::CarverParams params(fba::Context& ctx) {
     fba::vision::CarverParams p;
-    p.max_depth = ctx.param<int>("max_depth");
-    p.min_node_size = ctx.param<double>("min_node_size");
-    p.occupancy_threshold = ctx.param<double>("occupancy_threshold");
-    p.threads = ctx.param<int>("threads");
+    p.max_depth = ctx(kMaxDepth);
+    p.min_node_size = ctx(kMinNodeSize);
+    p.occupancy_threshold = ctx(kOccupancyThreshold);
+    p.threads = ctx(kThreads);
     return p;
   }
 
@@ -133,14 +148,11 @@ class OctreeCarverFilter final : public fba::Component {
     const std::string progress = "views " + std::to_string(st.views) + ", nodes visited " + std::to_string(st.nodes_visited) +
                                  ", refined " + std::to_string(st.nodes_refined);
     ctx_.log().info("{} ({:.0f} ms carving so far)", progress, st.seconds * 1e3);
-    ctx_.emit_event("updated", progress);
-    out_.emit(model);
+    ctx_.emit(kUpdated, progress);
+    ctx_(kOctree).emit(model);
   }
 
   fba::Context& ctx_;
-  fba::Input& silhouette_;
-  fba::Input& regions_;
-  fba::Output& out_;
   fba::vision::OctreeCarver carver_;
   const std::size_t bounds_views_;
   const double margin_;

@@ -3,9 +3,8 @@
 namespace {
 class Impostor final : public fba::Component {
  public:
-  static fba::Spec spec() {
-    return fba::Spec::sensor("examples.counter", "Not the real counter.").output<std::int64_t>("out", "nothing");
-  }
+  static constexpr fba::Out<std::int64_t> kOut{"out", "nothing"};
+  static fba::Spec spec() { return fba::Spec::sensor("examples.counter", "Not the real counter.").add(kOut); }
   explicit Impostor(fba::Context&) {}
   void process() override {}
 };

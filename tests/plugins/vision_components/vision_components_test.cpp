@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <fba/task_config.hpp>
 #include <fba/testing.hpp>
 #include <fba/types/frame.hpp>
 #include <fba/types/pose.hpp>
@@ -25,8 +26,6 @@ const fba::Registry& registry() { return fba::test::built_plugins(); }
 const std::string kData = FBA_SHARED_DATA_DIR;
 const std::string kDinoPar = kData + "/middlebury-dino/dinoSR_par.txt";
 
-std::string quoted(const std::string& s) { return "\"" + s + "\""; }
-
 bool has_event(const std::vector<fba::Event>& events, const std::string& name) {
   for (const auto& e : events)
     if (e.name == name) return true;
@@ -36,7 +35,7 @@ bool has_event(const std::vector<fba::Event>& events, const std::string& name) {
 }  // namespace
 
 TEST(ImageSet, ServesTheGoodViewsInOrderWithTheirCalibration) {
-  ComponentHarness h(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}});
+  ComponentHarness h(registry(), "vision.image_set", {{"file", kDinoPar}});
   EXPECT_EQ(h.run(), 15);
   EXPECT_TRUE(h.finished());
   const auto& frames = h.packets("frame");
@@ -49,9 +48,9 @@ TEST(ImageSet, ServesTheGoodViewsInOrderWithTheirCalibration) {
 }
 
 TEST(ImageSet, OnRequestServesTheNearestUnservedView) {
-  ComponentHarness h(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}, {"good_only", "false"}}, {"request"});
+  ComponentHarness h(registry(), "vision.image_set", {{"file", kDinoPar}, {"good_only", false}}, {"request"});
   EXPECT_EQ(h.run(), 0);  // nothing is served until asked
-  ComponentHarness reference(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}, {"good_only", "false"}});
+  ComponentHarness reference(registry(), "vision.image_set", {{"file", kDinoPar}, {"good_only", false}});
   reference.run();
   const auto& all = reference.packets("frame");
   // Ask for exactly where view 9 was taken from, twice: view 9, then its nearest neighbour.
@@ -69,7 +68,7 @@ TEST(ImageSet, OnRequestServesTheNearestUnservedView) {
 }
 
 TEST(ImageSet, AMissingFileIsAConfigurationError) {
-  EXPECT_THROW(ComponentHarness(registry(), "vision.image_set", {{"file", quoted("/nonexistent/set.txt")}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(registry(), "vision.image_set", {{"file", "/nonexistent/set.txt"}}), fba::ConfigError);
 }
 
 // A real video file through OpenCV's VideoCapture, with a calibration file in OpenCV's own
@@ -93,7 +92,7 @@ TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
   // The file backend by name: 'any' also probes USB and FireWire cameras, which is slow and
   // leaks inside those libraries.
   ComponentHarness h(registry(), "vision.camera",
-                     {{"source", quoted(video)}, {"backend", "ffmpeg"}, {"calibration", quoted(calibration)}}, {"pose"});
+                     {{"source", video}, {"backend", "ffmpeg"}, {"calibration", calibration}}, {"pose"});
   fba::Pose pose;
   pose.world_from_frame.translation() << 0.1, 0.2, 0.3;
   h.push<fba::Pose>("pose", pose);
@@ -113,12 +112,12 @@ TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
 }
 
 TEST(Camera, AnUnopenableSourceIsAConfigurationError) {
-  EXPECT_THROW(ComponentHarness(registry(), "vision.camera", {{"source", quoted("/nonexistent/video.avi")}, {"backend", "ffmpeg"}}),
+  EXPECT_THROW(ComponentHarness(registry(), "vision.camera", {{"source", "/nonexistent/video.avi"}, {"backend", "ffmpeg"}}),
                fba::ConfigError);
 }
 
 TEST(ContourExtraction, ExtractsTheDinoAndWritesTheOverlay) {
-  ComponentHarness views(registry(), "vision.image_set", {{"file", quoted(kDinoPar)}, {"limit", "2"}});
+  ComponentHarness views(registry(), "vision.image_set", {{"file", kDinoPar}, {"limit", 2}});
   views.run();
   ComponentHarness h(registry(), "vision.contour_extraction");
   for (const auto& p : views.packets("frame")) h.push_packet("frame", p);
@@ -131,6 +130,20 @@ TEST(ContourExtraction, ExtractsTheDinoAndWritesTheOverlay) {
   EXPECT_LT(area, 0.6 * 640 * 480);
   EXPECT_EQ(s.contour.size(), s.curvature.size());
   EXPECT_EQ(s.frame->index, 1);
+  // A silhouette carries its frame's capture stamp, not the time it was extracted.
+  EXPECT_EQ(out[1].header().stamp_ns, views.packets("frame")[1].header().stamp_ns);
+}
+
+TEST(ContourExtraction, KeepsTheFramesStampWhateverTheClock) {
+  ComponentHarness views(registry(), "vision.image_set", {{"file", kDinoPar}, {"limit", 1}});
+  views.set_time(1'000'000);
+  views.run();
+  ComponentHarness h(registry(), "vision.contour_extraction");
+  h.push_packet("frame", views.packets("frame").at(0));
+  h.set_time(9'000'000);
+  h.run();
+  ASSERT_EQ(h.packets("silhouette").size(), 1u);
+  EXPECT_EQ(h.packets("silhouette")[0].header().stamp_ns, 1'000'000);
 }
 
 TEST(ContourExtraction, AnEmptyImageIsAnEventNotAFailure) {
@@ -150,7 +163,7 @@ TEST(ContourExtraction, AnEmptyImageIsAnEventNotAFailure) {
 
 TEST(SimCamera, RendersTheMeshFromEveryViewpoint) {
   ComponentHarness h(registry(), "sim.camera",
-                     {{"mesh", quoted(kData + "/ycb/YcbMustardBottle/model.obj")}, {"views", "4"}, {"noise", "2"}});
+                     {{"mesh", kData + "/ycb/YcbMustardBottle/model.obj"}, {"views", 4}, {"noise", 2}});
   EXPECT_EQ(h.run(), 4);
   EXPECT_TRUE(h.finished());
   for (const auto& p : h.packets("frame")) {
@@ -165,13 +178,74 @@ TEST(SimCamera, RendersTheMeshFromEveryViewpoint) {
 }
 
 TEST(SimCamera, RendersFromAPoseItIsGiven) {
-  ComponentHarness h(registry(), "sim.camera", {{"mesh", quoted(kData + "/ycb/YcbMasterChefCan/model.obj")}}, {"pose"});
+  ComponentHarness h(registry(), "sim.camera", {{"mesh", kData + "/ycb/YcbMasterChefCan/model.obj"}}, {"pose"});
   fba::Pose far;  // looking along +z from far below the object: nothing in view
   far.world_from_frame.translation() << 0, 0, -50;
   h.push<fba::Pose>("pose", far);
   EXPECT_EQ(h.run(), 1);
   const auto& f = h.packets("frame")[0].get<fba::Frame>();
   EXPECT_NEAR(f.camera.centre_in_world().z(), -50, 1e-9);
+}
+
+// A read cut short by a stop is not the end of the source: no 'lost', no finish.
+TEST(Camera, AnInterruptedCameraStopsReadingWithoutReportingTheSourceLost) {
+  const fs::path dir = fs::path(testing::TempDir()) / "camera_interrupt_test";
+  fs::create_directories(dir);
+  const std::string video = (dir / "two.avi").string();
+  {
+    cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 5, cv::Size(64, 48));
+    ASSERT_TRUE(writer.isOpened());
+    for (int i = 0; i < 2; ++i) writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(40 * i)));
+  }
+  ComponentHarness h(registry(), "vision.camera", {{"source", video}, {"backend", "ffmpeg"}});
+  EXPECT_TRUE(h.step());
+  EXPECT_EQ(h.packets("frame").size(), 1u);
+  h.interrupt();
+  h.step();
+  EXPECT_EQ(h.packets("frame").size(), 1u);
+  EXPECT_FALSE(has_event(h.events(), "lost"));
+  EXPECT_FALSE(h.finished());
+}
+
+TEST(Camera, IsBlockingAndImplementsInterrupt) {
+  const auto camera = registry().find("vision.camera");
+  ASSERT_TRUE(camera);
+  EXPECT_TRUE(camera->spec.is_blocking());  // registered: Registry::add refuses a blocking type without interrupt()
+}
+
+// What `fba-run --check` runs: the carver's bounds are refused at the value, before anything
+// is built.
+TEST(OctreeCarver, BoundsOfTheWrongLengthFailTheCheckAtTheValue) {
+  fba::LoadOptions options;
+  options.require_inputs = false;
+  try {
+    fba::load_task_text("components:\n  carve:\n    type: vision.octree_carver\n    params: { bounds: [1, 2, 3] }\n", "carve.yaml",
+                        fs::current_path(), registry(), options);
+    FAIL() << "accepted";
+  } catch (const fba::ConfigError& e) {
+    ASSERT_EQ(e.diagnostics().size(), 1u);
+    EXPECT_EQ(e.diagnostics()[0].str(),
+              "carve.yaml:4:23: error: component 'carve' (vision.octree_carver): parameter 'bounds' must have 0 or 6 numbers; found 3");
+  }
+}
+
+TEST(OctreeCarver, AnInvertedBoxFailsTheCheck) {
+  EXPECT_THROW(ComponentHarness(registry(), "vision.octree_carver", {{"bounds", std::vector<double>{0, 0, 0, 1, -1, 1}}}),
+               fba::ConfigError);
+  ComponentHarness ok(registry(), "vision.octree_carver", {{"bounds", std::vector<double>{0, 0, 0, 1, 1, 1}}});
+  EXPECT_FALSE(ok.finished());
+}
+
+TEST(SimCamera, ElevationsOutOfOrderFailTheCheck) {
+  try {
+    ComponentHarness(registry(), "sim.camera",
+                     {{"mesh", kData + "/ycb/YcbMasterChefCan/model.obj"}, {"min_elevation", 60}, {"max_elevation", 30}});
+    FAIL() << "accepted";
+  } catch (const fba::ConfigError& e) {
+    EXPECT_NE(e.diagnostics().at(0).message.find("parameter 'min_elevation' (60) must be <= parameter 'max_elevation' (30)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // A task swaps the real camera for its simulated twin by changing the type alone: the two
