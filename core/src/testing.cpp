@@ -17,6 +17,7 @@ class HarnessClock final : public detail::Executor {
   void enqueue(detail::Node*) override {}
   std::int64_t now_ns() const override { return now; }
   void run() override { throw std::logic_error("a component harness is driven by hand, not run"); }
+  bool join(double) override { return true; }  // no threads of its own
   void wake_all() override {}
   void poke() override {}
   std::int64_t now = 0;

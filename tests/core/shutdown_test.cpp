@@ -31,10 +31,10 @@ std::atomic<int> g_safe_states{0};
 class Stuck final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::filter("test.stuck", "Never returns from process(), whatever it is told.")
-        .input<std::int64_t>("in", "anything")
-        .output<std::int64_t>("out", "nothing");
+    return fba::Spec::filter("test.stuck", "Never returns from process(), whatever it is told.").add(kIn, kOut);
   }
+  static constexpr fba::In<std::int64_t> kIn{"in", "anything"};
+  static constexpr fba::Out<std::int64_t> kOut{"out", "nothing"};
   explicit Stuck(fba::Context&) {}
   void process() override {
     g_stuck_entered.fetch_add(1);
@@ -46,9 +46,9 @@ class Stuck final : public fba::Component {
 class HangingSafeState final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::actuator("test.hanging_safe_state", "Its safe_state() never returns.")
-        .input<std::int64_t>("in", "anything");
+    return fba::Spec::actuator("test.hanging_safe_state", "Its safe_state() never returns.").add(kIn);
   }
+  static constexpr fba::In<std::int64_t> kIn{"in", "anything"};
   explicit HangingSafeState(fba::Context&) {}
   void process() override {}
   void safe_state() override {
@@ -60,9 +60,9 @@ class HangingSafeState final : public fba::Component {
 class CountedActuator final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::actuator("test.counted_actuator", "Counts calls of safe_state().")
-        .optional_input<std::int64_t>("in", "anything");
+    return fba::Spec::actuator("test.counted_actuator", "Counts calls of safe_state().").add(kIn);
   }
+  static constexpr fba::OptionalIn<std::int64_t> kIn{"in", "anything"};
   explicit CountedActuator(fba::Context&) {}
   void process() override {}
   void safe_state() override { g_safe_states.fetch_add(1); }
@@ -72,12 +72,12 @@ class CountedActuator final : public fba::Component {
 class IntThrower final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::actuator("test.int_thrower", "Throws 42 from one call.")
-        .input<std::int64_t>("in", "anything")
-        .param("from", "process",
-               "process, end_of_stream, safe_state, constructor, or restart (process, then the constructor)");
+    return fba::Spec::actuator("test.int_thrower", "Throws 42 from one call.").add(kIn, kFrom);
   }
-  explicit IntThrower(fba::Context& ctx) : from_(ctx.param<std::string>("from")) {
+  static constexpr fba::In<std::int64_t> kIn{"in", "anything"};
+  static constexpr fba::Param<std::string> kFrom{
+      "from", "process", "process, end_of_stream, safe_state, constructor, or restart (process, then the constructor)"};
+  explicit IntThrower(fba::Context& ctx) : from_(ctx(kFrom)) {
     const int n = g_constructions.fetch_add(1);
     if (from_ == "constructor" || (from_ == "restart" && n > 0)) throw 7;
   }
@@ -100,10 +100,9 @@ class IntThrower final : public fba::Component {
 class ThrowingInterrupt final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::actuator("test.throwing_interrupt", "interrupt() releases process() and throws 5.")
-        .input<std::int64_t>("in", "anything")
-        .blocking();
+    return fba::Spec::actuator("test.throwing_interrupt", "interrupt() releases process() and throws 5.").add(kIn).blocking();
   }
+  static constexpr fba::In<std::int64_t> kIn{"in", "anything"};
   explicit ThrowingInterrupt(fba::Context&) {}
   void process() override {
     g_interrupt_entered.fetch_add(1);
@@ -129,11 +128,10 @@ class ThrowingInterrupt final : public fba::Component {
 class AlwaysFails final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::filter("test.always_fails", "Throws from every process().")
-        .input<std::int64_t>("in", "anything")
-        .output<std::int64_t>("out", "nothing")
-        .blocking();
+    return fba::Spec::filter("test.always_fails", "Throws from every process().").add(kIn, kOut).blocking();
   }
+  static constexpr fba::In<std::int64_t> kIn{"in", "anything"};
+  static constexpr fba::Out<std::int64_t> kOut{"out", "nothing"};
   explicit AlwaysFails(fba::Context&) { g_constructions.fetch_add(1); }
   void process() override { throw std::runtime_error("always"); }
   void interrupt() override {}  // process() never waits
@@ -143,10 +141,9 @@ class AlwaysFails final : public fba::Component {
 class Idle final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return fba::Spec::sensor("test.idle", "Runs and produces nothing.")
-        .output<std::int64_t>("out", "nothing")
-        .trigger({fba::TriggerPolicy::Free, 0});
+    return fba::Spec::sensor("test.idle", "Runs and produces nothing.").add(kOut).trigger({fba::TriggerPolicy::Free, 0});
   }
+  static constexpr fba::Out<std::int64_t> kOut{"out", "nothing"};
   explicit Idle(fba::Context&) {}
   void process() override { std::this_thread::yield(); }
 };

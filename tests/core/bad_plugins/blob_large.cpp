@@ -10,7 +10,8 @@ FBA_DATA_TYPE(test_blob::Blob, "test.Blob", "A test type with two definitions.")
 namespace {
 class Source final : public fba::Component {
  public:
-  static fba::Spec spec() { return fba::Spec::sensor("test.blob_large", "Sends test.Blob (16 bytes).").output<test_blob::Blob>("out", "blobs"); }
+  static constexpr fba::Out<test_blob::Blob> kOut{"out", "blobs"};
+  static fba::Spec spec() { return fba::Spec::sensor("test.blob_large", "Sends test.Blob (16 bytes).").add(kOut); }
   explicit Source(fba::Context&) {}
   void process() override {}
 };

@@ -11,7 +11,8 @@ const bool marked = [] {
 }();
 class Marker final : public fba::Component {
  public:
-  static fba::Spec spec() { return fba::Spec::sensor("test.marker", "Leaves a mark when its plugin is loaded.").output<std::int64_t>("out", "nothing"); }
+  static constexpr fba::Out<std::int64_t> kOut{"out", "nothing"};
+  static fba::Spec spec() { return fba::Spec::sensor("test.marker", "Leaves a mark when its plugin is loaded.").add(kOut); }
   explicit Marker(fba::Context&) {}
   void process() override {}
 };

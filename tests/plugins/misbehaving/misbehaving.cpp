@@ -24,14 +24,13 @@ namespace {
   return true;
 }();
 
-fba::Spec with_mode(fba::Spec spec) {
-  return std::move(spec)
-      .param("mode", std::string("none"),
-             "how to misbehave: none, throw_exception, throw_int, throw_in_constructor_int, "
-             "segfault, block_process, block_safe_state, exit_zero, never_finish")
-      .param("after", 0, "good invocations before misbehaving")
-      .range(0, std::nullopt);
-}
+constexpr fba::Param<std::string> kMode =
+    fba::Param<std::string>{"mode", "none", "how to misbehave"}.choices(
+        {"none", "throw_exception", "throw_int", "throw_in_constructor_int", "segfault", "block_process",
+         "block_safe_state", "exit_zero", "never_finish"});
+constexpr fba::Param<std::int64_t> kAfter = fba::Param<std::int64_t>{"after", 0, "good invocations before misbehaving"}.at_least(0);
+
+fba::Spec with_mode(fba::Spec spec) { return std::move(spec).add(kMode, kAfter); }
 
 // Blocks the calling thread for good: neither interrupt() nor anything else ends it.
 [[noreturn]] void block_forever() {
@@ -41,7 +40,7 @@ fba::Spec with_mode(fba::Spec spec) {
 class Misbehaviour {
  public:
   explicit Misbehaviour(fba::Context& ctx)
-      : mode_(ctx.param<std::string>("mode")), after_(ctx.param<std::int64_t>("after")) {
+      : mode_(ctx(kMode)), after_(ctx(kAfter)) {
     static const char* const kModes[] = {
         "none",        "throw_exception", "throw_int",        "throw_in_constructor_int",
         "segfault",    "block_process",   "block_safe_state", "exit_zero",
@@ -75,43 +74,42 @@ class Misbehaviour {
 class MisbehavingFilter final : public fba::Component {
  public:
   static fba::Spec spec() {
-    return with_mode(fba::Spec::filter("test.misbehaving", "Forwards integers; misbehaves as its mode says.")
-                         .input<std::int64_t>("in", "integers")
-                         .output<std::int64_t>("out", "the same integers"));
+    return with_mode(fba::Spec::filter("test.misbehaving", "Forwards integers; misbehaves as its mode says.").add(kIn, kOut));
   }
-  explicit MisbehavingFilter(fba::Context& ctx) : m_(ctx), in_(ctx.input("in")), out_(ctx.output("out")) {}
+  static constexpr fba::In<std::int64_t> kIn{"in", "integers"};
+  static constexpr fba::Out<std::int64_t> kOut{"out", "the same integers"};
+  explicit MisbehavingFilter(fba::Context& ctx) : ctx_(ctx), m_(ctx) {}
   void process() override {
     m_.maybe();
-    out_.emit<std::int64_t>(in_.get<std::int64_t>());
+    ctx_(kOut).emit(ctx_(kIn).get());
   }
 
  private:
+  fba::Context& ctx_;
   Misbehaviour m_;
-  fba::Input& in_;
-  fba::Output& out_;
 };
 
 class MisbehavingSensor final : public fba::Component {
  public:
   static fba::Spec spec() {
     return with_mode(fba::Spec::sensor("test.misbehaving_sensor", "Emits count integers; misbehaves as its mode says.")
-                         .output<std::int64_t>("out", "0, 1, 2, ...")
-                         .param("count", 10, "integers to emit before finishing")
-                         .range(0, std::nullopt));
+                         .add(kOut, kCount));
   }
-  explicit MisbehavingSensor(fba::Context& ctx)
-      : ctx_(ctx), m_(ctx), out_(ctx.output("out")), count_(ctx.param<std::int64_t>("count")) {}
+  static constexpr fba::Out<std::int64_t> kOut{"out", "0, 1, 2, ..."};
+  static constexpr fba::Param<std::int64_t> kCount =
+      fba::Param<std::int64_t>{"count", 10, "integers to emit before finishing"}.at_least(0);
+  explicit MisbehavingSensor(fba::Context& ctx) : ctx_(ctx), m_(ctx), out_(ctx(kOut)), count_(ctx(kCount)) {}
   void process() override {
     if (m_.mode() == "never_finish") return;  // free-running, produces nothing, never finishes
     m_.maybe();
-    if (next_ < count_) out_.emit<std::int64_t>(next_++);
+    if (next_ < count_) out_.emit(next_++);
     if (next_ >= count_) ctx_.finish();
   }
 
  private:
   fba::Context& ctx_;
   Misbehaviour m_;
-  fba::Output& out_;
+  fba::OutputOf<std::int64_t> out_;
   std::int64_t count_, next_ = 0;
 };
 
@@ -122,9 +120,9 @@ class MisbehavingActuator final : public fba::Component {
  public:
   static fba::Spec spec() {
     return with_mode(
-        fba::Spec::actuator("test.misbehaving_actuator", "Consumes integers; marks its safe state in a file.")
-            .input<std::int64_t>("in", "integers"));
+        fba::Spec::actuator("test.misbehaving_actuator", "Consumes integers; marks its safe state in a file.").add(kIn));
   }
+  static constexpr fba::In<std::int64_t> kIn{"in", "integers"};
   explicit MisbehavingActuator(fba::Context& ctx) : ctx_(ctx), m_(ctx) {}
   void process() override {
     if (!running_ && !ctx_.output_dir().empty())
