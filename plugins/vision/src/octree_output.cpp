@@ -12,31 +12,24 @@ namespace fba::vision {
 
 namespace {
 
-bool occupied(const fba::OctreeNode& n) { return n.state != fba::NodeState::Empty; }
+bool occupied(const fba::OctreeNode& n) { return n.state() != fba::NodeState::Empty; }
 
-Eigen::AlignedBox3d box_of(const fba::OctreeNode& n) {
-  const Eigen::Vector3d c = n.centre.cast<double>();
-  const Eigen::Vector3d h = Eigen::Vector3d::Constant(n.half_size);
-  return {c - h, c + h};
-}
-
-std::size_t leaves_under(const fba::Octree& t, std::size_t i) {
-  const auto& n = t.nodes[i];
+std::size_t leaves_under(const fba::Octree& t, const fba::OctreeNode& n) {
   if (n.is_leaf()) return 1;
   std::size_t s = 0;
-  for (int c = 0; c < 8; ++c) s += leaves_under(t, static_cast<std::size_t>(n.first_child + c));
+  const fba::OctreeNode* c = t.children(n);
+  for (int i = 0; i < 8; ++i) s += leaves_under(t, c[i]);
   return s;
 }
 
-std::size_t mismatches(const fba::Octree& a, std::size_t ia, const fba::Octree& b, std::size_t ib) {
-  const auto& na = a.nodes[ia];
-  const auto& nb = b.nodes[ib];
-  if (na.is_leaf() && nb.is_leaf()) return na.state != nb.state ? 1 : 0;
+std::size_t mismatches(const fba::Octree& a, const fba::OctreeNode& na, const fba::Octree& b, const fba::OctreeNode& nb) {
+  if (na.is_leaf() && nb.is_leaf()) return na.state() != nb.state() ? 1 : 0;
   if (na.is_leaf()) return 1;
-  if (nb.is_leaf()) return leaves_under(a, ia);
+  if (nb.is_leaf()) return leaves_under(a, na);
   std::size_t s = 0;
-  for (int c = 0; c < 8; ++c)
-    s += mismatches(a, static_cast<std::size_t>(na.first_child + c), b, static_cast<std::size_t>(nb.first_child + c));
+  const fba::OctreeNode* ca = a.children(na);
+  const fba::OctreeNode* cb = b.children(nb);
+  for (int i = 0; i < 8; ++i) s += mismatches(a, ca[i], b, cb[i]);
   return s;
 }
 
@@ -48,29 +41,12 @@ class SurfaceBuilder {
   explicit SurfaceBuilder(const fba::Octree& t) : t_(t) {}
 
   fba::TriangleMesh build() {
-    if (t_.nodes.empty()) return std::move(mesh_);
-    int finest = 0;
-    for (const auto& n : t_.nodes) finest = std::max<int>(finest, n.depth);
-    n_ = 1 << finest;
-    // Cells from the root down; children are ordered x, then y, then z (bit 0, 1, 2).
-    cells_.resize(t_.nodes.size());
-    cells_[0] = {0, 0, 0, n_};
-    std::vector<std::size_t> stack{0};
-    while (!stack.empty()) {
-      const std::size_t i = stack.back();
-      stack.pop_back();
-      if (t_.nodes[i].is_leaf()) continue;
-      const Cell& c = cells_[i];
-      const int h = c.s / 2;
-      for (int k = 0; k < 8; ++k) {
-        const std::size_t j = static_cast<std::size_t>(t_.nodes[i].first_child + k);
-        cells_[j] = {c.x[0] + (k & 1) * h, c.x[1] + ((k >> 1) & 1) * h, c.x[2] + ((k >> 2) & 1) * h, h};
-        stack.push_back(j);
-      }
-    }
-    for (std::size_t i = 0; i < t_.nodes.size(); ++i) {
-      if (!t_.nodes[i].is_leaf() || !occupied(t_.nodes[i])) continue;
-      const Cell& c = cells_[i];
+    if (t_.node_count == 0) return std::move(mesh_);
+    t_.for_each_leaf([&](const fba::OctreeCell& c) { finest_ = std::max(finest_, c.depth); });
+    n_ = 1 << finest_;
+    t_.for_each_occupied_leaf([&](const fba::OctreeCell& oc) {
+      const int s = 1 << (finest_ - oc.depth);
+      const Cell c{{oc.x * s, oc.y * s, oc.z * s}, s};
       for (int axis = 0; axis < 3; ++axis)
         for (int dir : {-1, 1}) {
           const int plane = c.x[axis] + (dir > 0 ? c.s : 0);
@@ -80,9 +56,11 @@ class SurfaceBuilder {
             face(axis, dir, plane, c);  // the root's boundary: outside is not occupied
             continue;
           }
-          across(node_at(q, c.s), axis, dir, plane, c);
+          Cell nc;
+          const fba::OctreeNode& n = node_at(q, c.s, nc);
+          across(n, nc, axis, dir, plane, c);
         }
-    }
+    });
     return std::move(mesh_);
   }
 
@@ -92,31 +70,35 @@ class SurfaceBuilder {
     int s;     // edge
   };
 
-  // The node of edge >= s containing lattice point q: a leaf, or a node of edge s.
-  std::size_t node_at(const int q[3], int s) const {
-    std::size_t i = 0;
-    while (!t_.nodes[i].is_leaf() && cells_[i].s > s) {
-      const Cell& c = cells_[i];
-      const int h = c.s / 2;
-      const int k = (q[0] >= c.x[0] + h ? 1 : 0) | (q[1] >= c.x[1] + h ? 2 : 0) | (q[2] >= c.x[2] + h ? 4 : 0);
-      i = static_cast<std::size_t>(t_.nodes[i].first_child + k);
+  // The node of edge >= s containing lattice point q: a leaf, or a node of edge s; its cell in `cell`.
+  const fba::OctreeNode& node_at(const int q[3], int s, Cell& cell) const {
+    const fba::OctreeNode* n = &t_.root;
+    cell = {{0, 0, 0}, n_};
+    while (!n->is_leaf() && cell.s > s) {
+      const int h = cell.s / 2;
+      const int bx = q[0] >= cell.x[0] + h, by = q[1] >= cell.x[1] + h, bz = q[2] >= cell.x[2] + h;
+      n = &t_.children(*n)[bx | by << 1 | bz << 2];
+      cell = {{cell.x[0] + bx * h, cell.x[1] + by * h, cell.x[2] + bz * h}, h};
     }
-    return i;
+    return *n;
   }
 
-  // The face of occupied leaf `own` at `plane`, seen against node j across it: emitted where j's
-  // leaves that touch the face are not occupied, as one square per such leaf (or the whole face
-  // when j is a leaf at least as large).
-  void across(std::size_t j, int axis, int dir, int plane, const Cell& own) {
-    const fba::OctreeNode& n = t_.nodes[j];
+  // The face of occupied leaf `own` at `plane`, seen against node n (cell nc) across it: emitted
+  // where n's leaves that touch the face are not occupied, as one square per such leaf (or the
+  // whole face when n is a leaf at least as large).
+  void across(const fba::OctreeNode& n, const Cell& nc, int axis, int dir, int plane, const Cell& own) {
     if (n.is_leaf()) {
-      if (!occupied(n)) face(axis, dir, plane, cells_[j].s < own.s ? cells_[j] : own);
+      if (!occupied(n)) face(axis, dir, plane, nc.s < own.s ? nc : own);
       return;
     }
-    // Children on the near side: their `axis` bit is 0 when j lies on the + side of the face.
+    // Children on the near side: their `axis` bit is 0 when n lies on the + side of the face.
     const int near = dir > 0 ? 0 : 1;
+    const int h = nc.s / 2;
+    const fba::OctreeNode* c = t_.children(n);
     for (int k = 0; k < 8; ++k)
-      if (((k >> axis) & 1) == near) across(static_cast<std::size_t>(n.first_child + k), axis, dir, plane, own);
+      if (((k >> axis) & 1) == near)
+        across(c[k], Cell{{nc.x[0] + (k & 1) * h, nc.x[1] + ((k >> 1) & 1) * h, nc.x[2] + ((k >> 2) & 1) * h}, h}, axis,
+               dir, plane, own);
   }
 
   // A square in the plane axis = plane covering cell c's extent along the two other axes, two
@@ -154,8 +136,8 @@ class SurfaceBuilder {
   }
 
   const fba::Octree& t_;
+  int finest_ = 0;
   int n_ = 1;
-  std::vector<Cell> cells_;
   std::unordered_map<std::uint64_t, int> vertex_index_;
   fba::TriangleMesh mesh_;
 };
@@ -164,8 +146,7 @@ class SurfaceBuilder {
 
 std::vector<Eigen::AlignedBox3d> occupied_leaves(const fba::Octree& t) {
   std::vector<Eigen::AlignedBox3d> out;
-  for (const auto& n : t.nodes)
-    if (n.is_leaf() && occupied(n)) out.push_back(box_of(n));
+  t.for_each_occupied_leaf([&](const fba::OctreeCell& c) { out.push_back(c.box()); });
   return out;
 }
 
@@ -190,9 +171,9 @@ double mask_iou(const cv::Mat& a, const cv::Mat& b) {
 }
 
 std::size_t count_leaf_mismatches(const fba::Octree& a, const fba::Octree& b) {
-  if (a.nodes.empty()) return b.nodes.empty() ? 0 : 1;
-  if (b.nodes.empty() || !a.bounds.isApprox(b.bounds)) return leaves_under(a, 0);
-  return mismatches(a, 0, b, 0);
+  if (a.node_count == 0) return b.node_count == 0 ? 0 : 1;
+  if (b.node_count == 0 || !a.bounds.isApprox(b.bounds)) return leaves_under(a, a.root);
+  return mismatches(a, a.root, b, b.root);
 }
 
 }  // namespace fba::vision
