@@ -1,8 +1,9 @@
 // Reading results out of an Octree: leaves, surface mesh, PLY, re-projection, comparisons.
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <stdexcept>
-#include <unordered_map>
+#include <vector>
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/renderer.hpp"
@@ -44,23 +45,8 @@ class SurfaceBuilder {
     if (t_.node_count == 0) return std::move(mesh_);
     t_.for_each_leaf([&](const fba::OctreeCell& c) { finest_ = std::max(finest_, c.depth); });
     n_ = 1 << finest_;
-    t_.for_each_occupied_leaf([&](const fba::OctreeCell& oc) {
-      const int s = 1 << (finest_ - oc.depth);
-      const Cell c{{oc.x * s, oc.y * s, oc.z * s}, s};
-      for (int axis = 0; axis < 3; ++axis)
-        for (int dir : {-1, 1}) {
-          const int plane = c.x[axis] + (dir > 0 ? c.s : 0);
-          int q[3] = {c.x[0], c.x[1], c.x[2]};
-          q[axis] += dir * c.s;
-          if (q[axis] < 0 || q[axis] >= n_) {
-            face(axis, dir, plane, c);  // the root's boundary: outside is not occupied
-            continue;
-          }
-          Cell nc;
-          const fba::OctreeNode& n = node_at(q, c.s, nc);
-          across(n, nc, axis, dir, plane, c);
-        }
-    });
+    path_[0] = {&t_.root, {{0, 0, 0}, n_}};
+    visit(0);
     return std::move(mesh_);
   }
 
@@ -68,19 +54,56 @@ class SurfaceBuilder {
   struct Cell {
     int x[3];  // min corner, finest-lattice units
     int s;     // edge
+    bool contains(const int q[3]) const {
+      return q[0] >= x[0] && q[1] >= x[1] && q[2] >= x[2] && q[0] < x[0] + s && q[1] < x[1] + s && q[2] < x[2] + s;
+    }
+  };
+  struct Step {
+    const fba::OctreeNode* node;
+    Cell cell;
   };
 
-  // The node of edge >= s containing lattice point q: a leaf, or a node of edge s; its cell in `cell`.
-  const fba::OctreeNode& node_at(const int q[3], int s, Cell& cell) const {
-    const fba::OctreeNode* n = &t_.root;
-    cell = {{0, 0, 0}, n_};
-    while (!n->is_leaf() && cell.s > s) {
-      const int h = cell.s / 2;
-      const int bx = q[0] >= cell.x[0] + h, by = q[1] >= cell.x[1] + h, bz = q[2] >= cell.x[2] + h;
-      n = &t_.children(*n)[bx | by << 1 | bz << 2];
-      cell = {{cell.x[0] + bx * h, cell.x[1] + by * h, cell.x[2] + bz * h}, h};
+  // Depth first over the occupied leaves, keeping their ancestors in path_, so that a neighbour
+  // is looked up from the nearest common ancestor rather than from the root.
+  void visit(int d) {
+    const Step& st = path_[d];
+    if (!occupied(*st.node)) return;
+    if (st.node->is_leaf()) {
+      faces_of(d);
+      return;
     }
-    return *n;
+    const fba::OctreeNode* c = t_.children(*st.node);
+    const int h = st.cell.s / 2;
+    for (int k = 0; k < 8; ++k) {
+      path_[d + 1] = {&c[k], {{st.cell.x[0] + (k & 1) * h, st.cell.x[1] + ((k >> 1) & 1) * h, st.cell.x[2] + ((k >> 2) & 1) * h}, h}};
+      visit(d + 1);
+    }
+  }
+
+  void faces_of(int d) {
+    const Cell c = path_[d].cell;
+    for (int axis = 0; axis < 3; ++axis)
+      for (int dir : {-1, 1}) {
+        const int plane = c.x[axis] + (dir > 0 ? c.s : 0);
+        int q[3] = {c.x[0], c.x[1], c.x[2]};
+        q[axis] += dir * c.s;
+        if (q[axis] < 0 || q[axis] >= n_) {
+          face(axis, dir, plane, c);  // the root's boundary: outside is not occupied
+          continue;
+        }
+        int a = d - 1;  // d >= 1 here: the root's neighbours are all outside
+        while (!path_[a].cell.contains(q)) --a;
+        // Down to the node of edge >= c.s containing q: a leaf, or a node of c's edge.
+        const fba::OctreeNode* n = path_[a].node;
+        Cell nc = path_[a].cell;
+        while (!n->is_leaf() && nc.s > c.s) {
+          const int h = nc.s / 2;
+          const int bx = q[0] >= nc.x[0] + h, by = q[1] >= nc.x[1] + h, bz = q[2] >= nc.x[2] + h;
+          n = &t_.children(*n)[bx | by << 1 | bz << 2];
+          nc = {{nc.x[0] + bx * h, nc.x[1] + by * h, nc.x[2] + bz * h}, h};
+        }
+        across(*n, nc, axis, dir, plane, c);
+      }
   }
 
   // The face of occupied leaf `own` at `plane`, seen against node n (cell nc) across it: emitted
@@ -124,21 +147,49 @@ class SurfaceBuilder {
     }
   }
 
+  // Welds face corners: lattice point -> vertex index, in an open-addressing table (a node-based
+  // map cost more than the rest of the mesh at depth 9).
   int vertex(const int p[3]) {
-    // Coordinates are at most 2^19 (depth <= 19): 21 bits each.
+    // Coordinates are at most 2^19 (depth <= 19): 21 bits each, so ~0 is never a key.
     const std::uint64_t key = std::uint64_t(p[0]) | std::uint64_t(p[1]) << 21 | std::uint64_t(p[2]) << 42;
-    const auto [it, inserted] = vertex_index_.emplace(key, static_cast<int>(mesh_.vertices.size()));
-    if (inserted) {
-      const double unit = t_.bounds.sizes().x() / n_;
-      mesh_.vertices.push_back((t_.bounds.min() + unit * Eigen::Vector3d(p[0], p[1], p[2])).cast<float>());
+    if (2 * (mesh_.vertices.size() + 1) > keys_.size()) grow();
+    const std::size_t mask = keys_.size() - 1;
+    for (std::size_t i = (key * 0x9E3779B97F4A7C15ull) >> shift_;; i = (i + 1) & mask) {
+      if (keys_[i] == key) return values_[i];
+      if (keys_[i] == kNoKey) {
+        keys_[i] = key;
+        values_[i] = static_cast<int>(mesh_.vertices.size());
+        const double unit = t_.bounds.sizes().x() / n_;
+        mesh_.vertices.push_back((t_.bounds.min() + unit * Eigen::Vector3d(p[0], p[1], p[2])).cast<float>());
+        return values_[i];
+      }
     }
-    return it->second;
+  }
+
+  void grow() {
+    std::vector<std::uint64_t> keys = std::move(keys_);
+    std::vector<int> values = std::move(values_);
+    const std::size_t size = std::max<std::size_t>(1024, 2 * keys.size());
+    keys_.assign(size, kNoKey);
+    values_.assign(size, 0);
+    shift_ = 64 - std::countr_zero(size);
+    for (std::size_t j = 0; j < keys.size(); ++j) {
+      if (keys[j] == kNoKey) continue;
+      std::size_t i = (keys[j] * 0x9E3779B97F4A7C15ull) >> shift_;
+      while (keys_[i] != kNoKey) i = (i + 1) & (size - 1);
+      keys_[i] = keys[j];
+      values_[i] = values[j];
+    }
   }
 
   const fba::Octree& t_;
   int finest_ = 0;
   int n_ = 1;
-  std::unordered_map<std::uint64_t, int> vertex_index_;
+  static constexpr std::uint64_t kNoKey = ~std::uint64_t(0);
+  std::vector<std::uint64_t> keys_;
+  std::vector<int> values_;
+  int shift_ = 64;
+  Step path_[32];  // the node being visited and its ancestors, root first (depth <= 19)
   fba::TriangleMesh mesh_;
 };
 
