@@ -538,3 +538,43 @@ TEST(IncrementalCarve, EveryStepIsTheBatchCarveOfTheViewsSoFar) {
     EXPECT_EQ(deepest, static_cast<int>(k) < p.detail_after_views ? p.detail_depth : p.max_depth) << k << " views";
   }
 }
+
+TEST(OctreeStorage, CellsTakeTheirPlaceFromThePath) {
+  fba::Octree t;
+  t.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(-1, 0, 2), Eigen::Vector3d(3, 4, 6));  // edge 4
+  t.max_depth = 2;
+  fba::OctreeNode* c = t.split(t.root, fba::NodeState::Empty);
+  c[6].set_state(fba::NodeState::Partial);
+  t.split(c[6], fba::NodeState::Full)[3].set_state(fba::NodeState::Partial);  // child 6: x-, y+, z+
+  EXPECT_EQ(t.node_count, 17u);
+  EXPECT_EQ(t.bytes(), 17u * 8u);
+  std::vector<fba::OctreeCell> leaves;
+  t.for_each_leaf([&](const fba::OctreeCell& cell) { leaves.push_back(cell); });
+  ASSERT_EQ(leaves.size(), 15u);
+  // Grandchild 3 of child 6: x+ y+ z- within [-1, 1] x [2, 4] x [4, 6].
+  const auto it = std::find_if(leaves.begin(), leaves.end(), [](const fba::OctreeCell& l) { return l.state() == fba::NodeState::Partial; });
+  ASSERT_NE(it, leaves.end());
+  EXPECT_EQ(it->depth, 2);
+  EXPECT_EQ(it->x, 1);
+  EXPECT_EQ(it->y, 3);
+  EXPECT_EQ(it->z, 2);
+  EXPECT_TRUE(it->centre.isApprox(Eigen::Vector3d(0.5, 3.5, 4.5)));
+  EXPECT_DOUBLE_EQ(it->half_size, 0.5);
+  // Occupied leaves: the 8 grandchildren of child 6 (the Empty children prune their subtrees).
+  std::size_t occupied = 0;
+  t.for_each_occupied_leaf([&](const fba::OctreeCell&) { ++occupied; });
+  EXPECT_EQ(occupied, 8u);
+}
+
+TEST(OctreeStorage, ArenaRefusesToGrowPastItsBudgetWithTheFigure) {
+  fba::OctreeArena arena(2);
+  arena.allocate();
+  arena.allocate();
+  try {
+    arena.allocate();
+    FAIL() << "a third block in an arena of two";
+  } catch (const std::length_error& e) {
+    EXPECT_NE(std::string(e.what()).find("more than 2 blocks"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(arena.size(), 2u);
+}
