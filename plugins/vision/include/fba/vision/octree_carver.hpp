@@ -74,8 +74,8 @@ struct CarverParams {
   // Detail waits for views: while fewer than detail_after_views views are in, nodes at depth >=
   // detail_depth are not split (the model stops at detail_depth). The first silhouettes bound the
   // object only by their viewing cones, whose surface later views mostly carve away; refining it
-  // at once made an incremental carve of the 15 dino views visit 4.7 (after 3 views) to 15 (no
-  // wait) times the nodes of the batch carve at depth 9, 1.96 times after 8. With
+  // at once made an incremental carve of the 15 dino views at depth 9 visit 4.7 times the nodes of
+  // the batch carve when detail waited for 3 views, 1.96 times when it waits for 8. With
   // detail_after_views views or more the rule has no effect, so incremental and batch carves of
   // the same views agree at every step. An owner that knows it will get fewer views lowers it
   // (0 = no wait).
