@@ -447,7 +447,8 @@ TEST(Snapshot, PublishingCopiesOnlyWhatTheNextViewVisits) {
   for (const auto& v : dino()) {
     carver.add_view(v);
     const auto t = carver.snapshot();
-    const ViewStats& s = carver.stats().updates.back();
+    const CarveStats stats = carver.stats();
+    const ViewStats& s = stats.updates.back();
     EXPECT_EQ(s.model_nodes, t->node_count);
     EXPECT_EQ(s.model_bytes, 8 * t->node_count);
     // A block is copied only on the way to a node the update visits.
@@ -455,7 +456,8 @@ TEST(Snapshot, PublishingCopiesOnlyWhatTheNextViewVisits) {
   }
   // After the first views, a view changes a small part of the model: it copies far fewer blocks
   // than the model has.
-  const ViewStats& last = carver.stats().updates.back();
+  const CarveStats stats = carver.stats();
+  const ViewStats& last = stats.updates.back();
   EXPECT_LT(8 * last.blocks_copied, last.model_nodes / 4);
 }
 
