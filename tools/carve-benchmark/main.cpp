@@ -1,14 +1,18 @@
 // Reference vs fast octree carving on the Middlebury dino (the 15 good views, silhouettes by the
-// providers' recipe), at depths 6, 7 and 8: times, speed-up, nodes visited, leaf classification
-// mismatches (exit code 1 if any), and the re-projection IoU of the model on every silhouette.
+// providers' recipe), at depths 6, 7 and 8: times (the fast carver with 1 thread and with
+// --threads), speed-up, nodes visited, model size, leaf classification mismatches (exit code 1 if
+// any); then the incremental carve view by view (nodes visited against the batch, what
+// publishing a snapshot after each view costs); and the re-projection IoU of the model on every
+// silhouette.
 //
-//   fba-carve-benchmark [shared-data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX]
+//   fba-carve-benchmark [shared-data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX] [--detail VIEWS,DEPTH]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "fba/vision/contour_extraction.hpp"
@@ -34,11 +38,14 @@ int main(int argc, char** argv) {
   int repeat = 5, threads = 0;
   std::vector<int> depths{6, 7, 8};
   double tolerance = CarverParams{}.silhouette_tolerance;
+  int detail_after_views = CarverParams{}.detail_after_views, detail_depth = CarverParams{}.detail_depth;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--repeat" && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
     else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
     else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
+    else if (a == "--detail" && i + 1 < argc && std::sscanf(argv[++i], "%d,%d", &detail_after_views, &detail_depth) == 2) {
+    }
     else if (a == "--depths" && i + 1 < argc) {
       depths.clear();
       for (const char* p = argv[++i]; *p;) {
@@ -49,7 +56,7 @@ int main(int argc, char** argv) {
     }
     else if (a.rfind("-", 0) == 0) {
       const bool help = a == "--help" || a == "-h";
-      std::fprintf(help ? stdout : stderr, "usage: fba-carve-benchmark [shared-data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX]\n");
+      std::fprintf(help ? stdout : stderr, "usage: fba-carve-benchmark [shared-data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX] [--detail VIEWS,DEPTH]\n");
       if (!help) std::fprintf(stderr, "unknown or incomplete option '%s'\n", a.c_str());
       return help ? 0 : 2;
     } else {
@@ -75,18 +82,22 @@ int main(int argc, char** argv) {
     const Eigen::AlignedBox3d est = OctreeCarver::estimate_bounds(sils);
     std::printf("dino: %zu views; bounds from the README; estimate_bounds gives (%.4f %.4f %.4f)-(%.4f %.4f %.4f)\n",
                 sils.size(), est.min().x(), est.min().y(), est.min().z(), est.max().x(), est.max().y(), est.max().z());
-    std::printf("median of %d runs, fast carver threads=%d (0 = all cores), silhouette tolerance %.4f px\n\n", repeat,
-                threads, tolerance);
-    std::printf("depth  reference_ms  fast_ms  speedup  ref_nodes  fast_nodes_visited  all_leaves  mismatches\n");
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    std::printf("median of %d runs; fast carver with 1 thread and with %d (0 = all %u cores); silhouette tolerance %.4f px\n\n",
+                repeat, threads, cores, tolerance);
+    std::printf("depth  reference_ms  fast1_ms  fastN_ms  speedup1  speedupN  ref_nodes  fast_visited  all_leaves  "
+                "model_nodes  model_MB  B/node  mismatches\n");
 
     std::size_t total_mismatches = 0;
     std::vector<std::pair<int, std::shared_ptr<const fba::Octree>>> models;
+    std::vector<std::size_t> batch_visited;
     for (int depth : depths) {
       CarverParams p;
       p.max_depth = depth;
-      p.threads = threads;
       p.silhouette_tolerance = tolerance;
-      std::vector<double> tr, tf;
+      p.detail_after_views = detail_after_views;
+      p.detail_depth = detail_depth;
+      std::vector<double> tr, t1, tn;
       fba::Octree ref;
       CarveStats rs;
       std::shared_ptr<const fba::Octree> fast;
@@ -95,20 +106,68 @@ int main(int argc, char** argv) {
         double t0 = now();
         ref = reference_carve(sils, box, p, {}, &rs);
         tr.push_back(now() - t0);
-        t0 = now();
-        OctreeCarver carver(p);
-        carver.set_bounds(box);
-        carver.add_views(sils);
-        fast = carver.snapshot();
-        tf.push_back(now() - t0);
-        fs = carver.stats();
+        for (int n : {1, threads}) {
+          p.threads = n;
+          t0 = now();
+          OctreeCarver carver(p);
+          carver.set_bounds(box);
+          carver.add_views(sils);
+          fast = carver.snapshot();
+          (n == 1 ? t1 : tn).push_back(now() - t0);
+          fs = carver.stats();
+        }
       }
       const std::size_t mism = count_leaf_mismatches(ref, *fast) + count_leaf_mismatches(*fast, ref);
       total_mismatches += mism;
-      const std::size_t leaves = std::count_if(fast->nodes.begin(), fast->nodes.end(), [](const fba::OctreeNode& n) { return n.is_leaf(); });
-      std::printf("%5d  %12.1f  %7.1f  %6.2fx  %9zu  %18zu  %10zu  %10zu\n", depth, 1e3 * median(tr), 1e3 * median(tf),
-                  median(tr) / median(tf), rs.nodes_visited, fs.nodes_visited, leaves, mism);
+      std::size_t leaves = 0;
+      fast->for_each_leaf([&](const fba::OctreeCell&) { ++leaves; });
+      std::printf("%5d  %12.1f  %8.1f  %8.1f  %7.2fx  %7.2fx  %9zu  %12zu  %10zu  %11zu  %8.1f  %6zu  %10zu\n", depth,
+                  1e3 * median(tr), 1e3 * median(t1), 1e3 * median(tn), median(tr) / median(t1), median(tr) / median(tn),
+                  rs.nodes_visited, fs.nodes_visited, leaves, fast->node_count, fast->bytes() / 1048576.0,
+                  fast->bytes() / fast->node_count, mism);
       models.emplace_back(depth, fast);
+      batch_visited.push_back(fs.nodes_visited);
+    }
+
+    // Incremental: the views one by one (threads as given), once without publishing and once with
+    // a snapshot after every view (as the task does); the difference in carving time is what
+    // publishing costs (the blocks the next update must copy), plus snapshot() itself.
+    for (std::size_t m = 0; m < models.size(); ++m) {
+      CarverParams p;
+      p.max_depth = models[m].first;
+      p.silhouette_tolerance = tolerance;
+      p.detail_after_views = detail_after_views;
+      p.detail_depth = detail_depth;
+      p.threads = threads;
+      std::printf("\nincremental, depth %d: per view\nview  visited  carve_ms  carve_ms_publishing  snapshot_ms  "
+                  "blocks_copied  model_MB  storage_MB\n", p.max_depth);
+      OctreeCarver quiet(p), published(p);
+      quiet.set_bounds(box);
+      published.set_bounds(box);
+      std::shared_ptr<const fba::Octree> last;
+      for (const auto& s : sils) {
+        quiet.add_view(s);
+        published.add_view(s);
+        last = published.snapshot();
+      }
+      const auto q = quiet.stats(), pb = published.stats();
+      double quiet_total = 0, published_total = 0, snapshot_total = 0;
+      for (std::size_t v = 1; v < q.updates.size(); ++v) {  // updates[0] is set_bounds
+        const ViewStats& a = q.updates[v];
+        const ViewStats& b = pb.updates[v];
+        quiet_total += a.carve_seconds, published_total += b.carve_seconds, snapshot_total += b.snapshot_seconds;
+        std::printf("%4zu  %7zu  %8.1f  %19.1f  %11.3f  %13zu  %8.1f  %10.1f\n", v, a.nodes_visited, 1e3 * a.carve_seconds,
+                    1e3 * b.carve_seconds, 1e3 * b.snapshot_seconds, b.blocks_copied, b.model_bytes / 1048576.0,
+                    b.storage_bytes / 1048576.0);
+      }
+      const double cost = (published_total - quiet_total + snapshot_total) / quiet_total;
+      const std::size_t inc_mism = count_leaf_mismatches(*last, *models[m].second) + count_leaf_mismatches(*models[m].second, *last);
+      total_mismatches += inc_mism;
+      std::printf("depth %d: incremental visits %zu nodes, batch %zu (%.2fx; target <= 2x); publishing after every "
+                  "view adds %.1f%% to the carving time (%.0f ms against %.0f ms; target < 10%%); incremental vs batch "
+                  "mismatches %zu\n",
+                  p.max_depth, q.nodes_visited, batch_visited[m], double(q.nodes_visited) / double(batch_visited[m]),
+                  100 * cost, 1e3 * (published_total + snapshot_total), 1e3 * quiet_total, inc_mism);
     }
 
     std::printf("\nre-projection IoU of the carved model on each silhouette\nview          ");

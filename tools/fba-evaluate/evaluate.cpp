@@ -1,5 +1,6 @@
 #include "evaluate.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -125,13 +126,14 @@ SyntheticResult evaluate_synthetic(const std::filesystem::path& mesh_path,
   cp.max_depth = p.depth;
   cp.threads = p.threads;
   cp.silhouette_tolerance = p.silhouette_tolerance;
+  cp.detail_after_views = std::min(cp.detail_after_views, p.views);  // full detail with all the views there are
   vision::OctreeCarver carver(cp);
   carver.set_bounds(out.cube);
   const auto t0 = Clock::now();
   for (const auto& s : silhouettes) carver.add_view(s);
   const std::shared_ptr<const Octree> model = carver.snapshot();
   out.carve_ms = ms_since(t0);
-  out.octree_nodes = model->nodes.size();
+  out.octree_nodes = model->node_count;
 
   // The truth on the carver's own root cube, so both grids share their lattice exactly.
   const geometry::VoxelGrid truth = geometry::voxelize(mesh, model->bounds, p.depth);

@@ -255,23 +255,16 @@ VoxelGrid rasterize_octree(const Octree& octree) {
     throw std::invalid_argument("rasterize_octree: max_depth must be in 0..10");
   const int n = 1 << octree.max_depth;
   VoxelGrid grid(octree.bounds, n);
-  const double h = grid.voxel_size();
-  for (const auto& node : octree.nodes) {
-    if (!node.is_leaf() || node.state == NodeState::Empty) continue;
-    if (node.depth > octree.max_depth)
-      throw std::invalid_argument("rasterize_octree: node deeper than max_depth");
-    const int span = 1 << (octree.max_depth - node.depth);
-    int start[3];
-    for (int a = 0; a < 3; ++a) {
-      // Node corners sit on the voxel lattice; rounding absorbs float error in centre/half_size.
-      const double corner = node.centre[a] - node.half_size - octree.bounds.min()[a];
-      start[a] = std::clamp(static_cast<int>(std::lround(corner / h)), 0, n - span);
-    }
+  octree.for_each_occupied_leaf([&](const OctreeCell& c) {
+    if (c.depth > octree.max_depth) throw std::invalid_argument("rasterize_octree: node deeper than max_depth");
+    // The cell's min corner on the voxel lattice, from its path.
+    const int span = 1 << (octree.max_depth - c.depth);
+    const int start[3] = {c.x * span, c.y * span, c.z * span};
     for (int k = start[2]; k < start[2] + span; ++k)
       for (int j = start[1]; j < start[1] + span; ++j)
         std::fill_n(grid.occupancy.begin() + static_cast<std::ptrdiff_t>(grid.index(start[0], j, k)),
                     span, std::uint8_t{1});
-  }
+  });
   return grid;
 }
 

@@ -1,11 +1,11 @@
-// The node test shared by OctreeCarver and reference_carve (see octree_carver.hpp): corner
-// positions on an integer lattice, the rectangle rule, occupancy, the split decision. The
-// projection itself is not shared: the reference projects every corner with P * X, the fast
-// carver with the cheaper node_rect() below, so the reference stays an independent oracle; the
-// two agree except when a projection lands within rounding error (~1e-13 px) of a pixel edge,
-// which the benchmark and the tests check by counting mismatches. A pixel is the closed unit
-// square around its centre; the tolerance tol (CarverParams::silhouette_tolerance, pixels) is how
-// far from a projection a silhouette pixel's square may lie and still count.
+// The fast carver's node test (see octree_carver.hpp): corner positions on an integer lattice, the
+// rectangle rule, occupancy, the leaf test. reference_carve.cpp writes the same rules again on its
+// own (and projects every corner with P * X where node_rect() below adds projected edges), so it
+// is an independent oracle; the two agree except when a projection lands within rounding error
+// (~1e-13 px) of a pixel edge, which the benchmark and the tests check by counting mismatches. A
+// pixel is the closed unit square around its centre; the tolerance tol
+// (CarverParams::silhouette_tolerance, pixels) is how far from a projection a silhouette pixel's
+// square may lie and still count.
 #pragma once
 
 #include <algorithm>
@@ -17,7 +17,6 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include "fba/types/octree.hpp"
 #include "fba/types/regions_of_interest.hpp"
 #include "fba/types/silhouette.hpp"
 #include "fba/vision/octree_carver.hpp"
@@ -173,14 +172,6 @@ inline bool intersects_roi(const fba::RegionsOfInterest& roi, const Lattice& L, 
   return false;
 }
 
-inline void set_geometry(fba::OctreeNode& n, const Lattice& L, const NodeKey& k) {
-  const int s = cells_at_depth(k.depth);
-  const Eigen::Vector3d lo = L.corner(k.ix, k.iy, k.iz), hi = L.corner(k.ix + s, k.iy + s, k.iz + s);
-  n.centre = (0.5 * (lo + hi)).cast<float>();
-  n.half_size = static_cast<float>(0.5 * (hi.x() - lo.x()));
-  n.depth = static_cast<std::uint8_t>(k.depth);
-}
-
 // The leaf test (see octree_carver.hpp). A view may carve a leaf only if it sees the whole node:
 // in front of the camera and its rectangle inside the image, so that every pixel within the
 // tolerance of the projection is known (a node partly outside an image is never carved on that
@@ -233,23 +224,10 @@ inline bool at_resolution_limit(const CarverParams& p, const Lattice& L, int dep
 
 // The leaf test applies to the leaves at the resolution limit that are not wholly inside every
 // view (a wholly inside node has silhouette pixels all round its centre).
-inline bool wants_leaf_test(const CarverParams& p, const Lattice& L, int depth, double min_occ) {
-  return min_occ < 1 && at_resolution_limit(p, L, depth);
-}
-
 enum class Split { No, Generic, Grasp };
 
-// Algorithm 2's decision for a node that is not Empty, given its lowest and highest occupancy
-// over the views. The generic criterion asks when some view sees the node occupied above the
-// threshold, as the paper applies it view by view. Both quantities only move one way as views
-// come in (the lowest falls, the highest rises), so a split once made is never withdrawn by a
-// later view: carved space stays carved, and the model still depends only on its inputs.
-inline Split split_decision(const CarverParams& p, const Lattice& L, int depth, double min_occ, double max_occ,
-                            bool roi_hit, bool curvature_hit) {
-  if (min_occ <= 0 || min_occ >= 1 || at_resolution_limit(p, L, depth)) return Split::No;
-  if (max_occ > p.occupancy_threshold) return Split::Generic;
-  if (roi_hit || curvature_hit) return Split::Grasp;
-  return Split::No;
+inline bool wants_leaf_test(const CarverParams& p, const Lattice& L, int depth, double min_occ) {
+  return min_occ < 1 && at_resolution_limit(p, L, depth);
 }
 
 inline void check_params(const CarverParams& p) {
@@ -257,6 +235,8 @@ inline void check_params(const CarverParams& p) {
     throw std::invalid_argument("CarverParams.max_depth: expected 0..19, found " + std::to_string(p.max_depth));
   if (p.min_node_size < 0 || p.occupancy_threshold < 0 || p.occupancy_threshold > 1)
     throw std::invalid_argument("CarverParams: expected min_node_size >= 0 and occupancy_threshold in 0..1");
+  if (p.detail_after_views < 0 || p.detail_depth < 0)
+    throw std::invalid_argument("CarverParams: expected detail_after_views >= 0 and detail_depth >= 0");
   if (!(p.silhouette_tolerance >= 0 && p.silhouette_tolerance <= 64))
     throw std::invalid_argument("CarverParams.silhouette_tolerance: expected 0..64 pixels, found " +
                                 std::to_string(p.silhouette_tolerance));

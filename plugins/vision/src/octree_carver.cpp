@@ -2,6 +2,11 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <exception>
+#include <functional>
+#include <limits>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 
@@ -52,33 +57,74 @@ ViewData make_view(const fba::Silhouette& s, double curvature_threshold) {
 }  // namespace detail
 
 // ---------------------------------------------------------------------------------------------
-// The fast carver: a pointer octree whose eight children are allocated together, updated
-// depth-first so a node's data is hot when its children are tested, subtrees shared out to
-// threads. Compared with the reference it saves work three ways that leave every decision the
-// same: views in which an ancestor was wholly inside are not tested (a child's corners are inside
-// the parent's cube, so its rectangle is inside the parent's), the view that gave the parent its
-// lowest occupancy is tested first, and testing stops at the first view that carves the node.
+// The fast carver works on the published representation itself: 8-byte nodes in blocks of an
+// arena shared with the snapshots. A block that a snapshot may reach (index below `frozen`) is
+// never written: the update copies it and relinks its parent (whose own block was made writable
+// the same way on the way down), so a snapshot is O(1) and an update copies only what it visits.
+//
+// Compared with the reference it saves work in ways that leave every decision the same:
+//  * a node whose ancestor is wholly inside a view is not tested against it (a child's corners
+//    are inside the parent's cube, so its rectangle is inside the parent's);
+//  * a new view that sees a node wholly inside cannot change anything below it (no carving, no
+//    lower occupancy, no contour point), so the node's subtree is not visited at all, unless a
+//    node below could start splitting because its highest occupancy rises to 1 (only with an
+//    occupancy threshold above 0; the kSubtreeAbove flag says no node below can);
+//  * the view that gave the parent its lowest occupancy is tested first, and testing stops at the
+//    first view that carves the node; the leaf test of an existing leaf needs only the new views.
 
 namespace {
 
-struct FastNode {
-  double min_occ = 1;              // lowest occupancy over the views tested
-  double max_occ = 0;              // highest occupancy (1 when wholly inside some view)
-  std::uint64_t full_views = 0;    // bit v: wholly inside silhouette v (views 0..63)
-  bool empty = false;
-  bool curvature_hit = false;
-  Split split = Split::No;
-  std::unique_ptr<FastNode[]> children;  // 8, or none
-};
+// The producer flags of a node (fba::OctreeNode::flag).
+constexpr int kCurvatureHit = 0;  // a view where it is not wholly inside has a graspable contour point in its rectangle
+constexpr int kAbove = 1;         // some view's occupancy is above occupancy_threshold
+constexpr int kSubtreeAbove = 2;  // kAbove holds for this node and every non-empty node below it
+
+constexpr float kBelowOne = 0.99999994f;  // the largest float below 1: a partial node's occupancy
 
 struct Task {
-  FastNode* node;
+  fba::OctreeNode* node;
   NodeKey key;
   int from_view;
   int hint;
+  std::uint64_t full_mask;
 };
 
+std::uint64_t low_bits(int n) { return n >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1; }
+
 }  // namespace
+
+void run_on_threads(unsigned threads, std::size_t n, const std::function<void(std::size_t)>& f) {
+  const unsigned t = static_cast<unsigned>(std::max<std::size_t>(1, std::min<std::size_t>(threads, n)));
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto work = [&] {
+    try {
+      for (std::size_t i; (i = next.fetch_add(1)) < n;) f(i);
+    } catch (...) {
+      std::lock_guard lock(error_mutex);
+      if (!error) error = std::current_exception();
+      next = n;  // the others stop at their next task
+    }
+  };
+  std::vector<std::thread> pool;
+  try {
+    for (unsigned i = 1; i < t; ++i) pool.emplace_back(work);
+  } catch (...) {  // could not start a thread: the ones started and this one do the work
+  }
+  work();
+  for (auto& th : pool) th.join();
+  if (error) std::rethrow_exception(error);
+}
+
+std::size_t worst_case_bytes(int max_depth) {
+  // Every node of levels 0..max_depth, and as much again for the blocks that older versions
+  // still hold before the storage is compacted.
+  double nodes = 0;
+  for (int d = 0; d <= max_depth; ++d) nodes += std::pow(8.0, d);
+  const double bytes = 2 * nodes * sizeof(fba::OctreeNode);
+  return bytes >= 1.8e19 ? std::numeric_limits<std::size_t>::max() : static_cast<std::size_t>(bytes);
+}
 
 struct OctreeCarver::Impl {
   CarverParams params;
@@ -87,164 +133,251 @@ struct OctreeCarver::Impl {
   bool has_bounds = false;
   Eigen::AlignedBox3d cube;
   Lattice lattice;
-  FastNode root;
+  fba::OctreeNode root;
+  std::shared_ptr<fba::OctreeArena> arena;
+  std::uint32_t frozen = 0;          // blocks below this index may be held by a snapshot
+  std::atomic<std::int64_t> live_blocks{0};  // blocks reachable from the root
   CarveStats stats;
   std::shared_ptr<const fba::Octree> cached;
 
   struct Context {
-    std::size_t visited = 0, refined = 0;
+    std::size_t visited = 0, refined = 0, copied = 0;
     std::vector<Task>* defer = nullptr;  // when set, nodes at defer_depth are queued, not updated
     int defer_depth = 0;
   };
 
-  // Tests n against views [from_view, n_views) (first `hint`), then makes Algorithm 2's decision
-  // and recurses. Existing children are updated with the same new views; new children with all.
-  void update(FastNode& n, const NodeKey& k, int from_view, int hint, Context& ctx) const {
-    if (n.empty) return;  // carved stays carved
+  static void fresh(fba::OctreeNode& n) {  // a node no view has tested: lowest occupancy 1 so far
+    n = fba::OctreeNode{};
+    n.set_occupancy(1);
+  }
+
+  std::int64_t blocks_under(const fba::OctreeNode& n) const {
+    if (n.is_leaf()) return 0;
+    std::int64_t s = 1;
+    for (const auto& c : (*arena)[n.children()].child) s += blocks_under(c);
+    return s;
+  }
+
+  void drop_children(fba::OctreeNode& n) {
+    if (n.is_leaf()) return;
+    live_blocks -= blocks_under(n);
+    n.clear_children();
+  }
+
+  // Tests n against views [from_view, n_views) (first `hint`; views in full_mask are known to see
+  // it wholly inside), then makes Algorithm 2's decision and recurses. Existing children are
+  // updated with the same new views; new children with all. n must be writable.
+  void update(fba::OctreeNode& n, const NodeKey& k, int from_view, int hint, std::uint64_t full_mask, Context& ctx) {
+    if (n.state() == fba::NodeState::Empty) return;  // carved stays carved
     if (ctx.defer && k.depth == ctx.defer_depth) {
-      ctx.defer->push_back({&n, k, from_view, hint});
+      ctx.defer->push_back({&n, k, from_view, hint, full_mask});
       return;
     }
     ++ctx.visited;
     const int nv = static_cast<int>(views.size());
+    // A node wholly inside every view so far (lowest occupancy 1) is wholly inside the old views.
+    std::uint64_t mask = full_mask | (n.occupancy() >= 1 ? low_bits(from_view) : 0);
+    float min_occ = n.occupancy();
+    bool above = n.flag(kAbove), curvature_hit = n.flag(kCurvatureHit), all_full = true;
     int argmin = hint;
     double lowest = 2;
-    Rect rects[64];               // rectangles computed here, reused by the leaf test
+    Rect rects[64];  // rectangles computed here, reused by the leaf test
     std::uint64_t have_rect = 0;
-    auto test = [&](int v) {  // false when the view carves the node
-      if (v < 64 && ((n.full_views >> v) & 1u)) return true;
-      const Rect r = node_rect(views[static_cast<std::size_t>(v)], lattice, k, params.silhouette_tolerance);
-      if (v < 64) rects[v] = r, have_rect |= std::uint64_t(1) << v;
-      const Occupancy o = occupancy(views[static_cast<std::size_t>(v)], r);
-      if (o.empty()) return false;
-      const double val = o.value();
-      n.min_occ = std::min(n.min_occ, val);
-      n.max_occ = std::max(n.max_occ, val);
-      if (val < lowest) lowest = val, argmin = v;
-      if (o.full()) {
-        if (v < 64) n.full_views |= std::uint64_t(1) << v;
-      } else if (!n.curvature_hit && graspable_contour_in(views[static_cast<std::size_t>(v)], r)) {
-        n.curvature_hit = true;
+    auto carves = [&](int v) {
+      if (v < 64 && ((mask >> v) & 1u)) {
+        above = above || 1.0 > params.occupancy_threshold;
+        return false;
       }
-      return true;
+      const ViewData& view = views[static_cast<std::size_t>(v)];
+      const Rect r = node_rect(view, lattice, k, params.silhouette_tolerance);
+      if (v < 64) rects[v] = r, have_rect |= std::uint64_t(1) << v;
+      const Occupancy o = occupancy(view, r);
+      if (o.empty()) return true;
+      const double val = o.value();
+      above = above || val > params.occupancy_threshold;
+      if (o.full()) {
+        if (v < 64) mask |= std::uint64_t(1) << v;
+        return false;
+      }
+      all_full = false;
+      min_occ = std::min(min_occ, std::min(static_cast<float>(val), kBelowOne));
+      if (val < lowest) lowest = val, argmin = v;
+      curvature_hit = curvature_hit || graspable_contour_in(view, r);
+      return false;
     };
-    bool carved = hint >= from_view && hint < nv && !test(hint);
+    bool carved = hint >= from_view && hint < nv && carves(hint);
     for (int v = from_view; v < nv && !carved; ++v)
-      if (v != hint) carved = !test(v);
+      if (v != hint) carved = carves(v);
     if (carved) {
-      n.empty = true;
-      n.min_occ = 0;
-      n.children.reset();
+      set_empty(n);
       return;
     }
-    n.split = split_decision(params, lattice, k.depth, n.min_occ, n.max_occ, intersects_roi(roi, lattice, k), n.curvature_hit);
-    // Views in which the node is wholly inside cannot carve it by the leaf test either.
-    bool leaf_carved = false;
-    if (n.split == Split::No && wants_leaf_test(params, lattice, k.depth, n.min_occ))
-      for (int v = 0; v < nv && !leaf_carved; ++v) {
-        if (v < 64 && ((n.full_views >> v) & 1u)) continue;
+    n.set_occupancy(min_occ);
+    n.set_flag(kAbove, above);
+    n.set_flag(kCurvatureHit, curvature_hit);
+    // Nothing below can change (see the top of this section), unless detail held back until now
+    // is due.
+    const bool detail_due = from_view < params.detail_after_views && nv >= params.detail_after_views;
+    if (from_view < nv && all_full && !n.is_leaf() && !detail_due &&
+        (n.flag(kSubtreeAbove) || params.occupancy_threshold >= 1))
+      return;
+
+    const bool full = min_occ >= 1;
+    Split split = Split::No;
+    if (!full && !at_resolution_limit(params, lattice, k.depth)) {
+      if (above) split = Split::Generic;
+      else if (curvature_hit || intersects_roi(roi, lattice, k)) split = Split::Grasp;
+      if (nv < params.detail_after_views && k.depth >= params.detail_depth) split = Split::No;
+    }
+    // The leaf test: earlier views were tested when the node became a leaf at the limit, or saw
+    // it wholly inside, so only the new views can carve it now.
+    if (split == Split::No && wants_leaf_test(params, lattice, k.depth, min_occ))
+      for (int v = from_view; v < nv; ++v) {
+        if (v < 64 && ((mask >> v) & 1u)) continue;
         const ViewData& view = views[static_cast<std::size_t>(v)];
         const Rect r = v < 64 && ((have_rect >> v) & 1u) ? rects[v] : node_rect(view, lattice, k, params.silhouette_tolerance);
         double u = 0, w = 0;
-        leaf_carved = project_centre(view, lattice, k, u, w) && leaf_carved_by(view, r, u, w, params.silhouette_tolerance);
+        if (project_centre(view, lattice, k, u, w) && leaf_carved_by(view, r, u, w, params.silhouette_tolerance)) {
+          set_empty(n);
+          return;
+        }
       }
-    if (leaf_carved) {
-      n.empty = true;
-      n.min_occ = 0;
-      n.children.reset();
+    if (split == Split::No) {
+      drop_children(n);  // no longer wanted (fewer regions of interest, or occupancy fell)
+      n.set_state(full ? fba::NodeState::Full : fba::NodeState::Partial);
+      n.set_interest(false);
+      n.set_flag(kSubtreeAbove, above);
       return;
     }
-    if (n.split == Split::No) {
-      n.children.reset();  // no longer wanted (fewer regions of interest, or occupancy fell)
-      return;
-    }
+    n.set_state(fba::NodeState::Partial);
+    n.set_interest(split == Split::Grasp);
     int child_from = from_view;
-    if (!n.children) {
-      n.children = std::make_unique<FastNode[]>(8);
-      for (int c = 0; c < 8; ++c) {
-        n.children[c].full_views = n.full_views;  // those views are skipped: occupancy 1 there
-        n.children[c].max_occ = n.full_views ? 1 : 0;
-      }
+    if (n.is_leaf()) {
+      const std::uint32_t b = arena->allocate();
+      for (auto& c : (*arena)[b].child) fresh(c);
+      n.set_children(b);
+      ++live_blocks;
       child_from = 0;
       ++ctx.refined;
+    } else if (n.children() < frozen) {  // held by a snapshot: write a copy
+      const std::uint32_t b = arena->allocate();
+      (*arena)[b] = (*arena)[n.children()];
+      n.set_children(b);
+      ++ctx.copied;
     }
-    for (int c = 0; c < 8; ++c) update(n.children[c], k.child(c), child_from, argmin, ctx);
+    fba::OctreeNode* c = (*arena)[n.children()].child;
+    for (int i = 0; i < 8; ++i) update(c[i], k.child(i), child_from, argmin, mask, ctx);
+    if (!ctx.defer) refresh_subtree_above(n);
+  }
+
+  void set_empty(fba::OctreeNode& n) {
+    drop_children(n);
+    n = fba::OctreeNode{};
+    n.set_state(fba::NodeState::Empty);
+    n.set_flag(kSubtreeAbove, true);
+  }
+
+  void refresh_subtree_above(fba::OctreeNode& n) const {
+    bool all = n.flag(kAbove);
+    if (!n.is_leaf())
+      for (const auto& c : (*arena)[n.children()].child) all = all && c.flag(kSubtreeAbove);
+    n.set_flag(kSubtreeAbove, all);
+  }
+
+  // After the parallel part: the flags of the nodes above defer_depth, bottom up.
+  void refresh_top(fba::OctreeNode& n, int depth, int defer_depth) {
+    if (n.is_leaf() || depth >= defer_depth) return;
+    for (auto& c : (*arena)[n.children()].child) refresh_top(c, depth + 1, defer_depth);
+    refresh_subtree_above(n);
+  }
+
+  void parallel_for(std::size_t n, const std::function<void(std::size_t)>& f) const {
+    if (params.parallel_for) return params.parallel_for(n, f);
+    const unsigned threads = params.threads > 0 ? static_cast<unsigned>(params.threads) : std::thread::hardware_concurrency();
+    run_on_threads(threads, n, f);
+  }
+
+  // Copies the live tree into a new arena when old blocks (dropped, or copied for a snapshot)
+  // outnumber the live ones: O(live) at most once per as many blocks written, and versions still
+  // read keep the old arena alive.
+  void compact_if_wasteful() {
+    const std::int64_t live = live_blocks.load(), total = arena->size();
+    if (total - live <= live + 4096) return;
+    auto fresh_arena = std::make_shared<fba::OctreeArena>(arena->max_blocks());
+    std::function<void(fba::OctreeNode&)> copy = [&](fba::OctreeNode& n) {
+      if (n.is_leaf()) return;
+      const std::uint32_t b = fresh_arena->allocate();
+      (*fresh_arena)[b] = (*arena)[n.children()];
+      n.set_children(b);
+      for (auto& c : (*fresh_arena)[b].child) copy(c);
+    };
+    copy(root);
+    arena = std::move(fresh_arena);
+    frozen = 0;
   }
 
   // Updates the whole tree with views [from_view, n_views).
   void run(int from_view) {
-    if (!has_bounds) return;
-    const auto t0 = std::chrono::steady_clock::now();
-    std::vector<Task> tasks;
-    Context top;
-    top.defer = &tasks;
-    top.defer_depth = 3;  // up to 512 subtrees, enough to balance two to a few dozen threads
-    update(root, NodeKey{}, from_view, from_view, top);
-
-    unsigned n_threads = params.threads > 0 ? static_cast<unsigned>(params.threads) : std::thread::hardware_concurrency();
-    n_threads = std::max(1u, std::min<unsigned>(n_threads, static_cast<unsigned>(tasks.size())));
-    std::vector<Context> ctx(n_threads);
-    std::atomic<std::size_t> next{0};
-    auto work = [&](Context& c) {
-      for (std::size_t i; (i = next.fetch_add(1)) < tasks.size();) {
+    ViewStats vs;
+    vs.views = views.size();
+    if (has_bounds) {
+      const auto t0 = std::chrono::steady_clock::now();
+      std::vector<Task> tasks;
+      Context top;
+      top.defer = &tasks;
+      top.defer_depth = 3;  // up to 512 subtrees, enough to balance two to a few dozen threads
+      update(root, NodeKey{}, from_view, from_view, 0, top);
+      std::vector<Context> ctx(tasks.size());
+      parallel_for(tasks.size(), [&](std::size_t i) {
         const Task& t = tasks[i];
-        update(*t.node, t.key, t.from_view, t.hint, c);
-      }
-    };
-    if (n_threads <= 1) {
-      if (!ctx.empty()) work(ctx[0]);
-    } else {
-      std::vector<std::thread> pool;
-      for (unsigned i = 1; i < n_threads; ++i) pool.emplace_back(work, std::ref(ctx[i]));
-      work(ctx[0]);
-      for (auto& t : pool) t.join();
+        update(*t.node, t.key, t.from_view, t.hint, t.full_mask, ctx[i]);
+      });
+      refresh_top(root, 0, top.defer_depth);
+      vs.nodes_visited = top.visited, vs.nodes_refined = top.refined, vs.blocks_copied = top.copied;
+      for (const auto& c : ctx) vs.nodes_visited += c.visited, vs.nodes_refined += c.refined, vs.blocks_copied += c.copied;
+      compact_if_wasteful();
+      vs.carve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
-    stats.nodes_visited += top.visited;
-    stats.nodes_refined += top.refined;
-    for (const auto& c : ctx) stats.nodes_visited += c.visited, stats.nodes_refined += c.refined;
-    stats.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    vs.model_nodes = 1 + 8 * static_cast<std::size_t>(live_blocks.load());
+    vs.model_bytes = vs.model_nodes * sizeof(fba::OctreeNode);
+    vs.storage_bytes = std::size_t(arena->size()) * sizeof(fba::OctreeBlock);
+    stats.nodes_visited += vs.nodes_visited;
+    stats.nodes_refined += vs.nodes_refined;
+    stats.seconds += vs.carve_seconds;
+    stats.updates.push_back(vs);
     cached.reset();
   }
 
-  std::shared_ptr<const fba::Octree> flatten() const {
+  std::shared_ptr<const fba::Octree> publish() {
+    const auto t0 = std::chrono::steady_clock::now();
     auto t = std::make_shared<fba::Octree>();
     t->max_depth = params.max_depth;
     t->views = static_cast<int>(views.size());
-    if (!has_bounds) return t;
-    t->bounds = cube;
-    // Breadth first, like the reference, so the two layouts agree node for node.
-    std::vector<std::pair<const FastNode*, NodeKey>> queue{{&root, NodeKey{}}};
-    t->nodes.emplace_back();
-    for (std::size_t i = 0; i < queue.size(); ++i) {
-      const auto [fn, k] = queue[i];
-      fba::OctreeNode n;
-      set_geometry(n, lattice, k);
-      if (fn->empty) {
-        n.state = fba::NodeState::Empty;
-        n.occupancy = 0;
-      } else {
-        n.occupancy = static_cast<float>(fn->min_occ);
-        if (fn->children) {
-          n.state = fba::NodeState::Partial;
-          n.interest = fn->split == Split::Grasp ? 1.0f : 0.0f;
-          n.first_child = static_cast<std::int32_t>(queue.size());
-          for (int c = 0; c < 8; ++c) {
-            queue.emplace_back(&fn->children[c], k.child(c));
-            t->nodes.emplace_back();
-          }
-        } else {
-          n.state = fn->min_occ >= 1 ? fba::NodeState::Full : fba::NodeState::Partial;
-        }
-      }
-      t->nodes[i] = n;
+    if (has_bounds) {
+      t->bounds = cube;
+      t->root = root;
+      t->arena = arena;
+      t->node_count = 1 + 8 * static_cast<std::size_t>(live_blocks.load());
+      frozen = arena->size();  // from now on, the next update copies before writing
+    } else {
+      t->node_count = 0;
     }
+    if (!stats.updates.empty())
+      stats.updates.back().snapshot_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return t;
   }
 };
 
 OctreeCarver::OctreeCarver(CarverParams p) : params_(p), impl_(std::make_unique<Impl>()) {
   check_params(p);
+  const std::size_t need = worst_case_bytes(p.max_depth);
+  if (need > p.memory_budget)
+    throw std::invalid_argument("OctreeCarver: max_depth " + std::to_string(p.max_depth) + " may need up to " +
+                                std::to_string(need >> 20) + " MiB, more than the memory budget of " +
+                                std::to_string(p.memory_budget >> 20) + " MiB (CarverParams::memory_budget)");
   impl_->params = p;
+  impl_->arena = std::make_shared<fba::OctreeArena>(p.memory_budget / sizeof(fba::OctreeBlock));
+  Impl::fresh(impl_->root);
 }
 
 OctreeCarver::~OctreeCarver() = default;
@@ -255,7 +388,10 @@ void OctreeCarver::set_bounds(const Eigen::AlignedBox3d& box) {
   impl_->cube = cube;
   impl_->lattice = Lattice{cube.min(), cube.sizes().x()};
   impl_->has_bounds = true;
-  impl_->root = FastNode{};
+  Impl::fresh(impl_->root);
+  impl_->arena = std::make_shared<fba::OctreeArena>(impl_->arena->max_blocks());
+  impl_->frozen = 0;
+  impl_->live_blocks = 0;
   impl_->run(0);
 }
 
@@ -285,7 +421,7 @@ void OctreeCarver::set_regions_of_interest(const fba::RegionsOfInterest& roi) {
 
 std::shared_ptr<const fba::Octree> OctreeCarver::snapshot() const {
   std::lock_guard lock(mutex_);
-  if (!impl_->cached) impl_->cached = impl_->flatten();
+  if (!impl_->cached) impl_->cached = impl_->publish();
   return impl_->cached;
 }
 

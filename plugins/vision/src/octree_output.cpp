@@ -1,8 +1,9 @@
 // Reading results out of an Octree: leaves, surface mesh, PLY, re-projection, comparisons.
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <stdexcept>
-#include <unordered_map>
+#include <vector>
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/renderer.hpp"
@@ -12,31 +13,24 @@ namespace fba::vision {
 
 namespace {
 
-bool occupied(const fba::OctreeNode& n) { return n.state != fba::NodeState::Empty; }
+bool occupied(const fba::OctreeNode& n) { return n.state() != fba::NodeState::Empty; }
 
-Eigen::AlignedBox3d box_of(const fba::OctreeNode& n) {
-  const Eigen::Vector3d c = n.centre.cast<double>();
-  const Eigen::Vector3d h = Eigen::Vector3d::Constant(n.half_size);
-  return {c - h, c + h};
-}
-
-std::size_t leaves_under(const fba::Octree& t, std::size_t i) {
-  const auto& n = t.nodes[i];
+std::size_t leaves_under(const fba::Octree& t, const fba::OctreeNode& n) {
   if (n.is_leaf()) return 1;
   std::size_t s = 0;
-  for (int c = 0; c < 8; ++c) s += leaves_under(t, static_cast<std::size_t>(n.first_child + c));
+  const fba::OctreeNode* c = t.children(n);
+  for (int i = 0; i < 8; ++i) s += leaves_under(t, c[i]);
   return s;
 }
 
-std::size_t mismatches(const fba::Octree& a, std::size_t ia, const fba::Octree& b, std::size_t ib) {
-  const auto& na = a.nodes[ia];
-  const auto& nb = b.nodes[ib];
-  if (na.is_leaf() && nb.is_leaf()) return na.state != nb.state ? 1 : 0;
+std::size_t mismatches(const fba::Octree& a, const fba::OctreeNode& na, const fba::Octree& b, const fba::OctreeNode& nb) {
+  if (na.is_leaf() && nb.is_leaf()) return na.state() != nb.state() ? 1 : 0;
   if (na.is_leaf()) return 1;
-  if (nb.is_leaf()) return leaves_under(a, ia);
+  if (nb.is_leaf()) return leaves_under(a, na);
   std::size_t s = 0;
-  for (int c = 0; c < 8; ++c)
-    s += mismatches(a, static_cast<std::size_t>(na.first_child + c), b, static_cast<std::size_t>(nb.first_child + c));
+  const fba::OctreeNode* ca = a.children(na);
+  const fba::OctreeNode* cb = b.children(nb);
+  for (int i = 0; i < 8; ++i) s += mismatches(a, ca[i], b, cb[i]);
   return s;
 }
 
@@ -48,41 +42,11 @@ class SurfaceBuilder {
   explicit SurfaceBuilder(const fba::Octree& t) : t_(t) {}
 
   fba::TriangleMesh build() {
-    if (t_.nodes.empty()) return std::move(mesh_);
-    int finest = 0;
-    for (const auto& n : t_.nodes) finest = std::max<int>(finest, n.depth);
-    n_ = 1 << finest;
-    // Cells from the root down; children are ordered x, then y, then z (bit 0, 1, 2).
-    cells_.resize(t_.nodes.size());
-    cells_[0] = {0, 0, 0, n_};
-    std::vector<std::size_t> stack{0};
-    while (!stack.empty()) {
-      const std::size_t i = stack.back();
-      stack.pop_back();
-      if (t_.nodes[i].is_leaf()) continue;
-      const Cell& c = cells_[i];
-      const int h = c.s / 2;
-      for (int k = 0; k < 8; ++k) {
-        const std::size_t j = static_cast<std::size_t>(t_.nodes[i].first_child + k);
-        cells_[j] = {c.x[0] + (k & 1) * h, c.x[1] + ((k >> 1) & 1) * h, c.x[2] + ((k >> 2) & 1) * h, h};
-        stack.push_back(j);
-      }
-    }
-    for (std::size_t i = 0; i < t_.nodes.size(); ++i) {
-      if (!t_.nodes[i].is_leaf() || !occupied(t_.nodes[i])) continue;
-      const Cell& c = cells_[i];
-      for (int axis = 0; axis < 3; ++axis)
-        for (int dir : {-1, 1}) {
-          const int plane = c.x[axis] + (dir > 0 ? c.s : 0);
-          int q[3] = {c.x[0], c.x[1], c.x[2]};
-          q[axis] += dir * c.s;
-          if (q[axis] < 0 || q[axis] >= n_) {
-            face(axis, dir, plane, c);  // the root's boundary: outside is not occupied
-            continue;
-          }
-          across(node_at(q, c.s), axis, dir, plane, c);
-        }
-    }
+    if (t_.node_count == 0) return std::move(mesh_);
+    t_.for_each_leaf([&](const fba::OctreeCell& c) { finest_ = std::max(finest_, c.depth); });
+    n_ = 1 << finest_;
+    path_[0] = {&t_.root, {{0, 0, 0}, n_}};
+    visit(0);
     return std::move(mesh_);
   }
 
@@ -90,33 +54,74 @@ class SurfaceBuilder {
   struct Cell {
     int x[3];  // min corner, finest-lattice units
     int s;     // edge
+    bool contains(const int q[3]) const {
+      return q[0] >= x[0] && q[1] >= x[1] && q[2] >= x[2] && q[0] < x[0] + s && q[1] < x[1] + s && q[2] < x[2] + s;
+    }
+  };
+  struct Step {
+    const fba::OctreeNode* node;
+    Cell cell;
   };
 
-  // The node of edge >= s containing lattice point q: a leaf, or a node of edge s.
-  std::size_t node_at(const int q[3], int s) const {
-    std::size_t i = 0;
-    while (!t_.nodes[i].is_leaf() && cells_[i].s > s) {
-      const Cell& c = cells_[i];
-      const int h = c.s / 2;
-      const int k = (q[0] >= c.x[0] + h ? 1 : 0) | (q[1] >= c.x[1] + h ? 2 : 0) | (q[2] >= c.x[2] + h ? 4 : 0);
-      i = static_cast<std::size_t>(t_.nodes[i].first_child + k);
-    }
-    return i;
-  }
-
-  // The face of occupied leaf `own` at `plane`, seen against node j across it: emitted where j's
-  // leaves that touch the face are not occupied, as one square per such leaf (or the whole face
-  // when j is a leaf at least as large).
-  void across(std::size_t j, int axis, int dir, int plane, const Cell& own) {
-    const fba::OctreeNode& n = t_.nodes[j];
-    if (n.is_leaf()) {
-      if (!occupied(n)) face(axis, dir, plane, cells_[j].s < own.s ? cells_[j] : own);
+  // Depth first over the occupied leaves, keeping their ancestors in path_, so that a neighbour
+  // is looked up from the nearest common ancestor rather than from the root.
+  void visit(int d) {
+    const Step& st = path_[d];
+    if (!occupied(*st.node)) return;
+    if (st.node->is_leaf()) {
+      faces_of(d);
       return;
     }
-    // Children on the near side: their `axis` bit is 0 when j lies on the + side of the face.
+    const fba::OctreeNode* c = t_.children(*st.node);
+    const int h = st.cell.s / 2;
+    for (int k = 0; k < 8; ++k) {
+      path_[d + 1] = {&c[k], {{st.cell.x[0] + (k & 1) * h, st.cell.x[1] + ((k >> 1) & 1) * h, st.cell.x[2] + ((k >> 2) & 1) * h}, h}};
+      visit(d + 1);
+    }
+  }
+
+  void faces_of(int d) {
+    const Cell c = path_[d].cell;
+    for (int axis = 0; axis < 3; ++axis)
+      for (int dir : {-1, 1}) {
+        const int plane = c.x[axis] + (dir > 0 ? c.s : 0);
+        int q[3] = {c.x[0], c.x[1], c.x[2]};
+        q[axis] += dir * c.s;
+        if (q[axis] < 0 || q[axis] >= n_) {
+          face(axis, dir, plane, c);  // the root's boundary: outside is not occupied
+          continue;
+        }
+        int a = d - 1;  // d >= 1 here: the root's neighbours are all outside
+        while (!path_[a].cell.contains(q)) --a;
+        // Down to the node of edge >= c.s containing q: a leaf, or a node of c's edge.
+        const fba::OctreeNode* n = path_[a].node;
+        Cell nc = path_[a].cell;
+        while (!n->is_leaf() && nc.s > c.s) {
+          const int h = nc.s / 2;
+          const int bx = q[0] >= nc.x[0] + h, by = q[1] >= nc.x[1] + h, bz = q[2] >= nc.x[2] + h;
+          n = &t_.children(*n)[bx | by << 1 | bz << 2];
+          nc = {{nc.x[0] + bx * h, nc.x[1] + by * h, nc.x[2] + bz * h}, h};
+        }
+        across(*n, nc, axis, dir, plane, c);
+      }
+  }
+
+  // The face of occupied leaf `own` at `plane`, seen against node n (cell nc) across it: emitted
+  // where n's leaves that touch the face are not occupied, as one square per such leaf (or the
+  // whole face when n is a leaf at least as large).
+  void across(const fba::OctreeNode& n, const Cell& nc, int axis, int dir, int plane, const Cell& own) {
+    if (n.is_leaf()) {
+      if (!occupied(n)) face(axis, dir, plane, nc.s < own.s ? nc : own);
+      return;
+    }
+    // Children on the near side: their `axis` bit is 0 when n lies on the + side of the face.
     const int near = dir > 0 ? 0 : 1;
+    const int h = nc.s / 2;
+    const fba::OctreeNode* c = t_.children(n);
     for (int k = 0; k < 8; ++k)
-      if (((k >> axis) & 1) == near) across(static_cast<std::size_t>(n.first_child + k), axis, dir, plane, own);
+      if (((k >> axis) & 1) == near)
+        across(c[k], Cell{{nc.x[0] + (k & 1) * h, nc.x[1] + ((k >> 1) & 1) * h, nc.x[2] + ((k >> 2) & 1) * h}, h}, axis,
+               dir, plane, own);
   }
 
   // A square in the plane axis = plane covering cell c's extent along the two other axes, two
@@ -142,21 +147,49 @@ class SurfaceBuilder {
     }
   }
 
+  // Welds face corners: lattice point -> vertex index, in an open-addressing table (a node-based
+  // map cost more than the rest of the mesh at depth 9).
   int vertex(const int p[3]) {
-    // Coordinates are at most 2^19 (depth <= 19): 21 bits each.
+    // Coordinates are at most 2^19 (depth <= 19): 21 bits each, so ~0 is never a key.
     const std::uint64_t key = std::uint64_t(p[0]) | std::uint64_t(p[1]) << 21 | std::uint64_t(p[2]) << 42;
-    const auto [it, inserted] = vertex_index_.emplace(key, static_cast<int>(mesh_.vertices.size()));
-    if (inserted) {
-      const double unit = t_.bounds.sizes().x() / n_;
-      mesh_.vertices.push_back((t_.bounds.min() + unit * Eigen::Vector3d(p[0], p[1], p[2])).cast<float>());
+    if (2 * (mesh_.vertices.size() + 1) > keys_.size()) grow();
+    const std::size_t mask = keys_.size() - 1;
+    for (std::size_t i = (key * 0x9E3779B97F4A7C15ull) >> shift_;; i = (i + 1) & mask) {
+      if (keys_[i] == key) return values_[i];
+      if (keys_[i] == kNoKey) {
+        keys_[i] = key;
+        values_[i] = static_cast<int>(mesh_.vertices.size());
+        const double unit = t_.bounds.sizes().x() / n_;
+        mesh_.vertices.push_back((t_.bounds.min() + unit * Eigen::Vector3d(p[0], p[1], p[2])).cast<float>());
+        return values_[i];
+      }
     }
-    return it->second;
+  }
+
+  void grow() {
+    std::vector<std::uint64_t> keys = std::move(keys_);
+    std::vector<int> values = std::move(values_);
+    const std::size_t size = std::max<std::size_t>(1024, 2 * keys.size());
+    keys_.assign(size, kNoKey);
+    values_.assign(size, 0);
+    shift_ = 64 - std::countr_zero(size);
+    for (std::size_t j = 0; j < keys.size(); ++j) {
+      if (keys[j] == kNoKey) continue;
+      std::size_t i = (keys[j] * 0x9E3779B97F4A7C15ull) >> shift_;
+      while (keys_[i] != kNoKey) i = (i + 1) & (size - 1);
+      keys_[i] = keys[j];
+      values_[i] = values[j];
+    }
   }
 
   const fba::Octree& t_;
+  int finest_ = 0;
   int n_ = 1;
-  std::vector<Cell> cells_;
-  std::unordered_map<std::uint64_t, int> vertex_index_;
+  static constexpr std::uint64_t kNoKey = ~std::uint64_t(0);
+  std::vector<std::uint64_t> keys_;
+  std::vector<int> values_;
+  int shift_ = 64;
+  Step path_[32];  // the node being visited and its ancestors, root first (depth <= 19)
   fba::TriangleMesh mesh_;
 };
 
@@ -164,8 +197,7 @@ class SurfaceBuilder {
 
 std::vector<Eigen::AlignedBox3d> occupied_leaves(const fba::Octree& t) {
   std::vector<Eigen::AlignedBox3d> out;
-  for (const auto& n : t.nodes)
-    if (n.is_leaf() && occupied(n)) out.push_back(box_of(n));
+  t.for_each_occupied_leaf([&](const fba::OctreeCell& c) { out.push_back(c.box()); });
   return out;
 }
 
@@ -190,9 +222,9 @@ double mask_iou(const cv::Mat& a, const cv::Mat& b) {
 }
 
 std::size_t count_leaf_mismatches(const fba::Octree& a, const fba::Octree& b) {
-  if (a.nodes.empty()) return b.nodes.empty() ? 0 : 1;
-  if (b.nodes.empty() || !a.bounds.isApprox(b.bounds)) return leaves_under(a, 0);
-  return mismatches(a, 0, b, 0);
+  if (a.node_count == 0) return b.node_count == 0 ? 0 : 1;
+  if (b.node_count == 0 || !a.bounds.isApprox(b.bounds)) return leaves_under(a, a.root);
+  return mismatches(a, a.root, b, b.root);
 }
 
 }  // namespace fba::vision

@@ -1,104 +1,229 @@
+// The reference carve, written apart from the fast carver on purpose: its own image sums, corner
+// projection, occupancy, split decision and leaf test, straight from the rules in
+// octree_carver.hpp, so that "0 mismatches" checks the fast carver's criteria as well as its
+// traversal. Plain and tight: one thread, every node tested against the views in order until one
+// empties it, the 8 corners projected through P, one summed-area lookup per node and view, no
+// allocation per node.
 #include "fba/vision/reference_carve.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
-#include "carve_common.hpp"
 #include "fba/geometry/mesh_io.hpp"
 
 namespace fba::vision {
 
-using namespace detail;
-
 namespace {
 
-// The plainest projection: each corner through P.
-Rect reference_rect(const ViewData& v, const Lattice& L, const NodeKey& k, double tol) {
-  const int s = cells_at_depth(k.depth);
-  Rect r;
-  double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
-  for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3d X = L.corner(k.ix + (c & 1) * s, k.iy + ((c >> 1) & 1) * s, k.iz + ((c >> 2) & 1) * s);
-    const Eigen::Vector3d p = v.P * X.homogeneous();
-    if (!(p.z() > 0)) {
-      r.behind = true;
-      return r;
-    }
-    umin = std::min(umin, p.x() / p.z()), umax = std::max(umax, p.x() / p.z());
-    vmin = std::min(vmin, p.y() / p.z()), vmax = std::max(vmax, p.y() / p.z());
+// Corner coordinates: the root's edge divided into 2^20 cells (as the fast carver does, so that
+// both see the same corners bit for bit).
+constexpr int kBits = 20;
+constexpr double kInv = 1.0 / double(1 << kBits);
+
+struct View {
+  Eigen::Matrix<double, 3, 4> P;
+  int w = 0, h = 0;
+  const std::uint8_t* mask = nullptr;  // row-major, w per row
+  std::size_t step = 0;
+  std::vector<std::int64_t> sum;        // (w + 1) x (h + 1): silhouette pixels above-left
+  std::vector<std::int64_t> grasp_sum;  // the same for graspable contour points; empty when off
+  std::int64_t box(const std::vector<std::int64_t>& s, int x0, int y0, int x1, int y1) const {
+    const auto at = [&](int x, int y) { return s[std::size_t(y) * std::size_t(w + 1) + std::size_t(x)]; };
+    return at(x1 + 1, y1 + 1) - at(x0, y1 + 1) - at(x1 + 1, y0) + at(x0, y0);
   }
-  return pixel_rect(umin, umax, vmin, vmax, tol);
+};
+
+std::vector<std::int64_t> summed_area(int w, int h, const auto& in) {
+  std::vector<std::int64_t> s(std::size_t(w + 1) * std::size_t(h + 1), 0);
+  for (int y = 0; y < h; ++y) {
+    std::int64_t row = 0;
+    for (int x = 0; x < w; ++x) {
+      row += in(x, y) ? 1 : 0;
+      s[std::size_t(y + 1) * std::size_t(w + 1) + std::size_t(x + 1)] = s[std::size_t(y) * std::size_t(w + 1) + std::size_t(x + 1)] + row;
+    }
+  }
+  return s;
 }
 
-bool reference_leaf_carved_by(const ViewData& v, const Lattice& L, const NodeKey& k, const Rect& r, double tol) {
-  const int h = cells_at_depth(k.depth) / 2;
-  const Eigen::Vector3d p = v.P * L.corner(k.ix + h, k.iy + h, k.iz + h).homogeneous();
-  return p.z() > 0 && leaf_carved_by(v, r, p.x() / p.z(), p.y() / p.z(), tol);
+View prepare(const fba::Silhouette& s, double curvature_threshold) {
+  if (!s.frame) throw std::invalid_argument("reference_carve: the silhouette has no frame (camera)");
+  if (s.mask.empty() || s.mask.type() != CV_8UC1 || !s.mask.isContinuous())
+    throw std::invalid_argument("reference_carve: expected a continuous 8-bit single-channel silhouette mask");
+  View v;
+  v.P = s.frame->camera.projection();
+  v.w = s.mask.cols, v.h = s.mask.rows;
+  v.mask = s.mask.data;
+  v.step = s.mask.step;
+  v.sum = summed_area(v.w, v.h, [&](int x, int y) { return v.mask[std::size_t(y) * v.step + std::size_t(x)] != 0; });
+  if (std::isfinite(curvature_threshold) && !s.contour.empty()) {
+    std::vector<std::uint8_t> g(std::size_t(v.w) * std::size_t(v.h), 0);
+    for (std::size_t i = 0; i < s.contour.size() && i < s.curvature.size(); ++i) {
+      const cv::Point q = s.contour[i];
+      if (s.curvature[i] < curvature_threshold && q.x >= 0 && q.y >= 0 && q.x < v.w && q.y < v.h)
+        g[std::size_t(q.y) * std::size_t(v.w) + std::size_t(q.x)] = 1;
+    }
+    v.grasp_sum = summed_area(v.w, v.h, [&](int x, int y) { return g[std::size_t(y) * std::size_t(v.w) + std::size_t(x)] != 0; });
+  }
+  return v;
 }
+
+struct Key {
+  int x, y, z, depth;  // min corner in lattice cells
+};
+
+// The pixels within tol of the projected corners' bounding box (pixel centres at integers, a
+// pixel the unit square around its centre), or behind: a corner not in front of the camera.
+struct PixelBox {
+  int x0, y0, x1, y1;
+  bool behind;
+};
+
+int up(double v) { return static_cast<int>(std::ceil(std::clamp(v, -1e8, 1e8))); }
+int down(double v) { return static_cast<int>(std::floor(std::clamp(v, -1e8, 1e8))); }
+
+struct Carve {
+  const std::vector<View>& views;
+  const CarverParams& p;
+  const fba::RegionsOfInterest& roi;
+  Eigen::Vector3d origin;
+  double edge;
+
+  Eigen::Vector3d point(int ix, int iy, int iz) const {
+    return origin + edge * Eigen::Vector3d(ix * kInv, iy * kInv, iz * kInv);
+  }
+  int cells(int depth) const { return 1 << (kBits - depth); }
+  bool at_limit(int depth) const { return depth >= p.max_depth || edge * cells(depth) * kInv <= p.min_node_size; }
+
+  PixelBox pixels(const View& v, const Key& k) const {
+    const int s = cells(k.depth);
+    double u0 = INFINITY, u1 = -INFINITY, w0 = INFINITY, w1 = -INFINITY;
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d q = v.P * point(k.x + (c & 1) * s, k.y + ((c >> 1) & 1) * s, k.z + ((c >> 2) & 1) * s).homogeneous();
+      if (!(q.z() > 0)) return {0, 0, -1, -1, true};
+      u0 = std::min(u0, q.x() / q.z()), u1 = std::max(u1, q.x() / q.z());
+      w0 = std::min(w0, q.y() / q.z()), w1 = std::max(w1, q.y() / q.z());
+    }
+    const double g = p.silhouette_tolerance + 0.5;
+    return {up(u0 - g), up(w0 - g), down(u1 + g), down(w1 + g), false};
+  }
+
+  // Silhouette pixels plus pixels outside the image, over the box's area. Nothing is known
+  // outside the image or behind the camera: occupied.
+  std::pair<std::int64_t, std::int64_t> occupied(const View& v, const PixelBox& b) const {
+    if (b.behind) return {1, 1};
+    const std::int64_t area = std::int64_t(b.x1 - b.x0 + 1) * (b.y1 - b.y0 + 1);
+    const int x0 = std::max(b.x0, 0), x1 = std::min(b.x1, v.w - 1), y0 = std::max(b.y0, 0), y1 = std::min(b.y1, v.h - 1);
+    if (x0 > x1 || y0 > y1) return {area, area};
+    return {v.box(v.sum, x0, y0, x1, y1) + area - std::int64_t(x1 - x0 + 1) * (y1 - y0 + 1), area};
+  }
+
+  bool graspable(const View& v, const PixelBox& b) const {
+    if (v.grasp_sum.empty() || b.behind) return false;
+    const int x0 = std::max(b.x0, 0), x1 = std::min(b.x1, v.w - 1), y0 = std::max(b.y0, 0), y1 = std::min(b.y1, v.h - 1);
+    return x0 <= x1 && y0 <= y1 && v.box(v.grasp_sum, x0, y0, x1, y1) > 0;
+  }
+
+  bool in_roi(const Key& k) const {
+    const int s = cells(k.depth);
+    const Eigen::AlignedBox3d box(point(k.x, k.y, k.z), point(k.x + s, k.y + s, k.z + s));
+    return std::any_of(roi.boxes.begin(), roi.boxes.end(), [&](const auto& b) { return !b.isEmpty() && b.intersects(box); });
+  }
+
+  // A leaf at the limit is carved by a view that sees all of it (box inside the image) when no
+  // silhouette pixel's square lies within tol of its centre's projection.
+  bool leaf_carved(const View& v, const Key& k, const PixelBox& b) const {
+    if (b.behind || b.x0 < 0 || b.y0 < 0 || b.x1 >= v.w || b.y1 >= v.h) return false;
+    const int h = cells(k.depth) / 2;
+    const Eigen::Vector3d q = v.P * point(k.x + h, k.y + h, k.z + h).homogeneous();
+    if (!(q.z() > 0)) return false;
+    const double u = q.x() / q.z(), w = q.y() / q.z(), tol = p.silhouette_tolerance, g = tol + 0.5;
+    const int x0 = std::max(up(u - g), 0), x1 = std::min(down(u + g), v.w - 1);
+    const int y0 = std::max(up(w - g), 0), y1 = std::min(down(w + g), v.h - 1);
+    if (x0 > x1 || y0 > y1) return false;  // not reached (g >= 1/2): unknown, keep
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const double dx = std::max(std::abs(x - u) - 0.5, 0.0), dy = std::max(std::abs(y - w) - 0.5, 0.0);
+        if (v.mask[std::size_t(y) * v.step + std::size_t(x)] != 0 && dx * dx + dy * dy <= tol * tol) return false;
+      }
+    return true;
+  }
+};
 
 }  // namespace
 
-fba::Octree reference_carve(const std::vector<fba::Silhouette>& views, const Eigen::AlignedBox3d& bounds,
+fba::Octree reference_carve(const std::vector<fba::Silhouette>& silhouettes, const Eigen::AlignedBox3d& bounds,
                             const CarverParams& params, const fba::RegionsOfInterest& roi, CarveStats* stats) {
-  check_params(params);
+  if (params.max_depth < 0 || params.max_depth >= kBits)
+    throw std::invalid_argument("reference_carve: max_depth: expected 0..19, found " + std::to_string(params.max_depth));
+  if (!(params.silhouette_tolerance >= 0 && params.silhouette_tolerance <= 64) || params.min_node_size < 0 ||
+      !(params.occupancy_threshold >= 0 && params.occupancy_threshold <= 1))
+    throw std::invalid_argument("reference_carve: expected silhouette_tolerance in 0..64 px, min_node_size >= 0 and "
+                                "occupancy_threshold in 0..1");
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<ViewData> vd;
-  for (const auto& s : views) vd.push_back(make_view(s, params.curvature_threshold));
+  std::vector<View> views;
+  for (const auto& s : silhouettes) views.push_back(prepare(s, params.curvature_threshold));
 
   const Eigen::AlignedBox3d cube = geometry::cube_around(bounds);
-  const Lattice L{cube.min(), cube.sizes().x()};
+  const Carve carve{views, params, roi, cube.min(), cube.sizes().x()};
   fba::Octree tree;
   tree.bounds = cube;
   tree.max_depth = params.max_depth;
   tree.views = static_cast<int>(views.size());
-  std::vector<NodeKey> keys{NodeKey{}};
-  tree.nodes.emplace_back();
-  std::size_t refined = 0;
+  std::vector<PixelBox> boxes(views.size());
+  std::size_t visited = 0, refined = 0;
 
   // Algorithm 1: level by level; Algorithm 2 for each node of the level.
-  for (std::size_t begin = 0, end = 1; begin < end; begin = end, end = tree.nodes.size()) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const NodeKey k = keys[i];
-      double min_occ = 1, max_occ = 0;
-      bool empty = false, curvature_hit = false;
-      std::vector<Rect> rects(vd.size());
-      for (std::size_t vi = 0; vi < vd.size(); ++vi) {
-        const ViewData& v = vd[vi];
-        const Rect r = rects[vi] = reference_rect(v, L, k, params.silhouette_tolerance);
-        const Occupancy o = occupancy(v, r);
-        empty = empty || o.empty();
-        min_occ = std::min(min_occ, o.value());
-        max_occ = std::max(max_occ, o.value());
-        curvature_hit = curvature_hit || (!o.full() && graspable_contour_in(v, r));
+  std::vector<std::pair<fba::OctreeNode*, Key>> level{{&tree.root, Key{0, 0, 0, 0}}}, next;
+  while (!level.empty()) {
+    next.clear();
+    for (const auto& [n, k] : level) {
+      ++visited;
+      double lo = 1, hi = 0;
+      bool empty = false, grasp = false;
+      for (std::size_t i = 0; i < views.size() && !empty; ++i) {
+        boxes[i] = carve.pixels(views[i], k);
+        const auto [occ, area] = carve.occupied(views[i], boxes[i]);
+        empty = occ == 0;
+        lo = std::min(lo, double(occ) / double(area));
+        hi = std::max(hi, double(occ) / double(area));
+        grasp = grasp || (occ != area && carve.graspable(views[i], boxes[i]));
       }
-      fba::OctreeNode& n = tree.nodes[i];
-      set_geometry(n, L, k);
-      const Split split = split_decision(params, L, k.depth, min_occ, max_occ, intersects_roi(roi, L, k), curvature_hit);
-      if (!empty && split == Split::No && wants_leaf_test(params, L, k.depth, min_occ))
-        for (std::size_t vi = 0; vi < vd.size(); ++vi)
-          empty = empty || reference_leaf_carved_by(vd[vi], L, k, rects[vi], params.silhouette_tolerance);
+      bool split = false, interest = false;
+      if (!empty && lo < 1 && !carve.at_limit(k.depth)) {
+        split = hi > params.occupancy_threshold || grasp || carve.in_roi(k);
+        interest = split && !(hi > params.occupancy_threshold);
+        split = split && !(int(views.size()) < params.detail_after_views && k.depth >= params.detail_depth);
+      }
+      if (!empty && !split && lo < 1 && carve.at_limit(k.depth))
+        for (std::size_t i = 0; i < views.size() && !empty; ++i) empty = carve.leaf_carved(views[i], k, boxes[i]);
       if (empty) {
-        n.state = fba::NodeState::Empty;
-        n.occupancy = 0;
+        n->set_state(fba::NodeState::Empty);
+        n->set_occupancy(0);
         continue;
       }
-      n.occupancy = static_cast<float>(min_occ);
-      if (split == Split::No) {
-        n.state = min_occ >= 1 ? fba::NodeState::Full : fba::NodeState::Partial;
+      n->set_occupancy(lo < 1 ? std::min(static_cast<float>(lo), 0.99999994f) : 1.0f);
+      if (!split) {
+        n->set_state(lo >= 1 ? fba::NodeState::Full : fba::NodeState::Partial);
         continue;
       }
-      n.state = fba::NodeState::Partial;
-      n.interest = split == Split::Grasp ? 1.0f : 0.0f;
-      n.first_child = static_cast<std::int32_t>(tree.nodes.size());
+      n->set_state(fba::NodeState::Partial);
+      n->set_interest(interest);
+      fba::OctreeNode* c = tree.split(*n, fba::NodeState::Partial);
       ++refined;
-      for (int c = 0; c < 8; ++c) {
-        keys.push_back(k.child(c));
-        tree.nodes.emplace_back();  // invalidates n; not used below
-      }
+      const int h = carve.cells(k.depth + 1);
+      for (int i = 0; i < 8; ++i)
+        next.emplace_back(c + i, Key{k.x + (i & 1) * h, k.y + ((i >> 1) & 1) * h, k.z + ((i >> 2) & 1) * h, k.depth + 1});
     }
+    std::swap(level, next);
   }
   if (stats) {
     stats->views = views.size();
-    stats->nodes_visited = tree.nodes.size();
+    stats->nodes_visited = visited;
     stats->nodes_refined = refined;
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }

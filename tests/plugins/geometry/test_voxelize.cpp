@@ -123,18 +123,11 @@ TEST(VoxelMetrics, RasterizedOctreeFillsOccupiedLeavesAtFinestResolution) {
   Octree tree;
   tree.bounds = kUnitCube;
   tree.max_depth = 2;
-  tree.nodes.push_back({Eigen::Vector3f(0, 0, 0), 1.f, 0, NodeState::Partial, 1});
-  for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3f centre((c & 1) ? 0.5f : -0.5f, (c & 2) ? 0.5f : -0.5f,
-                                 (c & 4) ? 0.5f : -0.5f);
-    NodeState s = c == 0 ? NodeState::Full : (c == 7 ? NodeState::Partial : NodeState::Empty);
-    tree.nodes.push_back({centre, 0.5f, 1, s, c == 7 ? 9 : -1});
-  }
-  for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3f centre((c & 1) ? 0.75f : 0.25f, (c & 2) ? 0.75f : 0.25f,
-                                 (c & 4) ? 0.75f : 0.25f);
-    tree.nodes.push_back({centre, 0.25f, 2, c == 7 ? NodeState::Partial : NodeState::Empty, -1});
-  }
+  OctreeNode* c = tree.split(tree.root, NodeState::Empty);
+  c[0].set_state(NodeState::Full);
+  c[7].set_state(NodeState::Partial);
+  OctreeNode* g7 = tree.split(c[7], NodeState::Empty);
+  g7[7].set_state(NodeState::Partial);
   const VoxelGrid g = rasterize_octree(tree);
   ASSERT_EQ(g.n, 4);
   EXPECT_EQ(g.count(), 9u);
