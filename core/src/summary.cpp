@@ -1,4 +1,6 @@
 // summary.json and the outcome names and exit codes.
+#include <sys/resource.h>
+
 #include <nlohmann/json.hpp>
 
 #include "fba/task.hpp"
@@ -38,6 +40,8 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
   if (!r.phase.empty()) j["phase"] = r.phase;
   if (r.signal > 0) j["signal"] = r.signal;
   j["wall_time_s"] = r.wall_s;
+  // The process's peak resident memory so far (the whole fba-run process when it writes this).
+  if (rusage u{}; getrusage(RUSAGE_SELF, &u) == 0) j["peak_resident_mib"] = static_cast<double>(u.ru_maxrss) / 1024.0;
   j["lost_to_restarts"] = r.lost_to_restarts;
   // The final event is written once: by its index in `events` when it is listed there.
   j["final_event"] = nullptr;

@@ -2,11 +2,14 @@
 // model; regions of interest from grasp synthesis ask for detail where fingers may go. Every
 // update is published as an immutable snapshot.
 #include <cmath>
+#include <cstdio>
+#include <functional>
 #include <limits>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <fba/component.hpp>
+#include <fba/thread_pool.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/regions_of_interest.hpp>
 #include <fba/types/silhouette.hpp>
@@ -34,17 +37,26 @@ class OctreeCarverFilter final : public fba::Component {
       fba::Param<int>("bounds_views", 3, "silhouettes used to estimate the root box when bounds is empty").range(2, 100);
   static constexpr auto kBoundsMargin =
       fba::Param<double>("bounds_margin", 0.05, "estimated box grown by this share of its size on every side").range(0, 1);
-  // The carver library starts its own threads; once it takes a parallel_for (H6's rewrite), it
-  // gets ctx.thread_pool() instead and this parameter goes.
-  static constexpr auto kThreads = fba::Param<int>("threads", 0, "carving threads; 0 for one per core").range(0, 256);
+  static constexpr auto kDetailAfterViews = fba::Param<int>(
+      "detail_after_views", 8,
+      "nodes at depth >= detail_depth are split only once this many views are in (0: at once); lower it for tasks with fewer views")
+                                                .range(0, 1000);
+  static constexpr auto kDetailDepth =
+      fba::Param<int>("detail_depth", 4, "the depth the model stops at until detail_after_views views are in").range(0, 19);
+  static constexpr auto kMemoryBudgetMiB = fba::Param<double>(
+      "memory_budget_mib", 4096, "MiB the model may use: a max_depth whose worst case exceeds it is refused, with the figure")
+                                               .range(1, 1 << 20);
   static constexpr fba::EventOut kBoundsEstimated{"bounds_estimated", "the root box was estimated from the first silhouettes; payload: the box"};
-  static constexpr fba::EventOut kUpdated{"updated", "a view was integrated; payload: views, nodes visited and refined so far"};
+  static constexpr fba::EventOut kUpdated{
+      "updated",
+      "a view was integrated; payload (JSON): views, carve_s, snapshot_s (of the previous update's snapshot), nodes_visited, "
+      "nodes_refined, model_nodes, model_bytes, storage_bytes"};
 
   static fba::Spec spec() {
     return fba::Spec::filter("vision.octree_carver",
                              "Carves an octree model from silhouettes; refines where the occupancy or the grasp regions ask for it.")
         .add(kSilhouette, kRegions, kOctree, kMaxDepth, kMinNodeSize, kOccupancyThreshold, kBounds, kBoundsViews, kBoundsMargin,
-             kThreads, kBoundsEstimated, kUpdated)
+             kDetailAfterViews, kDetailDepth, kMemoryBudgetMiB, kBoundsEstimated, kUpdated)
         .check(kBounds, [](const fba::ParamValues& p) {
           const auto b = p(kBounds);
           if (!b.empty() && !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
@@ -131,7 +143,13 @@ class OctreeCarverFilter final : public fba::Component {
     p.max_depth = ctx(kMaxDepth);
     p.min_node_size = ctx(kMinNodeSize);
     p.occupancy_threshold = ctx(kOccupancyThreshold);
-    p.threads = ctx(kThreads);
+    p.detail_after_views = ctx(kDetailAfterViews);
+    p.detail_depth = ctx(kDetailDepth);
+    p.memory_budget = static_cast<std::size_t>(ctx(kMemoryBudgetMiB) * 1024 * 1024);
+    // Carving borrows the task's threads instead of starting its own: the runtime, rendering
+    // and carving share the cores.
+    fba::ThreadPool& pool = ctx.thread_pool();
+    p.parallel_for = [&pool](std::size_t n, const std::function<void(std::size_t)>& f) { pool.parallel_for(n, f); };
     return p;
   }
 
@@ -142,13 +160,25 @@ class OctreeCarverFilter final : public fba::Component {
     return s;
   }
 
+  // The progress line and the `updated` event (kept in summary.json) give the update's figures.
+  // The snapshot is timed by the carver when taken, so its time shows in the next line.
   void publish() {
     const auto model = carver_.snapshot();
     const auto st = carver_.stats();
-    const std::string progress = "views " + std::to_string(st.views) + ", nodes visited " + std::to_string(st.nodes_visited) +
-                                 ", refined " + std::to_string(st.nodes_refined);
-    ctx_.log().info("{} ({:.0f} ms carving so far)", progress, st.seconds * 1e3);
-    ctx_.emit(kUpdated, progress);
+    if (!st.updates.empty()) {
+      const auto& u = st.updates.back();
+      ctx_.log().info("views {}: carved in {:.1f} ms, {} nodes visited, {} refined; model {} nodes, {:.1f} MB ({:.1f} MB stored)",
+                      u.views, u.carve_seconds * 1e3, u.nodes_visited, u.nodes_refined, u.model_nodes, u.model_bytes / 1e6,
+                      u.storage_bytes / 1e6);
+      const double snapshot_s = st.updates.size() > 1 ? st.updates[st.updates.size() - 2].snapshot_seconds : 0.0;
+      char payload[320];
+      std::snprintf(payload, sizeof payload,
+                    "{\"views\": %zu, \"carve_s\": %.6f, \"snapshot_s\": %.6f, \"nodes_visited\": %zu, \"nodes_refined\": %zu, "
+                    "\"model_nodes\": %zu, \"model_bytes\": %zu, \"storage_bytes\": %zu}",
+                    u.views, u.carve_seconds, snapshot_s, u.nodes_visited, u.nodes_refined, u.model_nodes, u.model_bytes,
+                    u.storage_bytes);
+      ctx_.emit(kUpdated, payload);
+    }
     ctx_(kOctree).emit(model);
   }
 
