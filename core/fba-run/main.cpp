@@ -113,6 +113,10 @@ bool interrupted_early(int& status) {
   return true;
 }
 
+// Sent by main to its own watcher when the run is over, so that the watcher need not wait out its
+// tick (which every --check would otherwise pay).
+constexpr int kWakeSignal = SIGUSR2;
+
 void watch_signals(sigset_t signals) {
   auto& st = state();
   const timespec tick{0, 50'000'000};
@@ -120,6 +124,7 @@ void watch_signals(sigset_t signals) {
     siginfo_t info;
     if (sigtimedwait(&signals, &info, &tick) <= 0) continue;
     const int sig = info.si_signo;
+    if (sig == kWakeSignal) continue;  // main is done: look at `watching` again
     if (st.signals.fetch_add(1) > 0) {
       // A second signal forces the exit at once, with whatever safe states were attempted.
       fba::Task* task = st.task.load();
@@ -398,6 +403,7 @@ int main(int argc, char** argv) {
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, kWakeSignal);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   signal(SIGPIPE, SIG_IGN);  // a reader that went away is an EPIPE error, handled where written
   install_crash_handlers();
@@ -408,6 +414,7 @@ int main(int argc, char** argv) {
   const int status = run(argc, argv);
   st.returning.store(true);
   st.watching.store(false);
+  pthread_kill(st.watcher.native_handle(), kWakeSignal);
   st.watcher.join();
   if (st.exit_taken.load()) leave(kRuntimeError);
   return status;
