@@ -112,11 +112,16 @@ case "$cmd" in
     build fuzz --target fuzz_task_loader
     # A regression check: every input that ever crashed the loader stays in the corpus.
     run_tests fuzz -L fuzz
-    # Exploration finds new inputs only now and then; run.sh saves what it finds into
-    # tests/fuzz/corpus/ (commit it with the fix: the check above then keeps it fixed) and fails.
+    # Exploration finds new inputs only now and then, so it cannot decide whether CI passes (that
+    # would make CI a coin toss): run.sh saves a finding into tests/fuzz/corpus/ and this prints it,
+    # whole, so that it can be committed with its fix; the replay above then keeps it fixed.
     if ! bash tests/fuzz/run.sh build/fuzz "${FBA_FUZZ_SECONDS:-30}"; then
-      echo "== the fuzzer found an input that breaks the task loader; it is saved in tests/fuzz/corpus/ (see above)" >&2
-      exit 1
+      for f in build/fuzz/fuzz-findings/*; do
+        [ -f "$f" ] || continue
+        echo "== NEW FUZZ FINDING (commit it as tests/fuzz/corpus/finding-$(basename "$f") with its fix), base64:"
+        base64 -w 0 "$f"
+        echo
+      done
     fi
     stage ""
     echo "== all tests passed in $SECONDS s"
