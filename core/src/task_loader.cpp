@@ -152,6 +152,70 @@ std::string read_text(const fs::path& path, std::string& problem) {
 }
 
 // Guards the YAML parser's recursion: deeply nested flow collections would exhaust the stack.
+// yaml-cpp 0.7 never returns (and eats memory) on a ',' where a document's root node should start
+// or right after a root written in flow style or quotes (", a", "[a]\n, b", "'x' ,"; found by the
+// fuzzer). Valid YAML has no ',' there, so the error is said here before yaml-cpp sees the text.
+bool check_root_comma(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
+  enum class At { Start, Root, AfterRoot, Rest } at = At::Start;
+  int line = 1, col = 0, depth = 0;
+  char quote = 0;
+  char prev = '\n';  // the previous character that is not a space
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    const bool line_start = i == 0 || text[i - 1] == '\n';
+    if (c == '\n') {
+      ++line, col = 0;
+      if (quote == 0) prev = '\n';
+      continue;
+    }
+    ++col;
+    // A document marker at a line's start begins a new root.
+    if (line_start && quote == 0 && text.compare(i, 3, "---") == 0 && (i + 3 == text.size() || std::isspace(static_cast<unsigned char>(text[i + 3])))) {
+      at = At::Start, depth = 0, i += 2, col += 2;
+      continue;
+    }
+    if (at == At::Rest) continue;
+    if (quote) {  // inside a quoted scalar
+      if (quote == '"' && c == '\\') ++i, ++col;
+      else if (c == quote && quote == '\'' && i + 1 < text.size() && text[i + 1] == '\'') ++i, ++col;
+      else if (c == quote) {
+        quote = 0;
+        prev = c;
+        if (depth == 0) at = At::AfterRoot;
+      }
+      continue;
+    }
+    if (c == ' ' || c == '\t' || c == '\r') continue;
+    if (c == '#' && (line_start || std::isspace(static_cast<unsigned char>(text[i - 1])))) {
+      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+      continue;
+    }
+    if (at == At::Start && line_start && c == '%') {  // a directive
+      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+      continue;
+    }
+    if (at == At::Start || at == At::AfterRoot) {
+      if (c == ',') {
+        d.push_back(Diagnostic{Location{shown, line, col},
+                               "YAML syntax: ',' separates the entries of a flow list or mapping ([a, b] or {a: 1, b: 2}); "
+                               "here it stands outside one"});
+        return false;
+      }
+      if (at == At::Start && (c == '[' || c == '{')) at = At::Root, depth = 1;
+      else if (at == At::Start && (c == '"' || c == '\'')) at = At::Root, quote = c;
+      else at = At::Rest;  // a block node, a plain scalar, or a key after a flow root: yaml-cpp copes
+      prev = c;
+      continue;
+    }
+    // Inside a flow root: quotes open only where a scalar starts.
+    if ((c == '"' || c == '\'') && (prev == '[' || prev == '{' || prev == ',' || prev == ':' || prev == '\n')) quote = c;
+    else if (c == '[' || c == '{') ++depth;
+    else if ((c == ']' || c == '}') && --depth == 0) at = At::AfterRoot;
+    prev = c;
+  }
+  return true;
+}
+
 bool check_nesting(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
   int depth = 0, line = 1, col = 0;
   for (char ch : text) {
@@ -192,7 +256,7 @@ std::optional<Diagnostic> long_key(const std::string& text, const std::string& s
 // One YAML document, or nothing with the reasons added to `d`. A second document would be
 // ignored by a plain load, and its content silently lost.
 std::optional<YAML::Node> parse_yaml(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
-  if (!check_nesting(text, shown, d)) return std::nullopt;
+  if (!check_nesting(text, shown, d) || !check_root_comma(text, shown, d)) return std::nullopt;
   std::vector<YAML::Node> docs;
   try {
     docs = YAML::LoadAll(text);
