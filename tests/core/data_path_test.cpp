@@ -20,15 +20,9 @@
 using fba::ExecutorKind;
 using fba::Outcome;
 using fba::test::load;
+using fba::test::with;
 
 namespace {
-
-fba::RunOptions with(ExecutorKind e, double timeout_s = 60) {
-  fba::RunOptions o;
-  o.executor = e;
-  o.timeout_s = timeout_s;
-  return o;
-}
 
 const fba::ConnectionStats& connection(const fba::RunResult& r, const std::string& to) {
   for (const auto& c : r.connections)

@@ -12,15 +12,9 @@ using fba::ExecutorKind;
 using fba::Outcome;
 using fba::test::ints;
 using fba::test::load;
+using fba::test::with;
 
 namespace {
-
-fba::RunOptions with(ExecutorKind e, double timeout_s = 60) {
-  fba::RunOptions o;
-  o.executor = e;
-  o.timeout_s = timeout_s;
-  return o;
-}
 
 bool has_event(const fba::RunResult& r, const std::string& source, const std::string& name) {
   for (const auto& e : r.events)

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <fba/registry.hpp>
+#include <fba/task.hpp>
 #include <fba/task_config.hpp>
 
 namespace fba::test {
@@ -13,5 +14,13 @@ namespace fba::test {
 const Registry& registry();
 TaskConfig load(const std::string& yaml, const LoadOptions& options = {});
 std::vector<std::int64_t> ints(const std::vector<Packet>& packets);
+
+// Options for a test run on the given executor, with a timeout as a safety net (never a bound).
+inline RunOptions with(ExecutorKind e, double timeout_s = 60) {
+  RunOptions o;
+  o.executor = e;
+  o.timeout_s = timeout_s;
+  return o;
+}
 
 }  // namespace fba::test
