@@ -64,8 +64,10 @@ class ThreadedExecutor final : public Executor {
       queue_.push_back(n);
       queued_.store(queue_.size(), std::memory_order_seq_cst);
       // Spinning workers pick up what they see, and woken ones are on their way: wake one
-      // sleeper per node beyond those, never all of them.
-      if (sleepers_ > 0 && queue_.size() > static_cast<std::size_t>(spinners_ + waking_)) {
+      // sleeper per node beyond those, never all of them. Only a sleeper not already woken can
+      // be woken: a wake-up counted beyond them would never be consumed, and the next node
+      // would then wait in the queue with every worker asleep.
+      if (waking_ < sleepers_ && queue_.size() > static_cast<std::size_t>(spinners_ + waking_)) {
         ++waking_;
         wake = true;
       }
@@ -275,7 +277,7 @@ class ThreadedExecutor final : public Executor {
   std::atomic<std::size_t> queued_{0};  // queue_.size(), for spinners to watch without the lock
   std::condition_variable work_cv_;
   int spin_limit_ = 1;
-  int spinners_ = 0, sleepers_ = 0, waking_ = 0;  // under queue_mutex_
+  int spinners_ = 0, sleepers_ = 0, waking_ = 0;  // under queue_mutex_; waking_ <= sleepers_
   std::size_t dedicated_started_ = 0;
   std::atomic<std::uint32_t> exited_{0};
   std::vector<std::thread> workers_;

@@ -235,6 +235,23 @@ on: { sink.done: stop_success }
   }
 }
 
+// Samples that arrive one at a time (a timer) find every worker asleep, and a fan-out wakes
+// several at once: the wake-up bookkeeping must never count a wake-up that no sleeper will
+// consume, or the next tick waits in the queue forever (the hang CI once found at 1 kHz).
+TEST(Runtime, NoWakeUpIsLostWhenWorkersSleepBetweenTicks) {
+  std::string yaml = "components:\n  src: { type: examples.counter, params: { count: 300, rate: 2000 } }\n";
+  for (int i = 0; i < 4; ++i) yaml += "  s" + std::to_string(i) + ": { type: examples.sink, params: { expected: 300 } }\n";
+  yaml += "connections:\n";
+  for (int i = 0; i < 4; ++i) yaml += "  - src.out -> s" + std::to_string(i) + ".in\n";
+  for (int run = 0; run < 10; ++run) {
+    auto options = with(ExecutorKind::Threaded, 60);
+    options.threads = 2;
+    fba::Task task(load(yaml), options);
+    const auto r = task.run();
+    ASSERT_EQ(r.outcome, Outcome::Success) << "run " << run << ": " << r.reason;
+  }
+}
+
 TEST_P(RuntimeBoth, FailureEventStopsWithFailure) {
   // The sink expects nothing, so the only rule that can fire is the failure.
   fba::Task task(load(R"(
