@@ -17,6 +17,7 @@
 #include <cstring>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include <boost/program_options.hpp>
@@ -55,6 +56,8 @@ struct State {
   std::atomic<bool> exit_taken{false};    // an unexpected exit() is being handled
   std::atomic<bool> watching{true};
   std::thread watcher;
+  fs::path live_dot;                // graph-live.dot in --output-dir, written on SIGUSR1 and by --dot-every
+  std::atomic<double> dot_every{0};  // seconds between live dumps; 0 for none
 };
 State& state() {
   static State* s = new State;  // alive for the exit handler
@@ -113,6 +116,29 @@ bool interrupted_early(int& status) {
   return true;
 }
 
+// Writes the live graph (states, queue fills, rates since the previous dump) to graph-live.dot,
+// replacing it whole (a viewer never reads half a file). On the watcher thread, and once by main
+// after the run (the final state).
+void dump_live_graph(std::optional<fba::RunResult>& previous) {
+  auto& st = state();
+  if (st.live_dot.empty()) {
+    std::fprintf(stderr, "fba-run: SIGUSR1: no --output-dir to write graph-live.dot into\n");
+    return;
+  }
+  std::lock_guard lock(st.mutex);  // the task is not destroyed while it is read
+  fba::Task* task = st.task.load();
+  if (!task) return;  // nothing runs yet, or any more
+  fba::RunResult now = task->snapshot();
+  const std::string text = fba::to_dot(st.config, now, previous ? &*previous : nullptr);
+  previous = std::move(now);
+  const fs::path partial = st.live_dot.string() + ".partial";
+  std::FILE* f = std::fopen(partial.c_str(), "w");
+  bool ok = f && std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  if (f) ok = std::fclose(f) == 0 && ok;
+  if (!ok || std::rename(partial.c_str(), st.live_dot.c_str()) != 0)
+    std::fprintf(stderr, "fba-run: could not write %s: %s\n", st.live_dot.c_str(), std::strerror(errno));
+}
+
 // Sent by main to its own watcher when the run is over, so that the watcher need not wait out its
 // tick (which every --check would otherwise pay).
 constexpr int kWakeSignal = SIGUSR2;
@@ -120,11 +146,22 @@ constexpr int kWakeSignal = SIGUSR2;
 void watch_signals(sigset_t signals) {
   auto& st = state();
   const timespec tick{0, 50'000'000};
+  std::optional<fba::RunResult> previous_dump;
+  auto next_dump = std::chrono::steady_clock::now();
   while (st.watching.load()) {
+    if (const double every = st.dot_every.load(); every > 0 && st.task.load() && std::chrono::steady_clock::now() >= next_dump) {
+      dump_live_graph(previous_dump);
+      next_dump = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                          std::chrono::duration<double>(every));
+    }
     siginfo_t info;
     if (sigtimedwait(&signals, &info, &tick) <= 0) continue;
     const int sig = info.si_signo;
     if (sig == kWakeSignal) continue;  // main is done: look at `watching` again
+    if (sig == SIGUSR1) {
+      dump_live_graph(previous_dump);
+      continue;
+    }
     if (st.signals.fetch_add(1) > 0) {
       // A second signal forces the exit at once, with whatever safe states were attempted.
       fba::Task* task = st.task.load();
@@ -231,9 +268,13 @@ int run(int argc, char** argv) {
   std::string output_dir, executor, log_level = "info";
   double timeout = 0;
   double stop_grace = fba::RunOptions{}.stop_grace_s;
+  double dot_every = 0;
   int threads = 0;
   visible.add_options()("help,h", "show this help")("version", "print the version")(
       "check", "check the task and exit (nothing runs)")("dot", "print the task graph as Graphviz DOT and exit")(
+      "dot-every", po::value(&dot_every),
+      "while running, write the live graph (states, queue fills, rates) to OUTPUT-DIR/graph-live.dot every this many "
+      "seconds; SIGUSR1 writes it at once")(
       "set,s", po::value(&sets)->composing(), "override a parameter: component.param=value (repeatable)")(
       "plugin-path,p", po::value(&plugin_dirs)->composing(), "add a plugin folder (repeatable; also FBA_PLUGIN_PATH)")(
       "output-dir,o", po::value(&output_dir), "write the run's artefacts (summary.json, images, models) here")(
@@ -269,6 +310,8 @@ int run(int argc, char** argv) {
   if (timeout < 0) return usage_error("--timeout must be >= 0 seconds");
   if (!(stop_grace >= 0 && std::isfinite(stop_grace)))
     return usage_error("--stop-grace must be a finite number of seconds >= 0");
+  if (!(dot_every >= 0 && dot_every <= 1e6)) return usage_error("--dot-every must be between 0 and 1e6 seconds");
+  if (dot_every > 0 && output_dir.empty()) return usage_error("--dot-every needs --output-dir (graph-live.dot is written there)");
   fba::RunOptions options;
   if (!executor.empty()) {
     if (executor == "threaded") options.executor = fba::ExecutorKind::Threaded;
@@ -288,6 +331,7 @@ int run(int argc, char** argv) {
     if (ec) return usage_error("cannot create --output-dir '" + output_dir + "': " + ec.message());
     options.output_dir = fs::absolute(output_dir);
     st.summary = options.output_dir / "summary.json";
+    st.live_dot = options.output_dir / "graph-live.dot";
   }
   int status = 0;
   if (interrupted_early(status)) return status;
@@ -323,7 +367,10 @@ int run(int argc, char** argv) {
               << " connections, " << config.rules.size() << " event rules)\n";
     return 0;
   }
-  st.config = config;
+  {
+    std::lock_guard lock(st.mutex);  // the watcher reads it for live dumps
+    st.config = config;
+  }
   if (interrupted_early(status)) return status;
   options.threads = threads;
   options.timeout_s = timeout;
@@ -354,11 +401,16 @@ int run(int argc, char** argv) {
     else
       st.phase.store("running");
   }
+  st.dot_every.store(dot_every);
   // Registered again now: handlers run newest first, so this one runs before the plugins'
   // static destructors, while the components still have what they use.
   std::atexit(on_unexpected_exit);
 
   fba::RunResult result = task->run();
+  if (dot_every > 0) {
+    std::optional<fba::RunResult> none;  // the last dump: rates over the whole run
+    dump_live_graph(none);
+  }
   result.phase = st.signal_phase.load() ? st.signal_phase.load() : st.phase.load();
   if (result.outcome == fba::Outcome::Interrupted) result.signal = st.signal.load();
   status = result.exit_code();
@@ -376,7 +428,10 @@ int run(int argc, char** argv) {
     status = kRuntimeError;
   }
   if (!result.stuck.empty() || st.exit_taken.load()) leave(status);  // threads still run in components
-  st.task.store(nullptr);
+  {
+    std::lock_guard lock(st.mutex);  // a live dump in progress finishes first
+    st.task.store(nullptr);
+  }
   task.reset();
   return status;
 }
@@ -388,6 +443,7 @@ void block_stop_signals_early(int, char**, char**) {
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGUSR1);  // a live-graph request must not kill a run that is still loading
   sigprocmask(SIG_BLOCK, &signals, nullptr);
 }
 [[gnu::section(".preinit_array"), gnu::used]] void (*const block_stop_signals_entry)(int, char**,
@@ -403,6 +459,7 @@ int main(int argc, char** argv) {
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGUSR1);  // write graph-live.dot
   sigaddset(&signals, kWakeSignal);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   signal(SIGPIPE, SIG_IGN);  // a reader that went away is an EPIPE error, handled where written

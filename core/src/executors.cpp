@@ -46,17 +46,18 @@ class ThreadedExecutor final : public Executor {
     // Spinning pays only while a spinner has a core to itself; the others sleep until woken.
     spin_limit_ = std::max(1, std::min(threads_, cores) / 2);
     for (auto& n : g_.nodes)
-      if (n->dedicated) dedicated_.push_back(std::make_unique<Dedicated>(n.get()));
+      if (n->dedicated) {
+        n->executor_slot = dedicated_.size();
+        dedicated_.push_back(std::make_unique<Dedicated>(n.get()));
+      }
   }
 
   void enqueue(Node* n) override {
     if (n->dedicated) {
-      for (auto& d : dedicated_)
-        if (d->node == n) {
-          d->signal.fetch_add(1, std::memory_order_seq_cst);
-          d->signal.notify_one();
-          return;
-        }
+      Dedicated& d = *dedicated_[n->executor_slot];
+      d.signal.fetch_add(1, std::memory_order_seq_cst);
+      d.signal.notify_one();
+      return;
     }
     bool wake = false;
     {

@@ -850,6 +850,7 @@ RunResult Graph::run() {
   if (ran_) throw std::logic_error("a task runs once");
   ran_ = true;
   started = std::chrono::steady_clock::now();
+  running_since_set_.store(true, std::memory_order_release);
   for (auto& n : nodes)
     if (n->periodic()) {
       n->ticking.store(true);
@@ -870,6 +871,14 @@ RunResult Graph::run() {
   if (final_event_) r.final_event = *final_event_;
   r.stuck = stuck;
   r.safe_states = safe_states_;
+  const std::uint64_t left = collect_stats(r);
+  if (left > 0) make_logger("runtime")->info("{} samples were still queued at the stop (see 'left' per connection in the summary)", left);
+  return r;
+}
+
+// Per-component and per-connection counts as they stand; callable while the task runs (every
+// count read is atomic or taken under its buffer's lock). Returns the samples queued now.
+std::uint64_t Graph::collect_stats(RunResult& r) {
   for (auto& n : nodes) {
     ComponentStats s;
     s.name = n->config.name;
@@ -882,6 +891,14 @@ RunResult Graph::run() {
     s.restarts = n->restarts;
     s.lost_to_restarts = n->lost_to_restarts;
     r.lost_to_restarts += n->lost_to_restarts;
+    if (n->finished.load())
+      s.state = "finished";
+    else
+      switch (n->state.load()) {
+        case Node::Idle: s.state = "idle"; break;
+        case Node::Queued: s.state = "queued"; break;
+        default: s.state = "running"; break;
+      }
     {
       std::lock_guard stage_lock(n->stage_mutex);
       s.stage = n->stage;
@@ -893,11 +910,18 @@ RunResult Graph::run() {
     if (b->tap || !b->consumer) continue;
     const std::uint64_t queued = b->queued();
     std::lock_guard block(b->mutex);
-    r.connections.push_back(ConnectionStats{b->from, b->to, b->policy, b->pushed, b->consumed, b->dropped, queued,
-                                            b->peak, b->peak_bytes});
+    ConnectionStats c{b->from, b->to, b->policy, b->pushed, b->consumed, b->dropped, queued, b->peak, b->peak_bytes};
+    c.capacity = b->policy == BufferPolicy::Latest ? 1 : b->capacity;
+    r.connections.push_back(std::move(c));
     left += queued;
   }
-  if (left > 0) make_logger("runtime")->info("{} samples were still queued at the stop (see 'left' per connection in the summary)", left);
+  return left;
+}
+
+RunResult Graph::snapshot() {
+  RunResult r;
+  r.wall_s = running_since_set_.load(std::memory_order_acquire) ? std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() : 0.0;
+  collect_stats(r);
   return r;
 }
 
@@ -1051,6 +1075,7 @@ RunResult Task::run() { return graph_->run(); }
 void Task::request_stop(Outcome outcome, const std::string& reason) { graph_->request_stop(outcome, reason); }
 void Task::emergency_safe_states() noexcept { graph_->emergency_safe_states(); }
 std::string Task::safe_states_so_far() const { return graph_->safe_states_so_far(); }
+RunResult Task::snapshot() const { return graph_->snapshot(); }
 
 ActiveCall active_call() noexcept {
   const detail::Node* n = detail::t_active_node;

@@ -40,6 +40,25 @@ std::int64_t duration_ns(double seconds);
 // a + b for non-negative b, saturating at kNeverNs.
 inline std::int64_t add_ns(std::int64_t a, std::int64_t b) { return a > kNeverNs - b ? kNeverNs : a + b; }
 
+// A count written by one thread (a node's strand) and read by others while the task runs (the
+// live graph dump): a relaxed atomic, so the reads are not data races, at the cost of a plain
+// increment.
+class Counter {
+ public:
+  std::uint64_t get() const { return v_.load(std::memory_order_relaxed); }
+  operator std::uint64_t() const { return get(); }
+  std::uint64_t operator++(int) {  // post-increment: the value before
+    const std::uint64_t old = get();
+    v_.store(old + 1, std::memory_order_relaxed);
+    return old;
+  }
+  Counter& operator++() { (*this)++; return *this; }
+  Counter& operator+=(std::uint64_t d) { v_.store(get() + d, std::memory_order_relaxed); return *this; }
+
+ private:
+  std::atomic<std::uint64_t> v_{0};
+};
+
 // A name that lives as long as the process (headers point to it: a packet may outlive its task).
 const std::string* intern_name(std::string_view name);
 
@@ -95,7 +114,7 @@ struct InputState {
   const PortSpec* spec = nullptr;
   Buffer* buffer = nullptr;
   bool closes_node = true;  // false for event inputs: events are not a stream that ends
-  std::uint64_t received = 0;
+  Counter received;
   bool closed() const {
     return buffer == nullptr || (buffer->producer_done.load(std::memory_order_seq_cst) && buffer->empty());
   }
@@ -107,7 +126,7 @@ struct OutputState {
   const TypeInfo* type = nullptr;  // resolved (outputs typed like an input get that type)
   std::vector<Buffer*> consumers;
   const std::string& producer;  // "component.output", interned: every header points to it
-  std::uint64_t next_seq = 0;
+  Counter next_seq;
   Node* node = nullptr;
 };
 
@@ -145,6 +164,7 @@ class Node {
   Trigger trigger;
   bool is_sensor;
   bool dedicated;  // runs on a thread of its own (blocking components, or thread: dedicated)
+  std::size_t executor_slot = 0;  // the executor's index for it (its dedicated thread), so enqueue does not search
   bool periodic() const { return trigger.policy == TriggerPolicy::Periodic; }
 
   std::shared_ptr<const Library> library;  // destroyed after the component
@@ -175,7 +195,7 @@ class Node {
   std::map<std::string, EventRules, std::less<>> rules;
   std::atomic<bool> ticking{false};  // periodic, and a tick will still come (see Graph::end_ticks)
 
-  std::uint64_t invocations = 0, errors = 0, restarts = 0, lost_to_restarts = 0;
+  Counter invocations, errors, restarts, lost_to_restarts;
   std::atomic<std::int64_t> last_tick_ns{-1};  // for the stall warning: when the next tick is due
   std::mutex stage_mutex;
   std::string stage;
@@ -232,6 +252,9 @@ class Graph {
   // Created on first use, with as many threads as the executor has workers.
   ThreadPool& thread_pool();
   RunResult run();
+  // The counts and states as they stand, from any thread while the task runs.
+  RunResult snapshot();
+  std::uint64_t collect_stats(RunResult& r);  // see graph.cpp
   void emergency_safe_states() noexcept;
   std::string safe_states_so_far() const;
   std::vector<Event> events();
@@ -273,6 +296,7 @@ class Graph {
   std::shared_ptr<const Event> final_event_;
   std::vector<SafeStateResult> safe_states_;
   bool ran_ = false;
+  std::atomic<bool> running_since_set_{false};  // `started` is set: snapshots from other threads may read it
 };
 
 // Calls made on threads of their own so that one that never returns cannot hang the stop: the

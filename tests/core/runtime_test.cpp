@@ -1,6 +1,7 @@
 // The runtime's rules, each checked under both executors where both apply.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <thread>
 
@@ -250,6 +251,32 @@ TEST(Runtime, NoWakeUpIsLostWhenWorkersSleepBetweenTicks) {
     const auto r = task.run();
     ASSERT_EQ(r.outcome, Outcome::Success) << "run " << run << ": " << r.reason;
   }
+}
+
+// fba-run's live graph dumps read the counts from another thread while the task runs (TSan
+// checks that every read is atomic or locked); the counts only grow.
+TEST(Runtime, SnapshotsWhileRunningAreRaceFreeAndMonotone) {
+  fba::Task task(load(chain(20000, 4, "lossless", 4)), with(ExecutorKind::Threaded));
+  std::atomic<bool> done{false};
+  std::uint64_t last = 0;
+  bool monotone = true;
+  std::thread reader([&] {
+    while (!done.load()) {
+      const auto s = task.snapshot();
+      std::uint64_t calls = 0;
+      for (const auto& c : s.components) calls += c.invocations;
+      monotone = monotone && calls >= last;
+      last = calls;
+    }
+  });
+  const auto r = task.run();
+  done.store(true);
+  reader.join();
+  ASSERT_EQ(r.outcome, Outcome::Success) << r.reason;
+  EXPECT_TRUE(monotone);
+  const auto after = task.snapshot();
+  ASSERT_EQ(after.components.size(), r.components.size());
+  for (std::size_t i = 0; i < r.components.size(); ++i) EXPECT_EQ(after.components[i].invocations, r.components[i].invocations);
 }
 
 TEST_P(RuntimeBoth, FailureEventStopsWithFailure) {

@@ -321,6 +321,28 @@ TEST(Cli, DotPrintsTheGraph) {
   EXPECT_NE(r.output.find("cluster_pair/front"), std::string::npos);
 }
 
+// The live graph (also written on SIGUSR1 and every --dot-every seconds while running) is written
+// once more when the run ends: its counts are then the run's own.
+TEST(Cli, DotEveryWritesTheLiveGraphWithCountsAndQueueFills) {
+  const fs::path out = temp_dir("live-dot-test");
+  ASSERT_EQ(fba_run({task("chain.yaml"), "-o", out.string(), "-e", "deterministic", "--dot-every", "1000"}).status, 0);
+  std::ifstream in(out / "graph-live.dot");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string dot = ss.str();
+  EXPECT_EQ(dot.rfind("digraph \"chain\" {", 0), 0u) << dot;
+  EXPECT_NE(dot.find("100000 calls"), std::string::npos) << dot;          // the sink's invocations
+  EXPECT_NE(dot.find("lossless 0/64"), std::string::npos) << dot;         // a queue's fill and capacity
+  EXPECT_NE(dot.find("/s\"]"), std::string::npos) << dot;                 // a rate on an edge
+  EXPECT_FALSE(fs::exists(out / "graph-live.dot.partial"));
+}
+
+TEST(Cli, DotEveryNeedsAnOutputDir) {
+  const auto r = fba_run({task("chain.yaml"), "--dot-every", "1"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("--dot-every needs --output-dir"), std::string::npos) << r.output;
+}
+
 TEST(Cli, OutputDirHoldsTheSummary) {
   const fs::path out = temp_dir("summary-test");
   ASSERT_EQ(fba_run({task("chain.yaml"), "-o", out.string(), "-e", "deterministic"}).status, 0);

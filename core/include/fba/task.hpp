@@ -43,6 +43,7 @@ struct ComponentStats {
   std::uint64_t invocations = 0, samples_in = 0, samples_out = 0, errors = 0, restarts = 0;
   std::uint64_t lost_to_restarts = 0;  // input samples taken by invocations that failed and restarted
   std::string stage;
+  std::string state;  // idle, queued, running or finished (as it stood when the counts were read)
 };
 
 // A component call that had not returned when the run ended: its thread was left behind.
@@ -64,6 +65,7 @@ struct ConnectionStats {
   // buffer's policy, or left in the queue when the run stopped: pushed = delivered + dropped + left.
   std::uint64_t pushed = 0, delivered = 0, dropped = 0, left = 0;
   std::uint64_t peak = 0, peak_bytes = 0;  // the most samples and payload bytes queued at once
+  std::size_t capacity = 0;                 // the queue's capacity (1 for latest)
 };
 
 struct RunResult {
@@ -94,6 +96,11 @@ struct ActiveCall {
 };
 ActiveCall active_call() noexcept;
 
+// The task graph as Graphviz DOT with what a running task shows: each component's state, stage,
+// calls and rate; each connection's queue fill, delivery rate and drops (GStreamer's pipeline
+// dumps). Rates are since `earlier` (a previous snapshot), or since the start without one.
+std::string to_dot(const TaskConfig& task, const RunResult& now, const RunResult* earlier = nullptr);
+
 // summary.json: outcome, final event, wall time, per-component counts and rates.
 std::string summary_json(const RunResult& result, const TaskConfig& task);
 
@@ -121,6 +128,9 @@ class Task {
   void emergency_safe_states() noexcept;
   // The actuators' safe states so far, for a forced exit's message: "name (status)", ...
   std::string safe_states_so_far() const;
+  // The counts, states and queue fills as they stand, from any thread while run() runs (for
+  // live graph dumps); `left` is what is queued now. The run's own result is run()'s.
+  RunResult snapshot() const;
 
  private:
   std::unique_ptr<detail::Graph> graph_;
