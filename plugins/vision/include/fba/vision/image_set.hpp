@@ -3,7 +3,10 @@
 //
 // Loading a set reads only the text files and each image's size; pixels are read on demand by
 // load_frame(). Every malformed input throws FormatError naming the file, the line where one is
-// known, what was expected and what was found.
+// known, what was expected and what was found; so does a view that disagrees with the set (an
+// image of another size than the views sharing its camera, a focal length outside 0.001..1000
+// times the image's larger side, a camera centre not finite or over 1000 times the set's spread
+// away from the others).
 #pragma once
 
 #include <cstddef>
@@ -77,6 +80,8 @@ class ImageSet {
                                                    const std::set<std::size_t>& served) const;
 
  private:
+  static ImageSet load_yaml_checked(const std::string& file);  // load_yaml once the file is known to be text
+
   std::vector<ViewDescriptor> views_;
 };
 
