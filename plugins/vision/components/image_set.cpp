@@ -31,7 +31,7 @@ class ImageSetSensor final : public fba::Component {
           try {
             fba::vision::ImageSet::load(p(kFile).string(), p(kGoodOnly));
             return std::string();
-          } catch (const fba::vision::FormatError& e) {
+          } catch (const std::exception& e) {  // FormatError, or the file system's own error
             return std::string(e.what());
           }
         });
