@@ -49,7 +49,8 @@ class ModelAccuracy final : public fba::Component {
     if (m.max_depth > max_depth_)
       throw std::runtime_error("the model's depth " + std::to_string(m.max_depth) + " is above max_depth " +
                                std::to_string(max_depth_) + ": its dense grid would take " +
-                               std::to_string((1ull << (3 * m.max_depth)) >> 20) + " MiB");
+                               std::to_string(2ull << (3 * m.max_depth)) + " bytes (two grids of 8^" +
+                               std::to_string(m.max_depth) + " voxels, a byte each)");
     const auto mesh_box = fba::geometry::mesh_bounds(mesh_);
     // A mesh outside the model's root box is most likely not the object the camera saw (a
     // --set that changed one mesh parameter and not the other): said, as the score means nothing.
