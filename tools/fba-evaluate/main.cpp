@@ -9,7 +9,8 @@
 //       (b) with --images or --task: re-projection IoU of the model onto each silhouette of the
 //       image set. With --task, the silhouettes come from the task's own vision.contour_extraction
 //       component, run with the task's parameters (and --set overrides), on the task's image set
-//       unless --images names another; without it, from fba's default extraction.
+//       unless --images names another; without it, the set's own masks when every view has one
+//       (fba YAML 'mask'), else fba's default extraction.
 //   fba-evaluate grasp --mesh M.obj --summary run/summary.json | --random 1000 | --synthesise
 //       Grasp quality on the true surface (grasp.cpp; see its --help).
 
@@ -98,6 +99,18 @@ struct Silhouettes {
   std::vector<Silhouette> found;
   std::vector<std::string> missing;
 };
+
+// The providers' masks, made independently of fba.
+Silhouettes set_masks(const vision::ImageSet& set) {
+  Silhouettes out;
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    Silhouette s;
+    s.frame = std::make_shared<Frame>(set.load_frame(i));
+    s.mask = set.load_mask(i);
+    out.found.push_back(std::move(s));
+  }
+  return out;
+}
 
 Silhouettes default_silhouettes(const vision::ImageSet& set) {
   Silhouettes out;
@@ -308,10 +321,13 @@ int run_model(const std::vector<std::string>& args) {
     auto set = vision::ImageSet::load(images, good_only);
     if (limit > 0 && limit < set.size())
       set = vision::ImageSet(std::vector<vision::ViewDescriptor>(set.views().begin(), set.views().begin() + static_cast<std::ptrdiff_t>(limit)));
-    std::printf("silhouettes of %s by %s\n", images.c_str(),
-                extraction.contours ? ("the task's component '" + extraction.contours->name + "' (" + task_file + ")").c_str()
-                                    : "fba's default extraction (give --task to use a task's settings)");
-    const Silhouettes made = extraction.contours ? task_silhouettes(extraction, set) : default_silhouettes(set);
+    const std::string by = extraction.contours ? "the task's component '" + extraction.contours->name + "' (" + task_file + ")"
+                           : set.has_masks()   ? std::string("the set's own masks")
+                                               : std::string("fba's default extraction (give --task to use a task's settings)");
+    std::printf("silhouettes of %s by %s\n", images.c_str(), by.c_str());
+    const Silhouettes made = extraction.contours ? task_silhouettes(extraction, set)
+                             : set.has_masks()   ? set_masks(set)
+                                                 : default_silhouettes(set);
     for (const auto& m : made.missing) std::printf("  view %s\n", m.c_str());
     const std::vector<Silhouette>& silhouettes = made.found;
     const auto ious = evaluate::reprojection_ious(model, silhouettes);

@@ -393,6 +393,10 @@ ImageSet ImageSet::load_yaml_checked(const std::string& file) {
       w.matrix() = T;
       d.camera.camera_from_world = w.inverse();
     }
+    if (!img["mask"].empty()) {
+      if (!img["mask"].isString()) throw FormatError(file, 0, "expected " + ctx + ".mask to be a path, found another node type");
+      d.mask_path = resolve(file, static_cast<std::string>(img["mask"]));
+    }
     if (!img["width"].empty() && !img["height"].empty()) {
       d.camera.width = static_cast<int>(img["width"]);
       d.camera.height = static_cast<int>(img["height"]);
@@ -430,6 +434,7 @@ void ImageSet::save_yaml(const std::string& file) const {
   for (const auto& d : views_) {
     out << "{";
     out << "path" << fs::relative(fs::absolute(d.path), dir).generic_string();
+    if (!d.mask_path.empty()) out << "mask" << fs::relative(fs::absolute(d.mask_path), dir).generic_string();
     out << "width" << d.camera.width << "height" << d.camera.height;
     out << "K" << "[:";
     for (int r = 0; r < 3; ++r)
@@ -469,6 +474,22 @@ Frame ImageSet::load_frame(std::size_t i) const {
   f.source = d.path;
   f.index = d.index;
   return f;
+}
+
+bool ImageSet::has_masks() const {
+  return !views_.empty() && std::all_of(views_.begin(), views_.end(), [](const ViewDescriptor& d) { return !d.mask_path.empty(); });
+}
+
+cv::Mat ImageSet::load_mask(std::size_t i) const {
+  const ViewDescriptor& d = views_.at(i);
+  if (d.mask_path.empty()) throw FormatError(d.path, 0, "expected a mask for view '" + d.name + "', found none in the set");
+  const cv::Mat m = cv::imread(d.mask_path, cv::IMREAD_GRAYSCALE);
+  if (m.empty()) throw FormatError(d.mask_path, 0, "expected a mask image OpenCV can decode, found a missing or undecodable file");
+  if (m.cols != d.camera.width || m.rows != d.camera.height)
+    throw FormatError(d.mask_path, 0,
+                      "expected a " + std::to_string(d.camera.width) + "x" + std::to_string(d.camera.height) + " mask like view '" +
+                          d.name + "', found " + std::to_string(m.cols) + "x" + std::to_string(m.rows));
+  return m != 0;
 }
 
 std::optional<std::size_t> ImageSet::nearest_unserved_view(const Eigen::Isometry3d& requested,

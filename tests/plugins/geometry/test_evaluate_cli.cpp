@@ -12,7 +12,11 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 
+#include "fba/geometry/mesh_io.hpp"
+#include "fba/geometry/renderer.hpp"
+#include "fba/geometry/viewpoints.hpp"
 #include "support/temp_dir.hpp"
 
 extern char** environ;
@@ -194,6 +198,26 @@ TEST(EvaluateCli, ModelPlyWhoseDataStartsWithANewlineByteIsRead) {
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("12 triangles"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("IoU 1.0000"), std::string::npos) << r.output;
+}
+
+// An fba image set with the provider's own masks: the model is scored against them, not against
+// silhouettes fba extracts (here there would be none: the image is black). The mask is the
+// model's own render, so the score is exactly 1.
+TEST(EvaluateCli, ModelImagesWithTheSetsOwnMasksAreScoredAgainstThem) {
+  const fba::test::TempDir dir;
+  const fba::TriangleMesh box = fba::geometry::make_box({-0.2, -0.15, -0.05}, {0.2, 0.15, 0.05});
+  fba::geometry::write_ply(box, dir.file("box.ply"));
+  fba::CameraModel camera = fba::geometry::make_camera(64, 48, 50, 50, 31.5, 23.5);
+  camera.camera_from_world = Eigen::Translation3d(0, 0, 1) * Eigen::Isometry3d::Identity();
+  ASSERT_TRUE(cv::imwrite(dir.file("view.png"), cv::Mat(48, 64, CV_8UC1, cv::Scalar(0))));
+  ASSERT_TRUE(cv::imwrite(dir.file("mask.png"), fba::geometry::render(box, camera).mask));
+  const std::string set = dir.file("set.yaml",
+                                   "%YAML:1.0\n---\nK: [50, 0, 31.5, 0, 50, 23.5, 0, 0, 1]\nimages:\n"
+                                   "  - { path: view.png, mask: mask.png, R: [1,0,0,0,1,0,0,0,1], t: [0, 0, 1] }\n");
+  const Result r = fba_evaluate({"model", "--model", dir.file("box.ply"), "--images", set});
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("by the set's own masks"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("reprojection IoU: min 1.0000  mean 1.0000  over 1 views"), std::string::npos) << r.output;
 }
 
 }  // namespace

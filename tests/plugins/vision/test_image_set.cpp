@@ -294,3 +294,25 @@ TEST(ImageSetConsistency, SetFileThatIsAFolderDeviceOrImageIsNamedForWhatItIs) {
   EXPECT_NE(format_error([&] { ImageSet::load(dir.file("z_par.txt", std::string("1\0x", 3))); }).find("found binary data"),
             std::string::npos);
 }
+
+TEST(OwnFormat, MasksAreReadWrittenAndCheckedAgainstTheirView) {
+  TempDir dir;
+  cv::imwrite(dir.file("img.png"), cv::Mat(30, 40, CV_8UC1, cv::Scalar(7)));
+  cv::Mat mask(30, 40, CV_8UC1, cv::Scalar(0));
+  mask(cv::Rect(10, 5, 20, 10)) = 1;
+  cv::imwrite(dir.file("mask.png"), mask);
+  cv::imwrite(dir.file("small.png"), cv::Mat(30, 39, CV_8UC1, cv::Scalar(0)));
+  const std::string head = "%YAML:1.0\n---\nK: [500, 0, 20, 0, 500, 15, 0, 0, 1]\nimages:\n";
+  const ImageSet set = ImageSet::load_yaml(dir.file("set.yaml", head + "  - { path: img.png, mask: mask.png, R: [1,0,0,0,1,0,0,0,1], t: [0,0,1] }\n"));
+  ASSERT_TRUE(set.has_masks());
+  const cv::Mat m = set.load_mask(0);
+  EXPECT_EQ(cv::countNonZero(m), 200);
+  EXPECT_EQ(m.at<std::uint8_t>(5, 10), 255);
+  set.save_yaml(dir.file("again.yaml"));
+  EXPECT_EQ(cv::countNonZero(ImageSet::load_yaml(dir.file("again.yaml")).load_mask(0)), 200);
+  const ImageSet wrong = ImageSet::load_yaml(dir.file("wrong.yaml", head + "  - { path: img.png, mask: small.png, R: [1,0,0,0,1,0,0,0,1], t: [0,0,1] }\n"));
+  const std::string e = format_error([&] { wrong.load_mask(0); });
+  EXPECT_NE(e.find("expected a 40x30 mask like view 'img.png', found 39x30"), std::string::npos) << e;
+  const ImageSet none = ImageSet::load_yaml(dir.file("none.yaml", head + "  - { path: img.png, R: [1,0,0,0,1,0,0,0,1], t: [0,0,1] }\n"));
+  EXPECT_FALSE(none.has_masks());
+}

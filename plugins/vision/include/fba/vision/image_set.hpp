@@ -41,6 +41,7 @@ struct ViewDescriptor {
   std::string path;    // resolved path (relative names are taken relative to the set file)
   int index = 0;       // 1-based position in the set file (Middlebury numbering)
   CameraModel camera;  // width and height are those of the image file
+  std::string mask_path;  // the provider's silhouette mask (YAML 'mask'), resolved; empty when none
 };
 
 class ImageSet {
@@ -68,6 +69,12 @@ class ImageSet {
   // Reads view i's pixels (BGR, or grey for grey files). Throws FormatError when the image is
   // missing or unreadable, or its size differs from the one recorded at load time.
   Frame load_frame(std::size_t i) const;
+
+  // Whether every view has a provider's mask (a silhouette made independently of fba).
+  bool has_masks() const;
+  // View i's mask as CV_8U, 0 outside and 255 inside (any non-zero pixel is inside). Throws
+  // FormatError when the view has none, or it is unreadable or of another size than the image.
+  cv::Mat load_mask(std::size_t i) const;
 
   // For an exploration loop: the view not yet served whose camera is nearest the requested one.
   // Distance = centre distance (m) + angle_weight (m/rad) * angle between optical axes.
