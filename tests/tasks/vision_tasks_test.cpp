@@ -1,5 +1,8 @@
 // The vision tasks, run headless on the real data: what they produce meets the accuracy the
 // issue asks for.
+#include <algorithm>
+#include <cstdio>
+
 #include <gtest/gtest.h>
 
 #include <fba/registry.hpp>
@@ -11,6 +14,7 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/voxelize.hpp"
+#include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/octree_carver.hpp"
 
 namespace {
@@ -30,6 +34,12 @@ fba::RunOptions deterministic() {
 // carve take minutes, the same pipeline runs at depth 7, where a finest voxel projects to about 4 px
 // and the model's outline lies up to half a voxel outside each silhouette: the mean target is that
 // of depth 7 (measured: mean 0.9701, min 0.9541); the full targets stay with the plain build.
+//
+// Those IoUs are self-consistency: the model against the silhouettes it was carved from. Accuracy
+// is also scored against silhouettes made another way (Otsu's threshold instead of the fixed 0.19,
+// with the same clean-up), which the carve never saw: measured at depth 9, mean 0.9726 and min
+// 0.9160 (depth 7: 0.9583, 0.8903). Otsu's threshold is higher on the dark shadowed parts, so its
+// masks are smaller and the bound lower: it catches a model that fits its own silhouettes only.
 #if FBA_TEST_SANITIZED
 constexpr int kDinoDepth = 7;
 constexpr double kDinoMeanIoU = 0.965, kDinoMinIoU = 0.95;
@@ -37,6 +47,7 @@ constexpr double kDinoMeanIoU = 0.965, kDinoMinIoU = 0.95;
 constexpr int kDinoDepth = 9;
 constexpr double kDinoMeanIoU = 0.98, kDinoMinIoU = 0.95;
 #endif
+constexpr double kDinoOtsuMeanIoU = 0.95, kDinoOtsuMinIoU = 0.88;
 
 TEST(VisionTasks, CarveDinoReprojectsOntoEverySilhouette) {
   fba::LoadOptions o;
@@ -50,18 +61,34 @@ TEST(VisionTasks, CarveDinoReprojectsOntoEverySilhouette) {
   ASSERT_EQ(r.components[2].samples_out, 15u);  // one immutable snapshot per view
   const auto& model = models.back().get<fba::Octree>();
   EXPECT_EQ(model.views, 15);
-  double sum = 0, worst = 1;
+  fba::vision::ExtractionParams otsu;
+  otsu.binarise.method = fba::vision::BinariseParams::Method::Otsu;  // the providers' clean-up kept: without it Otsu
+                                                                      // loses whole shadowed limbs (one view: IoU 0.44)
+  double sum = 0, worst = 1, otsu_sum = 0, otsu_worst = 1;
   for (const auto& p : silhouettes) {
     const auto& s = p.get<fba::Silhouette>();
-    const double iou = fba::vision::mask_iou(fba::vision::reproject_mask(model, s.frame->camera), s.mask);
+    const cv::Mat reprojected = fba::vision::reproject_mask(model, s.frame->camera);
+    const double iou = fba::vision::mask_iou(reprojected, s.mask);
     sum += iou;
     worst = std::min(worst, iou);
+    const auto other = fba::vision::extract_silhouette(s.frame, otsu);
+    ASSERT_TRUE(other.ok()) << other.error;
+    const double otsu_iou = fba::vision::mask_iou(reprojected, other.silhouette->mask);
+    otsu_sum += otsu_iou;
+    otsu_worst = std::min(otsu_worst, otsu_iou);
   }
   const double mean = sum / static_cast<double>(silhouettes.size());
+  const double otsu_mean = otsu_sum / static_cast<double>(silhouettes.size());
   RecordProperty("reprojection_iou_mean", std::to_string(mean));
   RecordProperty("reprojection_iou_min", std::to_string(worst));
+  RecordProperty("otsu_reprojection_iou_mean", std::to_string(otsu_mean));
+  RecordProperty("otsu_reprojection_iou_min", std::to_string(otsu_worst));
+  std::printf("re-projection IoU, depth %d: own silhouettes mean %.4f min %.4f; Otsu silhouettes mean %.4f min %.4f\n",
+              kDinoDepth, mean, worst, otsu_mean, otsu_worst);
   EXPECT_GE(mean, kDinoMeanIoU);
   EXPECT_GE(worst, kDinoMinIoU);
+  EXPECT_GE(otsu_mean, kDinoOtsuMeanIoU);
+  EXPECT_GE(otsu_worst, kDinoOtsuMinIoU);
 }
 
 class CarveSim : public ::testing::TestWithParam<std::string> {};
@@ -77,7 +104,7 @@ INSTANTIATE_TEST_SUITE_P(Ycb, CarveSim, ::testing::Values("YcbMustardBottle", "Y
 TEST_P(CarveSim, ModelMatchesTheMesh) {
   const std::string mesh = std::string(FBA_SHARED_DATA_DIR) + "/ycb/" + GetParam() + "/model.obj";
   fba::LoadOptions o;
-  o.overrides = {{"camera.mesh=" + mesh}};
+  o.overrides = {{"camera.mesh=" + mesh}, {"accuracy.mesh=" + mesh}};
   fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/carve_sim.yaml", registry(), o), deterministic());
   const auto& models = task.tap("carver.octree", 1);
   const auto r = task.run();
@@ -94,4 +121,12 @@ TEST_P(CarveSim, ModelMatchesTheMesh) {
   RecordProperty("carved_away", std::to_string(lost));
   EXPECT_GE(iou, 0.88) << GetParam();
   EXPECT_EQ(lost, 0u) << GetParam();
+  // The task scores itself the same way (vision.model_accuracy, into summary.json's events).
+  const auto accuracy = std::find_if(r.events.begin(), r.events.end(), [](const fba::Event& e) { return e.name == "accuracy"; });
+  ASSERT_NE(accuracy, r.events.end());
+  char own[32];
+  std::snprintf(own, sizeof own, "\"voxel_iou\": %.6f,", iou);
+  EXPECT_NE(accuracy->payload.find(own), std::string::npos) << accuracy->payload << " vs " << own;
+  EXPECT_NE(accuracy->payload.find("\"carved_away\": 0,"), std::string::npos) << accuracy->payload;
+  EXPECT_NE(accuracy->payload.find("\"mesh_inside_box\": true"), std::string::npos) << accuracy->payload;
 }

@@ -4,9 +4,13 @@
 //       Renders each mesh from views spread over the upper hemisphere (f = 600 px, 640x480),
 //       carves with the exact masks, prints voxel IoU against the true voxelisation and the
 //       number of truly occupied voxels carved away (table plane clipped).
-//   fba-evaluate model --model carved.ply [--mesh truth.obj] [--images set] --depth 6
+//   fba-evaluate model --model carved.ply [--mesh truth.obj] [--images set] [--task T.yaml] --depth 6
 //       (a) with --mesh: voxel IoU and carved-away count of the model against the mesh;
-//       (b) with --images: re-projection IoU of the model onto each silhouette of the image set.
+//       (b) with --images or --task: re-projection IoU of the model onto each silhouette of the
+//       image set. With --task, the silhouettes come from the task's own vision.contour_extraction
+//       component, run with the task's parameters (and --set overrides), on the task's image set
+//       unless --images names another; without it, the set's own masks when every view has one
+//       (fba YAML 'mask'), else fba's default extraction.
 //   fba-evaluate grasp --mesh M.obj --summary run/summary.json | --random 1000 | --synthesise
 //       Grasp quality on the true surface (grasp.cpp; see its --help).
 
@@ -23,6 +27,10 @@
 
 #include "evaluate.hpp"
 #include "fba/geometry/mesh_io.hpp"
+#include "fba/log.hpp"
+#include "fba/registry.hpp"
+#include "fba/task_config.hpp"
+#include "fba/testing.hpp"
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/image_set.hpp"
 
@@ -86,6 +94,99 @@ void print_summary(const char* what, const std::vector<double>& v) {
               *std::min_element(v.begin(), v.end()), mean, v.size());
 }
 
+// The silhouettes of the image set's views, and for each view without one why not.
+struct Silhouettes {
+  std::vector<Silhouette> found;
+  std::vector<std::string> missing;
+};
+
+// The providers' masks, made independently of fba.
+Silhouettes set_masks(const vision::ImageSet& set) {
+  Silhouettes out;
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    Silhouette s;
+    s.frame = std::make_shared<Frame>(set.load_frame(i));
+    s.mask = set.load_mask(i);
+    out.found.push_back(std::move(s));
+  }
+  return out;
+}
+
+Silhouettes default_silhouettes(const vision::ImageSet& set) {
+  Silhouettes out;
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    auto r = vision::extract_silhouette(std::make_shared<Frame>(set.load_frame(i)));
+    if (r.ok()) out.found.push_back(*r.silhouette);
+    else out.missing.push_back(set[i].name + ": no silhouette (" + r.error + ")");
+  }
+  return out;
+}
+
+const ComponentConfig& only_component_of_type(const TaskConfig& task, const std::string& type) {
+  const ComponentConfig* found = nullptr;
+  for (const auto& c : task.components) {
+    if (c.type->spec.type_name() != type) continue;
+    if (found)
+      throw ArgumentError("--task: " + task.file.string() + " has two " + type + " components ('" + found->name + "' and '" + c.name +
+                          "'); fba-evaluate takes one");
+    found = &c;
+  }
+  if (!found) throw ArgumentError("--task: " + task.file.string() + " has no " + type + " component");
+  return *found;
+}
+
+// The task's own contour extraction: its vision.contour_extraction component, built from the
+// plugin with the task's resolved parameters and fed each view, so the silhouettes are made as
+// the task makes them (not by fba's defaults, which would agree with the carver by construction
+// only for a task that uses them).
+struct TaskExtraction {
+  Registry registry;
+  TaskConfig task;
+  const ComponentConfig* contours = nullptr;
+  const ComponentConfig* views = nullptr;  // the task's vision.image_set, if any
+};
+
+void load_task_extraction(TaskExtraction& t, const std::string& file, const std::vector<std::string>& sets) {
+  for (const auto& e : t.registry.load_path(plugin_search_path()))
+    std::fprintf(stderr, "fba-evaluate: warning: plugin %s: %s\n", e.file().c_str(), e.reason().c_str());
+  LoadOptions options;
+  for (const auto& s : sets) options.overrides.push_back({s});
+  try {
+    t.task = load_task(file, t.registry, options);
+  } catch (const ConfigError& e) {
+    std::string all;
+    for (const auto& d : e.diagnostics()) all += "\n  " + d.str();
+    throw ArgumentError("--task: the task file does not load:" + all);
+  }
+  t.contours = &only_component_of_type(t.task, "vision.contour_extraction");
+  for (const auto& c : t.task.components)
+    if (c.type->spec.type_name() == "vision.image_set") t.views = &c;
+}
+
+Silhouettes task_silhouettes(const TaskExtraction& t, const vision::ImageSet& set) {
+  set_log_level("error");  // a view without a target is reported below, once
+  testing::ComponentHarness contours(t.registry, t.contours->type->spec.type_name(), t.contours->params);
+  Silhouettes out;
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    const std::size_t before = contours.packets("silhouette").size();
+    const std::size_t events = contours.events().size();
+    contours.push<Frame>("frame", set.load_frame(i));
+    contours.run();
+    if (!contours.failure().empty()) throw std::runtime_error(t.contours->name + " failed on " + set[i].name + ": " + contours.failure());
+    const auto& packets = contours.packets("silhouette");
+    if (packets.size() > before) {
+      out.found.push_back(packets.back().get<Silhouette>());
+      continue;
+    }
+    std::string why = "the component gave none";
+    const auto ev = contours.events();
+    for (std::size_t k = events; k < ev.size(); ++k)
+      if (ev[k].name == "no_target") why = ev[k].payload;
+    out.missing.push_back(set[i].name + ": no silhouette (" + why + ")");
+  }
+  return out;
+}
+
 int run_synthetic(const std::vector<std::string>& args) {
   po::options_description opts("fba-evaluate synthetic");
   std::vector<std::string> meshes;
@@ -141,7 +242,8 @@ int run_synthetic(const std::vector<std::string>& args) {
 
 int run_model(const std::vector<std::string>& args) {
   po::options_description opts("fba-evaluate model");
-  std::string model_path, mesh_path, images;
+  std::string model_path, mesh_path, images, task_file;
+  std::vector<std::string> sets;
   std::vector<double> bounds;
   int depth = 6;
   double margin = 0.05;
@@ -154,7 +256,11 @@ int run_model(const std::vector<std::string>& args) {
        "bounding box made a cube with --margin")
       ("margin", po::value(&margin)->default_value(margin), "see --bounds")
       ("no-table-clip", "do not drop voxels below the mesh's lowest point")
-      ("images", po::value(&images), "(b) an image set (Middlebury *_par.txt or fba YAML)");
+      ("images", po::value(&images), "(b) an image set (Middlebury *_par.txt or fba YAML)")
+      ("task", po::value(&task_file),
+       "(b) make the silhouettes with this task's vision.contour_extraction and its parameters; the image set is the "
+       "task's vision.image_set unless --images is given")
+      ("set", po::value(&sets)->composing(), "with --task: override a task parameter, component.param=value (repeatable)");
   po::variables_map vm = parse(args, opts);
   if (vm.count("help")) {
     std::cout << opts << "\n";
@@ -174,6 +280,22 @@ int run_model(const std::vector<std::string>& args) {
     }
   }
   check_needs_mesh(vm, mesh_path, {"depth", "bounds", "margin", "no-table-clip"});
+  if (!sets.empty() && task_file.empty()) throw ArgumentError("--set applies to the task given with --task: give --task as well");
+  // The task is read before any work, so that a bad task file is refused at once.
+  TaskExtraction extraction;
+  bool good_only = true;
+  std::size_t limit = 0;
+  if (!task_file.empty()) {
+    load_task_extraction(extraction, task_file, sets);
+    if (images.empty()) {
+      if (!extraction.views)
+        throw ArgumentError("--task: " + task_file + " has no vision.image_set component: give the images with --images");
+      const auto& p = extraction.views->params;
+      images = std::get<std::string>(p.at("file"));
+      good_only = std::get<bool>(p.at("good_only"));
+      limit = static_cast<std::size_t>(std::get<std::int64_t>(p.at("limit")));
+    }
+  }
   const TriangleMesh model = geometry::load_mesh(model_path);
   std::printf("model %s: %zu triangles\n", model_path.c_str(), model.triangles.size());
 
@@ -196,23 +318,24 @@ int run_model(const std::vector<std::string>& args) {
                 mesh_path.c_str(), 1 << depth, c.truth_voxels, c.model_voxels, c.carved_away, c.iou);
   }
   if (!images.empty()) {
-    const auto set = vision::ImageSet::load(images);
-    std::vector<Silhouette> silhouettes;
-    for (std::size_t i = 0; i < set.size(); ++i) {
-      auto frame = std::make_shared<Frame>(set.load_frame(i));
-      auto r = vision::extract_silhouette(frame);
-      if (!r.ok()) {
-        std::printf("  view %s: no silhouette (%s)\n", set[i].name.c_str(), r.error.c_str());
-        continue;
-      }
-      silhouettes.push_back(*r.silhouette);
-    }
+    auto set = vision::ImageSet::load(images, good_only);
+    if (limit > 0 && limit < set.size())
+      set = vision::ImageSet(std::vector<vision::ViewDescriptor>(set.views().begin(), set.views().begin() + static_cast<std::ptrdiff_t>(limit)));
+    const std::string by = extraction.contours ? "the task's component '" + extraction.contours->name + "' (" + task_file + ")"
+                           : set.has_masks()   ? std::string("the set's own masks")
+                                               : std::string("fba's default extraction (give --task to use a task's settings)");
+    std::printf("silhouettes of %s by %s\n", images.c_str(), by.c_str());
+    const Silhouettes made = extraction.contours ? task_silhouettes(extraction, set)
+                             : set.has_masks()   ? set_masks(set)
+                                                 : default_silhouettes(set);
+    for (const auto& m : made.missing) std::printf("  view %s\n", m.c_str());
+    const std::vector<Silhouette>& silhouettes = made.found;
     const auto ious = evaluate::reprojection_ious(model, silhouettes);
     for (std::size_t i = 0; i < ious.size(); ++i)
       std::printf("  %-24s reprojection IoU %.4f\n", silhouettes[i].frame->source.c_str(), ious[i]);
     print_summary("(b) reprojection IoU", ious);
   }
-  if (mesh_path.empty() && images.empty()) std::printf("nothing to compare: give --mesh and/or --images\n");
+  if (mesh_path.empty() && images.empty()) std::printf("nothing to compare: give --mesh and/or --images or --task\n");
   return 0;
 }
 
@@ -226,7 +349,7 @@ int run_grasp(const std::vector<std::string>& args);
 int main(int argc, char** argv) {
   const std::string usage =
       "usage: fba-evaluate synthetic --mesh M.obj [M2.obj ...] [--views 8] [--depth 6] [options]\n"
-      "       fba-evaluate model --model carved.ply [--mesh truth.obj] [--images set] [--depth 6]\n"
+      "       fba-evaluate model --model carved.ply [--mesh truth.obj] [--images set] [--task T.yaml [--set c.p=v]] [--depth 6]\n"
       "       fba-evaluate grasp --mesh M.obj (--summary run/summary.json | --random 1000 | --synthesise)\n"
       "       fba-evaluate <command> --help\n";
   if (argc < 2) {

@@ -1,10 +1,13 @@
 #include "fba/geometry/mesh_io.hpp"
 
+#include <algorithm>
 #include <bit>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <numbers>
 #include <sstream>
 #include <unordered_map>
@@ -54,6 +57,323 @@ struct PositionEqual {
   bool operator()(const Eigen::Vector3f& a, const Eigen::Vector3f& b) const { return a == b; }
 };
 
+
+// Adds faces (polygons, fan-triangulated) over `positions` to `mesh`, welding vertices by exact
+// position across calls; counts the degenerate triangles dropped.
+class MeshBuilder {
+ public:
+  MeshBuilder(const std::filesystem::path& path, TriangleMesh& mesh) : path_(path), mesh_(mesh) {}
+
+  std::vector<int> add_vertices(const std::vector<Eigen::Vector3f>& positions) {
+    std::vector<int> remap(positions.size());
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+      const Eigen::Vector3f& q = positions[v];
+      if (!q.allFinite())
+        throw MeshLoadError("cannot load " + describe(path_) + ": non-finite coordinate in vertex " + std::to_string(v));
+      auto [it, inserted] = index_of_.emplace(q, static_cast<int>(mesh_.vertices.size()));
+      if (inserted) mesh_.vertices.push_back(q);
+      remap[v] = it->second;
+    }
+    return remap;
+  }
+
+  void add_triangle(int a, int b, int c) {
+    if (a == b || b == c || a == c) {
+      ++skipped_degenerate;
+      return;
+    }
+    mesh_.triangles.emplace_back(a, b, c);
+  }
+
+  std::size_t skipped_degenerate = 0;
+
+ private:
+  const std::filesystem::path& path_;
+  TriangleMesh& mesh_;
+  std::unordered_map<Eigen::Vector3f, int, PositionHash, PositionEqual> index_of_;
+};
+
+// PLY is read here rather than by assimp: assimp 5.2.5 drops a binary file's first data byte
+// when it is 0x0A (taking it for the end of the header line) and then reads past its buffers.
+// Every count in the header is checked against the file's size before anything is allocated,
+// so a truncated or lying file is an error naming what was expected and what was found.
+class PlyReader {
+ public:
+  PlyReader(const std::filesystem::path& path, std::string bytes) : path_(path), bytes_(std::move(bytes)) {}
+
+  void read(MeshBuilder& out) {
+    parse_header();
+    check_size();
+    if (format_ == Format::Ascii) read_body<true>(out);
+    else read_body<false>(out);
+  }
+
+ private:
+  enum class Format { Ascii, BinaryLittle, BinaryBig };
+  enum class Scalar { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+  struct Property {
+    std::string name;
+    Scalar type = Scalar::Float32;
+    bool list = false;
+    Scalar count_type = Scalar::UInt8;
+  };
+  struct Element {
+    std::string name;
+    std::uint64_t count = 0;
+    int line = 0;
+    std::vector<Property> properties;
+  };
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw MeshLoadError("cannot load " + describe(path_) + ": " + what);
+  }
+  [[noreturn]] void fail_at_line(int line, const std::string& what) const {
+    throw MeshLoadError("cannot load " + describe(path_) + ": line " + std::to_string(line) + ": " + what);
+  }
+
+  static std::size_t size_of(Scalar s) {
+    switch (s) {
+      case Scalar::Int8: case Scalar::UInt8: return 1;
+      case Scalar::Int16: case Scalar::UInt16: return 2;
+      case Scalar::Int32: case Scalar::UInt32: case Scalar::Float32: return 4;
+      case Scalar::Float64: return 8;
+    }
+    return 0;
+  }
+
+  Scalar scalar(const std::string& name, int line) const {
+    static const std::pair<const char*, Scalar> names[] = {
+        {"char", Scalar::Int8},     {"int8", Scalar::Int8},       {"uchar", Scalar::UInt8},     {"uint8", Scalar::UInt8},
+        {"short", Scalar::Int16},   {"int16", Scalar::Int16},     {"ushort", Scalar::UInt16},   {"uint16", Scalar::UInt16},
+        {"int", Scalar::Int32},     {"int32", Scalar::Int32},     {"uint", Scalar::UInt32},     {"uint32", Scalar::UInt32},
+        {"float", Scalar::Float32}, {"float32", Scalar::Float32}, {"double", Scalar::Float64}, {"float64", Scalar::Float64}};
+    for (const auto& [n, s] : names)
+      if (name == n) return s;
+    fail_at_line(line, "expected a PLY scalar type (char, uchar, short, ushort, int, uint, float, double), found '" + name + "'");
+  }
+
+  // The header, line by line up to "end_header" and its single line end.
+  void parse_header() {
+    int line_no = 0;
+    bool have_format = false;
+    for (;;) {
+      if (pos_ >= bytes_.size()) fail("expected 'end_header' to close the PLY header, found the end of the file");
+      const std::size_t eol = bytes_.find('\n', pos_);
+      if (eol == std::string::npos) fail("expected 'end_header' to close the PLY header, found the end of the file");
+      std::string line = bytes_.substr(pos_, eol - pos_);
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      pos_ = eol + 1;
+      ++line_no;
+      std::istringstream fields(line);
+      std::vector<std::string> w;
+      for (std::string t; fields >> t;) w.push_back(t);
+      if (line_no == 1) {
+        if (line != "ply") fail("expected 'ply' on the first line of a PLY file, found something else");
+        continue;
+      }
+      if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
+      if (w[0] == "end_header") break;
+      if (w[0] == "format") {
+        if (w.size() != 3 || w[2] != "1.0") fail_at_line(line_no, "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+        if (w[1] == "ascii") format_ = Format::Ascii;
+        else if (w[1] == "binary_little_endian") format_ = Format::BinaryLittle;
+        else if (w[1] == "binary_big_endian") format_ = Format::BinaryBig;
+        else fail_at_line(line_no, "expected the format ascii, binary_little_endian or binary_big_endian, found '" + w[1] + "'");
+        have_format = true;
+      } else if (w[0] == "element") {
+        std::uint64_t count = 0;
+        if (w.size() != 3 || std::from_chars(w[2].data(), w[2].data() + w[2].size(), count).ptr != w[2].data() + w[2].size())
+          fail_at_line(line_no, "expected 'element <name> <count>' with a whole count, found '" + line + "'");
+        elements_.push_back({w[1], count, line_no, {}});
+      } else if (w[0] == "property") {
+        if (elements_.empty()) fail_at_line(line_no, "expected an 'element' line before its properties");
+        Property p;
+        if (w.size() == 5 && w[1] == "list") {
+          p.list = true;
+          p.count_type = scalar(w[2], line_no);
+          if (p.count_type == Scalar::Float32 || p.count_type == Scalar::Float64)
+            fail_at_line(line_no, "expected an integer type for a list's count, found '" + w[2] + "'");
+          p.type = scalar(w[3], line_no);
+          p.name = w[4];
+        } else if (w.size() == 3) {
+          p.type = scalar(w[1], line_no);
+          p.name = w[2];
+        } else {
+          fail_at_line(line_no, "expected 'property <type> <name>' or 'property list <count type> <type> <name>', found '" + line + "'");
+        }
+        elements_.back().properties.push_back(p);
+      } else {
+        fail_at_line(line_no, "expected a PLY header line (format, element, property, comment, end_header), found '" + line + "'");
+      }
+    }
+    if (!have_format) fail("expected a 'format' line in the PLY header, found none");
+    header_lines_ = line_no;
+  }
+
+  // The least number of bytes the body can take (every list empty; in ASCII, one digit and one
+  // separator per value): more elements than the file can hold are refused before any allocation.
+  void check_size() const {
+    const std::uint64_t body = bytes_.size() - pos_ + (format_ == Format::Ascii ? 1 : 0);  // a last value needs no separator
+    std::uint64_t least = 0;
+    for (const Element& e : elements_) {
+      std::uint64_t per = 0;
+      for (const Property& p : e.properties)
+        per += format_ == Format::Ascii ? 2 : p.list ? size_of(p.count_type) : size_of(p.type);
+      if (per > 0 && e.count > body / per)
+        fail("the header declares " + std::to_string(e.count) + " '" + e.name + "' elements of at least " + std::to_string(per) +
+             " bytes each, but the data after the header is " + std::to_string(bytes_.size() - pos_) + " bytes");
+      least += per * e.count;
+      if (least > body)
+        fail("the header's elements need at least " + std::to_string(least) + " bytes, but the data after the header is " +
+             std::to_string(bytes_.size() - pos_) + " bytes");
+    }
+  }
+
+  // One scalar of the body, as a double (exact for every PLY integer type).
+  template <bool Ascii>
+  double value(Scalar s, const Element& e, std::uint64_t i) {
+    if constexpr (Ascii) {
+      while (pos_ < bytes_.size() && std::isspace(static_cast<unsigned char>(bytes_[pos_]))) {
+        if (bytes_[pos_] == '\n') ++line_;
+        ++pos_;
+      }
+      if (pos_ >= bytes_.size())
+        fail("expected " + std::to_string(e.count) + " '" + e.name + "' elements, found the end of the file in element " + std::to_string(i));
+      const std::size_t end = std::min(bytes_.find_first_of(" \t\r\n", pos_), bytes_.size());
+      double v = 0;
+      const auto r = std::from_chars(bytes_.data() + pos_, bytes_.data() + end, v);
+      if (r.ec != std::errc() || r.ptr != bytes_.data() + end)
+        fail_at_line(line_, "expected a number in '" + e.name + "' element " + std::to_string(i) + ", found '" +
+                                bytes_.substr(pos_, std::min<std::size_t>(end - pos_, 32)) + "'");
+      pos_ = end;
+      if ((s != Scalar::Float32 && s != Scalar::Float64) && v != std::floor(v))
+        fail_at_line(line_, "expected a whole number in '" + e.name + "' element " + std::to_string(i) + ", found " + std::to_string(v));
+      return v;
+    } else {
+      const std::size_t n = size_of(s);
+      if (bytes_.size() - pos_ < n)
+        fail("expected " + std::to_string(e.count) + " '" + e.name + "' elements, found the end of the file in element " + std::to_string(i));
+      unsigned char b[8];
+      std::memcpy(b, bytes_.data() + pos_, n);
+      pos_ += n;
+      if ((format_ == Format::BinaryBig) != (std::endian::native == std::endian::big)) std::reverse(b, b + n);
+      switch (s) {
+        case Scalar::Int8: { std::int8_t x; std::memcpy(&x, b, 1); return x; }
+        case Scalar::UInt8: return b[0];
+        case Scalar::Int16: { std::int16_t x; std::memcpy(&x, b, 2); return x; }
+        case Scalar::UInt16: { std::uint16_t x; std::memcpy(&x, b, 2); return x; }
+        case Scalar::Int32: { std::int32_t x; std::memcpy(&x, b, 4); return x; }
+        case Scalar::UInt32: { std::uint32_t x; std::memcpy(&x, b, 4); return x; }
+        case Scalar::Float32: { float x; std::memcpy(&x, b, 4); return x; }
+        case Scalar::Float64: { double x; std::memcpy(&x, b, 8); return x; }
+      }
+      return 0;
+    }
+  }
+
+  template <bool Ascii>
+  void read_body(MeshBuilder& out) {
+    line_ = header_lines_ + 1;
+    const Element* vertex_element = nullptr;
+    std::vector<Eigen::Vector3f> positions;
+    std::vector<int> remap;
+    std::vector<int> polygon;
+    for (const Element& e : elements_) {
+      if (e.name == "vertex") {
+        if (vertex_element) fail_at_line(e.line, "expected one 'vertex' element, found a second");
+        vertex_element = &e;
+        int xyz[3] = {-1, -1, -1};
+        for (std::size_t k = 0; k < e.properties.size(); ++k)
+          for (int a = 0; a < 3; ++a)
+            if (e.properties[k].name == std::string(1, char('x' + a))) {
+              if (e.properties[k].list) fail_at_line(e.line, "expected vertex property '" + e.properties[k].name + "' to be a scalar, found a list");
+              xyz[a] = static_cast<int>(k);
+            }
+        if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0) fail_at_line(e.line, "expected vertex properties x, y and z, found fewer");
+        positions.resize(static_cast<std::size_t>(e.count));
+        for (std::uint64_t i = 0; i < e.count; ++i)
+          for (std::size_t k = 0; k < e.properties.size(); ++k) {
+            const double v = skip_or_read<Ascii>(e.properties[k], e, i);
+            for (int a = 0; a < 3; ++a)
+              if (xyz[a] == static_cast<int>(k)) positions[i][a] = static_cast<float>(v);
+          }
+        remap = out.add_vertices(positions);
+      } else if (e.name == "face") {
+        if (!vertex_element) fail_at_line(e.line, "expected the 'vertex' element before 'face'");
+        int indices = -1;
+        for (std::size_t k = 0; k < e.properties.size(); ++k)
+          if (e.properties[k].list && (e.properties[k].name == "vertex_indices" || e.properties[k].name == "vertex_index"))
+            indices = static_cast<int>(k);
+        if (indices < 0) fail_at_line(e.line, "expected a list property 'vertex_indices' in element 'face', found none");
+        for (std::uint64_t i = 0; i < e.count; ++i)
+          for (std::size_t k = 0; k < e.properties.size(); ++k) {
+            const Property& p = e.properties[k];
+            if (static_cast<int>(k) != indices) {
+              skip_or_read<Ascii>(p, e, i);
+              continue;
+            }
+            const double n = value<Ascii>(p.count_type, e, i);
+            if (n < 0) fail("expected a list length in face " + std::to_string(i) + ", found " + std::to_string(n));
+            polygon.clear();
+            for (double j = 0; j < n; ++j) {
+              const double v = value<Ascii>(p.type, e, i);
+              if (!(v >= 0 && v < static_cast<double>(remap.size())))
+                fail("face " + std::to_string(i) + " names vertex " + std::to_string(static_cast<long long>(v)) + ", but there are " +
+                     std::to_string(remap.size()) + " vertices");
+              polygon.push_back(remap[static_cast<std::size_t>(v)]);
+            }
+            // Points and lines carry no surface; a polygon becomes a fan of triangles.
+            for (std::size_t j = 2; j < polygon.size(); ++j) out.add_triangle(polygon[0], polygon[j - 1], polygon[j]);
+          }
+      } else {
+        for (std::uint64_t i = 0; i < e.count; ++i)
+          for (const Property& p : e.properties) skip_or_read<Ascii>(p, e, i);
+      }
+    }
+    if constexpr (!Ascii) {
+      if (pos_ != bytes_.size())
+        fail("expected the data to end after the header's elements, found " + std::to_string(bytes_.size() - pos_) + " more bytes");
+    }
+  }
+
+  // Reads a scalar property (its value), or passes over a list property (returns 0).
+  template <bool Ascii>
+  double skip_or_read(const Property& p, const Element& e, std::uint64_t i) {
+    if (!p.list) return value<Ascii>(p.type, e, i);
+    const double n = value<Ascii>(p.count_type, e, i);
+    if (n < 0) fail("expected a list length in '" + e.name + "' element " + std::to_string(i) + ", found " + std::to_string(n));
+    for (double j = 0; j < n; ++j) value<Ascii>(p.type, e, i);
+    return 0;
+  }
+
+  const std::filesystem::path& path_;
+  std::string bytes_;
+  std::size_t pos_ = 0;
+  Format format_ = Format::Ascii;
+  std::vector<Element> elements_;
+  int header_lines_ = 0;
+  int line_ = 0;  // ASCII: the line being read
+};
+
+bool is_ply(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".ply") return true;
+  std::ifstream in(path, std::ios::binary);
+  char magic[4] = {};
+  in.read(magic, 4);
+  return in.gcount() == 4 && std::memcmp(magic, "ply", 3) == 0 && (magic[3] == '\n' || magic[3] == '\r');
+}
+
+MeshLoadResult finish(const std::filesystem::path& path, MeshLoadResult result, std::size_t skipped_degenerate) {
+  if (result.mesh.triangles.empty())
+    throw MeshLoadError("cannot load " + describe(path) + ": the file holds no triangles");
+  if (skipped_degenerate > 0)
+    result.warnings.push_back(describe(path) + ": dropped " + std::to_string(skipped_degenerate) + " degenerate triangles");
+  // Unreferenced vertices are harmless for rendering and voxelisation; keep indices stable.
+  return result;
+}
+
 }  // namespace
 
 MeshLoadResult load_mesh_with_warnings(const std::filesystem::path& path) {
@@ -68,6 +388,14 @@ MeshLoadResult load_mesh_with_warnings(const std::filesystem::path& path) {
   }
 
   MeshLoadResult result;
+  if (is_ply(path)) {
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in.good() && !in.eof()) throw MeshLoadError("cannot load " + describe(path) + ": read error");
+    MeshBuilder builder(path, result.mesh);
+    PlyReader(path, std::move(bytes)).read(builder);
+    return finish(path, std::move(result), builder.skipped_degenerate);
+  }
   check_obj_material_libraries(path, result.warnings);
 
   Assimp::Importer importer;
@@ -89,39 +417,20 @@ MeshLoadResult load_mesh_with_warnings(const std::filesystem::path& path) {
   }
 
   // Weld across assimp meshes (an OBJ with several objects or materials gives several).
-  std::unordered_map<Eigen::Vector3f, int, PositionHash, PositionEqual> index_of;
-  TriangleMesh& mesh = result.mesh;
-  std::size_t skipped_degenerate = 0;
+  MeshBuilder builder(path, result.mesh);
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* am = scene->mMeshes[m];
-    std::vector<int> remap(am->mNumVertices);
-    for (unsigned v = 0; v < am->mNumVertices; ++v) {
-      const aiVector3D& p = am->mVertices[v];
-      Eigen::Vector3f q(p.x, p.y, p.z);
-      if (!q.allFinite())
-        throw MeshLoadError("cannot load " + describe(path) + ": non-finite vertex coordinate");
-      auto [it, inserted] = index_of.emplace(q, static_cast<int>(mesh.vertices.size()));
-      if (inserted) mesh.vertices.push_back(q);
-      remap[v] = it->second;
-    }
+    std::vector<Eigen::Vector3f> positions(am->mNumVertices);
+    for (unsigned v = 0; v < am->mNumVertices; ++v)
+      positions[v] = Eigen::Vector3f(am->mVertices[v].x, am->mVertices[v].y, am->mVertices[v].z);
+    const std::vector<int> remap = builder.add_vertices(positions);
     for (unsigned f = 0; f < am->mNumFaces; ++f) {
       const aiFace& face = am->mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines carry no surface
-      Eigen::Vector3i t(remap[face.mIndices[0]], remap[face.mIndices[1]], remap[face.mIndices[2]]);
-      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-        ++skipped_degenerate;
-        continue;
-      }
-      mesh.triangles.push_back(t);
+      builder.add_triangle(remap[face.mIndices[0]], remap[face.mIndices[1]], remap[face.mIndices[2]]);
     }
   }
-  if (mesh.triangles.empty())
-    throw MeshLoadError("cannot load " + describe(path) + ": the file holds no triangles");
-  if (skipped_degenerate > 0)
-    result.warnings.push_back(describe(path) + ": dropped " + std::to_string(skipped_degenerate) +
-                              " degenerate triangles");
-  // Unreferenced vertices are harmless for rendering and voxelisation; keep indices stable.
-  return result;
+  return finish(path, std::move(result), builder.skipped_degenerate);
 }
 
 TriangleMesh load_mesh(const std::filesystem::path& path) {
@@ -129,19 +438,48 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
 }
 
 void write_ply(const TriangleMesh& mesh, const std::filesystem::path& path) {
+  static_assert(std::endian::native == std::endian::little, "PLY writer assumes little endian");
+  // assimp 5.2.5 (and readers like it) take a first data byte of 0x0A for the end of the header
+  // line and then read past their buffers. That byte is the lowest byte of the first vertex's x:
+  // put first a vertex whose x does not start so. With none (every x starts with 0x0A, as in
+  // crafted files), the file is written as ASCII, which every reader takes.
+  const auto first_byte = [](const Eigen::Vector3f& v) {
+    unsigned char b[4];
+    std::memcpy(b, v.data(), 4);
+    return b[0];
+  };
+  std::size_t first = 0;
+  while (first < mesh.vertices.size() && first_byte(mesh.vertices[first]) == '\n') ++first;
+  const bool ascii = first == mesh.vertices.size() && !mesh.vertices.empty();
+  // Vertex order written: `first` and 0 swapped.
+  const auto written = [&](std::size_t i) { return i == 0 ? first : i == first ? 0 : i; };
+
   std::ofstream out(path, std::ios::binary);
   if (!out) throw std::runtime_error("cannot write PLY '" + path.string() + "'");
-  out << "ply\nformat binary_little_endian 1.0\ncomment written by fba_geometry\n"
+  out << "ply\nformat " << (ascii ? "ascii" : "binary_little_endian") << " 1.0\ncomment written by fba_geometry\n"
       << "element vertex " << mesh.vertices.size() << "\n"
       << "property float x\nproperty float y\nproperty float z\n"
       << "element face " << mesh.triangles.size() << "\n"
       << "property list uchar int vertex_indices\nend_header\n";
-  static_assert(std::endian::native == std::endian::little, "PLY writer assumes little endian");
-  for (const auto& v : mesh.vertices) out.write(reinterpret_cast<const char*>(v.data()), 12);
-  for (const auto& t : mesh.triangles) {
-    const unsigned char three = 3;
-    out.write(reinterpret_cast<const char*>(&three), 1);
-    out.write(reinterpret_cast<const char*>(t.data()), 12);
+  if (ascii) {
+    char buf[64];
+    const auto put = [&](float x, char sep) {
+      char* end = std::to_chars(buf, buf + sizeof buf, x).ptr;  // the shortest text that reads back exactly
+      *end++ = sep;
+      out.write(buf, end - buf);
+    };
+    for (const auto& v : mesh.vertices) put(v.x(), ' '), put(v.y(), ' '), put(v.z(), '\n');
+    for (const auto& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  } else {
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+      out.write(reinterpret_cast<const char*>(mesh.vertices[written(i)].data()), 12);
+    for (const auto& t : mesh.triangles) {
+      const unsigned char three = 3;
+      std::int32_t idx[3];
+      for (int k = 0; k < 3; ++k) idx[k] = static_cast<std::int32_t>(written(static_cast<std::size_t>(t[k])));
+      out.write(reinterpret_cast<const char*>(&three), 1);
+      out.write(reinterpret_cast<const char*>(idx), 12);
+    }
   }
   if (!out) throw std::runtime_error("error while writing PLY '" + path.string() + "'");
 }

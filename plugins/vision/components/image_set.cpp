@@ -24,7 +24,17 @@ class ImageSetSensor final : public fba::Component {
 
   static fba::Spec spec() {
     return fba::Spec::sensor("vision.image_set", "Serves a calibrated image set (Middlebury *_par.txt or fba YAML) as camera frames.")
-        .add(kRequest, kFrame, kFile, kGoodOnly, kLimit, kExhausted);
+        .add(kRequest, kFrame, kFile, kGoodOnly, kLimit, kExhausted)
+        // The set is read (its text and each image's size) when the task is checked, so a
+        // malformed or inconsistent set fails `fba-run --check` at this parameter.
+        .check(kFile, [](const fba::ParamValues& p) {
+          try {
+            fba::vision::ImageSet::load(p(kFile).string(), p(kGoodOnly));
+            return std::string();
+          } catch (const std::exception& e) {  // FormatError, or the file system's own error
+            return std::string(e.what());
+          }
+        });
   }
 
   explicit ImageSetSensor(fba::Context& ctx)

@@ -115,6 +115,108 @@ cv::Mat distortion_mat(const std::vector<double>& d) {
   return cv::Mat(d, true).reshape(1, 1);
 }
 
+
+// What a path names, for a message: "a directory", "a character device", ...
+std::string kind_of(const fs::file_status& st) {
+  switch (st.type()) {
+    case fs::file_type::not_found: return "nothing (no such file)";
+    case fs::file_type::directory: return "a directory";
+    case fs::file_type::character: return "a character device";
+    case fs::file_type::block: return "a block device";
+    case fs::file_type::fifo: return "a FIFO";
+    case fs::file_type::socket: return "a socket";
+    default: return "something that is not a regular file";
+  }
+}
+
+// The set file must be a regular, non-empty text file: OpenCV's YAML reader asserts (or reads
+// forever) on anything else, so a folder, a device or an image is named here instead.
+void check_set_file(const std::string& file, const std::string& expected) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(file, ec);
+  if (st.type() != fs::file_type::regular) throw FormatError(file, 0, "expected " + expected + ", found " + kind_of(st));
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw FormatError(file, 0, "expected " + expected + ", found a file that cannot be read (permissions?)");
+  std::array<unsigned char, 4096> head{};
+  in.read(reinterpret_cast<char*>(head.data()), head.size());
+  const auto n = static_cast<std::size_t>(in.gcount());
+  if (n == 0) throw FormatError(file, 0, "expected " + expected + ", found an empty file");
+  const auto starts = [&](std::initializer_list<unsigned char> sig) {
+    return n >= sig.size() && std::equal(sig.begin(), sig.end(), head.begin());
+  };
+  const char* image = starts({0x89, 'P', 'N', 'G'})                           ? "a PNG image"
+                      : starts({0xFF, 0xD8, 0xFF})                            ? "a JPEG image"
+                      : starts({'B', 'M'}) && n > 14                          ? "a BMP image"
+                      : starts({'I', 'I', 42, 0}) || starts({'M', 'M', 0, 42}) ? "a TIFF image"
+                                                                              : nullptr;
+  if (image) throw FormatError(file, 0, "expected " + expected + ", found " + image + " (give the set file that names the images)");
+  if (std::find(head.begin(), head.begin() + static_cast<std::ptrdiff_t>(n), 0) != head.begin() + static_cast<std::ptrdiff_t>(n))
+    throw FormatError(file, 0, "expected " + expected + ", found binary data (a NUL byte in the first " + std::to_string(n) + " bytes)");
+}
+
+std::string num(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
+// Each view is checked against the set, so that one wrong line cannot change the model silently:
+// a focal length no lens has (the field of view must lie between about 0.1 and 179.9 degrees),
+// a camera centre that is not finite or lies orders of magnitude away from the others, and
+// (when the views share one camera) an image of another size. lines[i]: view i's line, or 0.
+void check_views(const std::vector<ViewDescriptor>& views, const std::string& file, const std::vector<int>& lines,
+                 const std::vector<bool>& shared_camera) {
+  const auto name = [&](std::size_t i) { return "view '" + views[i].name + "'"; };
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const CameraModel& c = views[i].camera;
+    const double side = std::max(c.width, c.height);
+    const double lo = 1e-3 * side, hi = 1e3 * side;
+    const double fx = c.K(0, 0), fy = c.K(1, 1);
+    if (!(fx >= lo && fx <= hi && fy >= lo && fy <= hi))
+      throw FormatError(file, lines[i],
+                        "expected the focal lengths of " + name(i) + " between 0.001 and 1000 times its image's larger side (" +
+                            num(lo) + " to " + num(hi) + " px), found fx " + num(fx) + " and fy " + num(fy));
+    if (!c.centre_in_world().allFinite() || !std::isfinite(c.centre_in_world().norm()))
+      throw FormatError(file, lines[i], "expected a finite camera centre for " + name(i) + ", found one that overflows (translation " +
+                                            num(c.camera_from_world.translation().x()) + " " + num(c.camera_from_world.translation().y()) +
+                                            " " + num(c.camera_from_world.translation().z()) + ")");
+  }
+  // The rig's spread: the median distance of the centres from their coordinate-wise median.
+  if (views.size() >= 3) {
+    Eigen::Vector3d median;
+    for (int a = 0; a < 3; ++a) {
+      std::vector<double> v;
+      for (const auto& d : views) v.push_back(d.camera.centre_in_world()[a]);
+      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+      median[a] = v[v.size() / 2];
+    }
+    std::vector<double> dist;
+    for (const auto& d : views) dist.push_back((d.camera.centre_in_world() - median).norm());
+    std::vector<double> sorted = dist;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+    const double spread = sorted[sorted.size() / 2];
+    for (std::size_t i = 0; i < views.size(); ++i)
+      if (spread > 0 && dist[i] > 1000 * spread)
+        throw FormatError(file, lines[i],
+                          "expected the camera of " + name(i) + " within 1000 times the set's spread (" + num(spread) +
+                              ") of the other cameras, found it " + num(dist[i]) + " away (a translation in other units?)");
+  }
+  // Views that share one camera have one image size: the most common one.
+  std::vector<std::pair<int, int>> sizes;
+  for (std::size_t i = 0; i < views.size(); ++i)
+    if (shared_camera[i]) sizes.emplace_back(views[i].camera.width, views[i].camera.height);
+  std::pair<int, int> common{0, 0};
+  std::ptrdiff_t most = 0;
+  for (const auto& sz : sizes)
+    if (const auto k = std::count(sizes.begin(), sizes.end(), sz); k > most) most = k, common = sz;
+  for (std::size_t i = 0; i < views.size(); ++i)
+    if (shared_camera[i] && std::make_pair(views[i].camera.width, views[i].camera.height) != common)
+      throw FormatError(file, lines[i],
+                        "expected " + name(i) + " to be " + std::to_string(common.first) + "x" + std::to_string(common.second) +
+                            " like the set's other views (one camera), found " + std::to_string(views[i].camera.width) + "x" +
+                            std::to_string(views[i].camera.height) + " (" + views[i].path + ")");
+}
+
 }  // namespace
 
 FormatError::FormatError(std::string file, int line, const std::string& what)
@@ -141,6 +243,7 @@ cv::Size image_file_size(const std::string& path) {
 }
 
 ImageSet ImageSet::load_middlebury(const std::string& par_file, const std::string& good_list) {
+  check_set_file(par_file, "a Middlebury parameter file (text: a count line, then one line per image)");
   std::ifstream in(par_file);
   if (!in) throw FormatError(par_file, 0, "expected a readable Middlebury parameter file, found none");
   std::string line;
@@ -160,6 +263,7 @@ ImageSet ImageSet::load_middlebury(const std::string& par_file, const std::strin
   if (count < 0) throw FormatError(par_file, line_no, "expected the number of images on the first line, found an empty file");
 
   std::vector<ViewDescriptor> views;
+  std::vector<int> lines;  // each view's line in par_file
   while (std::getline(in, line)) {
     ++line_no;
     if (blank(line)) continue;
@@ -182,6 +286,7 @@ ImageSet ImageSet::load_middlebury(const std::string& par_file, const std::strin
     d.camera.camera_from_world.linear() = R;
     d.camera.camera_from_world.translation() = Eigen::Vector3d(v[18], v[19], v[20]);
     views.push_back(std::move(d));
+    lines.push_back(line_no);
   }
   if (static_cast<long>(views.size()) != count)
     throw FormatError(par_file, 1, "expected " + std::to_string(count) + " image lines as the count line says, found " +
@@ -191,6 +296,7 @@ ImageSet ImageSet::load_middlebury(const std::string& par_file, const std::strin
     std::ifstream gin(good_list);
     if (!gin) throw FormatError(good_list, 0, "expected a readable list of good images, found none");
     std::vector<ViewDescriptor> kept;
+    std::vector<int> kept_lines;
     int gline = 0;
     while (std::getline(gin, line)) {
       ++gline;
@@ -202,18 +308,30 @@ ImageSet ImageSet::load_middlebury(const std::string& par_file, const std::strin
       if (it == views.end())
         throw FormatError(good_list, gline, "expected an image named in " + par_file + ", found '" + toks[0] + "'");
       kept.push_back(*it);
+      kept_lines.push_back(lines[static_cast<std::size_t>(it - views.begin())]);
     }
     views = std::move(kept);
+    lines = std::move(kept_lines);
   }
   for (auto& d : views) {
     const cv::Size s = image_file_size(d.path);
     d.camera.width = s.width;
     d.camera.height = s.height;
   }
+  check_views(views, par_file, lines, std::vector<bool>(views.size(), true));  // one camera took them all
   return ImageSet(std::move(views));
 }
 
 ImageSet ImageSet::load_yaml(const std::string& file) {
+  check_set_file(file, "an fba image-set YAML file (docs/image-set-format.md) or a Middlebury *_par.txt");
+  try {
+    return load_yaml_checked(file);
+  } catch (const cv::Exception& e) {  // a node of an unexpected kind read as a number or string
+    throw FormatError(file, 0, "expected an fba image-set YAML file (docs/image-set-format.md), found content OpenCV refuses: " + e.msg);
+  }
+}
+
+ImageSet ImageSet::load_yaml_checked(const std::string& file) {
   cv::FileStorage fsr;
   try {
     if (!fsr.open(file, cv::FileStorage::READ | cv::FileStorage::FORMAT_AUTO))
@@ -231,6 +349,7 @@ ImageSet ImageSet::load_yaml(const std::string& file) {
   if (!root["distortion"].empty()) default_dist = read_numbers(root["distortion"], file, "distortion", 0);
 
   std::vector<ViewDescriptor> views;
+  std::vector<bool> shared_camera;  // the view takes the top-level K
   int i = 0;
   for (const auto& img : images) {
     const std::string ctx = "images[" + std::to_string(i) + "]";
@@ -242,6 +361,7 @@ ImageSet ImageSet::load_yaml(const std::string& file) {
     d.path = resolve(file, d.name);
     std::vector<double> K = img["K"].empty() ? default_K : read_numbers(img["K"], file, ctx + ".K", 9);
     if (K.empty()) throw FormatError(file, 0, "expected K in " + ctx + " or at the top level, found none");
+    shared_camera.push_back(img["K"].empty());
     d.camera.K = matrix3(K);
     check_intrinsics(d.camera.K, file, 0);
     d.camera.distortion = distortion_mat(img["distortion"].empty() ? default_dist
@@ -273,6 +393,10 @@ ImageSet ImageSet::load_yaml(const std::string& file) {
       w.matrix() = T;
       d.camera.camera_from_world = w.inverse();
     }
+    if (!img["mask"].empty()) {
+      if (!img["mask"].isString()) throw FormatError(file, 0, "expected " + ctx + ".mask to be a path, found another node type");
+      d.mask_path = resolve(file, static_cast<std::string>(img["mask"]));
+    }
     if (!img["width"].empty() && !img["height"].empty()) {
       d.camera.width = static_cast<int>(img["width"]);
       d.camera.height = static_cast<int>(img["height"]);
@@ -286,6 +410,7 @@ ImageSet ImageSet::load_yaml(const std::string& file) {
     views.push_back(std::move(d));
     ++i;
   }
+  check_views(views, file, std::vector<int>(views.size(), 0), shared_camera);
   return ImageSet(std::move(views));
 }
 
@@ -309,6 +434,7 @@ void ImageSet::save_yaml(const std::string& file) const {
   for (const auto& d : views_) {
     out << "{";
     out << "path" << fs::relative(fs::absolute(d.path), dir).generic_string();
+    if (!d.mask_path.empty()) out << "mask" << fs::relative(fs::absolute(d.mask_path), dir).generic_string();
     out << "width" << d.camera.width << "height" << d.camera.height;
     out << "K" << "[:";
     for (int r = 0; r < 3; ++r)
@@ -348,6 +474,22 @@ Frame ImageSet::load_frame(std::size_t i) const {
   f.source = d.path;
   f.index = d.index;
   return f;
+}
+
+bool ImageSet::has_masks() const {
+  return !views_.empty() && std::all_of(views_.begin(), views_.end(), [](const ViewDescriptor& d) { return !d.mask_path.empty(); });
+}
+
+cv::Mat ImageSet::load_mask(std::size_t i) const {
+  const ViewDescriptor& d = views_.at(i);
+  if (d.mask_path.empty()) throw FormatError(d.path, 0, "expected a mask for view '" + d.name + "', found none in the set");
+  const cv::Mat m = cv::imread(d.mask_path, cv::IMREAD_GRAYSCALE);
+  if (m.empty()) throw FormatError(d.mask_path, 0, "expected a mask image OpenCV can decode, found a missing or undecodable file");
+  if (m.cols != d.camera.width || m.rows != d.camera.height)
+    throw FormatError(d.mask_path, 0,
+                      "expected a " + std::to_string(d.camera.width) + "x" + std::to_string(d.camera.height) + " mask like view '" +
+                          d.name + "', found " + std::to_string(m.cols) + "x" + std::to_string(m.rows));
+  return m != 0;
 }
 
 std::optional<std::size_t> ImageSet::nearest_unserved_view(const Eigen::Isometry3d& requested,

@@ -5,13 +5,18 @@
 #include <spawn.h>
 #include <sys/wait.h>
 
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 
+#include "fba/geometry/mesh_io.hpp"
+#include "fba/geometry/renderer.hpp"
+#include "fba/geometry/viewpoints.hpp"
 #include "support/temp_dir.hpp"
 
 extern char** environ;
@@ -53,6 +58,13 @@ Result fba_evaluate(std::vector<std::string> args) {
 
 const std::string kBanana = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbBanana/model.obj";
 const std::string kDinoSet = std::string(FBA_SHARED_DATA_DIR) + "/middlebury-dino/dinoSR_par.txt";
+const std::string kDinoTask = std::string(FBA_SOURCE_DIR) + "/tasks/carve_dino.yaml";
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
 
 // The run is refused with exit status 2 and a message that contains `says`.
 void expect_refused(const std::vector<std::string>& args, const std::string& says) {
@@ -124,6 +136,88 @@ TEST(EvaluateCli, NegativeNumbersAreOptionValues) {
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("(a) vs"), std::string::npos) << r.output;
   EXPECT_EQ(fba_evaluate({"model", "-h"}).status, 0);
+}
+
+// With --task, the silhouettes are the task's: its contour component with its parameters (and
+// --set overrides) on its image set. A minimum area no view reaches leaves every view without one,
+// which fba's default extraction would not.
+TEST(EvaluateCli, ModelWithTaskMakesSilhouettesWithTheTasksContourSettings) {
+  const Result defaults = fba_evaluate(model({"--images", kDinoSet}));
+  EXPECT_EQ(defaults.status, 0) << defaults.output;
+  EXPECT_EQ(count(defaults.output, "no silhouette"), 0u) << defaults.output;
+  EXPECT_NE(defaults.output.find("over 15 views"), std::string::npos) << defaults.output;
+
+  const Result task = fba_evaluate(model({"--task", kDinoTask, "--set", "contours.min_area=1e9"}));
+  EXPECT_EQ(task.status, 0) << task.output;
+  EXPECT_NE(task.output.find("by the task's component 'contours'"), std::string::npos) << task.output;
+  EXPECT_EQ(count(task.output, "no silhouette (dinoSR"), 15u) << task.output;  // the good views of the task's set
+  EXPECT_EQ(task.output.find("reprojection IoU:"), std::string::npos) << task.output;
+
+  const Result as_is = fba_evaluate(model({"--task", kDinoTask, "--set", "views.limit=3"}));
+  EXPECT_EQ(as_is.status, 0) << as_is.output;
+  EXPECT_NE(as_is.output.find("over 3 views"), std::string::npos) << as_is.output;
+}
+
+TEST(EvaluateCli, ModelRefusesATaskWithoutContourExtractionOrASetWithoutATask) {
+  expect_refused(model({"--task", std::string(FBA_SOURCE_DIR) + "/tasks/examples/chain.yaml"}),
+                 "has no vision.contour_extraction component");
+  expect_refused(model({"--images", kDinoSet, "--set", "contours.threshold=0.3"}), "--set applies to the task given with --task");
+  expect_refused(model({"--task", kDinoTask, "--set", "contours.threshold=7"}), "the task file does not load");
+}
+
+// A valid binary PLY whose data starts with the byte 0x0A (as the carver could write): assimp 5.2.5
+// crashed on it; it is read and compared.
+TEST(EvaluateCli, ModelPlyWhoseDataStartsWithANewlineByteIsRead) {
+  const fba::test::TempDir dir;
+  const float lo = [] {
+    float x = -0.05f;
+    unsigned char b[4];
+    std::memcpy(b, &x, 4);
+    b[0] = 0x0A;
+    std::memcpy(&x, b, 4);
+    return x;
+  }();
+  const float hi = 0.05f;
+  std::string bytes = "ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+                      "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int i = 0; i < 8; ++i) {
+    const float v[3] = {(i & 1) ? hi : lo, (i & 2) ? hi : -0.05f, (i & 4) ? hi : -0.05f};
+    bytes.append(reinterpret_cast<const char*>(v), 12);
+  }
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    const int t[2][3] = {{q[0], q[1], q[2]}, {q[0], q[2], q[3]}};
+    for (const auto& tri : t) {
+      bytes.push_back(3);
+      bytes.append(reinterpret_cast<const char*>(tri), 12);
+    }
+  }
+  const std::string path = dir.file("box.ply");
+  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  const Result r = fba_evaluate({"model", "--model", path, "--mesh", path, "--depth", "4"});
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("12 triangles"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("IoU 1.0000"), std::string::npos) << r.output;
+}
+
+// An fba image set with the provider's own masks: the model is scored against them, not against
+// silhouettes fba extracts (here there would be none: the image is black). The mask is the
+// model's own render, so the score is exactly 1.
+TEST(EvaluateCli, ModelImagesWithTheSetsOwnMasksAreScoredAgainstThem) {
+  const fba::test::TempDir dir;
+  const fba::TriangleMesh box = fba::geometry::make_box({-0.2, -0.15, -0.05}, {0.2, 0.15, 0.05});
+  fba::geometry::write_ply(box, dir.file("box.ply"));
+  fba::CameraModel camera = fba::geometry::make_camera(64, 48, 50, 50, 31.5, 23.5);
+  camera.camera_from_world = Eigen::Translation3d(0, 0, 1) * Eigen::Isometry3d::Identity();
+  ASSERT_TRUE(cv::imwrite(dir.file("view.png"), cv::Mat(48, 64, CV_8UC1, cv::Scalar(0))));
+  ASSERT_TRUE(cv::imwrite(dir.file("mask.png"), fba::geometry::render(box, camera).mask));
+  const std::string set = dir.file("set.yaml",
+                                   "%YAML:1.0\n---\nK: [50, 0, 31.5, 0, 50, 23.5, 0, 0, 1]\nimages:\n"
+                                   "  - { path: view.png, mask: mask.png, R: [1,0,0,0,1,0,0,0,1], t: [0, 0, 1] }\n");
+  const Result r = fba_evaluate({"model", "--model", dir.file("box.ply"), "--images", set});
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("by the set's own masks"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("reprojection IoU: min 1.0000  mean 1.0000  over 1 views"), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -240,3 +240,79 @@ TEST(Exploration, NearestUnservedViewSkipsServedViews) {
   for (std::size_t i = 0; i < set.size(); ++i) all.insert(i);
   EXPECT_FALSE(set.nearest_unserved_view(c3, all).has_value());
 }
+
+// Each view is checked against the set: one wrong line must not change the model silently.
+TEST(ImageSetConsistency, ViewsSharingACameraMustShareItsImageSize) {
+  TempDir dir;
+  cv::imwrite(dir.file("a.png"), cv::Mat(30, 40, CV_8UC1, cv::Scalar(0)));
+  cv::imwrite(dir.file("b.png"), cv::Mat(30, 41, CV_8UC1, cv::Scalar(0)));
+  const std::string head = "%YAML:1.0\n---\nK: [50, 0, 20, 0, 50, 15, 0, 0, 1]\nimages:\n";
+  const std::string m = format_error([&] {
+    ImageSet::load_yaml(dir.file("shared.yaml", head + "  - { path: a.png, R: [1,0,0,0,1,0,0,0,1], t: [0,0,1] }\n"
+                                                       "  - { path: b.png, R: [1,0,0,0,1,0,0,0,1], t: [0,0,2] }\n"));
+  });
+  EXPECT_NE(m.find("expected view 'b.png' to be 40x30 like the set's other views (one camera), found 41x30"), std::string::npos) << m;
+  // A view with a camera of its own (its own K) may have another size.
+  const ImageSet set = ImageSet::load_yaml(
+      dir.file("own.yaml", head + "  - { path: a.png, R: [1,0,0,0,1,0,0,0,1], t: [0,0,1] }\n"
+                                  "  - { path: b.png, K: [50, 0, 20, 0, 50, 15, 0, 0, 1], R: [1,0,0,0,1,0,0,0,1], t: [0,0,2] }\n"));
+  EXPECT_EQ(set.size(), 2u);
+}
+
+TEST(ImageSetConsistency, FocalLengthNoLensHasIsRefusedWithTheLine) {
+  TempDir dir;
+  cv::imwrite(dir.file("a.png"), cv::Mat(50, 100, CV_8UC1, cv::Scalar(0)));
+  const std::string far = "a.png 1e-300 0 50 0 1e-300 40 0 0 1 1 0 0 0 1 0 0 0 1 0.1 0.2 0.3\n";
+  const std::string m = format_error([&] { ImageSet::load_middlebury(dir.file("x_par.txt", std::string("2\n") + kGoodLine + far)); });
+  EXPECT_NE(m.find("x_par.txt:3: expected the focal lengths of view 'a.png' between 0.001 and 1000 times its image's larger "
+                   "side (0.1 to 100000 px), found fx 1e-300"),
+            std::string::npos) << m;
+}
+
+TEST(ImageSetConsistency, CameraFarFromTheOthersIsRefusedWithTheLine) {
+  TempDir dir;
+  cv::imwrite(dir.file("a.png"), cv::Mat(50, 100, CV_8UC1, cv::Scalar(0)));
+  const std::string set = std::string("4\n") + kGoodLine + "a.png 100 0 50 0 100 40 0 0 1 1 0 0 0 1 0 0 0 1 0.2 0.2 0.3\n" +
+                          "a.png 100 0 50 0 100 40 0 0 1 1 0 0 0 1 0 0 0 1 0.1 0.3 0.3\n" +
+                          "a.png 100 0 50 0 100 40 0 0 1 1 0 0 0 1 0 0 0 1 0.1 0.2 300\n";  // millimetres
+  std::string m = format_error([&] { ImageSet::load_middlebury(dir.file("x_par.txt", set)); });
+  EXPECT_NE(m.find("x_par.txt:5: expected the camera of view 'a.png' within 1000 times the set's spread"), std::string::npos) << m;
+  const std::string overflow = std::string("2\n") + kGoodLine + "a.png 100 0 50 0 100 40 0 0 1 1 0 0 0 1 0 0 0 1 0 0 1e308\n";
+  m = format_error([&] { ImageSet::load_middlebury(dir.file("y_par.txt", overflow)); });
+  EXPECT_NE(m.find("y_par.txt:3: expected a finite camera centre for view 'a.png', found one that overflows (translation 0 0 1e+308)"),
+            std::string::npos) << m;
+}
+
+TEST(ImageSetConsistency, SetFileThatIsAFolderDeviceOrImageIsNamedForWhatItIs) {
+  TempDir dir;
+  cv::imwrite(dir.file("a.png"), cv::Mat(50, 100, CV_8UC1, cv::Scalar(0)));
+  EXPECT_NE(format_error([&] { ImageSet::load(dir.path().string()); }).find("found a directory"), std::string::npos);
+  EXPECT_NE(format_error([&] { ImageSet::load("/dev/null"); }).find("found a character device"), std::string::npos);
+  EXPECT_NE(format_error([&] { ImageSet::load(dir.file("a.png")); }).find("found a PNG image"), std::string::npos);
+  std::ofstream(dir.file("e.yaml")).close();
+  EXPECT_NE(format_error([&] { ImageSet::load(dir.file("e.yaml")); }).find("found an empty file"), std::string::npos);
+  EXPECT_NE(format_error([&] { ImageSet::load(dir.file("z_par.txt", std::string("1\0x", 3))); }).find("found binary data"),
+            std::string::npos);
+}
+
+TEST(OwnFormat, MasksAreReadWrittenAndCheckedAgainstTheirView) {
+  TempDir dir;
+  cv::imwrite(dir.file("img.png"), cv::Mat(30, 40, CV_8UC1, cv::Scalar(7)));
+  cv::Mat mask(30, 40, CV_8UC1, cv::Scalar(0));
+  mask(cv::Rect(10, 5, 20, 10)) = 1;
+  cv::imwrite(dir.file("mask.png"), mask);
+  cv::imwrite(dir.file("small.png"), cv::Mat(30, 39, CV_8UC1, cv::Scalar(0)));
+  const std::string head = "%YAML:1.0\n---\nK: [500, 0, 20, 0, 500, 15, 0, 0, 1]\nimages:\n";
+  const ImageSet set = ImageSet::load_yaml(dir.file("set.yaml", head + "  - { path: img.png, mask: mask.png, R: [1,0,0,0,1,0,0,0,1], t: [0,0,1] }\n"));
+  ASSERT_TRUE(set.has_masks());
+  const cv::Mat m = set.load_mask(0);
+  EXPECT_EQ(cv::countNonZero(m), 200);
+  EXPECT_EQ(m.at<std::uint8_t>(5, 10), 255);
+  set.save_yaml(dir.file("again.yaml"));
+  EXPECT_EQ(cv::countNonZero(ImageSet::load_yaml(dir.file("again.yaml")).load_mask(0)), 200);
+  const ImageSet wrong = ImageSet::load_yaml(dir.file("wrong.yaml", head + "  - { path: img.png, mask: small.png, R: [1,0,0,0,1,0,0,0,1], t: [0,0,1] }\n"));
+  const std::string e = format_error([&] { wrong.load_mask(0); });
+  EXPECT_NE(e.find("expected a 40x30 mask like view 'img.png', found 39x30"), std::string::npos) << e;
+  const ImageSet none = ImageSet::load_yaml(dir.file("none.yaml", head + "  - { path: img.png, R: [1,0,0,0,1,0,0,0,1], t: [0,0,1] }\n"));
+  EXPECT_FALSE(none.has_masks());
+}

@@ -10,6 +10,7 @@
 #include <fba/task_config.hpp>
 #include <fba/testing.hpp>
 #include <fba/types/frame.hpp>
+#include <fba/types/octree.hpp>
 #include <fba/types/pose.hpp>
 #include <fba/types/silhouette.hpp>
 
@@ -262,4 +263,68 @@ TEST(SimCamera, IsATwinOfTheRealCamera) {
   EXPECT_EQ(ports(real->spec.inputs()), ports(twin->spec.inputs()));
   EXPECT_EQ(ports(real->spec.outputs()), ports(twin->spec.outputs()));
   EXPECT_EQ(real->spec.kind(), twin->spec.kind());
+}
+
+namespace {
+
+// A unit cube mesh (ASCII PLY) and an octree whose root box is that cube: its root a leaf in
+// `state`, at max_depth 3 (8^3 voxels).
+std::string unit_cube_ply(const fba::test::TempDir& dir) {
+  return dir.file("cube.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element face 6\nproperty list uchar int vertex_indices\nend_header\n"
+                  "0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+                  "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n");
+}
+
+fba::Octree root_only(fba::NodeState state, int max_depth) {
+  fba::Octree t;
+  t.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1));
+  t.max_depth = max_depth;
+  t.views = 4;
+  t.root.set_state(state);
+  return t;
+}
+
+std::string accuracy_payload(ComponentHarness& h) {
+  for (const auto& e : h.events())
+    if (e.name == "accuracy") return e.payload;
+  return {};
+}
+
+}  // namespace
+
+// The last model is scored once the stream ends, against the mesh's true voxelisation.
+TEST(ModelAccuracy, ScoresTheLastModelAgainstTheMeshsVoxelisation) {
+  const fba::test::TempDir dir;
+  ComponentHarness h(registry(), "vision.model_accuracy", {{"mesh", unit_cube_ply(dir)}, {"table_clip", false}});
+  h.push("octree", root_only(fba::NodeState::Empty, 3));
+  h.push("octree", root_only(fba::NodeState::Full, 3));
+  h.close("octree");
+  h.run();
+  ASSERT_TRUE(h.failure().empty()) << h.failure();
+  EXPECT_EQ(accuracy_payload(h),
+            "{\"voxel_iou\": 1.000000, \"truth_voxels\": 512, \"model_voxels\": 512, \"carved_away\": 0, \"depth\": 3, "
+            "\"views\": 4, \"mesh_inside_box\": true}");
+}
+
+TEST(ModelAccuracy, AnEmptyModelHasCarvedEverythingAway) {
+  const fba::test::TempDir dir;
+  ComponentHarness h(registry(), "vision.model_accuracy", {{"mesh", unit_cube_ply(dir)}, {"table_clip", false}});
+  h.push("octree", root_only(fba::NodeState::Empty, 3));
+  h.close("octree");
+  h.run();
+  EXPECT_NE(accuracy_payload(h).find("\"voxel_iou\": 0.000000, \"truth_voxels\": 512, \"model_voxels\": 0, \"carved_away\": 512"),
+            std::string::npos) << accuracy_payload(h);
+}
+
+TEST(ModelAccuracy, AModelDeeperThanItsLimitIsRefusedWithTheMemoryItWouldTake) {
+  const fba::test::TempDir dir;
+  ComponentHarness h(registry(), "vision.model_accuracy", {{"mesh", unit_cube_ply(dir)}, {"max_depth", 2}});
+  h.push("octree", root_only(fba::NodeState::Full, 3));
+  h.close("octree");
+  h.run();
+  EXPECT_NE(h.failure().find("the model's depth 3 is above max_depth 2: its dense grid would take 1024 bytes"), std::string::npos)
+      << h.failure();
+  EXPECT_TRUE(accuracy_payload(h).empty());
 }

@@ -25,7 +25,8 @@ struct MeshLoadResult {
   std::vector<std::string> warnings;
 };
 
-// Loads any format assimp reads (OBJ, PLY, STL, OFF, glTF, ...). Faces are triangulated, node
+// Loads any format assimp reads (OBJ, STL, OFF, glTF, ...) and PLY (read here, with the header's
+// counts checked against the file's size; ASCII and both binary forms). Faces are triangulated, node
 // transforms applied, and vertices welded by exact position (normals and texture coordinates
 // are dropped, so UV seams do not split the surface: the result is closed if the file's surface
 // is). Degenerate triangles (a repeated vertex) are dropped. Throws MeshLoadError.
@@ -34,7 +35,8 @@ MeshLoadResult load_mesh_with_warnings(const std::filesystem::path& path);
 // As load_mesh_with_warnings, discarding the warnings.
 TriangleMesh load_mesh(const std::filesystem::path& path);
 
-// Writes a binary little-endian PLY (float x y z vertices, uchar-counted int faces).
+// Writes a binary little-endian PLY (float x y z vertices, uchar-counted int faces) whose data does
+// not start with the byte 0x0A, which assimp 5.2.5 misreads (ASCII when no vertex order avoids it).
 // Throws std::runtime_error naming the file if it cannot be written.
 void write_ply(const TriangleMesh& mesh, const std::filesystem::path& path);
 

@@ -3,7 +3,10 @@
 //
 // Loading a set reads only the text files and each image's size; pixels are read on demand by
 // load_frame(). Every malformed input throws FormatError naming the file, the line where one is
-// known, what was expected and what was found.
+// known, what was expected and what was found; so does a view that disagrees with the set (an
+// image of another size than the views sharing its camera, a focal length outside 0.001..1000
+// times the image's larger side, a camera centre not finite or over 1000 times the set's spread
+// away from the others).
 #pragma once
 
 #include <cstddef>
@@ -38,6 +41,7 @@ struct ViewDescriptor {
   std::string path;    // resolved path (relative names are taken relative to the set file)
   int index = 0;       // 1-based position in the set file (Middlebury numbering)
   CameraModel camera;  // width and height are those of the image file
+  std::string mask_path;  // the provider's silhouette mask (YAML 'mask'), resolved; empty when none
 };
 
 class ImageSet {
@@ -66,6 +70,12 @@ class ImageSet {
   // missing or unreadable, or its size differs from the one recorded at load time.
   Frame load_frame(std::size_t i) const;
 
+  // Whether every view has a provider's mask (a silhouette made independently of fba).
+  bool has_masks() const;
+  // View i's mask as CV_8U, 0 outside and 255 inside (any non-zero pixel is inside). Throws
+  // FormatError when the view has none, or it is unreadable or of another size than the image.
+  cv::Mat load_mask(std::size_t i) const;
+
   // For an exploration loop: the view not yet served whose camera is nearest the requested one.
   // Distance = centre distance (m) + angle_weight (m/rad) * angle between optical axes.
   // nullopt when every view has been served.
@@ -77,6 +87,8 @@ class ImageSet {
                                                    const std::set<std::size_t>& served) const;
 
  private:
+  static ImageSet load_yaml_checked(const std::string& file);  // load_yaml once the file is known to be text
+
   std::vector<ViewDescriptor> views_;
 };
 
