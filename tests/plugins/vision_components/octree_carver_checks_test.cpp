@@ -8,6 +8,8 @@
 
 #include <fba/testing.hpp>
 #include <fba/types/frame.hpp>
+#include <fba/types/octree.hpp>
+#include <fba/types/regions_of_interest.hpp>
 #include <fba/types/silhouette.hpp>
 
 #include "support/built_plugins.hpp"
@@ -106,4 +108,36 @@ TEST(OctreeCarverChecks, BoundsOrdersOfMagnitudeOffTheViewingConesFailAskingForM
   EXPECT_TRUE(has_event(*h, "suspect_model"));
   // The same views in the right box give a model.
   EXPECT_EQ(carve(views)->failure(), "");
+}
+
+// The grasp criterion from regions of interest (grasp synthesis's boxes), with the generic one
+// off: detail to the deepest level goes inside the region and nowhere else.
+TEST(OctreeCarverGraspCriterion, RegionsOfInterestGetTheDetailAndNothingElseDoes) {
+  ComponentHarness h(registry(), "vision.octree_carver",
+                     {{"bounds", kDinoBox}, {"max_depth", 6}, {"occupancy_threshold", 1}, {"detail_after_views", 0}}, {"regions"});
+  fba::RegionsOfInterest roi;
+  const Eigen::AlignedBox3d region(Eigen::Vector3d(-0.06, -0.02, -0.06), Eigen::Vector3d(-0.025, 0.07, 0.016));
+  roi.boxes.push_back(region);
+  h.push<fba::RegionsOfInterest>("regions", roi);
+  for (const auto& f : dino_frames(4)) {
+    cv::Mat m = cv::Mat::zeros(f->image.rows, f->image.cols, CV_8UC1);
+    cv::circle(m, {320, 240}, 120, cv::Scalar(255), cv::FILLED);
+    h.push<fba::Silhouette>("silhouette", silhouette(f, m));
+  }
+  h.close("silhouette");
+  h.close("regions");
+  h.run();
+  ASSERT_EQ(h.failure(), "");
+  const auto models = h.values<fba::Octree>("octree");
+  ASSERT_FALSE(models.empty());
+  // A deepest leaf is the child of a node that meets the region: within a parent's edge of it.
+  const fba::Octree& model = models.back();
+  const double parent_edge = model.bounds.sizes().x() / 32;
+  const Eigen::AlignedBox3d near(region.min().array() - parent_edge, region.max().array() + parent_edge);
+  int deep_inside = 0, deep_outside = 0;
+  model.for_each_leaf([&](const fba::OctreeCell& c) {
+    if (c.depth == 6) ++(near.contains(c.box()) ? deep_inside : deep_outside);
+  });
+  EXPECT_GT(deep_inside, 0);
+  EXPECT_EQ(deep_outside, 0);
 }
