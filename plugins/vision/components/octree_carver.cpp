@@ -121,7 +121,7 @@ class OctreeCarverFilter final : public fba::Component {
                                  (s.frame ? s.frame->source : std::string()) +
                                  "' has no camera pose; the carver needs calibrated frames");
       if (!first_camera_) first_camera_ = s.frame->camera;
-      views_.push_back(s);
+      views_.push_back(geometry_of(s));
       if (!has_bounds_) {
         pending_.push_back(s);  // the root box comes from the first few views together
         if (pending_.size() < bounds_views_) return;
@@ -204,6 +204,19 @@ class OctreeCarverFilter final : public fba::Component {
     std::snprintf(s, sizeof s, "[%.4f, %.4f, %.4f, %.4f, %.4f, %.4f]", b.min().x(), b.min().y(), b.min().z(), b.max().x(),
                   b.max().y(), b.max().z());
     return s;
+  }
+
+  // What the checks at the end need of a view: its mask (shared with the carver's copy) and its
+  // camera, not the frame's image.
+  static fba::Silhouette geometry_of(const fba::Silhouette& s) {
+    auto frame = std::make_shared<fba::Frame>();
+    frame->camera = s.frame->camera;
+    frame->has_pose = true;
+    frame->index = s.frame->index;
+    fba::Silhouette kept;
+    kept.mask = s.mask;
+    kept.frame = std::move(frame);
+    return kept;
   }
 
   // Fails the run with the reason, after the event that records it in summary.json.
@@ -327,7 +340,7 @@ class OctreeCarverFilter final : public fba::Component {
   const double margin_;
   const bool compare_uniform_;
   bool has_bounds_ = false;
-  std::vector<fba::Silhouette> views_;  // every view so far (masks are shared, not copied): the checks at the end
+  std::vector<fba::Silhouette> views_;  // every view so far (geometry_of): the checks at the end
   std::vector<fba::Silhouette> pending_;
   std::optional<fba::CameraModel> first_camera_;
 };
