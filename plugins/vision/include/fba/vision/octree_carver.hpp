@@ -20,7 +20,7 @@
 //    carved on that view's evidence; a node with a corner behind the camera has occupancy 1
 //    (unknown) in that view;
 //  * a node is Empty when some view gives occupancy 0, Full when every view gives 1, else
-//    Partial. Its stored occupancy is the lowest over the views (0 when Empty);
+//    Partial. Its stored occupancy is the lowest rectangle share over the views (0 when Empty);
 //  * the leaf test: a Partial leaf at the resolution limit (max_depth or min_node_size) is Empty
 //    when, in some view whose rectangle is inside the image, no silhouette pixel's square lies
 //    within tol (Euclidean) of its centre's projection: the classic voxel-centre test made safe
