@@ -94,12 +94,16 @@ TEST(CarveGraspRegions, KeepsFewerNodesThanUniformDetailToTheSameDepth) {
   ASSERT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
   const fba::Event* e = find_event(r, "detail");
   ASSERT_NE(e, nullptr);
-  std::size_t nodes = 0, uniform = 0;
-  ASSERT_EQ(std::sscanf(e->payload.c_str(), "{\"model_nodes\": %zu, \"nodes_visited\": %*u, \"uniform_nodes\": %zu", &nodes, &uniform), 2)
+  std::size_t nodes = 0, visited = 0, uniform = 0, uniform_visited = 0;
+  ASSERT_EQ(std::sscanf(e->payload.c_str(),
+                        "{\"model_nodes\": %zu, \"nodes_visited\": %zu, \"uniform_nodes\": %zu, \"uniform_nodes_visited\": %zu",
+                        &nodes, &visited, &uniform, &uniform_visited),
+            4)
       << e->payload;
   RecordProperty("model_nodes", std::to_string(nodes));
   RecordProperty("uniform_nodes", std::to_string(uniform));
   EXPECT_LT(nodes, uniform) << e->payload;
+  EXPECT_LT(visited, uniform_visited) << e->payload;
   // Coarse and fine together: leaves at the deepest level, and leaves on the outline (Partial)
   // left well above it because no flat contour point asked for them.
   ASSERT_FALSE(models.empty());

@@ -47,8 +47,8 @@ class OctreeCarverFilter final : public fba::Component {
                                                    .range(0, 64);
   static constexpr fba::Param<bool> kCompareUniform{
       "compare_uniform", false,
-      "at the end, also carve the same views with uniform detail to the same depth (occupancy_threshold 0, no grasp criteria) "
-      "and report both node counts in the `detail` event"};
+      "at the end, also carve the same views one by one with uniform detail to the same depth (occupancy_threshold 0, no "
+      "grasp criteria) and report both node counts in the `detail` event"};
   static inline const auto kBounds =
       fba::Param<std::vector<double>>("bounds", {}, "root box [xmin, ymin, zmin, xmax, ymax, zmax] in metres; empty: estimated from the first silhouettes")
           .size({0, 6});
@@ -295,10 +295,10 @@ class OctreeCarverFilter final : public fba::Component {
       fba::vision::CarverParams p = carver_.params();
       p.occupancy_threshold = 0;
       p.curvature_threshold = -std::numeric_limits<double>::infinity();
-      p.detail_after_views = 0;  // all views at once: the batch carve
+      // The views one by one, as this carver had them, so that the nodes visited compare too.
       fba::vision::OctreeCarver uniform(p);
       uniform.set_bounds(model.bounds);
-      uniform.add_views(views_);
+      for (const auto& v : views_) uniform.add_view(v);
       const auto u = uniform.snapshot();
       const auto ust = uniform.stats();
       std::snprintf(payload, sizeof payload,
