@@ -112,21 +112,34 @@ inline Corners project_corners(const ViewData& v, const Lattice& L, const NodeKe
   return c;
 }
 
-inline Rect node_rect(const ViewData& v, const Lattice& L, const NodeKey& k, double tol) {
+// The 8 corners in pixels; false when one is not in front of the camera.
+inline bool project_corners_uv(const ViewData& v, const Lattice& L, const NodeKey& k, double u[8], double w[8]) {
   const Corners c = project_corners(v, L, k);
-  Rect r;
+  for (int i = 0; i < 8; ++i) {
+    if (!(c.z[i] > 0)) return false;
+    const double inv = 1.0 / c.z[i];
+    u[i] = c.x[i] * inv, w[i] = c.y[i] * inv;
+  }
+  return true;
+}
+
+inline Rect rect_of(const double u[8], const double w[8], double tol) {
   double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
   for (int i = 0; i < 8; ++i) {
-    if (!(c.z[i] > 0)) {
-      r.behind = true;
-      return r;
-    }
-    const double inv = 1.0 / c.z[i];
-    const double u = c.x[i] * inv, w = c.y[i] * inv;
-    umin = std::min(umin, u), umax = std::max(umax, u);
-    vmin = std::min(vmin, w), vmax = std::max(vmax, w);
+    umin = std::min(umin, u[i]), umax = std::max(umax, u[i]);
+    vmin = std::min(vmin, w[i]), vmax = std::max(vmax, w[i]);
   }
   return pixel_rect(umin, umax, vmin, vmax, tol);
+}
+
+inline Rect node_rect(const ViewData& v, const Lattice& L, const NodeKey& k, double tol) {
+  double u[8], w[8];
+  if (!project_corners_uv(v, L, k, u, w)) {
+    Rect r;
+    r.behind = true;
+    return r;
+  }
+  return rect_of(u, w, tol);
 }
 
 inline std::int64_t rect_sum(const cv::Mat& I, int x0, int y0, int x1, int y1) {
@@ -152,6 +165,61 @@ inline Occupancy occupancy(const ViewData& v, const Rect& r) {
   if (cx0 > cx1 || cy0 > cy1) return {area, area};  // wholly outside the image: unknown
   const std::int64_t in_image = std::int64_t(cx1 - cx0 + 1) * (cy1 - cy0 + 1);
   return {rect_sum(v.integral, cx0, cy0, cx1, cy1) + (area - in_image), area};
+}
+
+// The generic criterion's share: the node's projection is the convex hull of its 8 projected
+// corners (a hexagon in general position), so unlike the rectangle's share it does not depend on
+// how the cube is turned in the image. Share = occupied pixels (silhouette, or outside the image)
+// among the pixels whose centre lies in the hull, counted row by row with the integral image.
+// A hull holding no pixel centre (a node under about a pixel) takes the rectangle's share. The
+// node's state is the rectangle's (O(1)); for a Partial node (rectangle neither empty nor full)
+// the share is clamped into the open interval (0, 1), so occupancy_threshold 0 splits every
+// Partial node as the rectangle rule did.
+inline double hull_share(const ViewData& v, const double u[8], const double w[8], const Occupancy& rect) {
+  // Andrew's monotone chain on 8 points: the hull counter-clockwise in (u, w).
+  int idx[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+  std::sort(idx, idx + 8, [&](int a, int b) { return u[a] < u[b] || (u[a] == u[b] && w[a] < w[b]); });
+  double hu[16], hw[16];
+  int n = 0;
+  auto cross = [&](int i, int j, int p) {
+    return (hu[j] - hu[i]) * (w[p] - hw[i]) - (hw[j] - hw[i]) * (u[p] - hu[i]);
+  };
+  for (int i = 0; i < 8; ++i) {
+    while (n >= 2 && cross(n - 2, n - 1, idx[i]) <= 0) --n;
+    hu[n] = u[idx[i]], hw[n] = w[idx[i]], ++n;
+  }
+  for (int i = 6, lower = n + 1; i >= 0; --i) {
+    while (n >= lower && cross(n - 2, n - 1, idx[i]) <= 0) --n;
+    hu[n] = u[idx[i]], hw[n] = w[idx[i]], ++n;
+  }
+  --n;  // the last point repeats the first
+  double wmin = INFINITY, wmax = -INFINITY;
+  for (int i = 0; i < n; ++i) wmin = std::min(wmin, hw[i]), wmax = std::max(wmax, hw[i]);
+  std::int64_t area = 0, occupied = 0;
+  for (int y = first_pixel(wmin), y1 = last_pixel(wmax); y <= y1; ++y) {
+    // The hull's span on the row of pixel centres at height y: its edges crossing that height.
+    double lo = INFINITY, hi = -INFINITY;
+    for (int i = 0; i < n; ++i) {
+      const int j = i + 1 == n ? 0 : i + 1;
+      const double a = hw[i], b = hw[j];
+      if ((y < a && y < b) || (y > a && y > b)) continue;
+      const double x = a == b ? hu[i] : hu[i] + (hu[j] - hu[i]) * ((y - a) / (b - a));
+      lo = std::min({lo, x, a == b ? hu[j] : x}), hi = std::max({hi, x, a == b ? hu[j] : x});
+    }
+    const int x0 = first_pixel(lo), x1 = last_pixel(hi);
+    if (x0 > x1) continue;
+    const std::int64_t row = x1 - x0 + 1;
+    area += row;
+    if (y < 0 || y >= v.height) {
+      occupied += row;  // outside the image: unknown, occupied
+      continue;
+    }
+    const int cx0 = std::max(x0, 0), cx1 = std::min(x1, v.width - 1);
+    const std::int64_t in_image = cx0 <= cx1 ? cx1 - cx0 + 1 : 0;
+    occupied += row - in_image + (in_image > 0 ? rect_sum(v.integral, cx0, y, cx1, y) : 0);
+  }
+  const double share = area > 0 ? double(occupied) / double(area) : rect.value();
+  return std::clamp(share, 1e-9, 1 - 1e-9);
 }
 
 // Whether a graspable contour point lies in the (clipped) rectangle.

@@ -66,9 +66,7 @@ ViewData make_view(const fba::Silhouette& s, double curvature_threshold) {
 //  * a node whose ancestor is wholly inside a view is not tested against it (a child's corners
 //    are inside the parent's cube, so its rectangle is inside the parent's);
 //  * a new view that sees a node wholly inside cannot change anything below it (no carving, no
-//    lower occupancy, no contour point), so the node's subtree is not visited at all, unless a
-//    node below could start splitting because its highest occupancy rises to 1 (only with an
-//    occupancy threshold above 0; the kSubtreeAbove flag says no node below can);
+//    lower share, no contour point), so the node's subtree is not visited at all;
 //  * the view that gave the parent its lowest occupancy is tested first, and testing stops at the
 //    first view that carves the node; the leaf test of an existing leaf needs only the new views.
 
@@ -76,8 +74,7 @@ namespace {
 
 // The producer flags of a node (fba::OctreeNode::flag).
 constexpr int kCurvatureHit = 0;  // a view where it is not wholly inside has a graspable contour point in its rectangle
-constexpr int kAbove = 1;         // some view's occupancy is above occupancy_threshold
-constexpr int kSubtreeAbove = 2;  // kAbove holds for this node and every non-empty node below it
+constexpr int kAbove = 1;         // in a view where it lies on the outline, its share (hull_share) is above occupancy_threshold
 
 constexpr float kBelowOne = 0.99999994f;  // the largest float below 1: a partial node's occupancy
 
@@ -178,23 +175,28 @@ struct OctreeCarver::Impl {
     // A node wholly inside every view so far (lowest occupancy 1) is wholly inside the old views.
     std::uint64_t mask = full_mask | (n.occupancy() >= 1 ? low_bits(from_view) : 0);
     float min_occ = n.occupancy();
-    bool above = n.flag(kAbove), curvature_hit = n.flag(kCurvatureHit), all_full = true;
+    // The generic criterion: some view where the node lies on the outline has its share above
+    // the threshold. The hull's share costs a scan of its rows, so it is computed only while it
+    // can decide (a Partial node's share is in (0, 1): threshold 0 or 1 decides without it).
+    const double t = params.occupancy_threshold;
+    bool above = n.flag(kAbove);
+    bool curvature_hit = n.flag(kCurvatureHit), all_full = true;
     int argmin = hint;
     double lowest = 2;
     Rect rects[64];  // rectangles computed here, reused by the leaf test
     std::uint64_t have_rect = 0;
     auto carves = [&](int v) {
-      if (v < 64 && ((mask >> v) & 1u)) {
-        above = above || 1.0 > params.occupancy_threshold;
-        return false;
-      }
+      if (v < 64 && ((mask >> v) & 1u)) return false;  // wholly inside: not on the outline
       const ViewData& view = views[static_cast<std::size_t>(v)];
-      const Rect r = node_rect(view, lattice, k, params.silhouette_tolerance);
+      double cu[8], cw[8];
+      Rect r;
+      if (project_corners_uv(view, lattice, k, cu, cw)) r = rect_of(cu, cw, params.silhouette_tolerance);
+      else r.behind = true;
       if (v < 64) rects[v] = r, have_rect |= std::uint64_t(1) << v;
       const Occupancy o = occupancy(view, r);
       if (o.empty()) return true;
       const double val = o.value();
-      above = above || val > params.occupancy_threshold;
+      if (!above && !o.full()) above = t == 0 || (t < 1 && hull_share(view, cu, cw, o) > t);
       if (o.full()) {
         if (v < 64) mask |= std::uint64_t(1) << v;
         return false;
@@ -218,9 +220,7 @@ struct OctreeCarver::Impl {
     // Nothing below can change (see the top of this section), unless detail held back until now
     // is due.
     const bool detail_due = from_view < params.detail_after_views && nv >= params.detail_after_views;
-    if (from_view < nv && all_full && !n.is_leaf() && !detail_due &&
-        (n.flag(kSubtreeAbove) || params.occupancy_threshold >= 1))
-      return;
+    if (from_view < nv && all_full && !n.is_leaf() && !detail_due) return;
 
     const bool full = min_occ >= 1;
     Split split = Split::No;
@@ -246,7 +246,6 @@ struct OctreeCarver::Impl {
       drop_children(n);  // no longer wanted (fewer regions of interest, or occupancy fell)
       n.set_state(full ? fba::NodeState::Full : fba::NodeState::Partial);
       n.set_interest(false);
-      n.set_flag(kSubtreeAbove, above);
       return;
     }
     n.set_state(fba::NodeState::Partial);
@@ -267,28 +266,12 @@ struct OctreeCarver::Impl {
     }
     fba::OctreeNode* c = (*arena)[n.children()].child;
     for (int i = 0; i < 8; ++i) update(c[i], k.child(i), child_from, argmin, mask, ctx);
-    if (!ctx.defer) refresh_subtree_above(n);
   }
 
   void set_empty(fba::OctreeNode& n) {
     drop_children(n);
     n = fba::OctreeNode{};
     n.set_state(fba::NodeState::Empty);
-    n.set_flag(kSubtreeAbove, true);
-  }
-
-  void refresh_subtree_above(fba::OctreeNode& n) const {
-    bool all = n.flag(kAbove);
-    if (!n.is_leaf())
-      for (const auto& c : (*arena)[n.children()].child) all = all && c.flag(kSubtreeAbove);
-    n.set_flag(kSubtreeAbove, all);
-  }
-
-  // After the parallel part: the flags of the nodes above defer_depth, bottom up.
-  void refresh_top(fba::OctreeNode& n, int depth, int defer_depth) {
-    if (n.is_leaf() || depth >= defer_depth) return;
-    for (auto& c : (*arena)[n.children()].child) refresh_top(c, depth + 1, defer_depth);
-    refresh_subtree_above(n);
   }
 
   void parallel_for(std::size_t n, const std::function<void(std::size_t)>& f) const {
@@ -332,7 +315,6 @@ struct OctreeCarver::Impl {
         const Task& t = tasks[i];
         update(*t.node, t.key, t.from_view, t.hint, t.full_mask, ctx[i]);
       });
-      refresh_top(root, 0, top.defer_depth);
       vs.nodes_visited = top.visited, vs.nodes_refined = top.refined, vs.blocks_copied = top.copied;
       for (const auto& c : ctx) vs.nodes_visited += c.visited, vs.nodes_refined += c.refined, vs.blocks_copied += c.copied;
       compact_if_wasteful();

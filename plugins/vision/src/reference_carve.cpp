@@ -122,6 +122,44 @@ struct Carve {
     return {v.box(v.sum, x0, y0, x1, y1) + area - std::int64_t(x1 - x0 + 1) * (y1 - y0 + 1), area};
   }
 
+  // The share over the projected node: among the pixels whose centre's ray meets the node's cube
+  // (the cube's projection, found in 3D here rather than as a 2D hull), those in the silhouette
+  // or outside the image. No such pixel: the box's share. Clamped into (0, 1): only asked for a
+  // node that its box finds neither empty nor full.
+  double share(const View& v, const Key& k, double box_share) const {
+    const int s = cells(k.depth);
+    const Eigen::Vector3d lo = point(k.x, k.y, k.z), hi = point(k.x + s, k.y + s, k.z + s);
+    const Eigen::Matrix3d M = v.P.leftCols<3>();
+    const Eigen::Matrix3d Minv = M.inverse();
+    const Eigen::Vector3d C = -Minv * v.P.col(3);
+    double u0 = INFINITY, u1 = -INFINITY, w0 = INFINITY, w1 = -INFINITY;
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d q = v.P * point(k.x + (c & 1) * s, k.y + ((c >> 1) & 1) * s, k.z + ((c >> 2) & 1) * s).homogeneous();
+      if (!(q.z() > 0)) return std::clamp(box_share, 1e-9, 1 - 1e-9);
+      u0 = std::min(u0, q.x() / q.z()), u1 = std::max(u1, q.x() / q.z());
+      w0 = std::min(w0, q.y() / q.z()), w1 = std::max(w1, q.y() / q.z());
+    }
+    std::int64_t n = 0, occupied = 0;
+    for (int y = up(w0); y <= down(w1); ++y)
+      for (int x = up(u0); x <= down(u1); ++x) {
+        const Eigen::Vector3d d = Minv * Eigen::Vector3d(x, y, 1);
+        double t0 = 0, t1 = INFINITY;  // slab test of the ray C + t d, t > 0
+        for (int a = 0; a < 3 && t0 <= t1; ++a) {
+          if (d[a] == 0) {
+            if (C[a] < lo[a] || C[a] > hi[a]) t0 = 1, t1 = 0;
+            continue;
+          }
+          const double ta = (lo[a] - C[a]) / d[a], tb = (hi[a] - C[a]) / d[a];
+          t0 = std::max(t0, std::min(ta, tb)), t1 = std::min(t1, std::max(ta, tb));
+        }
+        if (t0 > t1) continue;
+        ++n;
+        const bool outside = x < 0 || y < 0 || x >= v.w || y >= v.h;
+        occupied += outside || v.mask[std::size_t(y) * v.step + std::size_t(x)] != 0;
+      }
+    return std::clamp(n > 0 ? double(occupied) / double(n) : box_share, 1e-9, 1 - 1e-9);
+  }
+
   bool graspable(const View& v, const PixelBox& b) const {
     if (v.grasp_sum.empty() || b.behind) return false;
     const int x0 = std::max(b.x0, 0), x1 = std::min(b.x1, v.w - 1), y0 = std::max(b.y0, 0), y1 = std::min(b.y1, v.h - 1);
@@ -175,6 +213,8 @@ fba::Octree reference_carve(const std::vector<fba::Silhouette>& silhouettes, con
   tree.max_depth = params.max_depth;
   tree.views = static_cast<int>(views.size());
   std::vector<PixelBox> boxes(views.size());
+  // A Partial node's share lies in (0, 1): only a threshold between decides by it.
+  const bool share_decides = params.occupancy_threshold > 0 && params.occupancy_threshold < 1;
   std::size_t visited = 0, refined = 0;
 
   // Algorithm 1: level by level; Algorithm 2 for each node of the level.
@@ -183,20 +223,22 @@ fba::Octree reference_carve(const std::vector<fba::Silhouette>& silhouettes, con
     next.clear();
     for (const auto& [n, k] : level) {
       ++visited;
-      double lo = 1, hi = 0;
-      bool empty = false, grasp = false;
+      double lo = 1;
+      bool empty = false, grasp = false, generic = false;
       for (std::size_t i = 0; i < views.size() && !empty; ++i) {
         boxes[i] = carve.pixels(views[i], k);
         const auto [occ, area] = carve.occupied(views[i], boxes[i]);
         empty = occ == 0;
         lo = std::min(lo, double(occ) / double(area));
-        hi = std::max(hi, double(occ) / double(area));
+        // The generic criterion: a view where the node is on the outline finds its share above the threshold.
+        if (!empty && occ != area && !generic)
+          generic = (share_decides ? carve.share(views[i], k, double(occ) / double(area)) : 0.5) > params.occupancy_threshold;
         grasp = grasp || (occ != area && carve.graspable(views[i], boxes[i]));
       }
       bool split = false, interest = false;
       if (!empty && lo < 1 && !carve.at_limit(k.depth)) {
-        split = hi > params.occupancy_threshold || grasp || carve.in_roi(k);
-        interest = split && !(hi > params.occupancy_threshold);
+        split = generic || grasp || carve.in_roi(k);
+        interest = split && !generic;
         split = split && !(int(views.size()) < params.detail_after_views && k.depth >= params.detail_depth);
       }
       if (!empty && !split && lo < 1 && carve.at_limit(k.depth))

@@ -20,7 +20,7 @@
 //    carved on that view's evidence; a node with a corner behind the camera has occupancy 1
 //    (unknown) in that view;
 //  * a node is Empty when some view gives occupancy 0, Full when every view gives 1, else
-//    Partial. Its stored occupancy is the lowest over the views (0 when Empty);
+//    Partial. Its stored occupancy is the lowest rectangle share over the views (0 when Empty);
 //  * the leaf test: a Partial leaf at the resolution limit (max_depth or min_node_size) is Empty
 //    when, in some view whose rectangle is inside the image, no silhouette pixel's square lies
 //    within tol (Euclidean) of its centre's projection: the classic voxel-centre test made safe
@@ -29,10 +29,16 @@
 //    whole voxel's projection, which padded the model by about a voxel all round;
 //  * a non-empty node is split when depth < max_depth, its edge > min_node_size (and, while fewer
 //    than detail_after_views views are in, depth < detail_depth), occupancy < 1
-//    in some view (a wholly-inside node's children would all be Full), and either the occupancy
-//    in some view > occupancy_threshold (generic criterion) or a grasp criterion asks: the node intersects a
-//    region of interest, or in some view where it is not wholly inside, its rectangle holds a
-//    contour point whose curvature is below curvature_threshold (a region that may be grasped).
+//    in some view (a wholly-inside node's children would all be Full), and either its share in
+//    some view where it lies on the outline (neither empty nor full) > occupancy_threshold
+//    (generic criterion) or a grasp criterion asks: the node
+//    intersects a region of interest, or in some view where it is not wholly inside, its
+//    rectangle holds a contour point whose curvature is below curvature_threshold (a region that
+//    may be grasped). The share is measured over the projected node (the convex hull of its 8
+//    projected corners, see hull_share in carve_common.hpp), not its rectangle, so that it does
+//    not depend on the viewing angle; a Partial node's share lies strictly between 0 and 1, so
+//    threshold 0 splits every Partial node (uniform refinement) and 1 switches the generic
+//    criterion off.
 //
 // The model is a function of (views, regions of interest, parameters): adding views one by one
 // gives exactly the batch result; nodes carved stay carved; set_regions_of_interest re-decides
@@ -63,7 +69,11 @@ namespace fba::vision {
 struct CarverParams {
   int max_depth = 6;                 // root is depth 0; at most 19
   double min_node_size = 0.0;        // metres: nodes with an edge <= this are not split
-  double occupancy_threshold = 0.0;  // generic criterion: split when occupancy > this and < 1
+  // Generic criterion: split a Partial node whose share, in a view where it lies on the outline,
+  // is above this. 0 (default) splits every Partial node (uniform detail); at 0.5 nodes mostly
+  // outside the silhouette wherever they meet its outline stay coarse, so that a grasp criterion
+  // decides where detail goes; 1 switches it off.
+  double occupancy_threshold = 0.0;
   // Grasp criterion on the contour: split where a contour point with curvature (1/px) below
   // this falls in the node's rectangle. -infinity (default) switches it off.
   double curvature_threshold = -std::numeric_limits<double>::infinity();

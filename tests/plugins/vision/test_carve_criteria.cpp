@@ -1,0 +1,147 @@
+// The carver's generic criterion measures a node's share over its projected hull, which does not
+// depend on the viewing angle, where the share over the bounding rectangle does.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "carve_common.hpp"
+#include "fba/geometry/viewpoints.hpp"
+#include "fba/vision/octree_carver.hpp"
+#include "fba/vision/reference_carve.hpp"
+
+using namespace fba::vision;
+using namespace fba::vision::detail;
+
+namespace {
+
+// A 640x480 camera 0.6 m from the origin, at the given azimuth and elevation (degrees), looking
+// at the origin.
+std::shared_ptr<fba::Frame> camera_around(double azimuth, double elevation) {
+  auto f = std::make_shared<fba::Frame>();
+  f->camera.width = 640, f->camera.height = 480;
+  f->camera.K << 800, 0, 320, 0, 800, 240, 0, 0, 1;
+  const double a = azimuth * M_PI / 180, e = elevation * M_PI / 180;
+  const Eigen::Vector3d eye = 0.6 * Eigen::Vector3d(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+  f->camera.camera_from_world = fba::geometry::look_at(eye, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
+  f->has_pose = true;
+  f->image = cv::Mat::zeros(480, 640, CV_8UC3);
+  return f;
+}
+
+// The root node of a 10 cm cube at the origin.
+const Lattice kCube{Eigen::Vector3d::Constant(-0.05), 0.1};
+
+}  // namespace
+
+// The silhouette is the node itself (the mask is its projection): its share should be 1 from
+// every direction. Over the hull it is, to within the pixels along the outline; over the
+// bounding rectangle it falls to about 0.7 where the cube shows three faces.
+TEST(HullShare, OfANodeIsNearlyIndependentOfTheViewingAngle) {
+  double hull_lo = 1, hull_hi = 0, rect_lo = 1, rect_hi = 0;
+  for (double elevation : {0.0, 20.0, 35.0})
+    for (double azimuth = 0; azimuth <= 90; azimuth += 15) {
+      fba::Silhouette s;
+      s.frame = camera_around(azimuth, elevation);
+      s.mask = cv::Mat::zeros(480, 640, CV_8UC1);
+      ViewData probe = make_view([&] {
+        fba::Silhouette t = s;
+        t.mask = s.mask.clone();
+        return t;
+      }(), -INFINITY);
+      double u[8], w[8];
+      ASSERT_TRUE(project_corners_uv(probe, kCube, NodeKey{}, u, w));
+      std::vector<cv::Point> pts, hull;
+      for (int i = 0; i < 8; ++i) pts.emplace_back(cvRound(u[i] * 256), cvRound(w[i] * 256));
+      cv::convexHull(pts, hull);
+      cv::fillConvexPoly(s.mask, hull, cv::Scalar(255), cv::LINE_8, 8);
+      const ViewData v = make_view(s, -INFINITY);
+      const Occupancy rect = occupancy(v, rect_of(u, w, 0));
+      ASSERT_FALSE(rect.empty());
+      const double h = rect.full() ? 1.0 : hull_share(v, u, w, rect);
+      hull_lo = std::min(hull_lo, h), hull_hi = std::max(hull_hi, h);
+      rect_lo = std::min(rect_lo, rect.value()), rect_hi = std::max(rect_hi, rect.value());
+    }
+  RecordProperty("hull_share_range", std::to_string(hull_lo) + " .. " + std::to_string(hull_hi));
+  RecordProperty("rectangle_share_range", std::to_string(rect_lo) + " .. " + std::to_string(rect_hi));
+  EXPECT_GE(hull_lo, 0.97);
+  EXPECT_LT(hull_hi - hull_lo, 0.03);
+  EXPECT_LT(rect_lo, 0.8);  // the rectangle rule depended on the angle
+  EXPECT_GT(rect_hi - rect_lo, 0.15);
+}
+
+// A half-plane silhouette through the node's projected centre covers half the hull from any
+// direction.
+TEST(HullShare, OfAHalfCoveredNodeIsAboutOneHalf) {
+  for (double azimuth = 0; azimuth <= 90; azimuth += 30) {
+    fba::Silhouette s;
+    s.frame = camera_around(azimuth, 30);
+    s.mask = cv::Mat::zeros(480, 640, CV_8UC1);
+    s.mask.colRange(0, 320).setTo(255);  // the origin projects to x = 320
+    const ViewData v = make_view(s, -INFINITY);
+    double u[8], w[8];
+    ASSERT_TRUE(project_corners_uv(v, kCube, NodeKey{}, u, w));
+    const Occupancy rect = occupancy(v, rect_of(u, w, 0));
+    EXPECT_NEAR(hull_share(v, u, w, rect), 0.5, 0.02) << azimuth;
+  }
+}
+
+// Occupancy threshold 1 switches the generic criterion off: without a grasp criterion the root
+// is never split. Threshold 0 splits every node on the outline.
+TEST(GenericCriterion, ThresholdOneNeverSplitsAndZeroSplitsTheOutline) {
+  std::vector<fba::Silhouette> views;
+  for (double azimuth : {0.0, 60.0, 120.0}) {
+    fba::Silhouette s;
+    s.frame = camera_around(azimuth, 20);
+    s.mask = cv::Mat::zeros(480, 640, CV_8UC1);
+    cv::circle(s.mask, {320, 240}, 60, cv::Scalar(255), cv::FILLED);
+    views.push_back(s);
+  }
+  const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
+  CarverParams p;
+  p.max_depth = 5;
+  p.detail_after_views = 0;
+  p.occupancy_threshold = 1;
+  EXPECT_EQ(reference_carve(views, box, p).node_count, 1u);
+  OctreeCarver off(p);
+  off.set_bounds(box);
+  off.add_views(views);
+  EXPECT_EQ(off.snapshot()->node_count, 1u);
+  p.occupancy_threshold = 0;
+  OctreeCarver uniform(p);
+  uniform.set_bounds(box);
+  uniform.add_views(views);
+  int deepest = 0;
+  uniform.snapshot()->for_each_leaf([&](const fba::OctreeCell& c) { deepest = std::max(deepest, c.depth); });
+  EXPECT_EQ(deepest, 5);
+}
+
+// Between 0 and 1 the criterion uses the hull's share, and the fast carver and the reference
+// (which finds the projection by casting rays through the cube) agree on every leaf.
+TEST(GenericCriterion, FastCarverAndReferenceAgreeAtAThresholdBetween) {
+  std::vector<fba::Silhouette> views;
+  for (double azimuth : {0.0, 50.0, 100.0, 150.0}) {
+    fba::Silhouette s;
+    s.frame = camera_around(azimuth, 25);
+    s.mask = cv::Mat::zeros(480, 640, CV_8UC1);
+    cv::ellipse(s.mask, {320, 240}, {90, 50}, azimuth, 0, 360, cv::Scalar(255), cv::FILLED);
+    views.push_back(s);
+  }
+  const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
+  for (double t : {0.3, 0.5, 0.7}) {
+    CarverParams p;
+    p.max_depth = 6;
+    p.detail_after_views = 0;
+    p.occupancy_threshold = t;
+    OctreeCarver fast(p);
+    fast.set_bounds(box);
+    fast.add_views(views);
+    const fba::Octree ref = reference_carve(views, box, p);
+    EXPECT_EQ(count_leaf_mismatches(*fast.snapshot(), ref), 0u) << t;
+    EXPECT_EQ(count_leaf_mismatches(ref, *fast.snapshot()), 0u) << t;
+    if (t < 0.5) EXPECT_GT(fast.snapshot()->node_count, 1u) << t;  // the criterion split something
+  }
+}
