@@ -28,19 +28,6 @@ constexpr double kStaircaseSigmaPx = 1.0;
 
 bool has_distortion(const cv::Mat& d) { return !d.empty() && cv::countNonZero(d != 0) > 0; }
 
-// The object's depth in this frame (camera z, metres), when the parameters tell it.
-std::optional<double> object_depth(const fba::Frame* frame, const SelectionParams& p) {
-  if (!frame || frame->camera.K(0, 0) <= 0 || frame->camera.K(1, 1) <= 0) return std::nullopt;
-  if (p.depth_m > 0) return p.depth_m;
-  if (!p.object_centre || !frame->has_pose) return std::nullopt;
-  const double z = (frame->camera.camera_from_world * *p.object_centre).z();
-  return z > 0 ? std::optional<double>(z) : std::nullopt;  // behind the camera: no meaningful depth
-}
-
-}  // namespace
-
-namespace {
-
 // The image as 8-bit grey: Otsu needs 8 bits, and 0.19 of full scale is the same cut either way.
 cv::Mat grey8(const cv::Mat& image) {
   cv::Mat grey;
@@ -51,6 +38,15 @@ cv::Mat grey8(const cv::Mat& image) {
   if (grey.depth() == CV_16U) grey.convertTo(grey, CV_8U, 255.0 / 65535.0);
   else if (grey.depth() != CV_8U) throw std::invalid_argument("binarise: expected 8- or 16-bit pixels");
   return grey;
+}
+
+// The object's depth in this frame (camera z, metres), when the parameters tell it.
+std::optional<double> object_depth(const fba::Frame* frame, const SelectionParams& p) {
+  if (!frame || frame->camera.K(0, 0) <= 0 || frame->camera.K(1, 1) <= 0) return std::nullopt;
+  if (p.depth_m > 0) return p.depth_m;
+  if (!p.object_centre || !frame->has_pose) return std::nullopt;
+  const double z = (frame->camera.camera_from_world * *p.object_centre).z();
+  return z > 0 ? std::optional<double>(z) : std::nullopt;  // behind the camera: no meaningful depth
 }
 
 }  // namespace
