@@ -73,7 +73,7 @@ Silhouette silhouette_from_render(const cv::Mat& colour, const cv::Mat& mask,
   std::size_t best = 0;
   for (std::size_t i = 1; i < contours.size(); ++i)
     if (cv::contourArea(contours[i]) > cv::contourArea(contours[best])) best = i;
-  if (!contours.empty()) s.contour = contours[best];
+  if (!contours.empty()) s.contour.assign(contours[best].begin(), contours[best].end());
   // Border contact: any mask pixel on the first or last row or column.
   s.touches_border = cv::countNonZero(mask.row(0)) + cv::countNonZero(mask.row(mask.rows - 1)) +
                          cv::countNonZero(mask.col(0)) + cv::countNonZero(mask.col(mask.cols - 1)) >

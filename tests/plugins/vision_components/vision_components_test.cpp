@@ -135,6 +135,25 @@ TEST(ContourExtraction, ExtractsTheDinoAndWritesTheOverlay) {
   EXPECT_EQ(out[1].header().stamp_ns, views.packets("frame")[1].header().stamp_ns);
 }
 
+TEST(ContourExtraction, MetricCurvatureOnlyWhenTheDepthIsGiven) {
+  ComponentHarness views(registry(), "vision.image_set", {{"file", kDinoPar}, {"limit", 1}});
+  views.run();
+  const auto frame = views.packets("frame").at(0);
+  ComponentHarness plain(registry(), "vision.contour_extraction");
+  plain.push_packet("frame", frame);
+  plain.run();
+  const auto& a = plain.packets("silhouette").at(0).get<fba::Silhouette>();
+  EXPECT_TRUE(a.metric_curvature.empty());
+  ComponentHarness metric(registry(), "vision.contour_extraction", {{"depth_m", 0.6}, {"curvature_scale_px", 10.0}});
+  metric.push_packet("frame", frame);
+  metric.run();
+  const auto& b = metric.packets("silhouette").at(0).get<fba::Silhouette>();
+  ASSERT_EQ(b.metric_curvature.size(), b.contour.size());
+  ASSERT_EQ(b.normals.size(), b.contour.size());
+  const double f = 0.5 * (b.frame->camera.K(0, 0) + b.frame->camera.K(1, 1));
+  for (std::size_t i = 0; i < b.contour.size(); i += 50) EXPECT_NEAR(b.metric_curvature[i], b.curvature[i] * f / 0.6, 1e-9);
+}
+
 TEST(ContourExtraction, KeepsTheFramesStampWhateverTheClock) {
   ComponentHarness views(registry(), "vision.image_set", {{"file", kDinoPar}, {"limit", 1}});
   views.set_time(1'000'000);

@@ -1,0 +1,166 @@
+// Objects you can see through, rendered by the simulated camera's renderer: the extraction keeps
+// their through-holes in the silhouette, and the carver carves them out.
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "fba/geometry/mesh_io.hpp"
+#include "fba/geometry/renderer.hpp"
+#include "fba/geometry/viewpoints.hpp"
+#include "fba/geometry/voxelize.hpp"
+#include "fba/vision/contour_extraction.hpp"
+#include "fba/vision/octree_carver.hpp"
+
+using namespace fba;
+
+namespace {
+
+constexpr int kDepth = 6;
+
+// A torus around the z axis: radius R to the tube's centre, tube radius r.
+TriangleMesh torus(double R, double r, int nu = 96, int nv = 48) {
+  TriangleMesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * std::numbers::pi * i / nu, v = 2 * std::numbers::pi * j / nv;
+      m.vertices.emplace_back((R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v));
+    }
+  auto id = [&](int i, int j) { return (i % nu) * nv + j % nv; };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      m.triangles.emplace_back(id(i, j), id(i + 1, j), id(i + 1, j + 1));
+      m.triangles.emplace_back(id(i, j), id(i + 1, j + 1), id(i, j + 1));
+    }
+  return m;
+}
+
+// A mug: a solid cylinder (the body) and a ring handle in the xz plane beside it, as voxels
+// turned into a closed surface, so body and handle join without overlapping faces.
+TriangleMesh mug() {
+  geometry::VoxelGrid g(Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.08), Eigen::Vector3d::Constant(0.08)), 64);
+  for (int k = 0; k < g.n; ++k)
+    for (int j = 0; j < g.n; ++j)
+      for (int i = 0; i < g.n; ++i) {
+        const Eigen::Vector3d p = g.centre(i, j, k);
+        const bool body = std::hypot(p.x() + 0.02, p.y()) < 0.035 && std::abs(p.z()) < 0.045;
+        const double ring = std::hypot(p.x() - 0.035, p.z());
+        const bool handle = ring > 0.015 && ring < 0.025 && std::abs(p.y()) < 0.008;
+        if (body || handle) g.set(i, j, k);
+      }
+  return geometry::grid_to_mesh(g);
+}
+
+struct Carved {
+  std::vector<Silhouette> silhouettes;
+  std::vector<cv::Mat> rendered_masks;
+  geometry::VoxelGrid model;
+};
+
+// Renders the mesh from `views` views over the upper hemisphere on a black background, extracts
+// the silhouettes from the colour images and carves them.
+Carved render_extract_carve(const TriangleMesh& mesh, const vision::ExtractionParams& p, int views = 12) {
+  const Eigen::AlignedBox3d box = geometry::mesh_bounds(mesh);
+  const Eigen::AlignedBox3d cube = geometry::cube_around(box, 0.1);
+  const int size = 320;
+  const double focal = 400;
+  geometry::RenderOptions look;
+  look.background_top = look.background_bottom = cv::Vec3b(0, 0, 0);
+  Carved out;
+  for (const auto& pose : geometry::hemisphere_views(views, 0.15, 1.45, geometry::framing_distance(box, size, size, focal),
+                                                     box.center())) {
+    const CameraModel cam = geometry::make_camera(size, size, focal, focal, (size - 1) / 2.0, (size - 1) / 2.0, pose);
+    const geometry::RenderResult r = geometry::render(mesh, cam, look);
+    auto frame = std::make_shared<Frame>();
+    frame->image = r.colour;
+    frame->camera = cam;
+    frame->has_pose = true;
+    frame->source = "sim";
+    const vision::ExtractionResult e = vision::extract_silhouette(frame, p);
+    if (!e.ok()) throw std::runtime_error(e.error);
+    out.silhouettes.push_back(*e.silhouette);
+    out.rendered_masks.push_back(r.mask);
+  }
+  vision::CarverParams cp;
+  cp.max_depth = kDepth;
+  cp.detail_after_views = 0;
+  vision::OctreeCarver carver(cp);
+  carver.set_bounds(cube);
+  carver.add_views(out.silhouettes);
+  out.model = geometry::rasterize_octree(*carver.snapshot());
+  return out;
+}
+
+vision::ExtractionParams params(bool holes) {
+  vision::ExtractionParams p;
+  // Shaded faces are at least 25% (ambient) of the object's grey of ~165; the background is 0.
+  p.binarise.threshold = 0.08;
+  p.binarise.dilate_px = p.binarise.erode_px = 0;
+  if (!holes) p.selection.min_hole_area_px = std::numeric_limits<double>::infinity();
+  return p;
+}
+
+struct Counts {
+  std::size_t voxels = 0, occupied = 0;
+};
+
+Counts count_in(const geometry::VoxelGrid& g, const std::function<bool(const Eigen::Vector3d&)>& region) {
+  Counts c;
+  for (int k = 0; k < g.n; ++k)
+    for (int j = 0; j < g.n; ++j)
+      for (int i = 0; i < g.n; ++i)
+        if (region(g.centre(i, j, k))) ++c.voxels, c.occupied += g.occupied(i, j, k);
+  return c;
+}
+
+// The rule checked on each object: (a) the hole is in the masks, which hold every rendered
+// object pixel; (b) the carve empties the through-hole that the filled silhouettes leave full;
+// (c) it is closer to the true voxelisation, and still never carves a true voxel.
+void check_through_hole(const TriangleMesh& mesh, const std::function<bool(const Eigen::Vector3d&)>& hole) {
+  const Carved with = render_extract_carve(mesh, params(true));
+  const Carved filled = render_extract_carve(mesh, params(false));
+
+  std::size_t views_with_holes = 0;
+  for (std::size_t v = 0; v < with.silhouettes.size(); ++v) {
+    const Silhouette& s = with.silhouettes[v];
+    EXPECT_EQ(cv::countNonZero(with.rendered_masks[v] & ~s.mask), 0) << "view " << v;
+    // Open pixels inside the outline are exactly those of the holes it reports.
+    const int open = cv::countNonZero(s.mask != filled.silhouettes[v].mask);
+    EXPECT_EQ(open > 0, !s.holes.empty()) << "view " << v;
+    views_with_holes += !s.holes.empty();
+    EXPECT_TRUE(filled.silhouettes[v].holes.empty());
+  }
+  EXPECT_GE(views_with_holes, 3u);
+
+  const Counts core_with = count_in(with.model, hole), core_filled = count_in(filled.model, hole);
+  ASSERT_GT(core_with.voxels, 20u);
+  EXPECT_EQ(core_with.occupied, 0u) << "of " << core_with.voxels << " voxels in the through-hole";
+  EXPECT_EQ(core_filled.occupied, core_filled.voxels);
+
+  const geometry::VoxelGrid truth = geometry::voxelize(mesh, with.model.bounds, kDepth);
+  const double iou_with = geometry::iou(truth, with.model), iou_filled = geometry::iou(truth, filled.model);
+  EXPECT_GT(iou_with, iou_filled + 0.02) << "with holes " << iou_with << ", filled " << iou_filled;
+  EXPECT_EQ(geometry::carved_away(truth, with.model), 0u);
+  ::testing::Test::RecordProperty("iou_with_holes", std::to_string(iou_with));
+  ::testing::Test::RecordProperty("iou_holes_filled", std::to_string(iou_filled));
+}
+
+}  // namespace
+
+TEST(ThroughHoles, TorusHoleIsKeptInTheSilhouettesAndCarved) {
+  const double R = 0.05, r = 0.015;
+  // The middle of the hole: well inside the tube's inner edge (R - r), within the tube's height.
+  check_through_hole(torus(R, r), [&](const Eigen::Vector3d& p) {
+    return std::hypot(p.x(), p.y()) < 0.6 * (R - r) && std::abs(p.z()) < 0.8 * r;
+  });
+}
+
+TEST(ThroughHoles, MugHandleHoleIsKeptInTheSilhouettesAndCarved) {
+  check_through_hole(mug(), [](const Eigen::Vector3d& p) {
+    return std::hypot(p.x() - 0.035, p.z()) < 0.6 * 0.015 && std::abs(p.y()) < 0.006;
+  });
+}
