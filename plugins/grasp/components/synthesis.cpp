@@ -5,8 +5,6 @@
 // exploration planner's request for a new view), until max_views, when it gives up with the reason.
 #include <algorithm>
 #include <cstdio>
-#include <map>
-#include <memory>
 #include <set>
 #include <string>
 
@@ -32,9 +30,9 @@ std::string fixed(double v) {
 
 class GraspSynthesisFilter final : public fba::Component {
  public:
-  static constexpr fba::In<fba::Octree> kOctree{"octree", "the model after each update; the latest is analysed"};
+  static constexpr fba::In<fba::Octree> kOctree{"octree", "the model after each update (connect with buffer: latest to skip models a newer one replaced)"};
   static constexpr fba::OptionalIn<fba::Silhouette> kSilhouette{
-      "silhouette", "the silhouettes the model was carved from, kept per view: their views are the grasp's views"};
+      "silhouette", "the silhouettes the model was carved from, kept in arrival order: their frames' indices are the grasp's views"};
   static constexpr fba::Out<fba::Grasp> kGrasp{"grasp", "the selected grasp (once)"};
   static constexpr fba::Out<fba::RegionsOfInterest> kRegions{
       "regions", "boxes of the candidate regions the model has not resolved: where the carver should refine and the next view should look"};
@@ -91,7 +89,7 @@ class GraspSynthesisFilter final : public fba::Component {
     if (done_) return;  // a grasp was selected or the search gave up: the component's work is over
     if (auto s = ctx_(kSilhouette); s.has()) {
       const auto& frame = s.get().frame;
-      silhouettes_[frame && frame->index >= 0 ? frame->index : int(silhouettes_.size())] = s.share();
+      view_index_.push_back(frame && frame->index >= 0 ? frame->index : int(view_index_.size()));
     }
     auto in = ctx_(kOctree);
     if (!in.has()) return;
@@ -160,9 +158,8 @@ class GraspSynthesisFilter final : public fba::Component {
   }
 
   void select(fba::Grasp g, int views) {
-    for (const auto& [index, s] : silhouettes_) g.views.push_back(index);
-    if (g.views.empty())
-      for (int v = 0; v < views; ++v) g.views.push_back(v);
+    // The carver integrates silhouettes in arrival order: the model's views are the first ones.
+    for (int v = 0; v < views; ++v) g.views.push_back(v < int(view_index_.size()) ? view_index_[v] : v);
     g.stamp = ctx_(kOctree).packet().header().stamp_ns * 1e-9;
     ctx_.emit(kGraspSelected, fba::grasp::grasp_to_json(g).dump());
     ctx_(kGrasp).emit(std::move(g));
@@ -181,7 +178,7 @@ class GraspSynthesisFilter final : public fba::Component {
   const double threshold_;
   const int max_views_;
   const double radius_;
-  std::map<int, std::shared_ptr<const fba::Silhouette>> silhouettes_;  // by view index
+  std::vector<int> view_index_;  // the silhouettes' view indices, in arrival order (their images are not kept)
   bool done_ = false;
 };
 
