@@ -127,7 +127,8 @@ class GraspSynthesisFilter final : public fba::Component {
     }
 
     // Where more information would help: the unresolved regions of the best candidates, else every
-    // unresolved region, else (all resolved, none reliable) the best candidates' regions.
+    // unresolved region, else (all resolved, none reliable) the best candidates' regions, else (no
+    // candidate at all) the whole model: more views may still carve it to a size the hand takes.
     std::set<std::size_t> wanted;
     for (const auto& c : r.candidates)
       for (std::size_t g : c.regions)
@@ -138,13 +139,19 @@ class GraspSynthesisFilter final : public fba::Component {
     fba::RegionsOfInterest roi;
     const Eigen::Vector3d margin = Eigen::Vector3d::Constant(surface.finest_edge);
     for (std::size_t g : wanted) roi.boxes.emplace_back(r.regions[g].box.min() - margin, r.regions[g].box.max() + margin);
+    if (roi.boxes.empty()) {
+      Eigen::AlignedBox3d all;
+      for (const auto& x : surface.samples) all.extend(x.position);
+      roi.boxes.emplace_back(all.min() - margin, all.max() + margin);
+    }
+    const std::size_t requested = roi.boxes.size();
     ctx_(kRegions).emit(std::move(roi));
     nlohmann::json j{{"views", views},
                      {"samples", surface.samples.size()},
                      {"regions", r.regions.size()},
                      {"candidates", r.candidates.size()},
                      {"uncertain_regions", r.uncertain_regions.size()},
-                     {"regions_requested", wanted.size()},
+                     {"regions_requested", requested},
                      {"best_total", best_total}};
     if (!r.candidates.empty()) {
       const auto& b = r.candidates.front();

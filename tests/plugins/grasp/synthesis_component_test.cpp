@@ -152,6 +152,29 @@ TEST(GraspSynthesisComponent, AThresholdNoCandidateReachesFailsAtMaxViews) {
   EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
 }
 
+// A hand that opens to 3 cm cannot take a 7 cm cylinder: no candidate, so it asks for the whole
+// model (more views may carve it smaller) until max_views, then names the cause.
+TEST(GraspSynthesisComponent, NoCandidateTheHandCanReachAsksForTheWholeModelThenFails) {
+  ComponentHarness h(registry(), "grasp.synthesis",
+                     {{"aperture_max", 0.03}, {"spread_max", 0.03}, {"spread_min", 0.02}, {"max_views", 9}});
+  h.push<fba::Octree>("octree", cylinder(8));
+  h.run();
+  const auto regions = h.values<fba::RegionsOfInterest>("regions");
+  ASSERT_EQ(regions.size(), 1u);
+  ASSERT_EQ(regions[0].boxes.size(), 1u);
+  const auto& box = regions[0].boxes[0];
+  EXPECT_NEAR(box.min().x(), -kRadius, 0.005);
+  EXPECT_NEAR(box.max().z(), 0.06, 0.005);
+  const auto j = nlohmann::json::parse(named(h.events(), "planning_performed").at(0).payload);
+  EXPECT_EQ(j.at("candidates"), 0);
+  EXPECT_EQ(j.at("regions_requested"), 1);
+  h.push<fba::Octree>("octree", cylinder(9));
+  h.run();
+  const auto failed = named(h.events(), "grasp_synthesis_failed");
+  ASSERT_EQ(failed.size(), 1u);
+  EXPECT_NE(failed[0].payload.find("(no candidate the hand can reach)"), std::string::npos) << failed[0].payload;
+}
+
 TEST(GraspSynthesisComponent, AnInconsistentHandIsRefusedWhenLoaded) {
   EXPECT_THROW(ComponentHarness(registry(), "grasp.synthesis", {{"aperture_min", 0.2}, {"aperture_max", 0.1}}), fba::ConfigError);
   EXPECT_THROW(ComponentHarness(registry(), "grasp.synthesis", {{"finger_width", 0.2}}), fba::ConfigError);  // > spread_max
