@@ -4,6 +4,7 @@
 // information is missing (regions of interest: the carver's grasp-specific criterion and the
 // exploration planner's request for a new view), until max_views, when it gives up with the reason.
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <set>
 #include <string>
@@ -58,7 +59,7 @@ class GraspSynthesisFilter final : public fba::Component {
   static constexpr fba::EventOut kPlanningPerformed{
       "planning_performed",
       "no reliable grasp yet: regions were emitted for a new view; payload (JSON): views, samples, regions, candidates, "
-      "uncertain_regions, regions_requested, best_total, best (the best candidate's S1, S3, S4 and whether it is uncertain)"};
+      "uncertain_regions, regions_requested, best_total, seconds (wall time of the analysis), best (the best candidate's S1, S3, S4 and whether it is uncertain)"};
   static constexpr fba::EventOut kGraspSelected{"grasp_selected", "a reliable grasp was selected; payload: the grasp as JSON"};
   static constexpr fba::EventOut kFailed{"grasp_synthesis_failed", "the search gave up; payload: the reason"};
 
@@ -101,6 +102,7 @@ class GraspSynthesisFilter final : public fba::Component {
 
  private:
   void analyse(const fba::Octree& model) {
+    const auto start = std::chrono::steady_clock::now();
     const int views = model.views;
     const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_});
     if (surface.samples.empty())
@@ -152,7 +154,8 @@ class GraspSynthesisFilter final : public fba::Component {
                      {"candidates", r.candidates.size()},
                      {"uncertain_regions", r.uncertain_regions.size()},
                      {"regions_requested", requested},
-                     {"best_total", best_total}};
+                     {"best_total", best_total},
+                     {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
     if (!r.candidates.empty()) {
       const auto& b = r.candidates.front();
       j["best"] = {{"symmetry", b.grasp.scores.symmetry},
