@@ -1,0 +1,37 @@
+// The surface of an octree model as grasp synthesis sees it: one SurfaceSample per occupied leaf
+// that has a free (empty, or outside the root box) face neighbour, with an outward normal and a
+// mean curvature estimated over its neighbours, and flagged uncertain where the model is not yet
+// refined to its finest depth.
+#pragma once
+
+#include <vector>
+
+#include "fba/grasp/synthesis.hpp"
+#include "fba/types/octree.hpp"
+
+namespace fba::grasp {
+
+struct ModelSurfaceParams {
+  // Metres: the neighbourhood that smooths normals and positions and estimates curvature; 0 means
+  // 3 edges of the finest occupied leaf (the staircase of voxel faces needs a few steps to average).
+  double radius = 0;
+};
+
+struct ModelSurface {
+  std::vector<SurfaceSample> samples;
+  double radius = 0;          // the neighbourhood used (pass it on as SynthesisParams::neighbour_radius)
+  double finest_edge = 0;     // edge of the finest occupied leaf, metres (0 when there is none)
+  std::size_t leaves = 0;     // occupied leaves in the model
+};
+
+// Empty samples for a model with no occupied leaf. Throws std::invalid_argument for a model whose
+// root box is not a cube of positive size, or a negative radius.
+//
+// Position: the leaf's centre moved to its free faces (a face centre, an edge or a corner of the
+// voxel), then projected on the plane fitted through its neighbours. Normal: the smallest
+// principal axis of the neighbours' positions, oriented like the summed free-face directions
+// (those alone if the fit has too few points). Uncertain: the leaf is coarser than the model's
+// max_depth, so the carver has not resolved this part of the surface yet.
+ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params = {});
+
+}  // namespace fba::grasp

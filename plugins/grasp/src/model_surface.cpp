@@ -1,0 +1,161 @@
+#include "fba/grasp/model_surface.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#include <Eigen/Eigenvalues>
+
+namespace fba::grasp {
+namespace {
+
+// The state of the model at p: Empty outside the root box, else the state of the leaf holding p.
+NodeState state_at(const Octree& model, const Eigen::Vector3d& p) {
+  if (!model.bounds.contains(p)) return NodeState::Empty;
+  const OctreeNode* n = &model.root;
+  Eigen::Vector3d lo = model.bounds.min();
+  double edge = model.bounds.sizes().x();
+  while (!n->is_leaf()) {
+    edge /= 2;
+    int i = 0;
+    for (int a = 0; a < 3; ++a)
+      if (p[a] >= lo[a] + edge) {
+        i |= 1 << a;
+        lo[a] += edge;
+      }
+    n = &model.children(*n)[i];
+  }
+  return n->state();
+}
+
+// Points closer than r to one another are in the same or adjacent cells of edge r.
+class Grid {
+ public:
+  Grid(const std::vector<SurfaceSample>& s, double r) : s_(s), r_(r) {
+    for (std::size_t i = 0; i < s.size(); ++i) cells_[key(cell(s[i].position))].push_back(i);
+  }
+  template <class F>
+  void within(const Eigen::Vector3d& p, F&& f) const {
+    const Eigen::Vector3i c = cell(p);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it == cells_.end()) continue;
+          for (std::size_t j : it->second)
+            if ((s_[j].position - p).squaredNorm() <= r_ * r_) f(j);
+        }
+  }
+
+ private:
+  Eigen::Vector3i cell(const Eigen::Vector3d& p) const { return (p / r_).array().floor().cast<int>(); }
+  static std::uint64_t key(const Eigen::Vector3i& c) {
+    return (static_cast<std::uint64_t>(c.x() & 0x1fffff) << 42) | (static_cast<std::uint64_t>(c.y() & 0x1fffff) << 21) |
+           static_cast<std::uint64_t>(c.z() & 0x1fffff);
+  }
+  const std::vector<SurfaceSample>& s_;
+  double r_;
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
+};
+
+}  // namespace
+
+ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params) {
+  if (params.radius < 0) throw std::invalid_argument("model surface: radius must be >= 0, found " + std::to_string(params.radius));
+  ModelSurface out;
+  if (model.node_count == 0) return out;
+  const Eigen::Vector3d size = model.bounds.sizes();
+  if (!(size.x() > 0) || std::abs(size.y() - size.x()) > 1e-9 * size.x() || std::abs(size.z() - size.x()) > 1e-9 * size.x())
+    throw std::invalid_argument("model surface: the octree's root box must be a cube of positive size; found sizes " +
+                                std::to_string(size.x()) + " x " + std::to_string(size.y()) + " x " + std::to_string(size.z()));
+
+  // Surface leaves and their free faces. A face is probed at its four quarter points just outside
+  // it, so a coarse leaf next to finer ones sees a free finer neighbour too.
+  struct Raw {
+    Eigen::Vector3d position, free_direction;
+    bool uncertain;
+  };
+  std::vector<Raw> raw;
+  int finest_depth = -1;
+  model.for_each_occupied_leaf([&](const OctreeCell& c) {
+    ++out.leaves;
+    finest_depth = std::max(finest_depth, c.depth);
+    const double h = c.half_size, eps = 1e-3 * h;
+    Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();
+    for (int a = 0; a < 3; ++a) {
+      const int u = (a + 1) % 3, v = (a + 2) % 3;
+      for (int sign : {-1, 1}) {
+        int free = 0;
+        for (int qu : {-1, 1})
+          for (int qv : {-1, 1}) {
+            Eigen::Vector3d p = c.centre;
+            p[a] += sign * (h + eps);
+            p[u] += qu * h / 2;
+            p[v] += qv * h / 2;
+            free += state_at(model, p) == NodeState::Empty;
+          }
+        free_direction[a] += sign * free / 4.0;
+      }
+    }
+    bool any_free = false;
+    for (int a = 0; a < 3; ++a) any_free = any_free || free_direction[a] != 0;
+    // Faces free on both sides of an axis cancel there (a wall one leaf thick): such a leaf is
+    // surface too, its direction left to the neighbours' fit.
+    if (!any_free) {
+      bool two_sided = false;
+      for (int a = 0; a < 3 && !two_sided; ++a) {
+        Eigen::Vector3d lo = c.centre, hi = c.centre;
+        lo[a] -= h + eps;
+        hi[a] += h + eps;
+        two_sided = state_at(model, lo) == NodeState::Empty && state_at(model, hi) == NodeState::Empty;
+      }
+      if (!two_sided) return;
+    }
+    raw.push_back({c.centre + h * free_direction.cwiseMax(-1.0).cwiseMin(1.0), free_direction, c.depth < model.max_depth});
+  });
+  if (raw.empty()) return out;
+  out.finest_edge = size.x() / double(std::int64_t(1) << finest_depth);
+  out.radius = params.radius > 0 ? params.radius : 3 * out.finest_edge;
+
+  std::vector<SurfaceSample> s(raw.size());
+  for (std::size_t i = 0; i < raw.size(); ++i) s[i].position = raw[i].position, s[i].uncertain = raw[i].uncertain;
+  const Grid grid(s, out.radius);
+  std::vector<SurfaceSample> smoothed = s;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), direction = Eigen::Vector3d::Zero();
+    std::vector<std::size_t> nb;
+    grid.within(s[i].position, [&](std::size_t j) {
+      nb.push_back(j);
+      mean += s[j].position;
+      direction += raw[j].free_direction;
+    });
+    mean /= double(nb.size());
+    Eigen::Vector3d normal = direction;
+    if (nb.size() >= 6) {
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (std::size_t j : nb) cov += (s[j].position - mean) * (s[j].position - mean).transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+      // A fit only where the neighbours spread in two directions: a line of points has no plane.
+      if (eig.eigenvalues()[1] > 1e-12 * out.radius * out.radius) {
+        normal = eig.eigenvectors().col(0);
+        if (normal.dot(direction) < 0) normal = -normal;
+        if (direction.squaredNorm() == 0) normal = Eigen::Vector3d::Zero();
+      }
+    }
+    if (normal.squaredNorm() == 0) normal = raw[i].free_direction;
+    if (normal.squaredNorm() == 0) normal = s[i].position - model.bounds.center();  // a lone voxel: away from the centre
+    if (normal.squaredNorm() == 0) normal = Eigen::Vector3d::UnitZ();
+    normal.normalize();
+    smoothed[i].normal = normal;
+    // Onto the fitted plane: removes the voxel staircase that would read as curvature.
+    smoothed[i].position = s[i].position + (mean - s[i].position).dot(normal) * normal;
+  }
+  estimate_curvature(smoothed, out.radius);
+  out.samples = std::move(smoothed);
+  return out;
+}
+
+}  // namespace fba::grasp

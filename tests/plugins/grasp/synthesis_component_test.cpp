@@ -1,0 +1,163 @@
+// grasp.synthesis through the component harness, on voxelised models of known shapes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include <fba/task_config.hpp>
+#include <fba/testing.hpp>
+#include <fba/types/grasp.hpp>
+#include <fba/types/octree.hpp>
+#include <fba/types/regions_of_interest.hpp>
+
+#include "fba/grasp/grasp_json.hpp"
+#include "support/built_plugins.hpp"
+#include "voxel_shapes.hpp"
+
+namespace {
+
+using fba::testing::ComponentHarness;
+namespace gt = fba::grasp::test;
+
+const fba::Registry& registry() { return fba::test::built_plugins(); }
+
+const Eigen::AlignedBox3d kCube(Eigen::Vector3d::Constant(-0.08), Eigen::Vector3d::Constant(0.08));
+constexpr double kRadius = 0.035;
+
+// An upright cylinder (radius 35 mm, 120 mm tall) resolved to depth 6 (2.5 mm leaves) where
+// leaf_depth allows.
+fba::Octree cylinder(int views, std::function<int(const Eigen::Vector3d&)> leaf_depth = {}) {
+  return gt::voxelise(gt::cylinder_sdf(kRadius, -0.06, 0.12), kCube, 6, std::move(leaf_depth), views);
+}
+
+std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::string& name) {
+  std::vector<fba::Event> out;
+  for (const auto& e : events)
+    if (e.name == name) out.push_back(e);
+  return out;
+}
+
+TEST(GraspSynthesisComponent, SelectsAGraspOnACylinderWithContactsOnItsSide) {
+  ComponentHarness h(registry(), "grasp.synthesis");
+  EXPECT_EQ(h.stage(), "visual_analysis");
+  h.push<fba::Octree>("octree", cylinder(8));
+  h.run();
+  const auto grasps = h.values<fba::Grasp>("grasp");
+  ASSERT_EQ(grasps.size(), 1u) << (named(h.events(), "planning_performed").empty() ? "" : named(h.events(), "planning_performed")[0].payload);
+  const fba::Grasp& g = grasps[0];
+  const double edge = 0.16 / 64;
+  for (const auto& c : g.contacts) {
+    EXPECT_NEAR(std::hypot(c.position.x(), c.position.y()), kRadius, 2 * edge) << c.position.transpose();
+    EXPECT_LT(std::abs(c.position.z()), 0.06 - edge);  // on the side, not a cap's rim
+    // Inward: towards the axis.
+    EXPECT_LT(c.normal.dot(Eigen::Vector3d(c.position.x(), c.position.y(), 0).normalized()), -0.9);
+  }
+  EXPECT_GT(g.scores.symmetry, 0.8);
+  EXPECT_GE(g.scores.total, 0.5);  // the default threshold
+  EXPECT_EQ(g.views.size(), 8u);
+  const auto selected = named(h.events(), "grasp_selected");
+  ASSERT_EQ(selected.size(), 1u);
+  const fba::Grasp from_event = fba::grasp::grasp_from_json(nlohmann::json::parse(selected[0].payload), "grasp_selected");
+  EXPECT_EQ(from_event.contacts[0].position, g.contacts[0].position);
+  EXPECT_EQ(h.stage(), "grasp_synthesis");
+  EXPECT_TRUE(h.values<fba::RegionsOfInterest>("regions").empty());
+
+  // Selecting ends the work: a later model changes nothing.
+  h.push<fba::Octree>("octree", cylinder(9));
+  h.run();
+  EXPECT_EQ(h.values<fba::Grasp>("grasp").size(), 1u);
+  EXPECT_EQ(named(h.events(), "grasp_selected").size(), 1u);
+  EXPECT_TRUE(h.failure().empty()) << h.failure();
+}
+
+TEST(GraspSynthesisComponent, AnEmptyModelFailsWithTheReason) {
+  ComponentHarness h(registry(), "grasp.synthesis");
+  fba::Octree empty;
+  empty.bounds = kCube;
+  empty.max_depth = 6;
+  empty.views = 3;
+  empty.root.set_state(fba::NodeState::Empty);
+  h.push<fba::Octree>("octree", empty);
+  h.run();
+  const auto failed = named(h.events(), "grasp_synthesis_failed");
+  ASSERT_EQ(failed.size(), 1u);
+  EXPECT_EQ(failed[0].payload.rfind("the model is empty after 3 views", 0), 0u) << failed[0].payload;
+  EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
+  EXPECT_TRUE(h.failure().empty()) << h.failure();  // a reason for the task's rules, not a crash
+}
+
+TEST(GraspSynthesisComponent, AModelWithoutATreeYetIsWaitedFor) {
+  ComponentHarness h(registry(), "grasp.synthesis");
+  fba::Octree none;
+  none.node_count = 0;
+  h.push<fba::Octree>("octree", none);
+  h.run();
+  EXPECT_TRUE(h.events().empty());
+  EXPECT_EQ(h.stage(), "visual_analysis");
+}
+
+// Resolved only to depth 3 of 6 everywhere: every candidate is uncertain, so the component asks
+// for detail and a new view where its candidates' regions are.
+TEST(GraspSynthesisComponent, AnUnresolvedModelEmitsRegionsAndPlansAView) {
+  ComponentHarness h(registry(), "grasp.synthesis");
+  h.push<fba::Octree>("octree", cylinder(3, [](const Eigen::Vector3d&) { return 4; }));
+  h.run();
+  EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
+  const auto regions = h.values<fba::RegionsOfInterest>("regions");
+  ASSERT_EQ(regions.size(), 1u);
+  ASSERT_FALSE(regions[0].boxes.empty());
+  for (const auto& b : regions[0].boxes) EXPECT_TRUE(kCube.contains(b.center())) << b.center().transpose();
+  const auto planned = named(h.events(), "planning_performed");
+  ASSERT_EQ(planned.size(), 1u);
+  const auto j = nlohmann::json::parse(planned[0].payload);
+  EXPECT_EQ(j.at("views"), 3);
+  EXPECT_GT(j.at("samples").get<int>(), 0);
+  EXPECT_EQ(j.at("regions_requested").get<std::size_t>(), regions[0].boxes.size());
+  EXPECT_EQ(h.stage(), "exploration_movement");
+
+  // The resolved model then yields a grasp.
+  h.push<fba::Octree>("octree", cylinder(4));
+  h.run();
+  EXPECT_EQ(h.values<fba::Grasp>("grasp").size(), 1u);
+  EXPECT_EQ(h.stage(), "grasp_synthesis");
+}
+
+TEST(GraspSynthesisComponent, GivesUpAfterMaxViewsWithTheBestTotal) {
+  ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 4}});
+  auto coarse = [](const Eigen::Vector3d&) { return 4; };
+  h.push<fba::Octree>("octree", cylinder(3, coarse));
+  h.run();
+  EXPECT_EQ(named(h.events(), "planning_performed").size(), 1u);
+  EXPECT_TRUE(named(h.events(), "grasp_synthesis_failed").empty());
+  h.push<fba::Octree>("octree", cylinder(4, coarse));
+  h.run();
+  const auto failed = named(h.events(), "grasp_synthesis_failed");
+  ASSERT_EQ(failed.size(), 1u);
+  EXPECT_EQ(failed[0].payload.rfind("no reliable grasp after 4 views: best total ", 0), 0u) << failed[0].payload;
+  EXPECT_NE(failed[0].payload.find(" < threshold 0.500"), std::string::npos) << failed[0].payload;
+  EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
+  // Then it ignores input.
+  h.push<fba::Octree>("octree", cylinder(5));
+  h.run();
+  EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
+}
+
+TEST(GraspSynthesisComponent, AThresholdNoCandidateReachesFailsAtMaxViews) {
+  ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 8}, {"threshold", 1.0}});
+  h.push<fba::Octree>("octree", cylinder(8));
+  h.run();
+  ASSERT_EQ(named(h.events(), "grasp_synthesis_failed").size(), 1u);
+  EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
+}
+
+TEST(GraspSynthesisComponent, AnInconsistentHandIsRefusedWhenLoaded) {
+  EXPECT_THROW(ComponentHarness(registry(), "grasp.synthesis", {{"aperture_min", 0.2}, {"aperture_max", 0.1}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(registry(), "grasp.synthesis", {{"finger_width", 0.2}}), fba::ConfigError);  // > spread_max
+  EXPECT_THROW(ComponentHarness(registry(), "grasp.synthesis",
+                                {{"weight_symmetry", 0}, {"weight_safety", 0}, {"weight_curvature", 0}}),
+               fba::ConfigError);
+}
+
+}  // namespace
