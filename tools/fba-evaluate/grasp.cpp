@@ -46,6 +46,9 @@ summary.json's "grasp" object (world frame, metres; the mesh is in world frame t
     "views": [i, ...]                                              optional
   }
 
+A run's summary.json from fba-run is read too: the grasp is then the payload of its last
+grasp_selected event (grasp.synthesis emits the grasp as this JSON).
+
 Exit status: 0 when evaluated (with --summary: the grasp is force closure), 1 when the grasp
 is not force closure, 2 for bad input (a mesh that does not load, a malformed summary).
 
@@ -90,9 +93,33 @@ Grasp read_summary_grasp(const std::string& path) {
   } catch (const nlohmann::json::parse_error& e) {
     throw std::invalid_argument("summary '" + path + "' is not valid JSON: " + e.what());
   }
-  if (!j.is_object() || !j.contains("grasp"))
-    throw std::invalid_argument("summary '" + path + "' has no \"grasp\" object (see fba-evaluate grasp --help)");
-  return grasp::grasp_from_json(j["grasp"], path + ": grasp");
+  if (j.is_object() && j.contains("grasp")) return grasp::grasp_from_json(j["grasp"], path + ": grasp");
+  // fba-run's own summary: the last grasp_selected event (grasp.synthesis), whose payload is the
+  // grasp as JSON; the final event carries its payload itself when it is not in "events".
+  if (j.is_object()) {
+    const nlohmann::json* payload = nullptr;
+    std::string where;
+    if (j.contains("events") && j["events"].is_array())
+      for (std::size_t i = 0; i < j["events"].size(); ++i) {
+        const auto& e = j["events"][i];
+        if (e.is_object() && e.value("name", "") == "grasp_selected" && e.contains("payload"))
+          payload = &e["payload"], where = path + ": events[" + std::to_string(i) + "].payload";
+      }
+    const auto fe = j.find("final_event");
+    if (!payload && fe != j.end() && fe->is_object() && fe->value("name", "") == "grasp_selected" && fe->contains("payload"))
+      payload = &(*fe)["payload"], where = path + ": final_event.payload";
+    if (payload) {
+      if (!payload->is_string())
+        throw std::invalid_argument(where + ": expected the grasp as a JSON string; found " + std::string(payload->type_name()));
+      try {
+        return grasp::grasp_from_json(nlohmann::json::parse(payload->get<std::string>()), where);
+      } catch (const nlohmann::json::parse_error& e) {
+        throw std::invalid_argument(where + " is not valid JSON: " + e.what());
+      }
+    }
+  }
+  throw std::invalid_argument("summary '" + path +
+                              "' has no \"grasp\" object and no grasp_selected event (see fba-evaluate grasp --help)");
 }
 
 std::string name_of(const std::string& mesh) {

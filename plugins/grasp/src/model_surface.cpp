@@ -114,7 +114,7 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
       }
       if (!two_sided) return;
     }
-    raw.push_back({c.centre + h * free_direction.cwiseMax(-1.0).cwiseMin(1.0), free_direction, c.depth < model.max_depth});
+    raw.push_back({c.centre + h * free_direction.cwiseMax(-1.0).cwiseMin(1.0), free_direction, c.state() == NodeState::Partial && c.depth < model.max_depth});
   });
   if (raw.empty()) return out;
   out.finest_edge = size.x() / double(std::int64_t(1) << finest_depth);

@@ -1,7 +1,7 @@
 // The surface of an octree model as grasp synthesis sees it: one SurfaceSample per occupied leaf
 // that has a free (empty, or outside the root box) face neighbour, with an outward normal and a
-// mean curvature estimated over its neighbours, and flagged uncertain where the model is not yet
-// refined to its finest depth.
+// mean curvature estimated over its neighbours, and flagged uncertain where the model has not yet
+// resolved the boundary to its finest depth.
 #pragma once
 
 #include <vector>
@@ -30,8 +30,10 @@ struct ModelSurface {
 // Position: the leaf's centre moved to its free faces (a face centre, an edge or a corner of the
 // voxel), then projected on the plane fitted through its neighbours. Normal: the smallest
 // principal axis of the neighbours' positions, oriented like the summed free-face directions
-// (those alone if the fit has too few points). Uncertain: the leaf is coarser than the model's
-// max_depth, so the carver has not resolved this part of the surface yet.
+// (those alone if the fit has too few points). Uncertain: the leaf is partial (it straddles the
+// object's boundary in some view) and coarser than the model's max_depth, so the carver has not
+// resolved this part of the surface yet. A full leaf next to an empty one is certain at any
+// depth: every view has it inside, and the face between them is where a view cut the object.
 ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params = {});
 
 }  // namespace fba::grasp
