@@ -118,9 +118,15 @@ class ExplorationPlanner final : public fba::Component {
     if (auto r = ctx_(kRegions); r.has()) pending_ = r.share();
     if (ctx_(kStart).has() && !started_) start();
     if (!pending_ || !model_ || model_->node_count == 0) return;
-    // A request counts once every view asked for is in the model: the ones before it came from a
-    // model that has not seen the last target yet, and would ask for the same view again.
-    if (model_->views < requested_) return;
+    // A request counts once it comes from a model with every view asked for: one from an older
+    // model does not know the last view yet and is dropped (synthesis sends another per model).
+    // Without its model's view count, the latest model's stands for it.
+    const int views = pending_->model_views >= 0 ? pending_->model_views : model_->views;
+    if (views < requested_) {
+      if (pending_->model_views >= 0) pending_.reset();
+      return;
+    }
+    if (model_->views < requested_) return;  // plan on a model that has the view too
     plan(*model_, *pending_);
     pending_.reset();
   }

@@ -138,6 +138,7 @@ class GraspSynthesisFilter final : public fba::Component {
     fba::RegionsOfInterest roi;
     const Eigen::Vector3d margin = Eigen::Vector3d::Constant(surface.finest_edge);
     for (std::size_t g : wanted) roi.boxes.emplace_back(r.regions[g].box.min() - margin, r.regions[g].box.max() + margin);
+    roi.model_views = views;
     ctx_(kRegions).emit(std::move(roi));
     nlohmann::json j{{"views", views},
                      {"samples", surface.samples.size()},

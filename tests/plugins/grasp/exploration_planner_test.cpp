@@ -161,3 +161,26 @@ TEST(ExplorationPlanner, BadConfigurationsAreRefusedWithTheReason) {
     EXPECT_NE(std::string(e.what()).find("set centre"), std::string::npos) << e.what();
   }
 }
+
+TEST(ExplorationPlanner, ARequestFromAModelWithoutTheLastViewIsDropped) {
+  ComponentHarness h(registry(), "grasp.exploration_planner", ring8(), {"start"});
+  h.push<std::int64_t>("start", 0);
+  h.push<fba::Octree>("octree", box_model(3));
+  h.run();
+  ASSERT_EQ(h.values<fba::Pose>("target").size(), 3u);
+  // Synthesis answered a 2-view model late, after the model of 3 views had arrived: not a request
+  // about the newest model, so no view is chosen on it, now or later.
+  auto stale = plus_x_face();
+  stale.model_views = 2;
+  h.push<fba::RegionsOfInterest>("regions", stale);
+  h.run();
+  h.push<fba::Octree>("octree", box_model(3));
+  h.run();
+  EXPECT_EQ(h.values<fba::Pose>("target").size(), 3u);
+  // Its answer about the 3-view model is one.
+  auto fresh = plus_x_face();
+  fresh.model_views = 3;
+  h.push<fba::RegionsOfInterest>("regions", fresh);
+  h.run();
+  EXPECT_EQ(h.values<fba::Pose>("target").size(), 4u);
+}

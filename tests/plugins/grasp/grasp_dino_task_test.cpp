@@ -46,12 +46,17 @@ TEST(GraspDinoTask, SelectsAGraspOnTheDinoWithFewerViewsThanTheRing) {
   for (const auto& f : frames) indices.insert(f.get<fba::Frame>().index);
   EXPECT_EQ(indices.size(), served);
   EXPECT_GE(targets.size(), served);
+  // Beyond the three initial views, the planner chose where to look.
+  int chosen = 0;
+  for (const auto& e : r.events) chosen += e.name == "view_chosen";
+  EXPECT_GE(chosen, 1);
+  EXPECT_EQ(targets.size(), std::size_t(3 + chosen));
 
   // The grasp: three contacts on the dino, each inside every silhouette it was carved from (with
   // a few pixels for the model's voxels), scored at the synthesis threshold or above.
   const auto g = nlohmann::json::parse(r.final_event->payload);
   ASSERT_EQ(g.at("contacts").size(), 3u);
-  EXPECT_GE(g.at("scores").at("total").get<double>(), 0.5);
+  EXPECT_GE(g.at("scores").at("total").get<double>(), 0.55);  // the task's threshold
   for (const auto& c : g.at("contacts")) {
     const auto p = c.at("position");
     const Eigen::Vector3d x(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
