@@ -1,7 +1,8 @@
 // grasp.exploration_planner: the exploration movement's planning. Each regions sample from grasp
 // synthesis is a request for a new view; the planner scores its candidate views by the uncertain
 // model nodes inside the regions each one sees, less the cost of moving there, and emits the best
-// as the camera's target pose, or no_view with the reason when none is worth the move.
+// as the camera's target pose, or no_view with the reason when none is worth the move. With an
+// output folder, the model each plan was made on is written as exploration/model_<views>views.ply.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -21,6 +22,7 @@
 #include <fba/types/pose.hpp>
 #include <fba/types/regions_of_interest.hpp>
 #include <fba/vision/image_set.hpp>
+#include <fba/vision/octree_carver.hpp>
 
 #include "fba/grasp/exploration.hpp"
 
@@ -171,6 +173,13 @@ class ExplorationPlanner final : public fba::Component {
     const std::optional<Eigen::Isometry3d> current = current_ ? current_ : last_target_;
     const auto choice = fba::grasp::choose_view(model, regions, candidates_, current,
                                                 exclude_visited_ ? visited_ : std::vector<bool>{}, params_);
+    if (!ctx_.output_dir().empty()) {
+      const auto dir = ctx_.output_dir() / "exploration";
+      std::filesystem::create_directories(dir);
+      const auto ply = dir / ("model_" + std::to_string(model.views) + "views.ply");
+      fba::vision::write_ply(model, ply.string());
+      ctx_.log().info("wrote {}", ply.string());
+    }
     if (!choice.best) {
       ctx_.log().info("no view: {}", choice.reason);
       ctx_.emit(kNoView, nlohmann::json{{"reason", choice.reason}, {"views_requested", requested_}}.dump());

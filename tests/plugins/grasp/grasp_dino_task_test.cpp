@@ -2,6 +2,7 @@
 // grasp on the object, after fewer views than the whole recorded ring, each view asked for once.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@
 
 #include "fba/geometry/viewpoints.hpp"
 #include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
 
 namespace {
 
@@ -28,6 +30,8 @@ TEST(GraspDinoTask, SelectsAGraspOnTheDinoWithFewerViewsThanTheRing) {
   fba::RunOptions o;
   o.executor = fba::ExecutorKind::Deterministic;
   o.timeout_s = 300;
+  const fba::test::TempDir out;
+  o.output_dir = out.path();
   fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_dino.yaml", registry()), o);
   const auto& frames = task.tap("views.frame");
   const auto& silhouettes = task.tap("contours.silhouette");
@@ -51,6 +55,11 @@ TEST(GraspDinoTask, SelectsAGraspOnTheDinoWithFewerViewsThanTheRing) {
   for (const auto& e : r.events) chosen += e.name == "view_chosen";
   EXPECT_GE(chosen, 1);
   EXPECT_EQ(targets.size(), std::size_t(3 + chosen));
+  // Each plan's model was written, named by its view count: the first after the initial views.
+  EXPECT_TRUE(std::filesystem::is_regular_file(out.path() / "exploration" / "model_3views.ply"));
+  std::size_t written = 0;
+  for (const auto& f : std::filesystem::directory_iterator(out.path() / "exploration")) written += f.path().extension() == ".ply";
+  EXPECT_EQ(written, std::size_t(chosen));
 
   // The grasp: three contacts on the dino, each inside every silhouette it was carved from (with
   // a few pixels for the model's voxels), scored at the synthesis threshold or above.
