@@ -40,7 +40,7 @@ class ExplorationPlanner final : public fba::Component {
  public:
   static constexpr fba::In<fba::Octree> kOctree{"octree", "the model (the latest is used)"};
   static constexpr fba::In<fba::RegionsOfInterest> kRegions{
-      "regions", "where grasping needs detail; each sample asks for a new view once the last one is in the model"};
+      "regions", "where grasping needs detail; a sample from a model with every view asked for so far asks for a new view"};
   static constexpr fba::OptionalIn<fba::Pose> kCurrent{
       "current", "where the camera is (world_from_camera); without it, the last target stands for it"};
   static constexpr fba::OptionalIn<std::int64_t> kStart{
@@ -60,7 +60,7 @@ class ExplorationPlanner final : public fba::Component {
       "centre", {}, "ring and hemisphere: what the cameras look at [x, y, z], metres; empty: the model's root box centre")
       .size({0, 3});
   static constexpr fba::Param<std::string> kPosesFrom{
-      "poses_from", "", "recorded: the image set (Middlebury *_par.txt or fba YAML) whose camera poses are the candidates"};
+      "poses_from", "", "recorded: the image set (Middlebury *_par.txt or fba YAML) whose camera poses are the candidates; relative to the task file's folder"};
   static constexpr fba::Param<bool> kGoodOnly{"good_only", true, "recorded, Middlebury: only the views with good silhouettes"};
   static constexpr auto kInitialViews = fba::Param<int>(
       "initial_views", 3, "on start: candidate 0 and its nearest candidates, for the initial analysis").range(1, 10000);
