@@ -147,6 +147,7 @@ class GraspSynthesisFilter final : public fba::Component {
       roi.boxes.emplace_back(all.min() - margin, all.max() + margin);
     }
     const std::size_t requested = roi.boxes.size();
+    roi.model_views = views;
     ctx_(kRegions).emit(std::move(roi));
     nlohmann::json j{{"views", views},
                      {"samples", surface.samples.size()},

@@ -11,6 +11,9 @@ namespace fba {
 
 struct RegionsOfInterest {
   std::vector<Eigen::AlignedBox3d> boxes;  // world coordinates, metres
+  // Views in the model they were derived from (-1: unknown), so that a next-view planner can tell
+  // a request about the newest model from one that does not know the last view yet.
+  int model_views = -1;
 };
 
 }  // namespace fba

@@ -1,0 +1,216 @@
+// grasp.exploration_planner: the exploration movement's planning. Each regions sample from grasp
+// synthesis is a request for a new view; the planner scores its candidate views by the uncertain
+// model nodes inside the regions each one sees, less the cost of moving there, and emits the best
+// as the camera's target pose, or no_view with the reason when none is worth the move. With an
+// output folder, the model each plan was made on is written as exploration/model_<views>views.ply.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include <fba/component.hpp>
+#include <fba/geometry/viewpoints.hpp>
+#include <fba/types/octree.hpp>
+#include <fba/types/pose.hpp>
+#include <fba/types/regions_of_interest.hpp>
+#include <fba/vision/image_set.hpp>
+#include <fba/vision/octree_carver.hpp>
+
+#include "fba/grasp/exploration.hpp"
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180;
+
+nlohmann::json pose_json(const Eigen::Isometry3d& world_from_camera) {
+  const Eigen::Vector3d t = world_from_camera.translation();
+  const Eigen::Quaterniond q(world_from_camera.linear());
+  return {{"position", {t.x(), t.y(), t.z()}}, {"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
+}
+
+class ExplorationPlanner final : public fba::Component {
+ public:
+  static constexpr fba::In<fba::Octree> kOctree{"octree", "the model (the latest is used)"};
+  static constexpr fba::In<fba::RegionsOfInterest> kRegions{
+      "regions", "where grasping needs detail; a sample from a model with every view asked for so far asks for a new view"};
+  static constexpr fba::OptionalIn<fba::Pose> kCurrent{
+      "current", "where the camera is (world_from_camera); without it, the last target stands for it"};
+  static constexpr fba::OptionalIn<std::int64_t> kStart{
+      "start", "a sample (e.g. from examples.counter with count 1) starts the exploration: the first initial_views candidates are requested, no model needed"};
+  static constexpr fba::Out<fba::Pose> kTarget{"target", "the camera's next pose, world_from_camera"};
+  static constexpr auto kViews = fba::Param<std::string>(
+      "views", "ring", "the candidate views: a ring or a hemisphere around centre, or the recorded views of poses_from")
+      .choices({"ring", "hemisphere", "recorded"});
+  static constexpr auto kCount = fba::Param<int>("count", 16, "ring and hemisphere: how many candidate views").range(1, 10000);
+  static constexpr auto kDistance = fba::Param<double>("distance", 0.5, "ring and hemisphere: metres from the centre").range(1e-6, 1e6);
+  static constexpr auto kMinElevation = fba::Param<double>(
+      "min_elevation_deg", 30, "lowest elevation above the centre's horizontal plane; a ring lies midway between the two")
+      .range(-90, 90);
+  static constexpr auto kMaxElevation =
+      fba::Param<double>("max_elevation_deg", 30, "highest elevation of a hemisphere band (90: up to the zenith)").range(-90, 90);
+  static inline const auto kCentre = fba::Param<std::vector<double>>(
+      "centre", {}, "ring and hemisphere: what the cameras look at [x, y, z], metres; empty: the model's root box centre")
+      .size({0, 3});
+  static constexpr fba::Param<std::string> kPosesFrom{
+      "poses_from", "", "recorded: the image set (Middlebury *_par.txt or fba YAML) whose camera poses are the candidates; relative to the task file's folder"};
+  static constexpr fba::Param<bool> kGoodOnly{"good_only", true, "recorded, Middlebury: only the views with good silhouettes"};
+  static constexpr auto kInitialViews = fba::Param<int>(
+      "initial_views", 3, "on start: candidate 0 and its nearest candidates, for the initial analysis").range(1, 10000);
+  static constexpr auto kMovementWeight = fba::Param<double>(
+      "movement_weight", 0.1, "score = share of the uncertain nodes seen - movement_weight * (angle moved / 180 deg)").at_least(0);
+  static constexpr auto kHalfFov =
+      fba::Param<double>("half_fov_deg", 30, "a node is in view within this angle of the optical axis").range(0.1, 179);
+  static constexpr auto kMinGain =
+      fba::Param<double>("min_gain", 0.01, "no_view when the best view sees less than this share of the uncertain nodes").range(0, 1);
+  static constexpr auto kMaxRays =
+      fba::Param<int>("max_rays", 4096, "at most this many uncertain nodes get a ray per candidate (an even stride)").range(1, 100000000);
+  static constexpr fba::Param<bool> kExcludeVisited{"exclude_visited", true, "a candidate already requested is not chosen again"};
+  static constexpr fba::EventOut kViewChosen{
+      "view_chosen", "a target was emitted; payload (JSON): view, pose, score, gain, seen, targets, reason"};
+  static constexpr fba::EventOut kNoView{"no_view", "no candidate is worth the move; payload (JSON): reason, views requested"};
+
+  static fba::Spec spec() {
+    return fba::Spec::filter("grasp.exploration_planner",
+                             "Chooses the next view: the candidate that sees most uncertain model nodes in the grasp's regions, "
+                             "visibility-aware, less the cost of moving.")
+        .add(kOctree, kRegions, kCurrent, kStart, kTarget, kViews, kCount, kDistance, kMinElevation, kMaxElevation, kCentre,
+             kPosesFrom, kGoodOnly, kInitialViews, kMovementWeight, kHalfFov, kMinGain, kMaxRays, kExcludeVisited, kViewChosen,
+             kNoView)
+        .add(kMinElevation <= kMaxElevation)
+        .check([](const fba::ParamValues& p) {
+          if (p(kViews) == "recorded" && p(kPosesFrom).empty())
+            return std::string("views: recorded needs poses_from, the image set whose poses are the candidates; found none");
+          if (p(kViews) != "recorded" && !p(kPosesFrom).empty())
+            return std::string("poses_from '" + p(kPosesFrom) + "' is used only with views: recorded; found views: " + p(kViews));
+          return std::string();
+        });
+  }
+
+  explicit ExplorationPlanner(fba::Context& ctx) : ctx_(ctx), initial_views_(ctx(kInitialViews)), exclude_visited_(ctx(kExcludeVisited)) {
+    params_.movement_weight = ctx(kMovementWeight);
+    params_.half_fov_deg = ctx(kHalfFov);
+    params_.min_gain = ctx(kMinGain);
+    params_.max_rays = static_cast<std::size_t>(ctx(kMaxRays));
+    const std::string views = ctx(kViews);
+    if (views == "recorded") {
+      std::filesystem::path file = ctx(kPosesFrom);
+      if (file.is_relative()) file = ctx.task_dir() / file;
+      const auto set = fba::vision::ImageSet::load(file.string(), ctx(kGoodOnly));
+      for (std::size_t i = 0; i < set.size(); ++i) candidates_.push_back(set[i].camera.camera_from_world.inverse());
+      if (candidates_.empty()) throw std::runtime_error("poses_from " + file.string() + ": the image set has no views");
+    } else if (const auto c = ctx(kCentre); c.size() == 3) {
+      make_candidates(Eigen::Vector3d(c[0], c[1], c[2]));
+    } else if (ctx(kStart).connected()) {
+      throw std::runtime_error("start is connected but the " + views +
+                               " has no centre before a model exists: set centre [x, y, z] or use views: recorded");
+    }
+  }
+
+  void process() override {
+    if (auto o = ctx_(kOctree); o.has()) model_ = o.share();
+    if (auto c = ctx_(kCurrent); c.has()) current_ = c.get().world_from_frame;
+    if (auto r = ctx_(kRegions); r.has()) pending_ = r.share();
+    if (ctx_(kStart).has() && !started_) start();
+    if (!pending_ || !model_ || model_->node_count == 0) return;
+    // A request counts once it comes from a model with every view asked for: one from an older
+    // model does not know the last view yet and is dropped (synthesis sends another per model).
+    // Without its model's view count, the latest model's stands for it.
+    const int views = pending_->model_views >= 0 ? pending_->model_views : model_->views;
+    if (views < requested_) {
+      if (pending_->model_views >= 0) pending_.reset();
+      return;
+    }
+    if (model_->views < requested_) return;  // plan on a model that has the view too
+    plan(*model_, *pending_);
+    pending_.reset();
+  }
+
+ private:
+  void make_candidates(const Eigen::Vector3d& centre) {
+    const double lo = ctx_(kMinElevation) * kDeg, hi = ctx_(kMaxElevation) * kDeg;
+    const auto camera_from_world = ctx_(kViews) == "ring"
+                                       ? fba::geometry::ring_views(ctx_(kCount), 0.5 * (lo + hi), ctx_(kDistance), centre)
+                                       : fba::geometry::hemisphere_views(ctx_(kCount), lo, hi, ctx_(kDistance), centre);
+    for (const auto& p : camera_from_world) candidates_.push_back(p.inverse());
+  }
+
+  void start() {
+    started_ = true;
+    // Candidate 0 and its nearest neighbours: a few views close together, as in the paper.
+    std::vector<std::size_t> order(candidates_.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    const Eigen::Vector3d first = candidates_[0].translation();
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return (candidates_[a].translation() - first).norm() < (candidates_[b].translation() - first).norm();
+    });
+    const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(initial_views_), order.size());
+    for (std::size_t i = 0; i < n; ++i) request(order[i]);
+    ctx_.log().info("start: {} initial views requested", n);
+  }
+
+  void request(std::size_t view) {
+    if (visited_.size() < candidates_.size()) visited_.resize(candidates_.size(), false);
+    visited_[view] = true;
+    ++requested_;
+    last_target_ = candidates_[view];
+    fba::Pose target;
+    target.world_from_frame = candidates_[view];
+    target.stamp = static_cast<double>(ctx_.now_ns()) * 1e-9;
+    ctx_(kTarget).emit(std::move(target));
+  }
+
+  void plan(const fba::Octree& model, const fba::RegionsOfInterest& regions) {
+    if (candidates_.empty()) make_candidates(model.bounds.center());
+    visited_.resize(candidates_.size(), false);
+    const std::optional<Eigen::Isometry3d> current = current_ ? current_ : last_target_;
+    const auto choice = fba::grasp::choose_view(model, regions, candidates_, current,
+                                                exclude_visited_ ? visited_ : std::vector<bool>{}, params_);
+    if (!ctx_.output_dir().empty()) {
+      const auto dir = ctx_.output_dir() / "exploration";
+      std::filesystem::create_directories(dir);
+      const auto ply = dir / ("model_" + std::to_string(model.views) + "views.ply");
+      fba::vision::write_ply(model, ply.string());
+      ctx_.log().info("wrote {}", ply.string());
+    }
+    if (!choice.best) {
+      ctx_.log().info("no view: {}", choice.reason);
+      ctx_.emit(kNoView, nlohmann::json{{"reason", choice.reason}, {"views_requested", requested_}}.dump());
+      return;
+    }
+    const auto& s = choice.scores[*choice.best];
+    ctx_.log().info("{}", choice.reason);
+    ctx_.emit(kViewChosen, nlohmann::json{{"view", s.index},
+                                          {"pose", pose_json(candidates_[s.index])},
+                                          {"score", s.score},
+                                          {"gain", s.gain},
+                                          {"seen", s.seen},
+                                          {"targets", choice.targets},
+                                          {"reason", choice.reason}}
+                               .dump());
+    request(s.index);
+  }
+
+  fba::Context& ctx_;
+  fba::grasp::ExplorationParams params_;
+  const int initial_views_;
+  const bool exclude_visited_;
+  std::vector<Eigen::Isometry3d> candidates_;  // world_from_camera
+  std::vector<bool> visited_;                  // per candidate: already requested
+  std::shared_ptr<const fba::Octree> model_;
+  std::shared_ptr<const fba::RegionsOfInterest> pending_;
+  std::optional<Eigen::Isometry3d> current_, last_target_;
+  int requested_ = 0;
+  bool started_ = false;
+};
+
+}  // namespace
+
+FBA_COMPONENT(ExplorationPlanner);

@@ -1,0 +1,71 @@
+// Next best view for grasp-driven exploration: among candidate camera poses, the one that sees
+// most of the model's still-uncertain nodes inside the regions grasping cares about, less the cost
+// of moving there. Visibility-aware: a node counts for a view only if the ray from the camera
+// centre to it crosses no occupied node of the model.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "fba/types/octree.hpp"
+#include "fba/types/regions_of_interest.hpp"
+
+namespace fba::grasp {
+
+struct ExplorationParams {
+  // Score = gain - movement_weight * (angle between the current and the candidate camera, seen
+  // from the targets' centre, in radians / pi). The gain is the share of target nodes seen, in
+  // [0, 1], so a weight of 0.1 trades a half-turn for a tenth of the targets.
+  double movement_weight = 0.1;
+  // A node is in view when its centre lies within this angle of the optical axis (camera z).
+  double half_fov_deg = 30;
+  // A view that sees less than this share of the targets is not worth the move.
+  double min_gain = 0.01;
+  // At most this many target nodes get a ray each (an even stride through them when there are
+  // more): the cost is candidates x rays x the depth of the tree.
+  std::size_t max_rays = 4096;
+};
+
+// The uncertain nodes still to observe: Partial leaves of the model that meet a region's box.
+std::vector<OctreeCell> uncertain_targets(const Octree& model, const RegionsOfInterest& regions);
+
+struct ViewScore {
+  std::size_t index = 0;    // into the candidates
+  std::size_t seen = 0;     // target rays that reach their node unobstructed, inside the field of view
+  std::size_t hidden = 0;   // in the field of view but behind an occupied node
+  std::size_t outside = 0;  // behind the camera or outside its field of view
+  double gain = 0;          // seen / rays
+  double move_angle = 0;    // radians from the current camera, around the targets' centre
+  double cost = 0;          // movement_weight * move_angle / pi
+  double score = 0;         // gain - cost
+  bool excluded = false;    // already visited: never chosen
+};
+
+struct ViewChoice {
+  std::optional<std::size_t> best;  // none: no candidate is worth the move (reason says why)
+  std::vector<ViewScore> scores;    // one per candidate, in their order
+  std::size_t targets = 0;          // uncertain nodes inside the regions
+  std::size_t rays = 0;             // targets given a ray (at most max_rays)
+  std::string reason;               // human-readable: what was chosen and why, or why nothing
+};
+
+// Whether the segment from eye to the target's box crosses an occupied node of the model other
+// than the target. Grazing contacts (the ray running through less than half of a node's
+// half-size) do not block, so that a surface node is not hidden by its neighbours on the surface.
+bool occluded(const Octree& model, const Eigen::Vector3d& eye, const OctreeCell& target);
+
+// Scores every candidate (world_from_camera poses, camera z forward) and picks the best one that
+// is not excluded. current: where the camera is now (no movement cost without it). excluded: one
+// flag per candidate (may be empty). Throws std::invalid_argument on parameters out of range or an
+// excluded list of the wrong length, naming the values.
+ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
+                       std::span<const Eigen::Isometry3d> candidates,
+                       const std::optional<Eigen::Isometry3d>& current = std::nullopt,
+                       const std::vector<bool>& excluded = {}, const ExplorationParams& params = {});
+
+}  // namespace fba::grasp
