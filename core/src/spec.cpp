@@ -168,7 +168,8 @@ void Spec::validate() const {
       if (p.required) fail("a sensor's inputs must be optional ('" + p.name + "' is required)");
   if (kind_ == Kind::Sensor && outputs_.empty()) fail("a sensor needs at least one output");
   if (kind_ == Kind::Filter && (inputs_.empty() || outputs_.empty())) fail("a filter needs inputs and outputs");
-  if (kind_ == Kind::Actuator && (!outputs_.empty() || inputs_.empty())) fail("an actuator has inputs and no outputs");
+  // An actuator may report its device's state (an arm's joints) on outputs; it is the kind told to go safe.
+  if (kind_ == Kind::Actuator && inputs_.empty()) fail("an actuator needs inputs (the commands it acts on)");
   std::set<std::string> pnames;
   for (const auto& p : params_) {
     if (!is_valid_name(p.name)) fail("parameter name '" + p.name + "' must be letters, digits and '_'");

@@ -27,8 +27,9 @@ TEST(Spec, SensorInputsMustBeOptional) {
   EXPECT_EQ(validation_error(Spec::sensor("t.s", "").add(kMaybe, kOut)), "");
 }
 
-TEST(Spec, ActuatorHasNoOutputs) {
-  EXPECT_NE(validation_error(Spec::actuator("t.a", "").add(kIn, kOut)).find("no outputs"), std::string::npos);
+TEST(Spec, ActuatorNeedsInputsAndMayReportOnOutputs) {
+  EXPECT_NE(validation_error(Spec::actuator("t.a", "").add(kOut)).find("needs inputs"), std::string::npos);
+  EXPECT_EQ(validation_error(Spec::actuator("t.a", "").add(kIn, kOut)), "");  // an arm publishing its joint states
 }
 
 TEST(Spec, OutLikeTakesTheTypeOfItsInput) {
