@@ -187,8 +187,10 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
   if (mesh.triangles.empty()) throw LiftTestError("lift test: the object mesh has no triangles");
   if (!(params.mass > 0) || !(params.friction > 0) || !(params.lift_height > 0) || !(params.hold_s >= 0) ||
       !(params.lift_s > 0) || !(params.finger_force > 0) || !(params.drop_distance > 0) || !(params.clearance >= 0) ||
+      !(params.contact_tolerance > 0) ||
       !(params.pregrasp_distance >= 0))
-    throw std::invalid_argument("lift test: mass, friction, lift height, lift time, finger force and drop distance must be "
+    throw std::invalid_argument("lift test: mass, friction, lift height, lift time, finger force, drop distance and contact "
+                                "tolerance must be "
                                 "positive, hold time, clearance and pregrasp distance not negative");
   auto& s = *impl_;
   s.params = params;
@@ -309,7 +311,7 @@ GraspExecution LiftTest::run(const Grasp& grasp) {
     return result;
   }
   const double aperture = std::max(grasp.aperture, width + 2 * p.clearance);
-  const double open_travel = std::clamp(travel_for(aperture / 2), 0.0, s.travel);
+  const double initial_travel = std::clamp(travel_for(aperture / 2), 0.0, s.travel);
   const double depth = s.pad_distance;
   double along = 0;
   for (const auto& c : grasp.contacts) along += c.position.dot(a) / 3;
@@ -322,26 +324,47 @@ GraspExecution LiftTest::run(const Grasp& grasp) {
   auto set_palm = [&](const Eigen::Vector3d& pos) {
     for (int k = 0; k < 3; ++k) d->mocap_pos[3 * s.mocap + k] = pos[k];
   };
-  set_palm(pregrasp_palm);
+  // The hand posed kinematically (no time passes): palm at pos, every finger open by travel.
   const double quat[4] = {q.w(), q.x(), q.y(), q.z()};
-  mjtNum* palm_qpos = d->qpos + m->jnt_qposadr[s.palm_joint];
-  for (int k = 0; k < 4; ++k) d->mocap_quat[4 * s.mocap + k] = palm_qpos[3 + k] = quat[k];
-  for (int k = 0; k < 3; ++k) palm_qpos[k] = pregrasp_palm[k];
-  for (std::size_t f = 0; f < 3; ++f) {
-    const auto& finger = s.fingers[f];
-    d->qpos[m->jnt_qposadr[finger.close_joint]] = open_travel;
-    for (int act : finger.phalanx_actuators) d->ctrl[act] = 0;
-    if (finger.spread_joint >= 0) {
-      const double offset = f == 1 ? half_spread : -half_spread;
-      d->qpos[m->jnt_qposadr[finger.spread_joint]] = offset;
-      d->ctrl[finger.spread_actuator] = offset;
+  auto pose_hand = [&](const Eigen::Vector3d& pos, double travel) {
+    set_palm(pos);
+    mjtNum* palm_qpos = d->qpos + m->jnt_qposadr[s.palm_joint];
+    for (int k = 0; k < 4; ++k) d->mocap_quat[4 * s.mocap + k] = palm_qpos[3 + k] = quat[k];
+    for (int k = 0; k < 3; ++k) palm_qpos[k] = pos[k];
+    for (std::size_t f = 0; f < 3; ++f) {
+      const auto& finger = s.fingers[f];
+      d->qpos[m->jnt_qposadr[finger.close_joint]] = travel;
+      for (int act : finger.phalanx_actuators) d->ctrl[act] = 0;
+      if (finger.spread_joint >= 0) {
+        const double offset = f == 1 ? half_spread : -half_spread;
+        d->qpos[m->jnt_qposadr[finger.spread_joint]] = offset;
+        d->ctrl[finger.spread_actuator] = offset;
+      }
     }
+    mj_forward(m, d);
+  };
+  // The pregrasp opening: the grasp's aperture if the way in is clear, else wider (as far as the
+  // hand opens): a finger whose contact normal is far from its closing direction passes the
+  // surface closer than its contact. The way in is checked at poses along it.
+  std::string hit;
+  bool hit_at_pregrasp = false;
+  double open_travel = initial_travel;
+  for (;; open_travel = std::max(open_travel - 0.01, 0.0)) {
+    hit.clear();
+    constexpr int kChecks = 10;
+    for (int i = 0; i <= kChecks && hit.empty(); ++i) {
+      pose_hand(pregrasp_palm + (grasp_palm - pregrasp_palm) * i / kChecks, open_travel);
+      hit = s.hand_collision();
+      hit_at_pregrasp = i == 0;
+    }
+    if (hit.empty() || open_travel == 0) break;
   }
-  mj_forward(m, d);
-  if (const auto hit = s.hand_collision(); !hit.empty()) {
-    result.reason = "collision at the pregrasp: " + hit;
+  if (!hit.empty()) {
+    result.reason = (hit_at_pregrasp ? "collision at the pregrasp, even with the hand fully open: "
+                                     : "no collision-free way in along the approach, even with the hand fully open: ") + hit;
     return result;
   }
+  pose_hand(pregrasp_palm, open_travel);
 
   // Closing slides: hold the pregrasp opening (proportional; the joints' damping damps it), or push
   // with the finger force once closing.
@@ -391,6 +414,25 @@ GraspExecution LiftTest::run(const Grasp& grasp) {
   if (result.contacts.empty()) {
     result.reason = "no contact with the object after closing the fingers (" + time_text() + ")";
     return result;
+  }
+  // The hand must have taken the planned grasp, not another one (a wide-open hand can close
+  // around the whole object). Where along its length a finger touches does not matter, so the
+  // distance is measured across the approach.
+  const std::array<Eigen::Vector3d, 3> planned = {thumb, finger_contacts[0], finger_contacts[1]};
+  for (std::size_t f = 0; f < 3; ++f) {
+    double nearest = INFINITY;
+    for (const auto& c : result.contacts) {
+      if (c.link.rfind(s.fingers[f].name + "_", 0) != 0) continue;
+      const Eigen::Vector3d off = c.position - planned[f];
+      nearest = std::min(nearest, (off - a * a.dot(off)).norm());
+    }
+    if (nearest > p.contact_tolerance) {
+      result.reason = std::isinf(nearest) ? s.fingers[f].name + " did not touch the object"
+                                          : fmt::format("{} touched the object {:.3f} m (across the approach) from its planned "
+                                                        "contact, more than the {:.3f} m allowed: not the planned grasp",
+                                                        s.fingers[f].name, nearest, p.contact_tolerance);
+      return result;
+    }
   }
 
   // Lift straight up, then hold; the object is out of the hand once it moved drop_distance

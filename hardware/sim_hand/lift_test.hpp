@@ -42,6 +42,10 @@ struct LiftTestParams {
   double clearance = 0.01;    // metres between each pad and its contact at the pregrasp, at least
   // The object is out of the hand once it moved this far relative to the palm since closing.
   double drop_distance = 0.03;
+  // Each finger must touch the object within this distance of its planned contact, measured
+  // across the approach (where along the finger it touches does not count); else the hand took
+  // another grasp than the one planned, and the test fails without lifting.
+  double contact_tolerance = 0.025;
 };
 
 // `mesh` is in the mesh file's frame; see ObjectPlacement. The hand model is the one in
@@ -55,8 +59,10 @@ class LiftTest {
   LiftTest(const LiftTest&) = delete;
   LiftTest& operator=(const LiftTest&) = delete;
 
-  // Runs one lift test from the initial scene (each run starts afresh). A grasp the hand cannot
-  // take (out of its reach, colliding at the pregrasp) gives held = false with the reason.
+  // Runs one lift test from the initial scene (each run starts afresh). The pregrasp opening is
+  // the grasp's aperture, or wider where the way in along the approach would otherwise collide. A
+  // grasp the hand cannot take (out of its reach, no collision-free way in, a finger that misses
+  // its planned contact) gives held = false with the reason.
   // Throws std::invalid_argument for a grasp with non-finite values or a zero approach.
   GraspExecution run(const Grasp& grasp);
 

@@ -91,11 +91,29 @@ TEST(LiftTest, EachRunStartsAfreshAndGivesTheSameResult) {
   EXPECT_EQ(a.contacts.size(), b.contacts.size());
 }
 
-TEST(LiftTest, ContactsAllOnOneSideDoNotHold) {
+TEST(LiftTest, ContactsAllOnOneSideAreNotTheGraspTheHandTakes) {
+  // The thumb cannot oppose fingers beside it: opened wide enough to pass the can, the hand closes
+  // around the whole can, far from the planned contacts.
   LiftTest test(can(), {});
   const auto r = test.run(grasp_at_angles(test, 0, 35 * kDegree, -35 * kDegree));
   EXPECT_FALSE(r.held);
-  EXPECT_FALSE(r.reason.empty());
+  EXPECT_NE(r.reason.find("not the planned grasp"), std::string::npos) << r.reason;
+}
+
+TEST(LiftTest, TwoFingersOnOneFaceOfABoxPushingTheSameWayDoNotHold) {
+  // All three contacts on the box's +x face: the thumb and the fingers push the same way.
+  const auto box = fba::geometry::make_box({-0.03, -0.05, 0}, {0.03, 0.05, 0.12});
+  LiftTest test(box, {});
+  fba::Grasp g;
+  g.contacts[0].position = {0.03, 0, 0.06};
+  g.contacts[1].position = {0.03, 0.03, 0.04};
+  g.contacts[2].position = {0.03, -0.03, 0.04};
+  for (auto& c : g.contacts) c.normal = {-1, 0, 0};
+  g.approach = {0, 0, -1};
+  g.aperture = 0.06;
+  const auto r = test.run(g);
+  EXPECT_FALSE(r.held);
+  EXPECT_NE(r.reason.find("not apart across the approach"), std::string::npos) << r.reason;
 }
 
 TEST(LiftTest, FingersClosingAboveTheObjectFindNoContact) {
@@ -114,7 +132,7 @@ TEST(LiftTest, ApproachFromUnderTheTableCollidesAtThePregrasp) {
   grasp.approach = Eigen::Vector3d::UnitZ();  // the palm would be under the table
   const auto r = test.run(grasp);
   EXPECT_FALSE(r.held);
-  EXPECT_NE(r.reason.find("collision at the pregrasp"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("collision at the pregrasp, even with the hand fully open"), std::string::npos) << r.reason;
   EXPECT_NE(r.reason.find("table"), std::string::npos) << r.reason;
 }
 
