@@ -112,7 +112,7 @@ struct LiftTest::Impl {
   };
   std::array<Finger, 3> fingers;  // thumb, finger_a (+y), finger_b (-y)
   // The hand's geometry, read from the model: the fully open fingers' distance from the palm's
-  // centre along x, the pad's distance from the palm's face, the pad's radius, the spread range,
+  // centre along x, the pad's distance from the palm's frame along z, the pad's radius, the spread range,
   // the closing slides' travel.
   double base_x = 0, pad_distance = 0, pad_radius = 0, spread_min = 0, spread_max = 0, travel = 0;
   long steps = 0;
@@ -245,9 +245,10 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
       finger.spread_actuator = s.id(mjOBJ_ACTUATOR, finger.name + "_spread");
     }
   }
-  s.base_x = -s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_base")];
-  s.pad_distance = s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_2") + 2] + s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_3") + 2] +
-                   s.m->site_pos[3 * s.id(mjOBJ_SITE, "thumb_pad") + 2];
+  const int thumb_base = s.id(mjOBJ_BODY, "thumb_base");
+  s.base_x = -s.m->body_pos[3 * thumb_base];
+  s.pad_distance = s.m->body_pos[3 * thumb_base + 2] + s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_2") + 2] +
+                   s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_3") + 2] + s.m->site_pos[3 * s.id(mjOBJ_SITE, "thumb_pad") + 2];
   s.pad_radius = s.m->geom_size[3 * s.id(mjOBJ_GEOM, "thumb_3")];
   const int spread = s.fingers[1].spread_joint;
   s.spread_min = 2 * s.m->jnt_range[2 * spread];
