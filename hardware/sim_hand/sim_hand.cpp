@@ -30,7 +30,7 @@ nlohmann::json to_json(const fba::GraspExecution& e) {
 
 class SimHand final : public fba::Component {
  public:
-  static constexpr fba::In<fba::Grasp> kGrasp{"grasp", "the grasp to execute (world frame: the table's, see object_x)"};
+  static constexpr fba::In<fba::Grasp> kGrasp{"grasp", "the grasp to execute, in the frame the 'frame' parameter names"};
   static constexpr fba::Out<fba::GraspExecution> kResult{"result", "what the lift test measured: held, slip, real contacts, reason"};
   static constexpr fba::EventOut kHeld{"held", "the object was lifted and held; payload: the result as JSON"};
   static constexpr fba::EventOut kDropped{
@@ -44,6 +44,12 @@ class SimHand final : public fba::Component {
   static constexpr auto kFriction = fba::Param<double>("friction", 0.5, "sliding friction of object, table and fingers").range(0.01, 2);
   static constexpr auto kLiftHeight = fba::Param<double>("lift_height", 0.1, "how far the hand lifts the object, metres").range(0.001, 1);
   static constexpr auto kHoldTime = fba::Param<double>("hold_time", 2.0, "simulated seconds the object is held after lifting").range(0, 60);
+  static constexpr auto kFrame =
+      fba::Param<std::string>("frame", "table",
+                              "the frame of grasps and reported contacts: 'table', where the object rests on z = 0, or 'mesh', "
+                              "the mesh file's own coordinates (turned and moved by object_yaw, object_x, object_y), the "
+                              "world sim.camera renders the same mesh in")
+          .choices({"table", "mesh"});
   static constexpr auto kFingerForce =
       fba::Param<double>("finger_force", 10.0, "force at each finger's pad when closing, newtons; the thumb pushes twice as hard").range(0.1, 100);
 
@@ -53,16 +59,20 @@ class SimHand final : public fba::Component {
                              "holds it, and reports the real contacts, whether it held and how far it slipped "
                              "(the twin of hw.robotiq_3f).")
         .add(kGrasp, kResult, kHeld, kDropped, kMesh, kObjectX, kObjectY, kObjectYaw, kMass, kFriction, kLiftHeight, kHoldTime,
-             kFingerForce);
+             kFingerForce, kFrame);
   }
 
-  explicit SimHand(fba::Context& ctx) : ctx_(ctx), test_(make_test(ctx)) {
+  explicit SimHand(fba::Context& ctx) : ctx_(ctx), test_(make_test(ctx, table_shift_)) {
+    if (ctx(kFrame) == "table") table_shift_ = 0;
     ctx.log().info("{}: {} triangles on the table at ({:.3f}, {:.3f}), yaw {:.1f} deg", ctx(kMesh).stem().string(),
                    test_.object().triangles.size(), ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw));
   }
 
   void process() override {
-    fba::GraspExecution result = test_.run(ctx_(kGrasp).get());
+    fba::Grasp grasp = ctx_(kGrasp).get();
+    for (auto& c : grasp.contacts) c.position.z() += table_shift_;
+    fba::GraspExecution result = test_.run(grasp);
+    for (auto& c : result.contacts) c.position.z() -= table_shift_;
     result.stamp = static_cast<double>(ctx_.now_ns()) * 1e-9;
     ctx_.log().info("lift test: {} after {:.2f} simulated s ({} steps){}", result.held ? "held" : "failed", test_.simulated_s(),
                     test_.steps(), result.reason.empty() ? "" : ": " + result.reason);
@@ -71,9 +81,12 @@ class SimHand final : public fba::Component {
   }
 
  private:
-  static fba::sim_hand::LiftTest make_test(fba::Context& ctx) {
+  // table_shift: how far the mesh is raised to rest on the table (turning it about z does not
+  // change its lowest point).
+  static fba::sim_hand::LiftTest make_test(fba::Context& ctx, double& table_shift) {
     auto loaded = fba::geometry::load_mesh_with_warnings(ctx(kMesh));
     for (const auto& w : loaded.warnings) ctx.log().info("{}", w);
+    table_shift = -fba::geometry::mesh_bounds(loaded.mesh).min().z();
     fba::sim_hand::LiftTestParams p;
     p.mass = ctx(kMass);
     p.friction = ctx(kFriction);
@@ -84,6 +97,7 @@ class SimHand final : public fba::Component {
   }
 
   fba::Context& ctx_;
+  double table_shift_ = 0;  // z from the grasp's frame to the table's
   fba::sim_hand::LiftTest test_;
 };
 

@@ -52,6 +52,24 @@ TEST(SimHand, GoodGraspHoldsAndSaysSo) {
   EXPECT_DOUBLE_EQ(payload["slip_m"].get<double>(), results[0].slip_m);
 }
 
+TEST(SimHand, InTheMeshFrameGraspsAndContactsAreInTheMeshFilesCoordinates) {
+  // The world sim.camera renders the mesh in: the can as the file has it, centred near z = 0.
+  const auto mesh = fba::geometry::load_mesh(kCan);
+  const auto bounds = fba::geometry::mesh_bounds(mesh);
+  ASSERT_LT(bounds.min().z(), -0.05);
+  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}, {"frame", "mesh"}});
+  h.push<fba::Grasp>("grasp", fba::sim_hand::ring_grasp(mesh, bounds.center().z(), M_PI));
+  h.run();
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_TRUE(results[0].held) << results[0].reason;
+  ASSERT_FALSE(results[0].contacts.empty());
+  for (const auto& c : results[0].contacts) {
+    EXPECT_GT(c.position.z(), bounds.min().z() - 0.01) << c.link;
+    EXPECT_LT(c.position.z(), bounds.max().z() + 0.01) << c.link;
+  }
+}
+
 TEST(SimHand, BadGraspGivesDroppedWithTheReason) {
   ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}});
   auto grasp = can_grasp(0, 0, 0, 0);
