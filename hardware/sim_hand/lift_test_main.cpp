@@ -82,12 +82,15 @@ int main(int argc, char** argv) {
     opt[argv[i]] = argv[i + 1];
   }
   try {
+    const auto build_start = std::chrono::steady_clock::now();
     const auto mesh = fba::geometry::load_mesh(argv[1]);
     fba::sim_hand::LiftTestParams params;
     params.mass = std::stod(opt["--mass"]);
     params.finger_force = std::stod(opt["--force"]);
     fba::sim_hand::LiftTest test(mesh, {std::stod(opt["--x"]), std::stod(opt["--y"]), std::stod(opt["--yaw"]) * M_PI / 180},
                                  params);
+    std::printf("scene built (mesh loaded, MuJoCo model compiled) in %.3f s wall time\n",
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count());
     if (const int samples = std::stoi(opt["--synthesise"]); samples > 0) return synthesised(test, samples, std::stoi(opt["--candidates"]));
     fba::Grasp grasp;
     if (!opt["--grasp"].empty()) {
