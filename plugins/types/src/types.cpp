@@ -7,6 +7,7 @@
 #include "fba/types/frame.hpp"
 #include "fba/types/grasp.hpp"
 #include "fba/types/joint_state.hpp"
+#include "fba/types/grasp_execution.hpp"
 #include "fba/types/mesh.hpp"
 #include "fba/types/octree.hpp"
 #include "fba/types/pose.hpp"
@@ -23,6 +24,7 @@ namespace {
   fba::type_of<fba::TriangleMesh>();
   fba::type_of<fba::Grasp>();
   fba::type_of<fba::JointState>();
+  fba::type_of<fba::GraspExecution>();
   return true;
 }();
 }  // namespace

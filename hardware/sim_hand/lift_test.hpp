@@ -1,0 +1,86 @@
+// The lift test: a three-fingered hand executes a grasp on an object in the MuJoCo physics engine,
+// the field's ground truth for "the grasp works". The hand (hardware/robots/three_finger_hand.xml)
+// goes to the pregrasp back along the approach, moves in, closes its fingers under force control
+// until they stop on the object, lifts it and holds it; the outcome is measured in the physics.
+// Simulated time alone decides (the step count), never the wall clock.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "fba/types/grasp.hpp"
+#include "fba/types/grasp_execution.hpp"
+#include "fba/types/mesh.hpp"
+
+namespace fba::sim_hand {
+
+// A scene that cannot be built: a mesh that does not load, or a model MuJoCo does not compile
+// (with MuJoCo's own message).
+class LiftTestError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Where the object stands: the mesh (metres, z up) turned by yaw about z, moved by (x, y), and
+// raised or lowered so that its lowest point rests on the table (z = 0). Grasps are given in
+// this world frame.
+struct ObjectPlacement {
+  double x = 0;
+  double y = 0;
+  double yaw = 0;  // radians
+};
+
+struct LiftTestParams {
+  double mass = 0.3;          // kg, spread over the mesh's volume
+  double friction = 0.5;      // sliding friction of the object, the table and the fingers
+  double lift_height = 0.1;   // metres, straight up
+  double lift_s = 1.0;        // seconds the lift takes
+  double hold_s = 2.0;        // seconds held after the lift
+  double finger_force = 10;   // newtons at each finger's pad; the thumb pushes twice as hard
+  double pregrasp_distance = 0.05;  // metres back along the approach where the hand starts
+  double clearance = 0.01;    // metres between each pad and its contact at the pregrasp, at least
+  // The object is out of the hand once it moved this far relative to the palm since closing.
+  double drop_distance = 0.03;
+  // Each finger must touch the object within this distance of its planned contact, measured
+  // across the approach (where along the finger it touches does not count); else the hand took
+  // another grasp than the one planned, and the test fails without lifting.
+  double contact_tolerance = 0.025;
+};
+
+// `mesh` is in the mesh file's frame; see ObjectPlacement. The hand model is the one in
+// hardware/robots (built in); `hand_mjcf`, when given, replaces it (MJCF text with the same
+// body, joint and actuator names). Throws LiftTestError.
+class LiftTest {
+ public:
+  LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, const LiftTestParams& params = {},
+           const std::string& hand_mjcf = {});
+  ~LiftTest();
+  LiftTest(const LiftTest&) = delete;
+  LiftTest& operator=(const LiftTest&) = delete;
+
+  // Runs one lift test from the initial scene (each run starts afresh). The pregrasp opening is
+  // the grasp's aperture, or wider where the way in along the approach would otherwise collide. A
+  // grasp the hand cannot take (out of its reach, no collision-free way in, a finger that misses
+  // its planned contact) gives held = false with the reason.
+  // Throws std::invalid_argument for a grasp with non-finite values or a zero approach.
+  GraspExecution run(const Grasp& grasp);
+
+  // The object as placed, world frame: for computing contacts on it.
+  const TriangleMesh& object() const;
+  // Simulated seconds and physics steps of the last run.
+  double simulated_s() const;
+  long steps() const;
+
+  // The built-in hand model (MJCF text).
+  static const std::string& hand_model();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The mesh moved to its place on the table (see ObjectPlacement).
+TriangleMesh place_on_table(const TriangleMesh& mesh, const ObjectPlacement& placement);
+
+}  // namespace fba::sim_hand

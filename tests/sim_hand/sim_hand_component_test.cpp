@@ -1,0 +1,107 @@
+// sim.hand through the component harness: a grasp in, the lift test's result and an event out.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include <fba/testing.hpp>
+#include <fba/types/grasp.hpp>
+#include <fba/types/grasp_execution.hpp>
+
+#include "fba/geometry/mesh_io.hpp"
+#include "lift_test.hpp"
+#include "ring_grasp.hpp"
+#include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
+
+namespace {
+
+using fba::testing::ComponentHarness;
+
+const std::string kCan = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMasterChefCan/model.obj";
+
+// The ring grasp on the can as sim.hand places it (at x, y, yaw degrees).
+fba::Grasp can_grasp(double x, double y, double yaw_deg, double thumb_deg) {
+  const auto placed = fba::sim_hand::place_on_table(fba::geometry::load_mesh(kCan), {x, y, yaw_deg * M_PI / 180});
+  return fba::sim_hand::ring_grasp(placed, fba::geometry::mesh_bounds(placed).center().z(), thumb_deg * M_PI / 180);
+}
+
+std::optional<fba::Event> find_event(const std::vector<fba::Event>& events, const std::string& name) {
+  for (const auto& e : events)
+    if (e.name == name) return e;
+  return std::nullopt;
+}
+
+TEST(SimHand, GoodGraspHoldsAndSaysSo) {
+  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}, {"object_x", 0.05}, {"object_yaw", 20.0}});
+  h.push<fba::Grasp>("grasp", can_grasp(0.05, 0, 20, 180));
+  EXPECT_EQ(h.run(), 1);
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_TRUE(results[0].held) << results[0].reason;
+  EXPECT_GE(results[0].contacts.size(), 3u);
+  const auto held = find_event(h.events(), "held");
+  ASSERT_TRUE(held);
+  EXPECT_FALSE(find_event(h.events(), "dropped"));
+  const auto payload = nlohmann::json::parse(held->payload);
+  EXPECT_EQ(payload["held"], true);
+  EXPECT_EQ(payload["contacts"].size(), results[0].contacts.size());
+  EXPECT_DOUBLE_EQ(payload["slip_m"].get<double>(), results[0].slip_m);
+}
+
+TEST(SimHand, InTheMeshFrameGraspsAndContactsAreInTheMeshFilesCoordinates) {
+  // The world sim.camera renders the mesh in: the can as the file has it, centred near z = 0.
+  const auto mesh = fba::geometry::load_mesh(kCan);
+  const auto bounds = fba::geometry::mesh_bounds(mesh);
+  ASSERT_LT(bounds.min().z(), -0.05);
+  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}, {"frame", "mesh"}});
+  h.push<fba::Grasp>("grasp", fba::sim_hand::ring_grasp(mesh, bounds.center().z(), M_PI));
+  h.run();
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_TRUE(results[0].held) << results[0].reason;
+  ASSERT_FALSE(results[0].contacts.empty());
+  for (const auto& c : results[0].contacts) {
+    EXPECT_GT(c.position.z(), bounds.min().z() - 0.01) << c.link;
+    EXPECT_LT(c.position.z(), bounds.max().z() + 0.01) << c.link;
+  }
+}
+
+TEST(SimHand, BadGraspGivesDroppedWithTheReason) {
+  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}});
+  auto grasp = can_grasp(0, 0, 0, 0);
+  for (auto& c : grasp.contacts) c.position.z() += 0.2;  // closes on the air above the can
+  h.push<fba::Grasp>("grasp", grasp);
+  h.run();
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_FALSE(results[0].held);
+  const auto dropped = find_event(h.events(), "dropped");
+  ASSERT_TRUE(dropped);
+  const auto payload = nlohmann::json::parse(dropped->payload);
+  EXPECT_EQ(payload["held"], false);
+  EXPECT_EQ(payload["reason"], results[0].reason);
+  EXPECT_NE(results[0].reason.find("no contact"), std::string::npos) << results[0].reason;
+}
+
+TEST(SimHand, MissingMeshIsAClearError) {
+  fba::test::TempDir dir;
+  const std::string missing = (dir.path() / "no_such_mesh.obj").string();
+  try {
+    ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", missing}});
+    FAIL() << "no error";
+  } catch (const fba::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("no_such_mesh.obj"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SimHand, MeshThatDoesNotLoadIsAClearError) {
+  fba::test::TempDir dir;
+  const std::string broken = dir.file("broken.obj", "this is not a mesh\n");
+  EXPECT_THROW(ComponentHarness(fba::test::built_plugins(), "sim.hand", {{"mesh", broken}}), fba::ConfigError);
+}
+
+}  // namespace
