@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -51,7 +52,10 @@ void write_all(int fd, const void* data, std::size_t size, std::chrono::millisec
   const auto deadline = Clock::now() + timeout;
   const auto* bytes = static_cast<const unsigned char*>(data);
   while (size > 0) {
-    const ssize_t n = ::write(fd, bytes, size);
+    // send() with MSG_NOSIGNAL on sockets: a closed peer is an EPIPE to report, not a SIGPIPE that
+    // kills the process; a tty is not a socket and takes write().
+    ssize_t n = ::send(fd, bytes, size, MSG_NOSIGNAL);
+    if (n < 0 && errno == ENOTSOCK) n = ::write(fd, bytes, size);
     if (n > 0) {
       bytes += n;
       size -= static_cast<std::size_t>(n);
