@@ -56,9 +56,10 @@ class AdapterThread {
       }
     });
   }
-  ~AdapterThread() {
+  ~AdapterThread() { stop(); }
+  void stop() {
     stop_ = true;
-    thread_.join();
+    if (thread_.joinable()) thread_.join();
   }
   std::vector<Frame> received() {
     std::lock_guard lock(mutex_);
@@ -309,4 +310,41 @@ TEST(SocketCan, AMissingInterfaceIsAClearError) {
     EXPECT_TRUE(what.find("no SocketCAN support") != std::string::npos || what.find("no such CAN interface") != std::string::npos)
         << what;
   }
+}
+
+TEST(SocketpairBus, AFloodOfMalformedRecordsStillEndsAtTheTimeout) {
+  auto [a, b] = fba::can::socketpair_bus();
+  std::atomic<bool> stop{false};
+  std::thread flood([&, &a = a] {
+    const std::uint8_t junk[3] = {1, 2, 3};
+    try {
+      while (!stop) a->write_raw(junk);
+    } catch (const BusError&) {  // the reader closed: the flood is over
+    }
+  });
+  EXPECT_FALSE(b->receive(20ms));
+  EXPECT_GT(b->discarded(), 0u);
+  stop = true;
+  b->close();
+  flood.join();
+}
+
+TEST(SlcanPty, AFloodOfNoiseStillEndsAtTheTimeout) {
+  auto pty = fba::can::open_pty();
+  const std::string path = pty.slave_path;
+  AdapterThread adapter(pty);
+  slcan::SlcanBus host(path);
+  adapter.stop();  // from here on, this test's flood is the only writer
+  std::atomic<bool> stop{false};
+  std::thread flood([&] {
+    const std::string noise = "tXYZ8\r";
+    try {
+      while (!stop) adapter.adapter().write_raw({reinterpret_cast<const std::uint8_t*>(noise.data()), noise.size()});
+    } catch (const BusError&) {
+    }
+  });
+  EXPECT_FALSE(host.receive(20ms));
+  EXPECT_GT(host.discarded(), 0u);
+  stop = true;
+  flood.join();
 }
