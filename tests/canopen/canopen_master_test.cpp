@@ -10,13 +10,9 @@
 
 #include <gtest/gtest.h>
 
-#include "fba/can/pty.hpp"
-#include "fba/can/slcan.hpp"
-#include "fba/can/slcan_adapter.hpp"
-#include "fba/can/socketpair_bus.hpp"
+#include "emulated_arm.hpp"
 #include "fba/canopen/cia402.hpp"
 #include "fba/canopen/master.hpp"
-#include "fba/emulators/canopen_arm.hpp"
 
 using namespace std::chrono_literals;
 using namespace fba::canopen;
@@ -24,16 +20,11 @@ using fba::emulators::CanopenArmEmulator;
 
 namespace {
 
-enum class Transport { slcan_pty, socketpair };
-
-std::string name_of(const ::testing::TestParamInfo<Transport>& info) {
-  return info.param == Transport::slcan_pty ? "SlcanPty" : "Socketpair";
-}
+using fba::test::Transport;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-// Three drives (nodes 1, 2, 3) with a 20 ms heartbeat, played in a thread of their own, and a
-// master on the other end of the chosen transport.
+// Three drives (nodes 1, 2, 3) with a 20 ms heartbeat, and a master on the other end of the chosen transport.
 class CanopenMaster : public ::testing::TestWithParam<Transport> {
  protected:
   void SetUp() override {
@@ -41,31 +32,14 @@ class CanopenMaster : public ::testing::TestWithParam<Transport> {
     options.nodes = {1, 2, 3};
     options.heartbeat_ms = 20;
     options.profile_velocity = 200'000;
-    if (GetParam() == Transport::slcan_pty) {
-      pty_ = fba::can::open_pty();
-      auto adapter = std::make_unique<fba::can::slcan::SlcanAdapter>(std::move(pty_.master), "emulator");
-      noise_ = fba::emulators::noise_for(*adapter);
-      device_ = std::move(adapter);
-    } else {
-      auto [a, b] = fba::can::socketpair_bus("socketpair");
-      noise_ = fba::emulators::noise_for(*b);
-      device_ = std::move(b);
-      host_ = std::move(a);
-    }
-    emulator_ = std::make_unique<CanopenArmEmulator>(*device_, options, noise_);
-    thread_ = std::thread([this] { end_ = emulator_->run(); });
-    if (GetParam() == Transport::slcan_pty) host_ = std::make_unique<fba::can::slcan::SlcanBus>(pty_.slave_path);
-    master_.emplace(*host_, MasterOptions{.sdo_timeout = 200ms});
+    arm_.emplace(GetParam(), options);
+    master_.emplace(arm_->host(), MasterOptions{.sdo_timeout = 1s});  // generous: the emulator may wait for a core
     // Every node's boot-up (or first heartbeat) arrives before the tests start.
     ASSERT_TRUE(master_->spin_until([this] { return heard(1) && heard(2) && heard(3); }, 5s));
   }
-  void TearDown() override {
-    emulator_->stop();
-    thread_.join();
-  }
   bool heard(int node) { return master_->state(node) != NmtState::unknown; }
   Master& master() { return *master_; }
-  CanopenArmEmulator& emulator() { return *emulator_; }
+  CanopenArmEmulator& emulator() { return arm_->emulator(); }
   // Operational, enabled and in profile position mode.
   cia402::Drive ready_drive(int node) {
     master().nmt(NmtCommand::start, node);
@@ -75,18 +49,14 @@ class CanopenMaster : public ::testing::TestWithParam<Transport> {
     return drive;
   }
 
-  fba::can::Pty pty_;
-  std::unique_ptr<fba::can::CanBus> device_, host_;
-  std::function<void()> noise_;
-  std::unique_ptr<CanopenArmEmulator> emulator_;
-  std::thread thread_;
-  std::string end_;
-  std::optional<Master> master_;
+  std::optional<fba::test::EmulatedArm> arm_;
+  std::optional<Master> master_;  // declared after arm_: destroyed before the bus it uses
 };
 
 }  // namespace
 
-INSTANTIATE_TEST_SUITE_P(Transports, CanopenMaster, ::testing::Values(Transport::slcan_pty, Transport::socketpair), name_of);
+INSTANTIATE_TEST_SUITE_P(Transports, CanopenMaster, ::testing::Values(Transport::slcan_pty, Transport::socketpair),
+                         fba::test::transport_name);
 
 TEST_P(CanopenMaster, SdoUploadAndDownloadRoundTrip) {
   EXPECT_EQ(master().read<std::uint32_t>(1, 0x1000, 0), 0x00020192u);  // CiA 402 servo drive
@@ -238,8 +208,9 @@ TEST_P(CanopenMaster, BadPdoMappingsAreRefusedWithNamedAborts) {
 }
 
 TEST_P(CanopenMaster, HeartbeatLossIsAFaultNamingTheNode) {
-  for (int node : {1, 2, 3}) master().watch_heartbeat(node, 100ms);
-  master().spin_for(150ms);
+  // Timeouts far above the 20 ms heartbeat, so that a loaded machine cannot fake a loss.
+  for (int node : {1, 2, 3}) master().watch_heartbeat(node, 500ms);
+  master().spin_for(300ms);
   EXPECT_TRUE(master().faults().empty());
   emulator().silence(2);
   ASSERT_TRUE(master().spin_until([&] { return !master().faults().empty(); }, 5s));
@@ -247,14 +218,14 @@ TEST_P(CanopenMaster, HeartbeatLossIsAFaultNamingTheNode) {
   EXPECT_EQ(fault.kind, Fault::Kind::heartbeat_lost);
   EXPECT_EQ(fault.node, 2);
   EXPECT_TRUE(contains(fault.message, "node 2: heartbeat lost")) << fault.message;
-  master().spin_for(150ms);
+  master().spin_for(300ms);
   EXPECT_EQ(master().faults().size(), 1u);  // the others still beat
   EXPECT_THROW(master().throw_if_faulted(2), NodeFault);
   EXPECT_NO_THROW(master().throw_if_faulted(1));
 }
 
 TEST_P(CanopenMaster, ANodeFallingSilentMidMotionEndsTheMoveAndTheOthersQuickStop) {
-  master().watch_heartbeat(2, 100ms);
+  master().watch_heartbeat(2, 500ms);
   cia402::Drive silent = ready_drive(2);
   cia402::Drive other = ready_drive(1);
   other.start_move(10'000'000, 2s);

@@ -108,7 +108,7 @@ TEST(CanopenArmEmulatorProgram, ADriveOnItsTerminalIsEnabledAndMovedThenItStopsO
   auto [emulator, path] = start_emulator();
   {
     auto bus = fba::can::open_bus("slcan:" + path);
-    fba::canopen::Master master(*bus);
+    fba::canopen::Master master(*bus, {.sdo_timeout = 1s});
     master.nmt(fba::canopen::NmtCommand::start, 2);
     fba::canopen::cia402::Drive drive(master, 2);
     drive.enable(2s);
@@ -123,8 +123,8 @@ TEST(CanopenArmEmulatorProgram, ADriveOnItsTerminalIsEnabledAndMovedThenItStopsO
 TEST(CanopenArmEmulatorProgram, ScheduledFaultsReachTheMaster) {
   auto [emulator, path] = start_emulator({"--fault-after", "0.2:1:7121", "--silence-after", "0.2:2"});
   auto bus = fba::can::open_bus("slcan:" + path);
-  fba::canopen::Master master(*bus);
-  master.watch_heartbeat(2, 100ms);
+  fba::canopen::Master master(*bus, {.sdo_timeout = 1s});
+  master.watch_heartbeat(2, 500ms);
   ASSERT_TRUE(master.spin_until([&] { return master.faults().size() >= 2; }, 10s));
   std::string all;
   for (const auto& f : master.faults()) all += f.message + "\n";
@@ -135,7 +135,7 @@ TEST(CanopenArmEmulatorProgram, ScheduledFaultsReachTheMaster) {
 TEST(CanopenArmEmulatorProgram, ADisconnectMidMotionIsABusErrorAndTheEmulatorEnds) {
   auto [emulator, path] = start_emulator({"--disconnect-after", "0.5"});
   auto bus = fba::can::open_bus("slcan:" + path);
-  fba::canopen::Master master(*bus);
+  fba::canopen::Master master(*bus, {.sdo_timeout = 1s});
   master.nmt(fba::canopen::NmtCommand::start, 1);
   fba::canopen::cia402::Drive drive(master, 1);
   try {

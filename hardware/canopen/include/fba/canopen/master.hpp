@@ -44,7 +44,8 @@ class SdoAbort : public Error {
 // No SDO answer within the timeout.
 class SdoTimeout : public Error {
  public:
-  using Error::Error;
+  SdoTimeout(int node_, const std::string& what) : Error(what), node(node_) {}
+  int node;
 };
 
 struct Emergency {
