@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <mutex>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -153,6 +154,41 @@ TEST(Slcan, LineReaderDropsAnOverlongLineAndRecoversAtTheNextCr) {
   EXPECT_EQ(t->kind, slcan::LineReader::Token::overflow);
   EXPECT_LE(t->text.size(), slcan::kMaxLine);
   EXPECT_EQ(reader.next()->text, "t1230");
+}
+
+TEST(Slcan, FramesBetweenRandomNoiseAllArriveInOrderWhateverTheReadSizes) {
+  std::mt19937 rng(2026);  // fixed: the same stream on every run
+  auto byte = [&] { return static_cast<std::uint8_t>(rng() & 0xFF); };
+  std::vector<Frame> sent;
+  std::string stream;
+  for (int i = 0; i < 500; ++i) {
+    const std::size_t noise = rng() % 80;  // up to beyond kMaxLine, with CRs, BELs, anything
+    for (std::size_t k = 0; k < noise; ++k) stream += static_cast<char>(byte());
+    Frame f;
+    f.extended = rng() % 4 == 0;
+    f.id = static_cast<std::uint32_t>(rng()) & (f.extended ? Frame::kMaxExtendedId : Frame::kMaxStandardId);
+    f.rtr = rng() % 8 == 0;
+    f.dlc = static_cast<std::uint8_t>(rng() % 9);
+    for (auto& d : f.data) d = f.rtr ? 0 : byte();
+    sent.push_back(f);
+    stream += "\r" + slcan::encode(f);  // a line noise left open ends at the CR before the frame
+  }
+  slcan::LineReader reader;
+  std::vector<Frame> received;
+  for (std::size_t at = 0; at < stream.size();) {
+    const std::size_t n = std::min<std::size_t>(1 + rng() % 37, stream.size() - at);
+    reader.feed({stream.data() + at, n});
+    at += n;
+    while (auto t = reader.next())
+      if (t->kind == slcan::LineReader::Token::line)
+        if (auto f = slcan::decode(t->text, nullptr)) received.push_back(*f);
+  }
+  // Every frame sent arrives, in order; noise may, rarely, happen to spell a valid frame of its own.
+  std::size_t next = 0;
+  for (const Frame& f : received)
+    if (next < sent.size() && f == sent[next]) ++next;
+  EXPECT_EQ(next, sent.size());
+  EXPECT_LE(received.size(), sent.size() + 10);
 }
 
 TEST(Slcan, BitrateCodesFollowLawicel) {
