@@ -117,6 +117,19 @@ TEST_P(CanopenMaster, NmtCommandsShowInTheHeartbeats) {
   master().nmt(NmtCommand::reset_node, 2);  // back to the defaults, with a boot-up message
   ASSERT_TRUE(master().spin_until([&] { return master().state(2) == NmtState::pre_operational; }, 2s));
   EXPECT_EQ(master().read<std::uint16_t>(2, 0x1017, 0), 20);
+  EXPECT_TRUE(master().faults().empty());  // a reset the master asked for is no fault
+}
+
+TEST_P(CanopenMaster, ANodeThatRebootsUnaskedIsAFaultNamingIt) {
+  cia402::Drive drive = ready_drive(2);
+  emulator().reboot(2);
+  ASSERT_TRUE(master().spin_until([&] { return !master().faults().empty(); }, 5s));
+  const Fault fault = master().faults().front();
+  EXPECT_EQ(fault.kind, Fault::Kind::rebooted);
+  EXPECT_EQ(fault.node, 2);
+  EXPECT_TRUE(contains(fault.message, "node 2: rebooted unasked")) << fault.message;
+  EXPECT_EQ(master().state(2), NmtState::pre_operational);
+  EXPECT_EQ(drive.state(), cia402::State::switch_on_disabled);  // the drive lost its enable with the reboot
 }
 
 TEST_P(CanopenMaster, TheDriveIsEnabledAndMovedToAPosition) {

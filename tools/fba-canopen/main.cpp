@@ -27,7 +27,7 @@ commands:
   write NODE INDEX[:SUB] SIZE VALUE   expedited SDO download of SIZE (1, 2, 4) bytes; VALUE decimal or 0x hex
   status NODE                      a CiA 402 drive's state, position and error code
   move NODE TARGET [VELOCITY]      start the node, enable the drive and make a profile position move
-  monitor SECONDS                  print NMT states, EMCY and heartbeat faults as they come
+  monitor SECONDS                  print NMT states, EMCY, lost heartbeats and reboots as they come
 )";
 
 [[noreturn]] void usage(const std::string& message) {
@@ -154,8 +154,8 @@ int run(co::Master& m, const std::vector<std::string>& a) {
         }
       for (; emcy < m.emergencies().size(); ++emcy) fmt::print("node {}: {}\n", m.emergencies()[emcy].node, m.emergencies()[emcy].describe());
       for (; faults < m.faults().size(); ++faults)
-        if (m.faults()[faults].kind == co::Fault::Kind::heartbeat_lost && seen.count(m.faults()[faults].node))
-          fmt::print("{}\n", m.faults()[faults].message);
+        if (m.faults()[faults].kind != co::Fault::Kind::emergency && seen.count(m.faults()[faults].node))
+          fmt::print("{}\n", m.faults()[faults].message);  // EMCY is printed above
     }
     return 0;
   }

@@ -42,8 +42,15 @@ void Master::check_size(int node, std::uint16_t index, std::uint8_t sub, std::si
 
 void Master::nmt(NmtCommand command, int node) {
   check_node(node, true);
+  if (command == NmtCommand::reset_node || command == NmtCommand::reset_communication) {
+    if (node != 0) resets_asked_.insert(node);
+    else
+      for (const auto& [n, state] : states_) resets_asked_.insert(n);
+  }
   bus_.send(can::make_frame(kNmtId, {static_cast<std::uint8_t>(command), static_cast<std::uint8_t>(node)}));
 }
+
+bool Master::known(int node) const { return states_.count(node) != 0; }
 
 NmtState Master::state(int node) const {
   const auto it = states_.find(node);
@@ -125,7 +132,16 @@ void Master::dispatch(const can::Frame& frame) {
   const int node = static_cast<int>(frame.id & 0x7F);
   if (node == 0) return;  // NMT and SYNC: other masters' traffic
   if (function == kHeartbeatBase && frame.dlc >= 1 && !frame.rtr) {
-    states_[node] = static_cast<NmtState>(frame.data[0] & 0x7F);
+    const auto state = static_cast<NmtState>(frame.data[0] & 0x7F);
+    if (state == NmtState::boot_up && known(node) && !resets_asked_.erase(node))
+      faults_.push_back({Fault::Kind::rebooted, node,
+                         fmt::format("node {}: rebooted unasked (boot-up message while {}); its drive and PDO configuration are "
+                                     "back at their defaults",
+                                     node, to_string(this->state(node)))});
+    else if (state == NmtState::boot_up)
+      resets_asked_.erase(node);
+    // A boot-up message says the node has entered pre-operational (CiA 301).
+    states_[node] = state == NmtState::boot_up ? NmtState::pre_operational : state;
     if (auto it = heartbeats_.find(node); it != heartbeats_.end()) {
       it->second.last = Clock::now();
       it->second.lost = false;  // heard again; the fault stays until cleared

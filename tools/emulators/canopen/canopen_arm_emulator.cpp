@@ -31,6 +31,7 @@ constexpr const char* kUsage = R"(usage: fba-canopen-arm-emulator [options]
   --velocity N            profile velocity after a reset, units/s (default 100000)
   --silence-after S:NODE  after S seconds, NODE stops answering (heartbeat silence)
   --fault-after S:NODE:CODE  after S seconds, NODE faults with the EMCY error CODE (hex, e.g. 2310)
+  --reboot-after S:NODE    after S seconds, NODE reboots (a power glitch: defaults, boot-up, pre-operational)
   --garbage-every S       put a burst of noise on the line every S seconds
   --disconnect-after S    close the line after S seconds (a pulled cable)
 )";
@@ -115,6 +116,11 @@ int main(int argc, char** argv) {
       const int node = integer(p[1], a, 1, 127);
       const auto code = static_cast<std::uint16_t>(integer(p[2], a, 0, 0xFFFF, 16));
       schedule.push_back({seconds(p[0], a), [&emulator, node, code] { emulator->inject_fault(node, code); }});
+    } else if (a == "--reboot-after") {
+      const auto p = split(v, ':');
+      if (p.size() != 2) usage_error(a + " takes S:NODE, not '" + v + "'");
+      const int node = integer(p[1], a, 1, 127);
+      schedule.push_back({seconds(p[0], a), [&emulator, node] { emulator->reboot(node); }});
     } else if (a == "--garbage-every") {
       const double s = seconds(v, a);
       if (s <= 0) usage_error(a + " must be more than 0 seconds");

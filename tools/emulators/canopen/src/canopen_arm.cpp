@@ -229,6 +229,18 @@ void CanopenArmEmulator::inject_fault(int id, std::uint16_t code) {
   });
 }
 
+void CanopenArmEmulator::reboot(int id) {
+  std::lock_guard lock(mutex_);
+  node(id);
+  requests_.push_back([this, id] {
+    Node& n = node(id);
+    reset_dictionary(n, options_);  // the position stays: the joint did not move
+    n.nmt = kPreOperational;
+    n.last_heartbeat = Clock::now();
+    if (!n.silent) send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {0x00}));
+  });
+}
+
 void CanopenArmEmulator::disconnect() {
   std::lock_guard lock(mutex_);
   requests_.push_back([this] { disconnect_ = true; });

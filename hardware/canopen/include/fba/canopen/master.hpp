@@ -12,6 +12,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -59,7 +60,9 @@ struct Emergency {
 
 // Something a node did that the application must act on.
 struct Fault {
-  enum class Kind { heartbeat_lost, emergency };
+  // rebooted: a boot-up message the master did not ask for (a power glitch, a watchdog reset);
+  // the node's drive and PDO configuration are back at their defaults.
+  enum class Kind { heartbeat_lost, emergency, rebooted };
   Kind kind;
   int node;
   std::string message;  // names the node and the reason
@@ -166,6 +169,7 @@ class Master {
   void step(Clock::time_point deadline);
   void dispatch(const can::Frame& frame);
   void check_heartbeats(Clock::time_point now);
+  bool known(int node) const;
   can::Frame sdo_exchange(int node, std::uint16_t index, std::uint8_t sub, const can::Frame& request, const char* what);
   void configure_pdo(int node, int number, const PdoConfig& config, bool transmit);
   static void check_node(int node, bool broadcast_allowed);
@@ -174,6 +178,7 @@ class Master {
   can::CanBus& bus_;
   MasterOptions options_;
   std::map<int, NmtState> states_;
+  std::set<int> resets_asked_;  // nodes whose next boot-up the master asked for (NMT reset)
   std::map<int, HeartbeatWatch> heartbeats_;
   std::map<std::pair<int, int>, PdoSample> tpdos_;
   std::vector<Fault> faults_;

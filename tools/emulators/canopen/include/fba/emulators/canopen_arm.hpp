@@ -46,6 +46,7 @@ class CanopenArmEmulator {
   void silence(int node);                         // answers nothing and sends no heartbeat from now on
   void inject_garbage();                          // one burst of line noise
   void inject_fault(int node, std::uint16_t code);  // the drive faults and sends EMCY `code`
+  void reboot(int node);                          // a power glitch: defaults again, boot-up, pre-operational
   void disconnect();                              // closes the line, as a pulled cable
 
   // For tests: a node's actual position and controlword-driven state bits.
