@@ -97,7 +97,8 @@ TEST(Slcan, EncodesEachFrameKindAsLawicelLines) {
 }
 
 TEST(Slcan, DecodeInvertsEncodeAndIgnoresATimeStamp) {
-  for (const Frame& f : {make_frame(0x7FF, {0, 1, 2, 3, 4, 5, 6, 0xFF}), make_frame(0, {}), extended_frame(), remote_frame()}) {
+  for (const Frame& f :
+       {make_frame(0x7FF, {0, 1, 2, 3, 4, 5, 6, 0xFF}), make_frame(0, {}), extended_frame(), remote_frame()}) {
     std::string line = slcan::encode(f);
     line.pop_back();  // the CR
     std::string error;
@@ -112,12 +113,8 @@ TEST(Slcan, DecodeInvertsEncodeAndIgnoresATimeStamp) {
 
 TEST(Slcan, DecodeRefusesMalformedLinesSayingWhy) {
   const std::pair<std::string, std::string> cases[] = {
-      {"t1", "too short"},
-      {"tXYZ8", "not hexadecimal"},
-      {"t1239001122334455667788", "0 to 8"},
-      {"t7FF2AB", "expected 4"},
-      {"t8000", "beyond the 11-bit range"},
-      {"x123", "starts with t, T, r or R"},
+      {"t1", "too short"},          {"tXYZ8", "not hexadecimal"},         {"t1239001122334455667788", "0 to 8"},
+      {"t7FF2AB", "expected 4"},    {"t8000", "beyond the 11-bit range"}, {"x123", "starts with t, T, r or R"},
       {"t12320G11", "data byte 0"},
   };
   for (const auto& [line, why] : cases) {
@@ -140,7 +137,7 @@ TEST(Slcan, LineReaderJoinsPartialLinesAndSeparatesBells) {
   EXPECT_EQ(t->text, "t1230");
   EXPECT_EQ(reader.next()->kind, slcan::LineReader::Token::bell);
   t = reader.next();
-  EXPECT_EQ(t->text, "");  // an OK answer
+  EXPECT_EQ(t->text, "");               // an OK answer
   EXPECT_EQ(reader.next()->text, "z");  // the LF before it is skipped
   EXPECT_FALSE(reader.next());
 }
@@ -285,7 +282,8 @@ TEST(SlcanPty, AFileThatIsNotASerialLineIsRefusedSayingWhatItIs) {
 
 TEST(SocketpairBus, CarriesEveryFrameKindBothWays) {
   auto [a, b] = fba::can::socketpair_bus();
-  for (const Frame& f : {make_frame(0x601, {1, 2, 3, 4, 5, 6, 7, 8}), make_frame(0x80, {}), extended_frame(), remote_frame()}) {
+  for (const Frame& f :
+       {make_frame(0x601, {1, 2, 3, 4, 5, 6, 7, 8}), make_frame(0x80, {}), extended_frame(), remote_frame()}) {
     a->send(f);
     const auto got = b->receive(2s);
     ASSERT_TRUE(got);
@@ -329,7 +327,8 @@ TEST(SocketCan, RoundTripOnVcan0WhereTheKernelHasCan) {
     a = fba::can::open_socketcan("vcan0");
     b = fba::can::open_socketcan("vcan0");
   } catch (const BusError& e) {
-    GTEST_SKIP() << "no usable vcan0 (" << e.what() << "); create one with 'ip link add vcan0 type vcan && ip link set vcan0 up'";
+    GTEST_SKIP() << "no usable vcan0 (" << e.what()
+                 << "); create one with 'ip link add vcan0 type vcan && ip link set vcan0 up'";
   }
   const Frame f = make_frame(0x123, {1, 2, 3});
   a->send(f);
@@ -343,7 +342,8 @@ TEST(SocketCan, AMissingInterfaceIsAClearError) {
   } catch (const BusError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("nosuchcan9"), std::string::npos) << what;
-    EXPECT_TRUE(what.find("no SocketCAN support") != std::string::npos || what.find("no such CAN interface") != std::string::npos)
+    EXPECT_TRUE(what.find("no SocketCAN support") != std::string::npos ||
+                what.find("no such CAN interface") != std::string::npos)
         << what;
   }
 }

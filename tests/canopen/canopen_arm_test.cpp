@@ -30,7 +30,8 @@ class CanopenArmTest : public ::testing::TestWithParam<Transport> {
     master_.emplace(emulated_->host(), MasterOptions{.sdo_timeout = 1s});  // generous: the emulator may wait for a core
     std::vector<ArmJoint> joints;
     for (int n = 1; n <= 6; ++n)
-      joints.push_back({"joint" + std::to_string(n), n, kCounts, 1000 * n, -2.5, 2.5, 20.0});  // 20 rad/s: short test moves
+      joints.push_back(
+          {"joint" + std::to_string(n), n, kCounts, 1000 * n, -2.5, 2.5, 20.0});  // 20 rad/s: short test moves
     // A consumer timeout far above the 20 ms heartbeat: a loaded machine cannot fake a loss.
     arm_.emplace(*master_, joints, ArmOptions{.heartbeat_ms = 20, .heartbeat_timeout = 1s});
     arm_->start();
@@ -74,7 +75,8 @@ TEST_P(CanopenArmTest, ACommandBeyondTheLimitsIsRefusedWithNothingSent) {
   try {
     arm_->move_to({0, 0, 2.6, 0, 0, 0});
   } catch (const LimitError& e) {
-    EXPECT_TRUE(contains(e.what(), "joint 'joint3' (node 3): target 2.6 is outside its limits [-2.5, 2.5]")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "joint 'joint3' (node 3): target 2.6 is outside its limits [-2.5, 2.5]"))
+        << e.what();
     EXPECT_TRUE(contains(e.what(), "no command was sent")) << e.what();
   }
   EXPECT_THROW(arm_->move_to({0, 0, 0, 0, 0, 0}, 1.5), LimitError);

@@ -76,7 +76,8 @@ TEST_P(CanopenMaster, SdoAbortsCarryTheirCodeAndName) {
   } cases[] = {
       {[&] { master().read<std::uint32_t>(1, 0x2000, 0); }, 0x06020000, "object does not exist"},
       {[&] { master().write<std::uint16_t>(1, 0x6041, 0, 1); }, 0x06010002, "read-only"},
-      {[&] { master().write<std::uint32_t>(1, 0x6040, 0, 6); }, 0x06070010, "length of service parameter does not match"},
+      {[&] { master().write<std::uint32_t>(1, 0x6040, 0, 6); }, 0x06070010,
+       "length of service parameter does not match"},
       {[&] { master().read<std::uint32_t>(1, 0x1018, 9); }, 0x06090011, "sub-index does not exist"},
       {[&] { master().write<std::int8_t>(1, 0x6060, 0, 3); }, 0x06090030, "invalid value"},
   };
@@ -164,16 +165,16 @@ TEST_P(CanopenMaster, QuickStopHoldsTheDriveShortOfItsTarget) {
 
 TEST_P(CanopenMaster, PdosAreMappedThroughSdoAndExchangedOnSync) {
   const int node = 2;
-  master().configure_tpdo(node, 1, {{{0x6041, 0, 16}, {0x6064, 0, 32}}, 1});      // on every SYNC
-  master().configure_rpdo(node, 1, {{{0x6040, 0, 16}, {0x607A, 0, 32}}, 0xFF});   // applied on arrival
+  master().configure_tpdo(node, 1, {{{0x6041, 0, 16}, {0x6064, 0, 32}}, 1});     // on every SYNC
+  master().configure_rpdo(node, 1, {{{0x6040, 0, 16}, {0x607A, 0, 32}}, 0xFF});  // applied on arrival
   EXPECT_EQ(master().read<std::uint8_t>(node, 0x1A00, 0), 2);
   EXPECT_EQ(master().read<std::uint32_t>(node, 0x1A00, 2), 0x60640020u);
   cia402::Drive drive = ready_drive(node);
   auto rpdo = [&](std::uint16_t controlword, std::int32_t target) {
     const auto t = static_cast<std::uint32_t>(target);
     const std::uint8_t bytes[6] = {static_cast<std::uint8_t>(controlword), static_cast<std::uint8_t>(controlword >> 8),
-                                   static_cast<std::uint8_t>(t), static_cast<std::uint8_t>(t >> 8),
-                                   static_cast<std::uint8_t>(t >> 16), static_cast<std::uint8_t>(t >> 24)};
+                                   static_cast<std::uint8_t>(t),           static_cast<std::uint8_t>(t >> 8),
+                                   static_cast<std::uint8_t>(t >> 16),     static_cast<std::uint8_t>(t >> 24)};
     master().send_rpdo(node, 1, bytes);
   };
   auto tpdo_position = [&]() -> std::optional<std::int32_t> {
@@ -216,7 +217,8 @@ TEST_P(CanopenMaster, BadPdoMappingsAreRefusedWithNamedAborts) {
     EXPECT_EQ(e.code, 0x06040041u) << e.what();
     EXPECT_TRUE(contains(e.what(), "cannot be mapped")) << e.what();
   }
-  EXPECT_THROW(master().configure_tpdo(1, 1, {{{0x6064, 0, 32}, {0x6064, 0, 32}, {0x6041, 0, 16}}}), std::invalid_argument);
+  EXPECT_THROW(master().configure_tpdo(1, 1, {{{0x6064, 0, 32}, {0x6064, 0, 32}, {0x6041, 0, 16}}}),
+               std::invalid_argument);
   EXPECT_THROW(master().configure_tpdo(1, 5, {}), std::invalid_argument);
 }
 
@@ -311,4 +313,16 @@ TEST_P(CanopenMaster, TheLineVanishingMidMotionIsAClearErrorNotAHang) {
     EXPECT_TRUE(contains(e.what(), master().bus().name())) << e.what();
   }
   EXPECT_THROW(master().nmt(NmtCommand::stop, 0), fba::can::BusError);
+}
+
+TEST_P(CanopenMaster, ANodeRepeatingEmcyWithoutEndIsKeptWithinBounds) {
+  for (int i = 0; i < 1500; ++i) emulator().inject_fault(1, static_cast<std::uint16_t>(0x5000 + i));
+  const auto last_arrived = [&] {
+    return !master().emergencies().empty() && master().emergencies().back().code == 0x5000 + 1499;
+  };
+  ASSERT_TRUE(master().spin_until(last_arrived, 20s));
+  EXPECT_EQ(master().emergencies().size(), 1000u);  // the latest thousand
+  EXPECT_EQ(master().emergencies().front().code, 0x5000 + 500);
+  EXPECT_EQ(master().faults().size(), 1000u);
+  EXPECT_TRUE(contains(master().faults().front().message, "EMCY 0x5000")) << master().faults().front().message;
 }

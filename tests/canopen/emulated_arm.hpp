@@ -40,7 +40,8 @@ class EmulatedArm {
     thread_ = std::thread([this] { emulator_->run(); });
     // Generous answer times: the emulator's thread may wait for a core on a loaded machine.
     if (transport == Transport::slcan_pty) {
-      host_ = std::make_unique<can::slcan::SlcanBus>(pty_.slave_path, can::slcan::Options{.reply_timeout = std::chrono::seconds(2)});
+      host_ = std::make_unique<can::slcan::SlcanBus>(pty_.slave_path,
+                                                     can::slcan::Options{.reply_timeout = std::chrono::seconds(2)});
     }
   }
   ~EmulatedArm() {

@@ -56,7 +56,8 @@ class Child {
   std::string read_until(const std::string& needle, std::chrono::milliseconds timeout) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     while (output_.find(needle) == std::string::npos) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
       if (left.count() <= 0) break;
       pollfd p{out_, POLLIN, 0};
       if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) break;
@@ -157,7 +158,8 @@ TEST(FbaCanopenCommand, MovesADriveAndReportsAnAbortByName) {
   EXPECT_NE(move.read_until("", 0ms).find("node 1: at 4000"), std::string::npos) << move.read_until("", 0ms);
   Child read({FBA_CANOPEN_TOOL, "--bus", "slcan:" + path, "read", "1", "2000"});
   EXPECT_EQ(read.wait(0, 30s), 1);
-  EXPECT_NE(read.read_until("", 0ms).find("0x06020000 (object does not exist"), std::string::npos) << read.read_until("", 0ms);
+  EXPECT_NE(read.read_until("", 0ms).find("0x06020000 (object does not exist"), std::string::npos)
+      << read.read_until("", 0ms);
   Child bad({FBA_CANOPEN_TOOL, "--bus", "slcan:" + path, "read", "200", "1000"});
   EXPECT_EQ(bad.wait(0, 30s), 2);
   EXPECT_NE(bad.read_until("", 0ms).find("node id '200'"), std::string::npos) << bad.read_until("", 0ms);

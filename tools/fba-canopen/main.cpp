@@ -50,7 +50,8 @@ long long number(const std::string& text, const char* what, long long lo, long l
   const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v, base);
   if (negative) v = -v;
   if (t.empty() || ec != std::errc() || end != t.data() + t.size() || v < lo || v > hi)
-    usage(fmt::format("{} '{}' is not a {} number in {}..{}", what, text, base == 16 ? "hexadecimal" : "decimal", lo, hi));
+    usage(fmt::format("{} '{}' is not a {} number in {}..{}", what, text, base == 16 ? "hexadecimal" : "decimal", lo,
+                      hi));
   return v;
 }
 
@@ -64,7 +65,8 @@ std::pair<std::uint16_t, std::uint8_t> object_arg(const std::vector<std::string>
   const std::string& s = a[i];
   const auto colon = s.find(':');
   const auto index = static_cast<std::uint16_t>(number(s.substr(0, colon), "index", 0, 0xFFFF, 16));
-  const auto sub = colon == std::string::npos ? 0 : static_cast<std::uint8_t>(number(s.substr(colon + 1), "sub-index", 0, 0xFF, 16));
+  const auto sub =
+      colon == std::string::npos ? 0 : static_cast<std::uint8_t>(number(s.substr(colon + 1), "sub-index", 0, 0xFF, 16));
   return {index, sub};
 }
 
@@ -102,7 +104,8 @@ int run(co::Master& m, const std::vector<std::string>& a) {
     const auto bytes = m.sdo_upload(node, index, sub);
     std::uint32_t v = 0;
     for (std::size_t i = 0; i < bytes.size(); ++i) v |= static_cast<std::uint32_t>(bytes[i]) << (8 * i);
-    fmt::print("node {} 0x{:04X}:{:02X} = {} (0x{:0{}X}, {} bytes)\n", node, index, sub, v, v, 2 * bytes.size(), bytes.size());
+    fmt::print("node {} 0x{:04X}:{:02X} = {} (0x{:0{}X}, {} bytes)\n", node, index, sub, v, v, 2 * bytes.size(),
+               bytes.size());
     return 0;
   }
   if (command == "write") {
@@ -152,7 +155,8 @@ int run(co::Master& m, const std::vector<std::string>& a) {
           seen[node] = m.state(node);
           fmt::print("node {}: {}\n", node, co::to_string(m.state(node)));
         }
-      for (; emcy < m.emergencies().size(); ++emcy) fmt::print("node {}: {}\n", m.emergencies()[emcy].node, m.emergencies()[emcy].describe());
+      for (; emcy < m.emergencies().size(); ++emcy)
+        fmt::print("node {}: {}\n", m.emergencies()[emcy].node, m.emergencies()[emcy].describe());
       for (; faults < m.faults().size(); ++faults)
         if (m.faults()[faults].kind != co::Fault::Kind::emergency && seen.count(m.faults()[faults].node))
           fmt::print("{}\n", m.faults()[faults].message);  // EMCY is printed above
@@ -178,9 +182,12 @@ int main(int argc, char** argv) {
     if (a == "--bus" || a == "--bitrate" || a == "--timeout-ms") {
       if (i + 1 >= argc) usage(a + " needs a value");
       const std::string v = argv[++i];
-      if (a == "--bus") bus_spec = v;
-      else if (a == "--bitrate") bitrate = static_cast<int>(number(v, "bitrate", 10000, 1000000));
-      else timeout_ms = static_cast<int>(number(v, "timeout", 1, 60000));
+      if (a == "--bus")
+        bus_spec = v;
+      else if (a == "--bitrate")
+        bitrate = static_cast<int>(number(v, "bitrate", 10000, 1000000));
+      else
+        timeout_ms = static_cast<int>(number(v, "timeout", 1, 60000));
     } else {
       args.push_back(a);
     }

@@ -9,8 +9,8 @@ namespace fba::can {
 void Frame::validate() const {
   const std::uint32_t max = extended ? kMaxExtendedId : kMaxStandardId;
   if (id > max)
-    throw std::invalid_argument(fmt::format("CAN frame: identifier 0x{:X} is beyond the {}-bit range (at most 0x{:X})", id,
-                                            extended ? 29 : 11, max));
+    throw std::invalid_argument(fmt::format("CAN frame: identifier 0x{:X} is beyond the {}-bit range (at most 0x{:X})",
+                                            id, extended ? 29 : 11, max));
   if (dlc > 8) throw std::invalid_argument(fmt::format("CAN frame 0x{:X}: data length {} is beyond 8", id, dlc));
 }
 
@@ -32,7 +32,8 @@ bool operator==(const Frame& a, const Frame& b) {
 }
 
 Frame make_frame(std::uint32_t id, std::initializer_list<std::uint8_t> bytes) {
-  if (bytes.size() > 8) throw std::invalid_argument(fmt::format("CAN frame 0x{:X}: {} data bytes, at most 8", id, bytes.size()));
+  if (bytes.size() > 8)
+    throw std::invalid_argument(fmt::format("CAN frame 0x{:X}: {} data bytes, at most 8", id, bytes.size()));
   Frame f;
   f.id = id;
   f.dlc = static_cast<std::uint8_t>(bytes.size());

@@ -37,7 +37,8 @@ std::optional<Frame> FrameSocketBus::receive(std::chrono::milliseconds timeout) 
   for (bool first = true;; first = false) {
     // At least one read, even with a zero timeout; a flood of malformed records still ends at the deadline.
     if (!first && std::chrono::steady_clock::now() >= deadline) return std::nullopt;
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     const Ready ready = wait_readable(socket_.get(), std::max(left, std::chrono::milliseconds(0)), name_);
     if (ready == Ready::timeout) return std::nullopt;
     if (ready == Ready::hangup) throw BusError(name_ + ": the other end closed the bus");

@@ -17,7 +17,8 @@ std::unique_ptr<CanBus> open_bus(const std::string& spec, int bitrate) {
   }
   const std::string interface = spec.rfind("socketcan:", 0) == 0 ? spec.substr(10) : spec;
   if (interface.empty() || interface.find_first_of("/:") != std::string::npos)
-    throw std::invalid_argument("CAN bus '" + spec + "' is neither an interface (can0, socketcan:can0) nor slcan:DEVICE (slcan:/dev/ttyUSB0)");
+    throw std::invalid_argument(
+        "CAN bus '" + spec + "' is neither an interface (can0, socketcan:can0) nor slcan:DEVICE (slcan:/dev/ttyUSB0)");
   // SocketCAN's bitrate belongs to the interface: 'ip link set can0 type can bitrate 500000'.
   return open_socketcan(interface);
 }

@@ -22,9 +22,11 @@ Pty open_pty() {
     throw BusError(std::string("ptsname failed: ") + std::strerror(errno));
   pty.slave_path = name;
   pty.slave.reset(::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC));
-  if (!pty.slave) throw BusError(pty.slave_path + ": cannot open the pseudo-terminal's slave end: " + std::strerror(errno));
+  if (!pty.slave)
+    throw BusError(pty.slave_path + ": cannot open the pseudo-terminal's slave end: " + std::strerror(errno));
   termios tio{};
-  if (::tcgetattr(pty.slave.get(), &tio) != 0) throw BusError(pty.slave_path + ": tcgetattr failed: " + std::strerror(errno));
+  if (::tcgetattr(pty.slave.get(), &tio) != 0)
+    throw BusError(pty.slave_path + ": tcgetattr failed: " + std::strerror(errno));
   ::cfmakeraw(&tio);
   if (::tcsetattr(pty.slave.get(), TCSANOW, &tio) != 0)
     throw BusError(pty.slave_path + ": tcsetattr failed: " + std::strerror(errno));

@@ -38,27 +38,41 @@ long long parse_hex(std::string_view text) {
 }
 
 std::chrono::milliseconds left_until(Clock::time_point deadline) {
-  return std::max(std::chrono::milliseconds(0), std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()));
+  return std::max(std::chrono::milliseconds(0),
+                  std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()));
 }
 
 speed_t baud_constant(int baud, const std::string& name) {
   switch (baud) {
-    case 9600: return B9600;
-    case 19200: return B19200;
-    case 38400: return B38400;
-    case 57600: return B57600;
-    case 115200: return B115200;
-    case 230400: return B230400;
-    case 460800: return B460800;
-    case 500000: return B500000;
-    case 921600: return B921600;
-    case 1000000: return B1000000;
-    case 2000000: return B2000000;
-    case 3000000: return B3000000;
+    case 9600:
+      return B9600;
+    case 19200:
+      return B19200;
+    case 38400:
+      return B38400;
+    case 57600:
+      return B57600;
+    case 115200:
+      return B115200;
+    case 230400:
+      return B230400;
+    case 460800:
+      return B460800;
+    case 500000:
+      return B500000;
+    case 921600:
+      return B921600;
+    case 1000000:
+      return B1000000;
+    case 2000000:
+      return B2000000;
+    case 3000000:
+      return B3000000;
     default:
-      throw BusError(fmt::format("{}: baud rate {} is not supported; use 9600, 19200, 38400, 57600, 115200, 230400, 460800, "
-                                 "500000, 921600, 1000000, 2000000 or 3000000",
-                                 name, baud));
+      throw BusError(
+          fmt::format("{}: baud rate {} is not supported; use 9600, 19200, 38400, 57600, 115200, 230400, 460800, "
+                      "500000, 921600, 1000000, 2000000 or 3000000",
+                      name, baud));
   }
 }
 
@@ -108,13 +122,15 @@ std::optional<Frame> decode(std::string_view line, std::string* error) {
   const std::size_t data_digits = f.rtr ? 0 : 2 * static_cast<std::size_t>(dlc);
   const std::size_t rest = line.size() - head;
   if (rest != data_digits && rest != data_digits + 4)  // + 4: a time stamp (Z1)
-    return fail(fmt::format("{} characters after the length, expected {} (or {} with a time stamp)", rest, data_digits, data_digits + 4));
+    return fail(fmt::format("{} characters after the length, expected {} (or {} with a time stamp)", rest, data_digits,
+                            data_digits + 4));
   for (std::size_t i = 0; i < data_digits / 2; ++i) {
     const long long b = parse_hex(line.substr(head + 2 * i, 2));
     if (b < 0) return fail(fmt::format("data byte {} is not hexadecimal", i));
     f.data[i] = static_cast<std::uint8_t>(b);
   }
-  if (rest == data_digits + 4 && parse_hex(line.substr(head + data_digits)) < 0) return fail("the time stamp is not hexadecimal");
+  if (rest == data_digits + 4 && parse_hex(line.substr(head + data_digits)) < 0)
+    return fail("the time stamp is not hexadecimal");
   try {
     f.validate();
   } catch (const std::invalid_argument& e) {
@@ -126,9 +142,10 @@ std::optional<Frame> decode(std::string_view line, std::string* error) {
 char bitrate_code(int bitrate) {
   for (int i = 0; i < 9; ++i)
     if (kBitrates[i] == bitrate) return static_cast<char>('0' + i);
-  throw std::invalid_argument(fmt::format(
-      "SLCAN: CAN bitrate {} is not one the S command sets; use 10000, 20000, 50000, 100000, 125000, 250000, 500000, 800000 or 1000000",
-      bitrate));
+  throw std::invalid_argument(
+      fmt::format("SLCAN: CAN bitrate {} is not one the S command sets; use 10000, 20000, 50000, 100000, 125000, "
+                  "250000, 500000, 800000 or 1000000",
+                  bitrate));
 }
 
 int bitrate_of_code(char code) { return code >= '0' && code <= '8' ? kBitrates[code - '0'] : 0; }
@@ -136,8 +153,10 @@ int bitrate_of_code(char code) { return code >= '0' && code <= '8' ? kBitrates[c
 std::string printable(std::string_view text) {
   std::string s;
   for (unsigned char c : text) {
-    if (c >= 0x20 && c < 0x7F && c != '\\') s += static_cast<char>(c);
-    else s += fmt::format("\\x{:02X}", c);
+    if (c >= 0x20 && c < 0x7F && c != '\\')
+      s += static_cast<char>(c);
+    else
+      s += fmt::format("\\x{:02X}", c);
   }
   return s;
 }
@@ -145,8 +164,10 @@ std::string printable(std::string_view text) {
 void LineReader::feed(std::span<const char> bytes) {
   for (char c : bytes) {
     if (c == '\r') {
-      if (overflowing_) tokens_.push_back({Token::overflow, std::move(partial_)});
-      else tokens_.push_back({Token::line, std::move(partial_)});
+      if (overflowing_)
+        tokens_.push_back({Token::overflow, std::move(partial_)});
+      else
+        tokens_.push_back({Token::line, std::move(partial_)});
       partial_.clear();
       overflowing_ = false;
     } else if (c == kBell) {
@@ -179,7 +200,8 @@ SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("s
     throw BusError(name_ + ": not a serial line but " + what_it_is(st));
   }
   termios tio{};
-  if (::tcgetattr(fd_.get(), &tio) != 0) throw BusError(name_ + ": cannot read the line settings: " + std::strerror(errno));
+  if (::tcgetattr(fd_.get(), &tio) != 0)
+    throw BusError(name_ + ": cannot read the line settings: " + std::strerror(errno));
   ::cfmakeraw(&tio);
   tio.c_cflag |= CLOCAL | CREAD;
   tio.c_cflag &= ~CRTSCTS;
@@ -187,7 +209,8 @@ SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("s
   tio.c_cc[VTIME] = 0;
   ::cfsetispeed(&tio, speed);
   ::cfsetospeed(&tio, speed);
-  if (::tcsetattr(fd_.get(), TCSANOW, &tio) != 0) throw BusError(name_ + ": cannot set the line raw: " + std::strerror(errno));
+  if (::tcsetattr(fd_.get(), TCSANOW, &tio) != 0)
+    throw BusError(name_ + ": cannot set the line raw: " + std::strerror(errno));
   ::tcflush(fd_.get(), TCIOFLUSH);
 
   // A half-typed command from an earlier session ends with these CRs; their answers, and anything
@@ -199,8 +222,10 @@ SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("s
   reader_ = LineReader{};
   command("C", options.reply_timeout);  // closing a closed channel is an error on some adapters: either answer will do
   if (!command(std::string("S") + code, options.reply_timeout))
-    throw BusError(fmt::format("{}: the adapter refused the bitrate command 'S{}' ({} bit/s) with BEL", name_, code, options.bitrate));
-  if (!command("O", options.reply_timeout)) throw BusError(name_ + ": the adapter refused to open the channel ('O' answered with BEL)");
+    throw BusError(fmt::format("{}: the adapter refused the bitrate command 'S{}' ({} bit/s) with BEL", name_, code,
+                               options.bitrate));
+  if (!command("O", options.reply_timeout))
+    throw BusError(name_ + ": the adapter refused to open the channel ('O' answered with BEL)");
 }
 
 SlcanBus::~SlcanBus() {
@@ -227,7 +252,8 @@ void SlcanBus::discard(std::string reason) {
 bool SlcanBus::read_some(std::chrono::milliseconds timeout) {
   const Ready ready = wait_readable(fd_.get(), timeout, name_);
   if (ready == Ready::timeout) return false;
-  if (ready == Ready::hangup) throw BusError(name_ + ": the serial line hung up (the adapter was unplugged or the other end closed)");
+  if (ready == Ready::hangup)
+    throw BusError(name_ + ": the serial line hung up (the adapter was unplugged or the other end closed)");
   char buffer[256];
   const ssize_t n = ::read(fd_.get(), buffer, sizeof buffer);
   if (n > 0) {
@@ -256,8 +282,9 @@ bool SlcanBus::command(const std::string& text, std::chrono::milliseconds timeou
       }  // z/Z acknowledgements and other replies are not this command's answer
     }
     if (Clock::now() >= deadline)
-      throw BusError(fmt::format("{}: no answer to '{}' within {} ms: is it an SLCAN adapter, and is the baud rate right?", name_,
-                                 text, timeout.count()));
+      throw BusError(
+          fmt::format("{}: no answer to '{}' within {} ms: is it an SLCAN adapter, and is the baud rate right?", name_,
+                      text, timeout.count()));
     read_some(left_until(deadline));
   }
 }
@@ -279,8 +306,12 @@ std::optional<Frame> SlcanBus::receive(std::chrono::milliseconds timeout) {
     }
     while (auto token = reader_.next()) {
       switch (token->kind) {
-        case LineReader::Token::bell: discard("the adapter answered BEL (an error: bus off, overrun or a refused frame)"); break;
-        case LineReader::Token::overflow: discard("an overlong line of noise: '" + printable(token->text) + "...'"); break;
+        case LineReader::Token::bell:
+          discard("the adapter answered BEL (an error: bus off, overrun or a refused frame)");
+          break;
+        case LineReader::Token::overflow:
+          discard("an overlong line of noise: '" + printable(token->text) + "...'");
+          break;
         case LineReader::Token::line: {
           const std::string& text = token->text;
           if (text.empty() || text == "z" || text == "Z") break;  // acknowledgements of what we sent

@@ -15,7 +15,9 @@ SlcanAdapter::SlcanAdapter(Fd line, std::string name) : fd_(std::move(line)), na
   set_nonblocking(fd_.get(), name_);
 }
 
-void SlcanAdapter::reply(std::string_view text) { write_all(fd_.get(), text.data(), text.size(), kWriteTimeout, name_); }
+void SlcanAdapter::reply(std::string_view text) {
+  write_all(fd_.get(), text.data(), text.size(), kWriteTimeout, name_);
+}
 
 void SlcanAdapter::write_raw(std::span<const std::uint8_t> bytes) {
   write_all(fd_.get(), bytes.data(), bytes.size(), kWriteTimeout, name_);
@@ -58,9 +60,15 @@ std::optional<Frame> SlcanAdapter::handle(const std::string& line) {
         reply(bell);
       }
       return std::nullopt;
-    case 'V': reply("V1013\r"); return std::nullopt;
-    case 'N': reply("NFBA0\r"); return std::nullopt;
-    case 'F': reply("F00\r"); return std::nullopt;
+    case 'V':
+      reply("V1013\r");
+      return std::nullopt;
+    case 'N':
+      reply("NFBA0\r");
+      return std::nullopt;
+    case 'F':
+      reply("F00\r");
+      return std::nullopt;
     case 't':
     case 'T':
     case 'r':
@@ -102,15 +110,18 @@ std::optional<Frame> SlcanAdapter::receive(std::chrono::milliseconds timeout) {
     const auto now = std::chrono::steady_clock::now();
     if (!first_read && now >= deadline) return std::nullopt;
     first_read = false;
-    const auto left = std::max(std::chrono::milliseconds(0), std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now));
+    const auto left =
+        std::max(std::chrono::milliseconds(0), std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now));
     const Ready ready = wait_readable(fd_.get(), left, name_);
     if (ready == Ready::timeout) continue;
     if (ready == Ready::hangup) throw BusError(name_ + ": the host closed the serial line");
     char buffer[256];
     const ssize_t n = ::read(fd_.get(), buffer, sizeof buffer);
-    if (n > 0) reader_.feed({buffer, static_cast<std::size_t>(n)});
+    if (n > 0)
+      reader_.feed({buffer, static_cast<std::size_t>(n)});
     else if (n == 0 || (errno != EAGAIN && errno != EINTR))
-      throw BusError(name_ + ": the serial line is gone" + (n < 0 ? std::string(": ") + std::strerror(errno) : std::string()));
+      throw BusError(name_ + ": the serial line is gone" +
+                     (n < 0 ? std::string(": ") + std::strerror(errno) : std::string()));
   }
 }
 

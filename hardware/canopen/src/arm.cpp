@@ -27,15 +27,20 @@ CanopenArm::CanopenArm(Master& master, std::vector<ArmJoint> joints, ArmOptions 
   if (joints_.empty()) throw std::invalid_argument("CANopen arm: no joints given");
   std::set<int> nodes;
   for (const ArmJoint& j : joints_) {
-    if (j.node < 1 || j.node > kMaxNode) throw std::invalid_argument(fmt::format("CANopen arm: {}: node id is not 1..127", joint_name(j)));
+    if (j.node < 1 || j.node > kMaxNode)
+      throw std::invalid_argument(fmt::format("CANopen arm: {}: node id is not 1..127", joint_name(j)));
     if (!nodes.insert(j.node).second)
-      throw std::invalid_argument(fmt::format("CANopen arm: {}: node {} drives another joint too", joint_name(j), j.node));
+      throw std::invalid_argument(
+          fmt::format("CANopen arm: {}: node {} drives another joint too", joint_name(j), j.node));
     if (!std::isfinite(j.lower) || !std::isfinite(j.upper) || j.lower > j.upper)
-      throw std::invalid_argument(fmt::format("CANopen arm: {}: limits [{}, {}] are not an interval", joint_name(j), j.lower, j.upper));
+      throw std::invalid_argument(
+          fmt::format("CANopen arm: {}: limits [{}, {}] are not an interval", joint_name(j), j.lower, j.upper));
     if (!std::isfinite(j.counts_per_unit) || j.counts_per_unit == 0)
-      throw std::invalid_argument(fmt::format("CANopen arm: {}: counts per unit {} must be finite and not 0", joint_name(j), j.counts_per_unit));
+      throw std::invalid_argument(fmt::format("CANopen arm: {}: counts per unit {} must be finite and not 0",
+                                              joint_name(j), j.counts_per_unit));
     if (!(j.max_velocity > 0) || !std::isfinite(j.max_velocity))
-      throw std::invalid_argument(fmt::format("CANopen arm: {}: maximum velocity {} must be more than 0", joint_name(j), j.max_velocity));
+      throw std::invalid_argument(
+          fmt::format("CANopen arm: {}: maximum velocity {} must be more than 0", joint_name(j), j.max_velocity));
     drives_.emplace_back(master_, j.node);
   }
 }
@@ -43,8 +48,9 @@ CanopenArm::CanopenArm(Master& master, std::vector<ArmJoint> joints, ArmOptions 
 std::int32_t CanopenArm::to_counts(std::size_t i, double value) const {
   const double counts = std::round(value * joints_[i].counts_per_unit) + joints_[i].zero;
   if (counts < std::numeric_limits<std::int32_t>::min() || counts > std::numeric_limits<std::int32_t>::max())
-    throw LimitError(fmt::format("{}: position {} is {} drive counts, beyond what a drive's 32-bit position holds; no command was sent",
-                                 joint_name(joints_[i]), value, counts));
+    throw LimitError(fmt::format(
+        "{}: position {} is {} drive counts, beyond what a drive's 32-bit position holds; no command was sent",
+        joint_name(joints_[i]), value, counts));
   return static_cast<std::int32_t>(counts);
 }
 
@@ -91,8 +97,8 @@ auto CanopenArm::guarded(F&& f) -> decltype(f()) {
   }
   const auto failures = quick_stop_all();
   std::string outcome = failures.empty() ? "every joint was sent quick stop"
-                                         : fmt::format("quick stop failed on {} of {} joints: {}", failures.size(), joints_.size(),
-                                                       failures.front());
+                                         : fmt::format("quick stop failed on {} of {} joints: {}", failures.size(),
+                                                       joints_.size(), failures.front());
   throw ArmStopped(node, fmt::format("arm stopped: {}; {}", reason, outcome));
 }
 
@@ -110,7 +116,8 @@ void CanopenArm::start() {
     }
     for (std::size_t i = 0; i < joints_.size(); ++i) {
       drives_[i].enable(options_.enable_timeout);
-      const auto v = static_cast<std::uint32_t>(std::max(1.0, std::abs(joints_[i].max_velocity * joints_[i].counts_per_unit)));
+      const auto v =
+          static_cast<std::uint32_t>(std::max(1.0, std::abs(joints_[i].max_velocity * joints_[i].counts_per_unit)));
       drives_[i].set_profile(v, 10 * v);
     }
   });
@@ -118,15 +125,17 @@ void CanopenArm::start() {
 
 void CanopenArm::move_to(const std::vector<double>& targets, double speed) {
   if (targets.size() != joints_.size())
-    throw LimitError(fmt::format("CANopen arm: {} targets for {} joints; no command was sent", targets.size(), joints_.size()));
+    throw LimitError(
+        fmt::format("CANopen arm: {} targets for {} joints; no command was sent", targets.size(), joints_.size()));
   if (!(speed > 0 && speed <= 1))
-    throw LimitError(fmt::format("CANopen arm: speed {} is not in (0, 1] of the maximum velocities; no command was sent", speed));
+    throw LimitError(
+        fmt::format("CANopen arm: speed {} is not in (0, 1] of the maximum velocities; no command was sent", speed));
   std::vector<std::int32_t> counts(targets.size());
   for (std::size_t i = 0; i < targets.size(); ++i) {
     const ArmJoint& j = joints_[i];
     if (!std::isfinite(targets[i]) || targets[i] < j.lower || targets[i] > j.upper)
-      throw LimitError(fmt::format("{}: target {} is outside its limits [{}, {}]; no command was sent", joint_name(j), targets[i], j.lower,
-                                   j.upper));
+      throw LimitError(fmt::format("{}: target {} is outside its limits [{}, {}]; no command was sent", joint_name(j),
+                                   targets[i], j.lower, j.upper));
     counts[i] = to_counts(i, targets[i]);
   }
   guarded([&] {
@@ -136,9 +145,11 @@ void CanopenArm::move_to(const std::vector<double>& targets, double speed) {
     for (std::size_t i = 0; i < joints_.size(); ++i)
       duration = std::max(duration, std::abs(targets[i] - now[i]) / (joints_[i].max_velocity * speed));
     for (std::size_t i = 0; i < joints_.size(); ++i) {
-      const double distance = std::abs(static_cast<double>(counts[i]) - std::round(now[i] * joints_[i].counts_per_unit + joints_[i].zero));
+      const double distance =
+          std::abs(static_cast<double>(counts[i]) - std::round(now[i] * joints_[i].counts_per_unit + joints_[i].zero));
       const double v = duration > 0 ? distance / duration : 1.0;
-      master_.write<std::uint32_t>(joints_[i].node, cia402::od::kProfileVelocity, 0, static_cast<std::uint32_t>(std::max(1.0, std::ceil(v))));
+      master_.write<std::uint32_t>(joints_[i].node, cia402::od::kProfileVelocity, 0,
+                                   static_cast<std::uint32_t>(std::max(1.0, std::ceil(v))));
     }
     for (std::size_t i = 0; i < joints_.size(); ++i) drives_[i].start_move(counts[i], options_.enable_timeout);
   });
@@ -153,9 +164,10 @@ bool CanopenArm::reached() {
       const cia402::State state = cia402::decode(s);
       if (state != cia402::State::operation_enabled) {
         const std::uint16_t code = state == cia402::State::fault ? drives_[i].error_code() : 0;
-        throw JointFailure(joints_[i].node, fmt::format("{}: the drive is in \"{}\" (statusword 0x{:04X}{})", joint_name(joints_[i]),
-                                                      cia402::to_string(state), s,
-                                                      code ? fmt::format(", error code 0x{:04X}: {}", code, emcy_name(code)) : ""));
+        throw JointFailure(joints_[i].node,
+                           fmt::format("{}: the drive is in \"{}\" (statusword 0x{:04X}{})", joint_name(joints_[i]),
+                                       cia402::to_string(state), s,
+                                       code ? fmt::format(", error code 0x{:04X}: {}", code, emcy_name(code)) : ""));
       }
       all = all && (s & cia402::sw::kTargetReached);
     }

@@ -148,7 +148,8 @@ int main(int argc, char** argv) {
       std::cout << "CANopen arm emulator: nodes on SocketCAN " << socketcan << std::endl;
     } else {
       pty = fba::can::open_pty();
-      auto adapter = std::make_unique<fba::can::slcan::SlcanAdapter>(std::move(pty.master), "emulator:" + pty.slave_path);
+      auto adapter =
+          std::make_unique<fba::can::slcan::SlcanAdapter>(std::move(pty.master), "emulator:" + pty.slave_path);
       noise = fba::emulators::noise_for(*adapter);
       bus = std::move(adapter);
       if (!link.empty()) {
@@ -156,8 +157,8 @@ int main(int argc, char** argv) {
         if (std::filesystem::is_symlink(link, ec)) std::filesystem::remove(link, ec);
         std::filesystem::create_symlink(pty.slave_path, link);
       }
-      std::cout << "CANopen arm emulator: SLCAN adapter on " << pty.slave_path << (link.empty() ? "" : " (link " + link + ")")
-                << std::endl;
+      std::cout << "CANopen arm emulator: SLCAN adapter on " << pty.slave_path
+                << (link.empty() ? "" : " (link " + link + ")") << std::endl;
     }
     fba::emulators::CanopenArmEmulator emu(*bus, options, noise);
     emulator = &emu;

@@ -74,8 +74,8 @@ struct CanopenArmEmulator::Node {
 
 namespace {
 
-void add(std::map<std::uint32_t, Entry>& od, std::uint16_t index, std::uint8_t sub, std::uint8_t size, const char* access, bool mappable,
-         std::uint32_t value) {
+void add(std::map<std::uint32_t, Entry>& od, std::uint16_t index, std::uint8_t sub, std::uint8_t size,
+         const char* access, bool mappable, std::uint32_t value) {
   const std::string a = access;
   od[key(index, sub)] = Entry{size, a != "wo", a != "ro", mappable, value};
 }
@@ -134,11 +134,11 @@ void reset_dictionary(CanopenArmEmulator::Node& n, const CanopenArmOptions& o) {
 }
 
 std::uint16_t statusword(const CanopenArmEmulator::Node& n) {
-  std::uint16_t s = static_cast<std::uint16_t>(n.drive) | 0x0200;  // remote: controlled over the bus
+  std::uint16_t s = static_cast<std::uint16_t>(n.drive) | 0x0200;                    // remote: controlled over the bus
   if (n.drive != Drive::switch_on_disabled && n.drive != Drive::fault) s |= 0x0010;  // voltage enabled
-  if (!n.moving) s |= 0x0400;                                                          // target reached
-  if (n.limited) s |= 0x0800;                                                          // internal limit active
-  if (n.acknowledged) s |= 0x1000;                                                     // set-point acknowledge
+  if (!n.moving) s |= 0x0400;                                                        // target reached
+  if (n.limited) s |= 0x0800;                                                        // internal limit active
+  if (n.acknowledged) s |= 0x1000;                                                   // set-point acknowledge
   return s;
 }
 
@@ -154,11 +154,20 @@ void refresh(CanopenArmEmulator::Node& n) {
 std::uint8_t error_register_for(std::uint16_t code) {
   std::uint8_t reg = 0x01;  // generic
   switch (code >> 12) {
-    case 0x2: reg |= 0x02; break;  // current
-    case 0x3: reg |= 0x04; break;  // voltage
-    case 0x4: reg |= 0x08; break;  // temperature
-    case 0x8: reg |= (code >> 8) == 0x81 ? 0x10 : 0x20; break;  // communication, or device profile
-    default: break;
+    case 0x2:
+      reg |= 0x02;
+      break;  // current
+    case 0x3:
+      reg |= 0x04;
+      break;  // voltage
+    case 0x4:
+      reg |= 0x08;
+      break;  // temperature
+    case 0x8:
+      reg |= (code >> 8) == 0x81 ? 0x10 : 0x20;
+      break;  // communication, or device profile
+    default:
+      break;
   }
   return reg;
 }
@@ -171,19 +180,23 @@ can::Frame emcy_frame(int id, std::uint16_t code, std::uint8_t reg) {
 can::Frame sdo_abort(int id, std::uint16_t index, std::uint8_t sub, std::uint32_t code) {
   return can::make_frame(kSdoTx + static_cast<std::uint32_t>(id),
                          {0x80, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub,
-                          static_cast<std::uint8_t>(code), static_cast<std::uint8_t>(code >> 8), static_cast<std::uint8_t>(code >> 16),
-                          static_cast<std::uint8_t>(code >> 24)});
+                          static_cast<std::uint8_t>(code), static_cast<std::uint8_t>(code >> 8),
+                          static_cast<std::uint8_t>(code >> 16), static_cast<std::uint8_t>(code >> 24)});
 }
 
-bool pdo_valid(const CanopenArmEmulator::Node& n, std::uint16_t communication) { return !(n.get(communication, 1) & 0x80000000U); }
+bool pdo_valid(const CanopenArmEmulator::Node& n, std::uint16_t communication) {
+  return !(n.get(communication, 1) & 0x80000000U);
+}
 
 }  // namespace
 
 CanopenArmEmulator::CanopenArmEmulator(can::CanBus& bus, CanopenArmOptions options, std::function<void()> make_noise)
     : bus_(bus), options_(std::move(options)), make_noise_(std::move(make_noise)) {
   for (int id : options_.nodes) {
-    if (id < 1 || id > 127) throw std::invalid_argument(fmt::format("CANopen arm emulator: node id {} is not 1..127", id));
-    if (nodes_.count(id)) throw std::invalid_argument(fmt::format("CANopen arm emulator: node id {} is given twice", id));
+    if (id < 1 || id > 127)
+      throw std::invalid_argument(fmt::format("CANopen arm emulator: node id {} is not 1..127", id));
+    if (nodes_.count(id))
+      throw std::invalid_argument(fmt::format("CANopen arm emulator: node id {} is given twice", id));
     auto n = std::make_unique<Node>();
     n->id = id;
     reset_dictionary(*n, options_);
@@ -292,10 +305,11 @@ namespace {
 
 // A write through SDO or an RPDO: the checks of CiA 301, then the drive's reaction. Returns an
 // abort code, or 0.
-std::uint32_t write_object(CanopenArmEmulator::Node& n, std::uint16_t index, std::uint8_t sub, std::uint32_t value, std::size_t size,
-                           const std::function<void(const can::Frame&)>& send);
+std::uint32_t write_object(CanopenArmEmulator::Node& n, std::uint16_t index, std::uint8_t sub, std::uint32_t value,
+                           std::size_t size, const std::function<void(const can::Frame&)>& send);
 
-void apply_controlword(CanopenArmEmulator::Node& n, std::uint16_t cw, const std::function<void(const can::Frame&)>& send) {
+void apply_controlword(CanopenArmEmulator::Node& n, std::uint16_t cw,
+                       const std::function<void(const can::Frame&)>& send) {
   const std::uint16_t previous = n.controlword;
   n.controlword = cw;
   const bool fault_reset_edge = (cw & 0x80) && !(previous & 0x80);
@@ -318,24 +332,36 @@ void apply_controlword(CanopenArmEmulator::Node& n, std::uint16_t cw, const std:
       if (shutdown) next = Drive::ready;
       break;
     case Drive::ready:
-      if (switch_on) next = Drive::switched_on;
-      else if (enable) next = Drive::enabled;  // transitions 3 and 4 at once, as most drives allow
-      else if (disable_voltage || quick_stop) next = Drive::switch_on_disabled;
+      if (switch_on)
+        next = Drive::switched_on;
+      else if (enable)
+        next = Drive::enabled;  // transitions 3 and 4 at once, as most drives allow
+      else if (disable_voltage || quick_stop)
+        next = Drive::switch_on_disabled;
       break;
     case Drive::switched_on:
-      if (enable) next = Drive::enabled;
-      else if (shutdown) next = Drive::ready;
-      else if (disable_voltage || quick_stop) next = Drive::switch_on_disabled;
+      if (enable)
+        next = Drive::enabled;
+      else if (shutdown)
+        next = Drive::ready;
+      else if (disable_voltage || quick_stop)
+        next = Drive::switch_on_disabled;
       break;
     case Drive::enabled:
-      if (switch_on) next = Drive::switched_on;
-      else if (shutdown) next = Drive::ready;
-      else if (disable_voltage) next = Drive::switch_on_disabled;
-      else if (quick_stop) next = Drive::quick_stop;
+      if (switch_on)
+        next = Drive::switched_on;
+      else if (shutdown)
+        next = Drive::ready;
+      else if (disable_voltage)
+        next = Drive::switch_on_disabled;
+      else if (quick_stop)
+        next = Drive::quick_stop;
       break;
     case Drive::quick_stop:
-      if (disable_voltage) next = Drive::switch_on_disabled;
-      else if (enable) next = Drive::enabled;  // quick stop option codes 5-8: transition 16
+      if (disable_voltage)
+        next = Drive::switch_on_disabled;
+      else if (enable)
+        next = Drive::enabled;  // quick stop option codes 5-8: transition 16
       break;
   }
   if (next != Drive::enabled) {  // every way out of "operation enabled" stops the motion
@@ -370,8 +396,8 @@ std::uint32_t check_mapping(const CanopenArmEmulator::Node& n, std::uint16_t map
   return bits > 64 ? kAbortPdoLength : 0;
 }
 
-std::uint32_t write_object(CanopenArmEmulator::Node& n, std::uint16_t index, std::uint8_t sub, std::uint32_t value, std::size_t size,
-                           const std::function<void(const can::Frame&)>& send) {
+std::uint32_t write_object(CanopenArmEmulator::Node& n, std::uint16_t index, std::uint8_t sub, std::uint32_t value,
+                           std::size_t size, const std::function<void(const can::Frame&)>& send) {
   const auto it = n.od.find(key(index, sub));
   if (it == n.od.end()) {
     const auto any = n.od.lower_bound(key(index, 0));
@@ -388,7 +414,8 @@ std::uint32_t write_object(CanopenArmEmulator::Node& n, std::uint16_t index, std
     if (sub == 0) {
       if (const std::uint32_t abort = check_mapping(n, index, value)) return abort;
     } else {
-      const auto object = n.od.find(key(static_cast<std::uint16_t>(value >> 16), static_cast<std::uint8_t>(value >> 8)));
+      const auto object =
+          n.od.find(key(static_cast<std::uint16_t>(value >> 16), static_cast<std::uint8_t>(value >> 8)));
       if (object == n.od.end()) return kAbortNoObject;
       if (!object->second.mappable) return kAbortNotMappable;
       if ((value & 0xFF) != 8u * object->second.size) return kAbortParameters;
@@ -413,7 +440,8 @@ std::vector<std::uint8_t> pdo_bytes(CanopenArmEmulator::Node& n, std::uint16_t m
   return bytes;
 }
 
-void apply_rpdo(CanopenArmEmulator::Node& n, int p, const can::Frame& frame, const std::function<void(const can::Frame&)>& send) {
+void apply_rpdo(CanopenArmEmulator::Node& n, int p, const can::Frame& frame,
+                const std::function<void(const can::Frame&)>& send) {
   const auto mapping = static_cast<std::uint16_t>(0x1600 + p);
   const std::uint32_t count = n.get(mapping, 0);
   std::size_t at = 0;
@@ -432,8 +460,10 @@ void apply_rpdo(CanopenArmEmulator::Node& n, int p, const can::Frame& frame, con
     std::uint32_t v = 0;
     for (std::size_t b = 0; b < bytes; ++b) v |= static_cast<std::uint32_t>(frame.data[at + b]) << (8 * b);
     at += bytes;
-    if ((m >> 16) == 0x6040) controlword = v;
-    else write_object(n, static_cast<std::uint16_t>(m >> 16), static_cast<std::uint8_t>(m >> 8), v, bytes, send);
+    if ((m >> 16) == 0x6040)
+      controlword = v;
+    else
+      write_object(n, static_cast<std::uint16_t>(m >> 16), static_cast<std::uint8_t>(m >> 8), v, bytes, send);
   }
   if (controlword) write_object(n, 0x6040, 0, *controlword, 2, send);
 }
@@ -448,9 +478,15 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
     for (auto& [id, n] : nodes_) {
       if (n->silent || (frame.data[1] != 0 && frame.data[1] != id)) continue;
       switch (frame.data[0]) {
-        case 0x01: n->nmt = kOperational; break;
-        case 0x02: n->nmt = kStopped; break;
-        case 0x80: n->nmt = kPreOperational; break;
+        case 0x01:
+          n->nmt = kOperational;
+          break;
+        case 0x02:
+          n->nmt = kStopped;
+          break;
+        case 0x80:
+          n->nmt = kPreOperational;
+          break;
         case 0x81:  // reset node: the whole dictionary
         case 0x82:  // reset communication: this emulator keeps no other state worth sparing
           reset_dictionary(*n, options_);
@@ -458,7 +494,8 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
           n->nmt = kPreOperational;
           n->last_heartbeat = Clock::now();
           break;
-        default: break;
+        default:
+          break;
       }
     }
     return;
@@ -500,8 +537,9 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
     const std::uint8_t command = frame.data[0];
     const auto index = static_cast<std::uint16_t>(frame.data[1] | frame.data[2] << 8);
     const std::uint8_t sub = frame.data[3];
-    const std::uint32_t value = static_cast<std::uint32_t>(frame.data[4]) | static_cast<std::uint32_t>(frame.data[5]) << 8 |
-                                static_cast<std::uint32_t>(frame.data[6]) << 16 | static_cast<std::uint32_t>(frame.data[7]) << 24;
+    const std::uint32_t value =
+        static_cast<std::uint32_t>(frame.data[4]) | static_cast<std::uint32_t>(frame.data[5]) << 8 |
+        static_cast<std::uint32_t>(frame.data[6]) << 16 | static_cast<std::uint32_t>(frame.data[7]) << 24;
     switch (command >> 5) {
       case 1: {  // initiate download
         if (!(command & 0x02)) {
@@ -513,8 +551,9 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
         if (const std::uint32_t abort = write_object(n, index, sub, masked, size, sender)) {
           send(sdo_abort(id, index, sub, abort));
         } else {
-          send(can::make_frame(kSdoTx + static_cast<std::uint32_t>(id),
-                               {0x60, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub, 0, 0, 0, 0}));
+          send(can::make_frame(
+              kSdoTx + static_cast<std::uint32_t>(id),
+              {0x60, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub, 0, 0, 0, 0}));
         }
         return;
       }
@@ -523,7 +562,8 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
         const auto entry = n.od.find(key(index, sub));
         if (entry == n.od.end()) {
           const auto any = n.od.lower_bound(key(index, 0));
-          send(sdo_abort(id, index, sub, any != n.od.end() && (any->first >> 8) == index ? kAbortNoSub : kAbortNoObject));
+          send(sdo_abort(id, index, sub,
+                         any != n.od.end() && (any->first >> 8) == index ? kAbortNoSub : kAbortNoObject));
           return;
         }
         if (!entry->second.readable) {
@@ -532,23 +572,29 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
         }
         const std::uint32_t v = entry->second.value;
         const int size = entry->second.size;
-        send(can::make_frame(kSdoTx + static_cast<std::uint32_t>(id),
-                             {static_cast<std::uint8_t>(0x43 | ((4 - size) << 2)), static_cast<std::uint8_t>(index),
-                              static_cast<std::uint8_t>(index >> 8), sub, static_cast<std::uint8_t>(v),
-                              static_cast<std::uint8_t>(size > 1 ? v >> 8 : 0), static_cast<std::uint8_t>(size > 2 ? v >> 16 : 0),
-                              static_cast<std::uint8_t>(size > 3 ? v >> 24 : 0)}));
+        send(can::make_frame(
+            kSdoTx + static_cast<std::uint32_t>(id),
+            {static_cast<std::uint8_t>(0x43 | ((4 - size) << 2)), static_cast<std::uint8_t>(index),
+             static_cast<std::uint8_t>(index >> 8), sub, static_cast<std::uint8_t>(v),
+             static_cast<std::uint8_t>(size > 1 ? v >> 8 : 0), static_cast<std::uint8_t>(size > 2 ? v >> 16 : 0),
+             static_cast<std::uint8_t>(size > 3 ? v >> 24 : 0)}));
         return;
       }
-      case 4: return;  // the client aborted: nothing in flight to drop
-      default: send(sdo_abort(id, index, sub, kAbortCommand)); return;
+      case 4:
+        return;  // the client aborted: nothing in flight to drop
+      default:
+        send(sdo_abort(id, index, sub, kAbortCommand));
+        return;
     }
   }
   if (n.nmt != kOperational) return;
   for (int p = 0; p < 4; ++p) {
     const auto communication = static_cast<std::uint16_t>(0x1400 + p);
     if (!pdo_valid(n, communication) || frame.id != (n.get(communication, 1) & 0x7FF)) continue;
-    if (n.get(communication, 2) <= 240) n.rpdo_pending[p] = frame;  // takes effect on the next SYNC
-    else apply_rpdo(n, p, frame, sender);
+    if (n.get(communication, 2) <= 240)
+      n.rpdo_pending[p] = frame;  // takes effect on the next SYNC
+    else
+      apply_rpdo(n, p, frame, sender);
   }
 }
 
@@ -575,10 +621,12 @@ void CanopenArmEmulator::update(Clock::time_point now) {
     if (n->nmt != kOperational) continue;
     for (int p = 0; p < 4; ++p) {  // change-driven and timer-driven TPDOs
       const auto communication = static_cast<std::uint16_t>(0x1800 + p);
-      if (!pdo_valid(*n, communication) || n->get(communication, 2) < 0xFE || now - n->tpdo_time[p] < kInhibit) continue;
+      if (!pdo_valid(*n, communication) || n->get(communication, 2) < 0xFE || now - n->tpdo_time[p] < kInhibit)
+        continue;
       auto bytes = pdo_bytes(*n, static_cast<std::uint16_t>(0x1A00 + p));
       const std::uint32_t timer = n->get(communication, 5);
-      if (bytes == n->tpdo_last[p] && (timer == 0 || now - n->tpdo_time[p] < std::chrono::milliseconds(timer))) continue;
+      if (bytes == n->tpdo_last[p] && (timer == 0 || now - n->tpdo_time[p] < std::chrono::milliseconds(timer)))
+        continue;
       can::Frame f;
       f.id = n->get(communication, 1) & 0x7FF;
       f.dlc = static_cast<std::uint8_t>(bytes.size());
@@ -592,8 +640,8 @@ void CanopenArmEmulator::update(Clock::time_point now) {
 
 std::function<void()> noise_for(can::slcan::SlcanAdapter& adapter) {
   return [&adapter] {
-    const std::string noise = std::string("\x01\x02\xFF~junk\r") + "t1\r" + "tXYZ8\r" + "t12390011223344556677\r" + "t7FF2AB\r" +
-                              std::string(100, 'A') + "\r" + "\a" + "\r\n";
+    const std::string noise = std::string("\x01\x02\xFF~junk\r") + "t1\r" + "tXYZ8\r" + "t12390011223344556677\r" +
+                              "t7FF2AB\r" + std::string(100, 'A') + "\r" + "\a" + "\r\n";
     adapter.write_raw({reinterpret_cast<const std::uint8_t*>(noise.data()), noise.size()});
   };
 }

@@ -55,8 +55,8 @@ class LineReader {
 };
 
 struct Options {
-  int bitrate = 500000;  // the CAN bitrate (S code); 500 kbit/s is CANopen's most common
-  int baud = 115200;     // the serial line's speed; USB CDC adapters ignore it
+  int bitrate = 500000;                          // the CAN bitrate (S code); 500 kbit/s is CANopen's most common
+  int baud = 115200;                             // the serial line's speed; USB CDC adapters ignore it
   std::chrono::milliseconds reply_timeout{500};  // for each command while opening
 };
 

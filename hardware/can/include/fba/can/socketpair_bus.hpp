@@ -11,6 +11,7 @@
 
 namespace fba::can {
 
-std::pair<std::unique_ptr<FrameSocketBus>, std::unique_ptr<FrameSocketBus>> socketpair_bus(const std::string& name = "socketpair");
+std::pair<std::unique_ptr<FrameSocketBus>, std::unique_ptr<FrameSocketBus>> socketpair_bus(
+    const std::string& name = "socketpair");
 
 }  // namespace fba::can

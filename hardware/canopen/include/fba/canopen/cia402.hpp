@@ -34,7 +34,7 @@ constexpr std::uint16_t kSwitchOn = 0x0007;
 constexpr std::uint16_t kEnableOperation = 0x000F;
 constexpr std::uint16_t kQuickStop = 0x0002;
 constexpr std::uint16_t kDisableVoltage = 0x0000;
-constexpr std::uint16_t kFaultReset = 0x0080;  // acts on the rising edge
+constexpr std::uint16_t kFaultReset = 0x0080;   // acts on the rising edge
 constexpr std::uint16_t kNewSetPoint = 0x0010;  // profile position: bit 4
 constexpr std::uint16_t kChangeImmediately = 0x0020;
 constexpr std::uint16_t kRelative = 0x0040;
@@ -105,7 +105,8 @@ class Drive {
  private:
   void controlword(std::uint16_t value);
   // Polls the statusword until `done` holds, checking the node's faults; throws on timeout with `what`.
-  std::uint16_t wait(const std::function<bool(std::uint16_t)>& done, std::chrono::milliseconds timeout, const std::string& what);
+  std::uint16_t wait(const std::function<bool(std::uint16_t)>& done, std::chrono::milliseconds timeout,
+                     const std::string& what);
 
   Master& master_;
   int node_;

@@ -116,7 +116,8 @@ class Master {
   template <std::integral T>
   void write(int node, std::uint16_t index, std::uint8_t sub, T value) {
     std::array<std::uint8_t, sizeof(T)> bytes;
-    for (std::size_t i = 0; i < sizeof(T); ++i) bytes[i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(value) >> (8 * i));
+    for (std::size_t i = 0; i < sizeof(T); ++i)
+      bytes[i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(value) >> (8 * i));
     sdo_download(node, index, sub, bytes);
   }
   // Throws Error when the node answers with a size other than sizeof(T).
@@ -150,7 +151,9 @@ class Master {
   // Processes traffic until `done()` or the timeout; returns whether done() became true.
   bool spin_until(const std::function<bool()>& done, std::chrono::milliseconds timeout);
 
-  // Faults recorded so far, oldest first; a node's faults stay until clear_faults(node).
+  // Faults recorded so far, oldest first; a node's faults stay until clear_faults(node). EMCY
+  // faults and records stop at 1000 (the records keep the latest), so a babbling node cannot
+  // exhaust memory.
   const std::vector<Fault>& faults() const { return faults_; }
   void clear_faults(int node);
   // Throws NodeFault with the node's first fault, if it has one.

@@ -42,10 +42,10 @@ std::string to_string(NmtState state);
 
 // SDO command bytes (the first data byte): client command specifier in bits 5-7.
 namespace sdo {
-constexpr std::uint8_t kDownloadRequest = 0x20;   // | expedited 0x02 | size indicated 0x01 | (4 - n) << 2
+constexpr std::uint8_t kDownloadRequest = 0x20;  // | expedited 0x02 | size indicated 0x01 | (4 - n) << 2
 constexpr std::uint8_t kDownloadResponse = 0x60;
 constexpr std::uint8_t kUploadRequest = 0x40;
-constexpr std::uint8_t kUploadResponse = 0x40;    // | expedited 0x02 | size indicated 0x01 | (4 - n) << 2
+constexpr std::uint8_t kUploadResponse = 0x40;  // | expedited 0x02 | size indicated 0x01 | (4 - n) << 2
 constexpr std::uint8_t kAbort = 0x80;
 constexpr std::uint8_t kExpedited = 0x02;
 constexpr std::uint8_t kSizeIndicated = 0x01;

@@ -24,7 +24,7 @@ namespace fba::emulators {
 
 struct CanopenArmOptions {
   std::vector<int> nodes{1, 2, 3, 4, 5, 6};
-  std::uint16_t heartbeat_ms = 100;  // 0x1017 after a reset; 0 = no heartbeat
+  std::uint16_t heartbeat_ms = 100;         // 0x1017 after a reset; 0 = no heartbeat
   std::int32_t min_position = -10'000'000;  // 0x607D software limits after a reset
   std::int32_t max_position = 10'000'000;
   std::uint32_t profile_velocity = 100'000;  // 0x6081 after a reset, units/s
@@ -43,11 +43,11 @@ class CanopenArmEmulator {
   void stop() { stop_ = true; }
 
   // Fault injection, safe from any thread; acted on by run() within a few milliseconds.
-  void silence(int node);                         // answers nothing and sends no heartbeat from now on
-  void inject_garbage();                          // one burst of line noise
+  void silence(int node);                           // answers nothing and sends no heartbeat from now on
+  void inject_garbage();                            // one burst of line noise
   void inject_fault(int node, std::uint16_t code);  // the drive faults and sends EMCY `code`
-  void reboot(int node);                          // a power glitch: defaults again, boot-up, pre-operational
-  void disconnect();                              // closes the line, as a pulled cable
+  void reboot(int node);                            // a power glitch: defaults again, boot-up, pre-operational
+  void disconnect();                                // closes the line, as a pulled cable
 
   // For tests: a node's actual position and controlword-driven state bits.
   std::int32_t position(int node) const;
