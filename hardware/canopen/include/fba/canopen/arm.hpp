@@ -1,0 +1,87 @@
+// A CANopen arm: one CiA 402 drive per joint, driven as one. The core of the hw.canopen_arm
+// driver, without the component around it: joint units (radians, or metres for a prismatic joint)
+// scaled to drive counts, every command checked against the joint limits before anything is sent,
+// synchronised profile position moves, and one fault policy: whatever faults (an EMCY, a drive
+// fault, a lost heartbeat, the line), every joint that can still hear is quick-stopped, and the
+// error names the joint, its node and the reason.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fba/canopen/cia402.hpp"
+#include "fba/canopen/master.hpp"
+
+namespace fba::canopen {
+
+struct ArmJoint {
+  std::string name;        // as in the URDF, for messages
+  int node = 0;            // the drive's CANopen node id
+  double counts_per_unit;  // drive position units per radian (or metre)
+  std::int32_t zero = 0;   // the drive's position at joint position 0
+  double lower;            // joint limits, radians (or metres)
+  double upper;
+  double max_velocity;  // radians (metres) per second, > 0
+};
+
+struct ArmOptions {
+  std::uint16_t heartbeat_ms = 50;  // written to each drive's 0x1017
+  std::chrono::milliseconds heartbeat_timeout{200};
+  std::chrono::milliseconds enable_timeout{2000};
+};
+
+// A command refused before it left the process: the joint, the value and the limit it breaks.
+class LimitError : public Error {
+ public:
+  using Error::Error;
+};
+
+// The arm was stopped because something faulted; the message says what, and whether every quick
+// stop went out.
+class ArmStopped : public Error {
+ public:
+  ArmStopped(int node, const std::string& what) : Error(what), node(node) {}
+  int node;  // the node that faulted; 0 for the line itself
+};
+
+class CanopenArm {
+ public:
+  // Throws std::invalid_argument for a configuration that cannot be right (no joints, a node id
+  // used twice, limits in the wrong order, a zero scale or velocity).
+  CanopenArm(Master& master, std::vector<ArmJoint> joints, ArmOptions options = {});
+
+  const std::vector<ArmJoint>& joints() const { return joints_; }
+
+  // Every node operational, its heartbeat watched, its software limits set from the joint limits,
+  // its drive enabled in profile position mode.
+  void start();
+  // Checks every target (count, finite, within limits, representable in counts) and `speed`
+  // (0 < speed <= 1 of the joints' maximum velocities) and throws LimitError with nothing sent if
+  // one fails; then starts one move in which every joint arrives at the same time.
+  void move_to(const std::vector<double>& targets, double speed = 1.0);
+  // Whether every joint has reached its target. Throws ArmStopped, after quick-stopping every
+  // joint, if a drive faulted, left "operation enabled", sent an EMCY or fell silent.
+  bool reached();
+  // move_to, then waits for reached() at most `timeout` (ArmStopped on a fault or on the timeout).
+  void move_and_wait(const std::vector<double>& targets, double speed, std::chrono::milliseconds timeout);
+  // Joint positions from the drives' actual positions (ArmStopped if a drive cannot be read).
+  std::vector<double> positions();
+  // Sends quick stop to every joint, each independently of the others' failures; returns the
+  // failures (empty when every joint got it).
+  std::vector<std::string> quick_stop_all();
+
+ private:
+  template <class F>
+  auto guarded(F&& f) -> decltype(f());
+  std::int32_t to_counts(std::size_t joint, double value) const;
+  std::vector<double> read_positions();
+
+  Master& master_;
+  std::vector<ArmJoint> joints_;
+  ArmOptions options_;
+  std::vector<cia402::Drive> drives_;
+};
+
+}  // namespace fba::canopen

@@ -1,0 +1,116 @@
+// CiA 402 (drives and motion control) on a CANopen master: the drive state machine driven through
+// the controlword (0x6040) and read from the statusword (0x6041), profile position moves, quick
+// stop and fault reset. Every wait has a timeout and ends early, with the reason, when the drive
+// faults, sends an EMCY, or falls silent.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+#include "fba/canopen/master.hpp"
+
+namespace fba::canopen::cia402 {
+
+namespace od {
+constexpr std::uint16_t kErrorCode = 0x603F;
+constexpr std::uint16_t kControlword = 0x6040;
+constexpr std::uint16_t kStatusword = 0x6041;
+constexpr std::uint16_t kModesOfOperation = 0x6060;
+constexpr std::uint16_t kModesOfOperationDisplay = 0x6061;
+constexpr std::uint16_t kPositionActual = 0x6064;
+constexpr std::uint16_t kVelocityActual = 0x606C;
+constexpr std::uint16_t kTargetPosition = 0x607A;
+constexpr std::uint16_t kSoftwarePositionLimit = 0x607D;  // sub 1 min, sub 2 max
+constexpr std::uint16_t kProfileVelocity = 0x6081;
+constexpr std::uint16_t kProfileAcceleration = 0x6083;
+constexpr std::uint16_t kProfileDeceleration = 0x6084;
+}  // namespace od
+
+// Controlword commands (the low bits) and flags.
+namespace cw {
+constexpr std::uint16_t kShutdown = 0x0006;
+constexpr std::uint16_t kSwitchOn = 0x0007;
+constexpr std::uint16_t kEnableOperation = 0x000F;
+constexpr std::uint16_t kQuickStop = 0x0002;
+constexpr std::uint16_t kDisableVoltage = 0x0000;
+constexpr std::uint16_t kFaultReset = 0x0080;   // acts on the rising edge
+constexpr std::uint16_t kNewSetPoint = 0x0010;  // profile position: bit 4
+constexpr std::uint16_t kChangeImmediately = 0x0020;
+constexpr std::uint16_t kRelative = 0x0040;
+constexpr std::uint16_t kHalt = 0x0100;
+}  // namespace cw
+
+// Statusword flags beside the state bits.
+namespace sw {
+constexpr std::uint16_t kWarning = 0x0080;
+constexpr std::uint16_t kRemote = 0x0200;
+constexpr std::uint16_t kTargetReached = 0x0400;
+constexpr std::uint16_t kInternalLimit = 0x0800;
+constexpr std::uint16_t kSetPointAcknowledge = 0x1000;
+constexpr std::uint16_t kFollowingError = 0x2000;
+}  // namespace sw
+
+constexpr std::int8_t kProfilePosition = 1;
+
+enum class State {
+  not_ready_to_switch_on,
+  switch_on_disabled,
+  ready_to_switch_on,
+  switched_on,
+  operation_enabled,
+  quick_stop_active,
+  fault_reaction_active,
+  fault,
+};
+
+// The state a statusword shows (masks 0x4F / 0x6F of CiA 402).
+State decode(std::uint16_t statusword);
+// The statusword bits (0x6F mask) of a state: what a drive reports in it.
+std::uint16_t state_bits(State state);
+std::string to_string(State state);
+
+struct DriveOptions {
+  std::chrono::milliseconds poll_period{5};  // between statusword reads while waiting
+};
+
+class Drive {
+ public:
+  Drive(Master& master, int node, DriveOptions options = {});
+
+  int node() const { return node_; }
+  std::uint16_t statusword();
+  State state() { return decode(statusword()); }
+  std::int32_t position();
+  // 0x603F: the code of the drive's last fault (0 if none).
+  std::uint16_t error_code();
+
+  // Walks the state machine to "operation enabled" from wherever the drive is (a fault is reset
+  // first). Throws Error naming the node, the state it stuck in and the statusword.
+  void enable(std::chrono::milliseconds timeout);
+  // Profile position mode with the given velocity and acceleration (drive units).
+  void set_profile(std::uint32_t velocity, std::uint32_t acceleration);
+  // Starts a profile position move: target, new set-point, waits for the acknowledge, clears it.
+  void start_move(std::int32_t target, std::chrono::milliseconds timeout, bool relative = false);
+  bool target_reached();
+  // start_move, then waits for "target reached". Throws NodeFault on a fault, EMCY or lost
+  // heartbeat meanwhile, Error when the drive leaves "operation enabled" or the time runs out.
+  void move_to(std::int32_t target, std::chrono::milliseconds timeout);
+  // Quick stop: the drive decelerates and holds in "quick stop active".
+  void quick_stop();
+  // Fault reset (a rising edge of bit 7); the drive goes to "switch on disabled".
+  void fault_reset(std::chrono::milliseconds timeout);
+  void disable();
+
+ private:
+  void controlword(std::uint16_t value);
+  // Polls the statusword until `done` holds, checking the node's faults; throws on timeout with `what`.
+  std::uint16_t wait(const std::function<bool(std::uint16_t)>& done, std::chrono::milliseconds timeout,
+                     const std::string& what);
+
+  Master& master_;
+  int node_;
+  DriveOptions options_;
+};
+
+}  // namespace fba::canopen::cia402

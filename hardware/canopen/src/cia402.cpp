@@ -1,0 +1,173 @@
+#include "fba/canopen/cia402.hpp"
+
+#include <fmt/format.h>
+
+namespace fba::canopen::cia402 {
+
+State decode(std::uint16_t s) {
+  if ((s & 0x4F) == 0x00) return State::not_ready_to_switch_on;
+  if ((s & 0x4F) == 0x40) return State::switch_on_disabled;
+  if ((s & 0x6F) == 0x21) return State::ready_to_switch_on;
+  if ((s & 0x6F) == 0x23) return State::switched_on;
+  if ((s & 0x6F) == 0x27) return State::operation_enabled;
+  if ((s & 0x6F) == 0x07) return State::quick_stop_active;
+  if ((s & 0x4F) == 0x0F) return State::fault_reaction_active;
+  if ((s & 0x4F) == 0x08) return State::fault;
+  return State::not_ready_to_switch_on;  // no state of the standard matches: not ready
+}
+
+std::uint16_t state_bits(State state) {
+  switch (state) {
+    case State::not_ready_to_switch_on:
+      return 0x0000;
+    case State::switch_on_disabled:
+      return 0x0040;
+    case State::ready_to_switch_on:
+      return 0x0021;
+    case State::switched_on:
+      return 0x0023;
+    case State::operation_enabled:
+      return 0x0027;
+    case State::quick_stop_active:
+      return 0x0007;
+    case State::fault_reaction_active:
+      return 0x000F;
+    case State::fault:
+      return 0x0008;
+  }
+  return 0;
+}
+
+std::string to_string(State state) {
+  switch (state) {
+    case State::not_ready_to_switch_on:
+      return "not ready to switch on";
+    case State::switch_on_disabled:
+      return "switch on disabled";
+    case State::ready_to_switch_on:
+      return "ready to switch on";
+    case State::switched_on:
+      return "switched on";
+    case State::operation_enabled:
+      return "operation enabled";
+    case State::quick_stop_active:
+      return "quick stop active";
+    case State::fault_reaction_active:
+      return "fault reaction active";
+    case State::fault:
+      return "fault";
+  }
+  return "unknown";
+}
+
+Drive::Drive(Master& master, int node, DriveOptions options) : master_(master), node_(node), options_(options) {}
+
+std::uint16_t Drive::statusword() { return master_.read<std::uint16_t>(node_, od::kStatusword, 0); }
+std::int32_t Drive::position() { return master_.read<std::int32_t>(node_, od::kPositionActual, 0); }
+std::uint16_t Drive::error_code() { return master_.read<std::uint16_t>(node_, od::kErrorCode, 0); }
+void Drive::controlword(std::uint16_t value) { master_.write<std::uint16_t>(node_, od::kControlword, 0, value); }
+
+std::uint16_t Drive::wait(const std::function<bool(std::uint16_t)>& done, std::chrono::milliseconds timeout,
+                          const std::string& what) {
+  const auto deadline = Clock::now() + timeout;
+  for (;;) {
+    master_.throw_if_faulted(node_);
+    const std::uint16_t s = statusword();
+    if (done(s)) return s;
+    if (decode(s) == State::fault) {
+      const std::uint16_t code = error_code();
+      throw Error(fmt::format("node {}: the drive is in fault while waiting for {}: error code 0x{:04X} ({})", node_,
+                              what, code, emcy_name(code)));
+    }
+    if (Clock::now() >= deadline)
+      throw Error(
+          fmt::format("node {}: timed out after {} ms waiting for {}; the drive is in \"{}\" (statusword 0x{:04X})",
+                      node_, timeout.count(), what, to_string(decode(s)), s));
+    master_.spin_for(options_.poll_period);
+  }
+}
+
+void Drive::enable(std::chrono::milliseconds timeout) {
+  const auto deadline = Clock::now() + timeout;
+  for (;;) {
+    master_.throw_if_faulted(node_);
+    const State state = this->state();
+    if (state == State::operation_enabled) return;
+    if (Clock::now() >= deadline)
+      throw Error(fmt::format("node {}: could not enable the drive within {} ms; it stays in \"{}\"", node_,
+                              timeout.count(), to_string(state)));
+    switch (state) {
+      case State::fault:
+        controlword(cw::kDisableVoltage);  // bit 7 low, so that the reset below is a rising edge
+        controlword(cw::kFaultReset);
+        break;
+      case State::switch_on_disabled:
+        controlword(cw::kShutdown);
+        break;
+      case State::ready_to_switch_on:
+        controlword(cw::kSwitchOn);
+        break;
+      case State::switched_on:
+        controlword(cw::kEnableOperation);
+        break;
+      case State::quick_stop_active:
+        controlword(cw::kDisableVoltage);
+        break;  // back through "switch on disabled"
+      case State::not_ready_to_switch_on:
+      case State::fault_reaction_active:
+      case State::operation_enabled:
+        break;  // the drive moves on by itself
+    }
+    master_.spin_for(options_.poll_period);
+  }
+}
+
+void Drive::set_profile(std::uint32_t velocity, std::uint32_t acceleration) {
+  master_.write<std::int8_t>(node_, od::kModesOfOperation, 0, kProfilePosition);
+  const auto mode = master_.read<std::int8_t>(node_, od::kModesOfOperationDisplay, 0);
+  if (mode != kProfilePosition)
+    throw Error(
+        fmt::format("node {}: the drive shows mode of operation {} after profile position (1) was set", node_, mode));
+  master_.write<std::uint32_t>(node_, od::kProfileVelocity, 0, velocity);
+  master_.write<std::uint32_t>(node_, od::kProfileAcceleration, 0, acceleration);
+  master_.write<std::uint32_t>(node_, od::kProfileDeceleration, 0, acceleration);
+}
+
+void Drive::start_move(std::int32_t target, std::chrono::milliseconds timeout, bool relative) {
+  master_.write<std::int32_t>(node_, od::kTargetPosition, 0, target);
+  const std::uint16_t base = cw::kEnableOperation | cw::kChangeImmediately | (relative ? cw::kRelative : 0);
+  controlword(base | cw::kNewSetPoint);
+  wait([](std::uint16_t s) { return (s & sw::kSetPointAcknowledge) != 0; }, timeout,
+       fmt::format("the set-point acknowledge of target {}", target));
+  controlword(base);  // the handshake: bit 4 low again, ready for the next set-point
+}
+
+bool Drive::target_reached() { return (statusword() & sw::kTargetReached) != 0; }
+
+void Drive::move_to(std::int32_t target, std::chrono::milliseconds timeout) {
+  const auto deadline = Clock::now() + timeout;
+  start_move(target, timeout);
+  const auto left = std::max(std::chrono::milliseconds(0),
+                             std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()));
+  wait(
+      [this, target](std::uint16_t s) {
+        if (decode(s) != State::operation_enabled)
+          throw Error(fmt::format(
+              "node {}: the drive left \"operation enabled\" for \"{}\" while moving to {} (statusword 0x{:04X})",
+              node_, to_string(decode(s)), target, s));
+        return (s & sw::kTargetReached) != 0;
+      },
+      left, fmt::format("target position {}", target));
+}
+
+void Drive::quick_stop() { controlword(cw::kQuickStop); }
+
+void Drive::fault_reset(std::chrono::milliseconds timeout) {
+  controlword(cw::kDisableVoltage);
+  controlword(cw::kFaultReset);
+  wait([](std::uint16_t s) { return decode(s) == State::switch_on_disabled; }, timeout, "the fault reset");
+}
+
+void Drive::disable() { controlword(cw::kDisableVoltage); }
+
+}  // namespace fba::canopen::cia402

@@ -1,0 +1,146 @@
+// The CANopen arm (six CiA 402 joints driven as one) against the emulator, over both transports:
+// synchronised moves in joint units, limits checked before anything is sent, and every fault
+// ending in a quick stop of the joints that can still hear, with the joint and the reason named.
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "emulated_arm.hpp"
+#include "fba/canopen/arm.hpp"
+
+using namespace std::chrono_literals;
+using namespace fba::canopen;
+using fba::test::Transport;
+
+namespace {
+
+constexpr double kCounts = 10'000;  // counts per radian
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+class CanopenArmTest : public ::testing::TestWithParam<Transport> {
+ protected:
+  void SetUp() override {
+    fba::emulators::CanopenArmOptions options;
+    options.nodes = {1, 2, 3, 4, 5, 6};
+    options.heartbeat_ms = 20;
+    emulated_.emplace(GetParam(), options);
+    master_.emplace(emulated_->host(), MasterOptions{.sdo_timeout = 1s});  // generous: the emulator may wait for a core
+    std::vector<ArmJoint> joints;
+    for (int n = 1; n <= 6; ++n)
+      joints.push_back(
+          {"joint" + std::to_string(n), n, kCounts, 1000 * n, -2.5, 2.5, 20.0});  // 20 rad/s: short test moves
+    // A consumer timeout far above the 20 ms heartbeat: a loaded machine cannot fake a loss.
+    arm_.emplace(*master_, joints, ArmOptions{.heartbeat_ms = 20, .heartbeat_timeout = 1s});
+    arm_->start();
+  }
+  fba::emulators::CanopenArmEmulator& emulator() { return emulated_->emulator(); }
+  bool quick_stopped(int node) { return (emulator().statusword(node) & 0x6F) == 0x07; }
+
+  std::optional<fba::test::EmulatedArm> emulated_;
+  std::optional<Master> master_;
+  std::optional<CanopenArm> arm_;
+};
+
+}  // namespace
+
+INSTANTIATE_TEST_SUITE_P(Transports, CanopenArmTest, ::testing::Values(Transport::slcan_pty, Transport::socketpair),
+                         fba::test::transport_name);
+
+TEST_P(CanopenArmTest, EveryJointReachesItsTargetInJointUnits) {
+  const std::vector<double> targets{0.5, -0.3, 1.0, 0.0, 0.2, -1.0};
+  arm_->move_and_wait(targets, 1.0, 10s);
+  const auto at = arm_->positions();
+  for (std::size_t i = 0; i < targets.size(); ++i) EXPECT_NEAR(at[i], targets[i], 1 / kCounts) << "joint " << i + 1;
+  EXPECT_EQ(emulator().position(3), 1000 * 3 + 10'000);  // the zero offset and the scale reach the drive
+}
+
+TEST_P(CanopenArmTest, JointsMoveTogetherTheLongestAtTheScaledMaximumVelocity) {
+  // The joints start at -0.1 * n rad (drive position 0, zero offset 1000 * n counts): these
+  // targets are 1.0, 0.5, 0.25, 0, 0 and 1.0 rad away, a move of 0.1 s at 20 rad/s * 0.5.
+  arm_->move_to({0.9, 0.3, -0.05, -0.4, -0.5, -1.6}, 0.5);
+  auto velocity = [&](int node) { return static_cast<double>(master_->read<std::uint32_t>(node, 0x6081, 0)); };
+  EXPECT_NEAR(velocity(1), 100'000, 1);  // 20 rad/s * 0.5 * 10,000 counts/rad
+  EXPECT_NEAR(velocity(6), 100'000, 1);
+  EXPECT_NEAR(velocity(2), 50'000, 1);  // half the distance in the same time
+  EXPECT_NEAR(velocity(3), 25'000, 1);
+}
+
+TEST_P(CanopenArmTest, ACommandBeyondTheLimitsIsRefusedWithNothingSent) {
+  const std::vector<std::vector<double>> refused{
+      {0, 0, 2.6, 0, 0, 0}, {0, 0, 0, NAN, 0, 0}, {0, 0, 0, 0, 0, -INFINITY}, {0, 0, 0}};
+  for (const auto& targets : refused) EXPECT_THROW(arm_->move_to(targets), LimitError);
+  try {
+    arm_->move_to({0, 0, 2.6, 0, 0, 0});
+  } catch (const LimitError& e) {
+    EXPECT_TRUE(contains(e.what(), "joint 'joint3' (node 3): target 2.6 is outside its limits [-2.5, 2.5]"))
+        << e.what();
+    EXPECT_TRUE(contains(e.what(), "no command was sent")) << e.what();
+  }
+  EXPECT_THROW(arm_->move_to({0, 0, 0, 0, 0, 0}, 1.5), LimitError);
+  for (int node = 1; node <= 6; ++node) EXPECT_EQ(master_->read<std::int32_t>(node, 0x607A, 0), 0) << "node " << node;
+  EXPECT_EQ(master_->read<std::int32_t>(3, 0x607D, 2), 3000 + 25'000);  // the drive's own limit, in counts
+}
+
+TEST_P(CanopenArmTest, AnEmcyOnOneJointQuickStopsTheOthersAndNamesIt) {
+  arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);  // 100 s: the fault comes first
+  emulator().inject_fault(4, 0x7121);
+  try {
+    arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s);
+    FAIL() << "the move outlived the fault";
+  } catch (const ArmStopped& e) {
+    EXPECT_EQ(e.node, 4);
+    EXPECT_TRUE(contains(e.what(), "node 4")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "every joint was sent quick stop")) << e.what();
+  }
+  for (int node : {1, 2, 3, 5, 6}) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+}
+
+TEST_P(CanopenArmTest, AJointFallingSilentQuickStopsTheOthers) {
+  arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);
+  emulator().silence(2);
+  try {
+    while (!arm_->reached()) master_->spin_for(5ms);
+    FAIL() << "reached the target with a silent joint";
+  } catch (const ArmStopped& e) {
+    EXPECT_EQ(e.node, 2);
+    EXPECT_TRUE(contains(e.what(), "node 2")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "quick stop failed on 1 of 6 joints: joint 'joint2' (node 2)")) << e.what();
+  }
+  for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+}
+
+TEST_P(CanopenArmTest, TheLineVanishingStopsTheArmWithAClearError) {
+  arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);
+  emulator().disconnect();
+  try {
+    arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s);
+    FAIL();
+  } catch (const ArmStopped& e) {
+    EXPECT_EQ(e.node, 0);
+    EXPECT_TRUE(contains(e.what(), master_->bus().name())) << e.what();
+    EXPECT_TRUE(contains(e.what(), "quick stop failed on 6 of 6 joints")) << e.what();
+  }
+}
+
+TEST(CanopenArmConfiguration, ImpossibleJointsAreRefused) {
+  auto [a, b] = fba::can::socketpair_bus();
+  Master master(*a);
+  const ArmJoint ok{"j", 1, 1000, 0, -1, 1, 1};
+  EXPECT_THROW(CanopenArm(master, {}), std::invalid_argument);
+  EXPECT_THROW(CanopenArm(master, {ok, ok}), std::invalid_argument);  // node 1 twice
+  ArmJoint bad = ok;
+  bad.lower = 2;
+  EXPECT_THROW(CanopenArm(master, {bad}), std::invalid_argument);
+  bad = ok;
+  bad.counts_per_unit = 0;
+  EXPECT_THROW(CanopenArm(master, {bad}), std::invalid_argument);
+  bad = ok;
+  bad.max_velocity = 0;
+  EXPECT_THROW(CanopenArm(master, {bad}), std::invalid_argument);
+  bad = ok;
+  bad.node = 128;
+  EXPECT_THROW(CanopenArm(master, {bad}), std::invalid_argument);
+}

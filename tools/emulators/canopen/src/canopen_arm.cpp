@@ -1,0 +1,658 @@
+#include "fba/emulators/canopen_arm.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace fba::emulators {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// CiA 301 identifiers and codes, written here from the standard rather than shared with the
+// master, so that a misreading on one side shows up as a failing test.
+constexpr std::uint32_t kNmt = 0x000, kSync = 0x080, kEmcy = 0x080, kSdoTx = 0x580, kSdoRx = 0x600, kHeartbeat = 0x700;
+constexpr std::uint8_t kPreOperational = 0x7F, kOperational = 0x05, kStopped = 0x04;
+constexpr std::uint32_t kAbortCommand = 0x05040001, kAbortWriteOnly = 0x06010001, kAbortReadOnly = 0x06010002,
+                        kAbortNoObject = 0x06020000, kAbortNotMappable = 0x06040041, kAbortPdoLength = 0x06040042,
+                        kAbortParameters = 0x06040043, kAbortLength = 0x06070010, kAbortNoSub = 0x06090011,
+                        kAbortValue = 0x06090030, kAbortDeviceState = 0x08000022;
+// Change-driven TPDOs go at most this often (an inhibit time), so a moving joint does not flood the bus.
+constexpr std::chrono::milliseconds kInhibit{10};
+
+// CiA 402 states, as statusword bits under the 0x6F mask.
+enum class Drive : std::uint16_t {
+  switch_on_disabled = 0x0040,
+  ready = 0x0021,
+  switched_on = 0x0023,
+  enabled = 0x0027,
+  quick_stop = 0x0007,
+  fault = 0x0008,
+};
+
+std::uint32_t key(std::uint16_t index, std::uint8_t sub) { return static_cast<std::uint32_t>(index) << 8 | sub; }
+
+struct Entry {
+  std::uint8_t size;  // bytes
+  bool readable;
+  bool writable;
+  bool mappable;
+  std::uint32_t value;
+};
+
+}  // namespace
+
+struct CanopenArmEmulator::Node {
+  int id;
+  bool silent = false;
+  std::uint8_t nmt = kPreOperational;
+  std::map<std::uint32_t, Entry> od;
+  Clock::time_point last_heartbeat;
+  // TPDO and RPDO run-time state, per PDO number 0..3.
+  std::array<int, 4> tpdo_syncs{};
+  std::array<std::vector<std::uint8_t>, 4> tpdo_last;
+  std::array<Clock::time_point, 4> tpdo_time{};
+  std::array<std::optional<can::Frame>, 4> rpdo_pending;
+  // The drive.
+  Drive drive = Drive::switch_on_disabled;
+  std::uint16_t controlword = 0;
+  double position = 0;
+  double target = 0;
+  bool moving = false;
+  bool acknowledged = false;
+  bool limited = false;
+  Clock::time_point last_update;
+
+  std::uint32_t get(std::uint16_t index, std::uint8_t sub) const { return od.at(key(index, sub)).value; }
+  void set(std::uint16_t index, std::uint8_t sub, std::uint32_t v) { od.at(key(index, sub)).value = v; }
+};
+
+namespace {
+
+void add(std::map<std::uint32_t, Entry>& od, std::uint16_t index, std::uint8_t sub, std::uint8_t size,
+         const char* access, bool mappable, std::uint32_t value) {
+  const std::string a = access;
+  od[key(index, sub)] = Entry{size, a != "wo", a != "ro", mappable, value};
+}
+
+// The object dictionary after a reset: communication objects and the CiA 402 drive objects.
+void reset_dictionary(CanopenArmEmulator::Node& n, const CanopenArmOptions& o) {
+  auto& od = n.od;
+  od.clear();
+  const auto id = static_cast<std::uint32_t>(n.id);
+  add(od, 0x1000, 0, 4, "ro", false, 0x00020192);  // device type: CiA 402, servo drive
+  add(od, 0x1001, 0, 1, "ro", true, 0);            // error register
+  add(od, 0x1017, 0, 2, "rw", false, o.heartbeat_ms);
+  add(od, 0x1018, 0, 1, "ro", false, 4);
+  add(od, 0x1018, 1, 4, "ro", false, 0x00000FBA);  // vendor id
+  add(od, 0x1018, 2, 4, "ro", false, 0x00000402);  // product code
+  add(od, 0x1018, 3, 4, "ro", false, 0x00010000);  // revision
+  add(od, 0x1018, 4, 4, "ro", false, id);          // serial number
+  for (std::uint16_t p = 0; p < 4; ++p) {
+    const std::uint32_t rpdo = 0x200 + 0x100 * p + id, tpdo = 0x180 + 0x100 * p + id;
+    add(od, 0x1400 + p, 0, 1, "ro", false, 2);
+    add(od, 0x1400 + p, 1, 4, "rw", false, rpdo | 0x80000000U);  // invalid until configured
+    add(od, 0x1400 + p, 2, 1, "rw", false, 0xFF);
+    add(od, 0x1600 + p, 0, 1, "rw", false, 0);
+    add(od, 0x1800 + p, 0, 1, "ro", false, 5);
+    add(od, 0x1800 + p, 1, 4, "rw", false, tpdo | 0x80000000U);
+    add(od, 0x1800 + p, 2, 1, "rw", false, 0xFF);
+    add(od, 0x1800 + p, 3, 2, "rw", false, 0);  // inhibit time
+    add(od, 0x1800 + p, 5, 2, "rw", false, 0);  // event timer
+    add(od, 0x1A00 + p, 0, 1, "rw", false, 0);
+    for (std::uint8_t s = 1; s <= 8; ++s) {
+      add(od, 0x1600 + p, s, 4, "rw", false, 0);
+      add(od, 0x1A00 + p, s, 4, "rw", false, 0);
+    }
+  }
+  add(od, 0x603F, 0, 2, "ro", true, 0);  // error code
+  add(od, 0x6040, 0, 2, "rw", true, 0);  // controlword
+  add(od, 0x6041, 0, 2, "ro", true, 0);  // statusword
+  add(od, 0x6060, 0, 1, "rw", true, 0);  // modes of operation
+  add(od, 0x6061, 0, 1, "ro", true, 0);  // modes of operation display
+  add(od, 0x6064, 0, 4, "ro", true, 0);  // position actual value
+  add(od, 0x606C, 0, 4, "ro", true, 0);  // velocity actual value
+  add(od, 0x607A, 0, 4, "rw", true, 0);  // target position
+  add(od, 0x607D, 0, 1, "ro", false, 2);
+  add(od, 0x607D, 1, 4, "rw", false, static_cast<std::uint32_t>(o.min_position));
+  add(od, 0x607D, 2, 4, "rw", false, static_cast<std::uint32_t>(o.max_position));
+  add(od, 0x6081, 0, 4, "rw", true, o.profile_velocity);
+  add(od, 0x6083, 0, 4, "rw", true, 10 * o.profile_velocity);
+  add(od, 0x6084, 0, 4, "rw", true, 10 * o.profile_velocity);
+  n.drive = Drive::switch_on_disabled;
+  n.controlword = 0;
+  n.target = n.position;
+  n.moving = n.acknowledged = n.limited = false;
+  n.tpdo_syncs = {};
+  n.tpdo_last = {};
+  n.rpdo_pending = {};
+}
+
+std::uint16_t statusword(const CanopenArmEmulator::Node& n) {
+  std::uint16_t s = static_cast<std::uint16_t>(n.drive) | 0x0200;                    // remote: controlled over the bus
+  if (n.drive != Drive::switch_on_disabled && n.drive != Drive::fault) s |= 0x0010;  // voltage enabled
+  if (!n.moving) s |= 0x0400;                                                        // target reached
+  if (n.limited) s |= 0x0800;                                                        // internal limit active
+  if (n.acknowledged) s |= 0x1000;                                                   // set-point acknowledge
+  return s;
+}
+
+// The objects the drive computes, brought up to date before anything reads them.
+void refresh(CanopenArmEmulator::Node& n) {
+  n.set(0x6041, 0, statusword(n));
+  n.set(0x6061, 0, n.get(0x6060, 0));
+  n.set(0x6064, 0, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(n.position))));
+  const double v = n.moving && n.drive == Drive::enabled ? static_cast<double>(n.get(0x6081, 0)) : 0.0;
+  n.set(0x606C, 0, static_cast<std::uint32_t>(static_cast<std::int32_t>(n.target >= n.position ? v : -v)));
+}
+
+std::uint8_t error_register_for(std::uint16_t code) {
+  std::uint8_t reg = 0x01;  // generic
+  switch (code >> 12) {
+    case 0x2:
+      reg |= 0x02;
+      break;  // current
+    case 0x3:
+      reg |= 0x04;
+      break;  // voltage
+    case 0x4:
+      reg |= 0x08;
+      break;  // temperature
+    case 0x8:
+      reg |= (code >> 8) == 0x81 ? 0x10 : 0x20;
+      break;  // communication, or device profile
+    default:
+      break;
+  }
+  return reg;
+}
+
+can::Frame emcy_frame(int id, std::uint16_t code, std::uint8_t reg) {
+  return can::make_frame(kEmcy + static_cast<std::uint32_t>(id),
+                         {static_cast<std::uint8_t>(code), static_cast<std::uint8_t>(code >> 8), reg, 0, 0, 0, 0, 0});
+}
+
+can::Frame sdo_abort(int id, std::uint16_t index, std::uint8_t sub, std::uint32_t code) {
+  return can::make_frame(kSdoTx + static_cast<std::uint32_t>(id),
+                         {0x80, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub,
+                          static_cast<std::uint8_t>(code), static_cast<std::uint8_t>(code >> 8),
+                          static_cast<std::uint8_t>(code >> 16), static_cast<std::uint8_t>(code >> 24)});
+}
+
+bool pdo_valid(const CanopenArmEmulator::Node& n, std::uint16_t communication) {
+  return !(n.get(communication, 1) & 0x80000000U);
+}
+
+}  // namespace
+
+CanopenArmEmulator::CanopenArmEmulator(can::CanBus& bus, CanopenArmOptions options, std::function<void()> make_noise)
+    : bus_(bus), options_(std::move(options)), make_noise_(std::move(make_noise)) {
+  for (int id : options_.nodes) {
+    if (id < 1 || id > 127)
+      throw std::invalid_argument(fmt::format("CANopen arm emulator: node id {} is not 1..127", id));
+    if (nodes_.count(id))
+      throw std::invalid_argument(fmt::format("CANopen arm emulator: node id {} is given twice", id));
+    auto n = std::make_unique<Node>();
+    n->id = id;
+    reset_dictionary(*n, options_);
+    nodes_[id] = std::move(n);
+  }
+  if (nodes_.empty()) throw std::invalid_argument("CANopen arm emulator: no node ids given");
+}
+
+CanopenArmEmulator::~CanopenArmEmulator() = default;
+
+CanopenArmEmulator::Node& CanopenArmEmulator::node(int id) const {
+  const auto it = nodes_.find(id);
+  if (it == nodes_.end()) throw std::invalid_argument(fmt::format("CANopen arm emulator: there is no node {}", id));
+  return *it->second;
+}
+
+void CanopenArmEmulator::send(const can::Frame& frame) { bus_.send(frame); }
+
+void CanopenArmEmulator::silence(int id) {
+  std::lock_guard lock(mutex_);
+  node(id);  // throws for an unknown id, in the caller's thread
+  requests_.push_back([this, id] { node(id).silent = true; });
+}
+
+void CanopenArmEmulator::inject_garbage() {
+  std::lock_guard lock(mutex_);
+  requests_.push_back([this] {
+    if (make_noise_) make_noise_();
+  });
+}
+
+void CanopenArmEmulator::inject_fault(int id, std::uint16_t code) {
+  std::lock_guard lock(mutex_);
+  node(id);
+  requests_.push_back([this, id, code] {
+    Node& n = node(id);
+    n.drive = Drive::fault;
+    n.moving = false;
+    n.target = n.position;
+    n.set(0x603F, 0, code);
+    n.set(0x1001, 0, error_register_for(code));
+    if (!n.silent) send(emcy_frame(id, code, error_register_for(code)));
+  });
+}
+
+void CanopenArmEmulator::reboot(int id) {
+  std::lock_guard lock(mutex_);
+  node(id);
+  requests_.push_back([this, id] {
+    Node& n = node(id);
+    reset_dictionary(n, options_);  // the position stays: the joint did not move
+    n.nmt = kPreOperational;
+    n.last_heartbeat = Clock::now();
+    if (!n.silent) send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {0x00}));
+  });
+}
+
+void CanopenArmEmulator::disconnect() {
+  std::lock_guard lock(mutex_);
+  requests_.push_back([this] { disconnect_ = true; });
+}
+
+std::int32_t CanopenArmEmulator::position(int id) const {
+  std::lock_guard lock(mutex_);
+  return static_cast<std::int32_t>(std::lround(node(id).position));
+}
+
+std::uint16_t CanopenArmEmulator::statusword(int id) const {
+  std::lock_guard lock(mutex_);
+  return fba::emulators::statusword(node(id));
+}
+
+std::string CanopenArmEmulator::run() {
+  try {
+    {
+      std::lock_guard lock(mutex_);
+      const auto now = Clock::now();
+      for (auto& [id, n] : nodes_) {
+        send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {0x00}));  // boot-up
+        n->nmt = kPreOperational;
+        n->last_heartbeat = n->last_update = now;
+      }
+    }
+    while (!stop_) {
+      {
+        std::lock_guard lock(mutex_);
+        for (auto& request : requests_) request();
+        requests_.clear();
+        if (disconnect_) {
+          bus_.close();
+          return "disconnected (fault injection)";
+        }
+      }
+      const auto frame = bus_.receive(std::chrono::milliseconds(2));
+      std::lock_guard lock(mutex_);
+      if (frame) handle(*frame);
+      update(Clock::now());
+    }
+  } catch (const can::BusError& e) {
+    return e.what();
+  }
+  return "stopped";
+}
+
+namespace {
+
+// A write through SDO or an RPDO: the checks of CiA 301, then the drive's reaction. Returns an
+// abort code, or 0.
+std::uint32_t write_object(CanopenArmEmulator::Node& n, std::uint16_t index, std::uint8_t sub, std::uint32_t value,
+                           std::size_t size, const std::function<void(const can::Frame&)>& send);
+
+void apply_controlword(CanopenArmEmulator::Node& n, std::uint16_t cw,
+                       const std::function<void(const can::Frame&)>& send) {
+  const std::uint16_t previous = n.controlword;
+  n.controlword = cw;
+  const bool fault_reset_edge = (cw & 0x80) && !(previous & 0x80);
+  const bool disable_voltage = (cw & 0x02) == 0;
+  const bool quick_stop = (cw & 0x06) == 0x02;
+  const bool shutdown = (cw & 0x87) == 0x06;
+  const bool switch_on = (cw & 0x8F) == 0x07;
+  const bool enable = (cw & 0x8F) == 0x0F;
+  Drive next = n.drive;
+  switch (n.drive) {
+    case Drive::fault:
+      if (fault_reset_edge) {
+        next = Drive::switch_on_disabled;
+        n.set(0x603F, 0, 0);
+        n.set(0x1001, 0, 0);
+        send(emcy_frame(n.id, 0x0000, 0));  // error reset
+      }
+      break;
+    case Drive::switch_on_disabled:
+      if (shutdown) next = Drive::ready;
+      break;
+    case Drive::ready:
+      if (switch_on)
+        next = Drive::switched_on;
+      else if (enable)
+        next = Drive::enabled;  // transitions 3 and 4 at once, as most drives allow
+      else if (disable_voltage || quick_stop)
+        next = Drive::switch_on_disabled;
+      break;
+    case Drive::switched_on:
+      if (enable)
+        next = Drive::enabled;
+      else if (shutdown)
+        next = Drive::ready;
+      else if (disable_voltage || quick_stop)
+        next = Drive::switch_on_disabled;
+      break;
+    case Drive::enabled:
+      if (switch_on)
+        next = Drive::switched_on;
+      else if (shutdown)
+        next = Drive::ready;
+      else if (disable_voltage)
+        next = Drive::switch_on_disabled;
+      else if (quick_stop)
+        next = Drive::quick_stop;
+      break;
+    case Drive::quick_stop:
+      if (disable_voltage)
+        next = Drive::switch_on_disabled;
+      else if (enable)
+        next = Drive::enabled;  // quick stop option codes 5-8: transition 16
+      break;
+  }
+  if (next != Drive::enabled) {  // every way out of "operation enabled" stops the motion
+    n.moving = false;
+    n.target = n.position;
+  }
+  n.drive = next;
+  if (n.drive != Drive::enabled || n.get(0x6060, 0) != 1) return;
+  // Profile position: a rising edge of bit 4 takes the target (relative with bit 6); bit 5
+  // replaces a move in progress, without it a new set-point waits for the current one to end.
+  if ((cw & 0x10) && !(previous & 0x10) && (!n.moving || (cw & 0x20))) {
+    const auto target = static_cast<double>(static_cast<std::int32_t>(n.get(0x607A, 0)));
+    double goal = (cw & 0x40) ? n.target + target : target;
+    const auto lo = static_cast<double>(static_cast<std::int32_t>(n.get(0x607D, 1)));
+    const auto hi = static_cast<double>(static_cast<std::int32_t>(n.get(0x607D, 2)));
+    n.limited = goal < lo || goal > hi;
+    goal = std::clamp(goal, lo, hi);
+    n.target = goal;
+    n.moving = goal != n.position;
+    n.acknowledged = true;
+  }
+  if (!(cw & 0x10)) n.acknowledged = false;
+}
+
+std::uint32_t check_mapping(const CanopenArmEmulator::Node& n, std::uint16_t mapping, std::uint32_t count) {
+  if (count > 8) return kAbortValue;
+  int bits = 0;
+  for (std::uint32_t s = 1; s <= count; ++s) {
+    const std::uint32_t m = n.get(mapping, static_cast<std::uint8_t>(s));
+    bits += static_cast<int>(m & 0xFF);
+  }
+  return bits > 64 ? kAbortPdoLength : 0;
+}
+
+std::uint32_t write_object(CanopenArmEmulator::Node& n, std::uint16_t index, std::uint8_t sub, std::uint32_t value,
+                           std::size_t size, const std::function<void(const can::Frame&)>& send) {
+  const auto it = n.od.find(key(index, sub));
+  if (it == n.od.end()) {
+    const auto any = n.od.lower_bound(key(index, 0));
+    return any != n.od.end() && (any->first >> 8) == index ? kAbortNoSub : kAbortNoObject;
+  }
+  Entry& e = it->second;
+  if (!e.writable) return kAbortReadOnly;
+  if (size != e.size) return kAbortLength;
+  const bool rpdo_map = index >= 0x1600 && index <= 0x1603, tpdo_map = index >= 0x1A00 && index <= 0x1A03;
+  if (rpdo_map || tpdo_map) {
+    const auto communication = static_cast<std::uint16_t>(index - 0x200);  // 0x1400 or 0x1800 + n
+    // CiA 301: the mapping changes only while the PDO is invalid, and entries only while sub 0 is 0.
+    if (pdo_valid(n, communication) || (sub != 0 && n.get(index, 0) != 0)) return kAbortDeviceState;
+    if (sub == 0) {
+      if (const std::uint32_t abort = check_mapping(n, index, value)) return abort;
+    } else {
+      const auto object =
+          n.od.find(key(static_cast<std::uint16_t>(value >> 16), static_cast<std::uint8_t>(value >> 8)));
+      if (object == n.od.end()) return kAbortNoObject;
+      if (!object->second.mappable) return kAbortNotMappable;
+      if ((value & 0xFF) != 8u * object->second.size) return kAbortParameters;
+      if (rpdo_map && !object->second.writable) return kAbortNotMappable;
+    }
+  }
+  if (index == 0x6060 && static_cast<std::int8_t>(value) != 1) return kAbortValue;  // profile position only
+  e.value = value;
+  if (index == 0x6040) apply_controlword(n, static_cast<std::uint16_t>(value), send);
+  return 0;
+}
+
+std::vector<std::uint8_t> pdo_bytes(CanopenArmEmulator::Node& n, std::uint16_t mapping) {
+  refresh(n);
+  std::vector<std::uint8_t> bytes;
+  const std::uint32_t count = n.get(mapping, 0);
+  for (std::uint32_t s = 1; s <= count; ++s) {
+    const std::uint32_t m = n.get(mapping, static_cast<std::uint8_t>(s));
+    const std::uint32_t v = n.get(static_cast<std::uint16_t>(m >> 16), static_cast<std::uint8_t>(m >> 8));
+    for (std::uint32_t b = 0; b < (m & 0xFF) / 8; ++b) bytes.push_back(static_cast<std::uint8_t>(v >> (8 * b)));
+  }
+  return bytes;
+}
+
+void apply_rpdo(CanopenArmEmulator::Node& n, int p, const can::Frame& frame,
+                const std::function<void(const can::Frame&)>& send) {
+  const auto mapping = static_cast<std::uint16_t>(0x1600 + p);
+  const std::uint32_t count = n.get(mapping, 0);
+  std::size_t at = 0;
+  std::size_t need = 0;
+  for (std::uint32_t s = 1; s <= count; ++s) need += (n.get(mapping, static_cast<std::uint8_t>(s)) & 0xFF) / 8;
+  if (frame.dlc < need) {
+    send(emcy_frame(n.id, 0x8210, 0x11));  // PDO not processed due to length error
+    return;
+  }
+  // The whole PDO is taken in before the drive acts on a controlword in it, as drives do: a
+  // new set-point then moves to the target that came in the same PDO, whatever the mapping order.
+  std::optional<std::uint32_t> controlword;
+  for (std::uint32_t s = 1; s <= count; ++s) {
+    const std::uint32_t m = n.get(mapping, static_cast<std::uint8_t>(s));
+    const std::size_t bytes = (m & 0xFF) / 8;
+    std::uint32_t v = 0;
+    for (std::size_t b = 0; b < bytes; ++b) v |= static_cast<std::uint32_t>(frame.data[at + b]) << (8 * b);
+    at += bytes;
+    if ((m >> 16) == 0x6040)
+      controlword = v;
+    else
+      write_object(n, static_cast<std::uint16_t>(m >> 16), static_cast<std::uint8_t>(m >> 8), v, bytes, send);
+  }
+  if (controlword) write_object(n, 0x6040, 0, *controlword, 2, send);
+}
+
+}  // namespace
+
+void CanopenArmEmulator::handle(const can::Frame& frame) {
+  if (frame.extended || frame.rtr) return;
+  const auto sender = [this](const can::Frame& f) { send(f); };
+  if (frame.id == kNmt) {
+    if (frame.dlc != 2) return;
+    for (auto& [id, n] : nodes_) {
+      if (n->silent || (frame.data[1] != 0 && frame.data[1] != id)) continue;
+      switch (frame.data[0]) {
+        case 0x01:
+          n->nmt = kOperational;
+          break;
+        case 0x02:
+          n->nmt = kStopped;
+          break;
+        case 0x80:
+          n->nmt = kPreOperational;
+          break;
+        case 0x81:  // reset node: the whole dictionary
+        case 0x82:  // reset communication: this emulator keeps no other state worth sparing
+          reset_dictionary(*n, options_);
+          send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {0x00}));
+          n->nmt = kPreOperational;
+          n->last_heartbeat = Clock::now();
+          break;
+        default:
+          break;
+      }
+    }
+    return;
+  }
+  if (frame.id == kSync) {
+    ++syncs_;
+    for (auto& [id, n] : nodes_) {
+      if (n->silent || n->nmt != kOperational) continue;
+      for (int p = 0; p < 4; ++p)
+        if (n->rpdo_pending[p]) {
+          apply_rpdo(*n, p, *n->rpdo_pending[p], sender);
+          n->rpdo_pending[p].reset();
+        }
+      for (int p = 0; p < 4; ++p) {
+        const auto communication = static_cast<std::uint16_t>(0x1800 + p);
+        const std::uint32_t type = n->get(communication, 2);
+        if (!pdo_valid(*n, communication) || type > 240) continue;
+        auto bytes = pdo_bytes(*n, static_cast<std::uint16_t>(0x1A00 + p));
+        const bool due = type == 0 ? bytes != n->tpdo_last[p] : ++n->tpdo_syncs[p] >= static_cast<int>(type);
+        if (!due) continue;
+        n->tpdo_syncs[p] = 0;
+        can::Frame f;
+        f.id = n->get(communication, 1) & 0x7FF;
+        f.dlc = static_cast<std::uint8_t>(bytes.size());
+        std::copy(bytes.begin(), bytes.end(), f.data.begin());
+        send(f);
+        n->tpdo_last[p] = std::move(bytes);
+      }
+    }
+    return;
+  }
+  const int id = static_cast<int>(frame.id & 0x7F);
+  const auto it = nodes_.find(id);
+  if (it == nodes_.end() || it->second->silent) return;
+  Node& n = *it->second;
+  const std::uint32_t function = frame.id & 0x780;
+  if (function == kSdoRx) {
+    if (n.nmt == kStopped || frame.dlc != 8) return;
+    const std::uint8_t command = frame.data[0];
+    const auto index = static_cast<std::uint16_t>(frame.data[1] | frame.data[2] << 8);
+    const std::uint8_t sub = frame.data[3];
+    const std::uint32_t value =
+        static_cast<std::uint32_t>(frame.data[4]) | static_cast<std::uint32_t>(frame.data[5]) << 8 |
+        static_cast<std::uint32_t>(frame.data[6]) << 16 | static_cast<std::uint32_t>(frame.data[7]) << 24;
+    switch (command >> 5) {
+      case 1: {  // initiate download
+        if (!(command & 0x02)) {
+          send(sdo_abort(id, index, sub, kAbortCommand));  // segmented transfers: not offered
+          return;
+        }
+        const std::size_t size = (command & 0x01) ? 4 - ((command >> 2) & 0x03) : 4;
+        const std::uint32_t masked = size == 4 ? value : value & ((1U << (8 * size)) - 1);
+        if (const std::uint32_t abort = write_object(n, index, sub, masked, size, sender)) {
+          send(sdo_abort(id, index, sub, abort));
+        } else {
+          send(can::make_frame(
+              kSdoTx + static_cast<std::uint32_t>(id),
+              {0x60, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub, 0, 0, 0, 0}));
+        }
+        return;
+      }
+      case 2: {  // initiate upload
+        refresh(n);
+        const auto entry = n.od.find(key(index, sub));
+        if (entry == n.od.end()) {
+          const auto any = n.od.lower_bound(key(index, 0));
+          send(sdo_abort(id, index, sub,
+                         any != n.od.end() && (any->first >> 8) == index ? kAbortNoSub : kAbortNoObject));
+          return;
+        }
+        if (!entry->second.readable) {
+          send(sdo_abort(id, index, sub, kAbortWriteOnly));
+          return;
+        }
+        const std::uint32_t v = entry->second.value;
+        const int size = entry->second.size;
+        send(can::make_frame(
+            kSdoTx + static_cast<std::uint32_t>(id),
+            {static_cast<std::uint8_t>(0x43 | ((4 - size) << 2)), static_cast<std::uint8_t>(index),
+             static_cast<std::uint8_t>(index >> 8), sub, static_cast<std::uint8_t>(v),
+             static_cast<std::uint8_t>(size > 1 ? v >> 8 : 0), static_cast<std::uint8_t>(size > 2 ? v >> 16 : 0),
+             static_cast<std::uint8_t>(size > 3 ? v >> 24 : 0)}));
+        return;
+      }
+      case 4:
+        return;  // the client aborted: nothing in flight to drop
+      default:
+        send(sdo_abort(id, index, sub, kAbortCommand));
+        return;
+    }
+  }
+  if (n.nmt != kOperational) return;
+  for (int p = 0; p < 4; ++p) {
+    const auto communication = static_cast<std::uint16_t>(0x1400 + p);
+    if (!pdo_valid(n, communication) || frame.id != (n.get(communication, 1) & 0x7FF)) continue;
+    if (n.get(communication, 2) <= 240)
+      n.rpdo_pending[p] = frame;  // takes effect on the next SYNC
+    else
+      apply_rpdo(n, p, frame, sender);
+  }
+}
+
+void CanopenArmEmulator::update(Clock::time_point now) {
+  for (auto& [id, n] : nodes_) {
+    const double dt = std::chrono::duration<double>(now - n->last_update).count();
+    n->last_update = now;
+    if (n->drive == Drive::enabled && n->moving && !(n->controlword & 0x0100)) {  // bit 8: halt
+      const double step = static_cast<double>(n->get(0x6081, 0)) * dt;
+      const double left = n->target - n->position;
+      if (std::abs(left) <= step) {
+        n->position = n->target;
+        n->moving = false;
+      } else {
+        n->position += left > 0 ? step : -step;
+      }
+    }
+    if (n->silent) continue;
+    const std::uint32_t period = n->get(0x1017, 0);
+    if (period > 0 && now - n->last_heartbeat >= std::chrono::milliseconds(period)) {
+      send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {n->nmt}));
+      n->last_heartbeat = now;
+    }
+    if (n->nmt != kOperational) continue;
+    for (int p = 0; p < 4; ++p) {  // change-driven and timer-driven TPDOs
+      const auto communication = static_cast<std::uint16_t>(0x1800 + p);
+      if (!pdo_valid(*n, communication) || n->get(communication, 2) < 0xFE || now - n->tpdo_time[p] < kInhibit)
+        continue;
+      auto bytes = pdo_bytes(*n, static_cast<std::uint16_t>(0x1A00 + p));
+      const std::uint32_t timer = n->get(communication, 5);
+      if (bytes == n->tpdo_last[p] && (timer == 0 || now - n->tpdo_time[p] < std::chrono::milliseconds(timer)))
+        continue;
+      can::Frame f;
+      f.id = n->get(communication, 1) & 0x7FF;
+      f.dlc = static_cast<std::uint8_t>(bytes.size());
+      std::copy(bytes.begin(), bytes.end(), f.data.begin());
+      send(f);
+      n->tpdo_last[p] = std::move(bytes);
+      n->tpdo_time[p] = now;
+    }
+  }
+}
+
+std::function<void()> noise_for(can::slcan::SlcanAdapter& adapter) {
+  return [&adapter] {
+    const std::string noise = std::string("\x01\x02\xFF~junk\r") + "t1\r" + "tXYZ8\r" + "t12390011223344556677\r" +
+                              "t7FF2AB\r" + std::string(100, 'A') + "\r" + "\a" + "\r\n";
+    adapter.write_raw({reinterpret_cast<const std::uint8_t*>(noise.data()), noise.size()});
+  };
+}
+
+std::function<void()> noise_for(can::FrameSocketBus& bus) {
+  return [&bus] {
+    const std::uint8_t short_record[5] = {1, 2, 3, 4, 5};
+    bus.write_raw(short_record);
+    std::uint8_t bad_length[16] = {0x81, 0x05, 0, 0, 12};  // a can_frame of id 0x581 claiming 12 data bytes
+    bus.write_raw(bad_length);
+  };
+}
+
+}  // namespace fba::emulators
