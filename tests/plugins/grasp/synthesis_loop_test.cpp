@@ -27,7 +27,7 @@ components:
     params: { method: fixed, threshold: 0.19, dilate: 10, erode: 7 }
   carver:
     type: vision.octree_carver
-    params: { max_depth: 6, detail_after_views: 4, bounds: [-0.061897, -0.018874, -0.057845, 0.010897, 0.068227, 0.015495] }
+    params: { max_depth: 6, detail_after_views: 4, occupancy_threshold: 0, bounds: [-0.061897, -0.018874, -0.057845, 0.010897, 0.068227, 0.015495] }
   synthesis:
     type: grasp.synthesis
     params: )" + synthesis_params + R"(
