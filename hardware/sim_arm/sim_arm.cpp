@@ -2,6 +2,7 @@
 // ports and events). It takes a camera pose or joint target, plans a joint-space motion within
 // the URDF's limits, and moves along it in the task's time: joint states at `rate` while it
 // moves, and the camera's pose when it arrives, for sim.camera to render from.
+#include <deque>
 #include <dlfcn.h>
 
 #include <cmath>
@@ -102,8 +103,8 @@ class SimArm final : public fba::Component {
   void process() override {
     const std::int64_t now = ctx_.now_ns();
     publish_initial(now);
-    if (auto in = ctx_(kTarget); in.has()) pending_ = Pending{in.get(), now};
-    if (auto in = ctx_(kJointTarget); in.has()) pending_ = Pending{in.get(), now};
+    if (auto in = ctx_(kTarget); in.has()) pending_.push_back(Pending{in.get(), now});
+    if (auto in = ctx_(kJointTarget); in.has()) pending_.push_back(Pending{in.get(), now});
     advance(now);
   }
 
@@ -122,7 +123,7 @@ class SimArm final : public fba::Component {
       ctx_.log().warn("safe state: stopped {:.3f} s into a motion of {:.3f} s", seconds_since_start(ctx_.now_ns()), motion_->duration());
     }
     motion_.reset();
-    pending_.reset();
+    pending_.clear();
   }
 
  private:
@@ -143,9 +144,9 @@ class SimArm final : public fba::Component {
   void advance(std::int64_t until) {
     for (;;) {
       if (!motion_) {
-        if (!pending_) return;
-        const Pending p = std::move(*pending_);
-        pending_.reset();
+        if (pending_.empty()) return;
+        const Pending p = std::move(pending_.front());
+        pending_.pop_front();
         start(p.request, std::max(p.received_ns, stopped_ns_));
         continue;
       }
@@ -254,7 +255,9 @@ class SimArm final : public fba::Component {
   std::int64_t start_ns_ = 0;    // of the motion
   std::int64_t last_ns_ = 0;     // the last time the motion was published
   std::int64_t stopped_ns_ = 0;  // when the last motion ended
-  std::optional<Pending> pending_;  // the newest target that came during a motion: it starts when the motion ends
+  // Targets that came during a motion, in order: each starts when the one before ends (a planner
+  // may ask for several views at once; none is dropped).
+  std::deque<Pending> pending_;
   bool publish_initial_;
 };
 

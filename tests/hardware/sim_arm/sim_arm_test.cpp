@@ -186,6 +186,25 @@ TEST(SimArm, ATargetDuringAMotionStartsWhenTheMotionEnds) {
   }
 }
 
+// A planner asks for several views at once: every target is reached, in the order it came (the
+// exploration loop waits for each view; one dropped would stall it).
+TEST(SimArm, TargetsThatComeTogetherAreAllReachedInOrder) {
+  ComponentHarness h(registry(), "sim.arm", {}, {"target"});
+  h.push<fba::Pose>("target", looking_at_origin(45, 90, 0.4));
+  tick(h);
+  h.push<fba::Pose>("target", looking_at_origin(60, -90, 0.35));
+  tick(h);
+  h.push<fba::Pose>("target", looking_at_origin(50, 0, 0.35));
+  for (int i = 0; i < 8000 && named(h.events(), "arrived").size() < 3; ++i) tick(h);
+  const auto poses = h.values<fba::Pose>("camera_pose");
+  ASSERT_EQ(named(h.events(), "arrived").size(), 3u);
+  ASSERT_GE(poses.size(), 3u);
+  const auto last3 = std::vector<fba::Pose>(poses.end() - 3, poses.end());
+  const fba::Pose wanted[3] = {looking_at_origin(45, 90, 0.4), looking_at_origin(60, -90, 0.35), looking_at_origin(50, 0, 0.35)};
+  for (int i = 0; i < 3; ++i)
+    EXPECT_LT((last3[i].world_from_frame.translation() - wanted[i].world_from_frame.translation()).norm(), 0.005) << i;
+}
+
 // No tick comes after the end of the stream: the motion under way runs to its end, stamped in task time.
 TEST(SimArm, AtTheEndOfTheStreamTheMotionUnderWayIsCompleted) {
   ComponentHarness h(registry(), "sim.arm", {}, {"target"});
