@@ -147,6 +147,9 @@ void watch_signals(sigset_t signals) {
   auto& st = state();
   const timespec tick{0, 50'000'000};
   std::optional<fba::RunResult> previous_dump;
+  int first_sig = 0;
+  pid_t first_pid = 0;
+  std::chrono::steady_clock::time_point first_at;
   auto next_dump = std::chrono::steady_clock::now();
   while (st.watching.load()) {
     if (const double every = st.dot_every.load(); every > 0 && st.task.load() && std::chrono::steady_clock::now() >= next_dump) {
@@ -161,6 +164,17 @@ void watch_signals(sigset_t signals) {
     if (sig == SIGUSR1) {
       dump_live_graph(previous_dump);
       continue;
+    }
+    // timeout(1) and group kills deliver one request twice: the same signal from the same process
+    // within a second is that one request, not the second that forces the exit.
+    const auto now = std::chrono::steady_clock::now();
+    if (st.signals.load() > 0 && sig == first_sig && info.si_pid != 0 && info.si_pid == first_pid &&
+        now - first_at < std::chrono::seconds(1))
+      continue;
+    if (st.signals.load() == 0) {
+      first_sig = sig;
+      first_pid = info.si_pid;
+      first_at = now;
     }
     if (st.signals.fetch_add(1) > 0) {
       // A second signal forces the exit at once, with whatever safe states were attempted.

@@ -1,6 +1,10 @@
 // fba-run's contract with the shell: exit statuses, signals, --check, --dot, --output-dir.
 #include <gtest/gtest.h>
 
+#include <chrono>
+
+#include <thread>
+
 #include <nlohmann/json.hpp>
 
 #include "fba_run_process.hpp"
@@ -259,10 +263,25 @@ TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) 
   ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
   p.signal(SIGINT);
   ASSERT_TRUE(p.wait_for_output("SIGINT received")) << p.output();
+  // Over a second later: the same signal from the same process sooner is taken as one request.
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
   p.signal(SIGINT);
   const auto r = p.wait();
   EXPECT_EQ(r.status, 130) << r.output;
   EXPECT_NE(r.output.find("second SIGINT while stopping: exiting now"), std::string::npos) << r.output;
+}
+
+// timeout(1) sends its signal to fba-run and again to the process group: one request, which
+// stops the run in order (safe states, summary), not a forced exit.
+TEST(CliMisbehaving, TheSameSignalTwiceAtOnceFromOneSenderIsOneRequest) {
+  const fs::path out = temp_dir("double-sigterm");
+  Process p({task("chain.yaml"), "--set", "source.rate=10", "--output-dir", out.string()}, {}, /*signals_blocked=*/true);
+  p.signal(SIGTERM);
+  p.signal(SIGTERM);
+  const auto r = p.wait();
+  EXPECT_EQ(r.status, 143) << r.output;
+  EXPECT_EQ(r.output.find("second SIGTERM"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
 }
 
 // ---------------------------------------------------------------------------------------------
