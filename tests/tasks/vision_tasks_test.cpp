@@ -130,3 +130,26 @@ TEST_P(CarveSim, ModelMatchesTheMesh) {
   EXPECT_NE(accuracy->payload.find("\"carved_away\": 0,"), std::string::npos) << accuracy->payload;
   EXPECT_NE(accuracy->payload.find("\"mesh_inside_box\": true"), std::string::npos) << accuracy->payload;
 }
+
+// The whole simulated loop is wired: the planner's initial views reach the arm, the camera
+// renders from where the arm took it, the model is carved, synthesis selects a grasp and the
+// hand runs the lift test on it; the run ends on the hand's verdict (held or dropped, with the
+// lift test's reason), not on a stall or a time-out.
+TEST(GraspSimTask, TheLoopRunsFromTheArmsViewsToTheHandsLiftTest) {
+  fba::RunOptions options;
+  options.executor = fba::ExecutorKind::Deterministic;
+  options.timeout_s = 600;  // a hang detector only: the run takes about a second
+  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_sim.yaml", registry()), options);
+  const auto r = task.run();
+  ASSERT_TRUE(r.final_event) << r.reason;
+  EXPECT_EQ(r.final_event->source, "hand") << r.reason;
+  bool selected = false;
+  std::size_t arrivals = 0;
+  for (const auto& e : r.events) {
+    selected = selected || (e.source == "synthesis" && e.name == "grasp_selected");
+    arrivals += e.source == "arm" && e.name == "arrived";
+  }
+  EXPECT_TRUE(selected);
+  EXPECT_GE(arrivals, 3u);
+  EXPECT_NE(r.final_event->payload.find("\"held\""), std::string::npos) << r.final_event->payload;
+}

@@ -111,7 +111,17 @@ class OctreeCarverFilter final : public fba::Component {
   void process() override {
     const auto regions = ctx_(kRegions);
     const auto silhouette = ctx_(kSilhouette);
-    if (regions.has()) carver_.set_regions_of_interest(regions.get());
+    // The same regions again (synthesis asks after every model) change nothing: publishing the
+    // same model would only bring the same request back, around the feedback loop for ever.
+    bool new_regions = false;
+    if (regions.has()) {
+      const auto& boxes = regions.get().boxes;
+      new_regions = !same_boxes(boxes, last_regions_);
+      if (new_regions) {
+        last_regions_ = boxes;
+        carver_.set_regions_of_interest(regions.get());
+      }
+    }
     if (silhouette.has()) {
       const auto& s = silhouette.get();
       // A frame without a pose projects through an identity camera: the cones would not meet,
@@ -134,7 +144,7 @@ class OctreeCarverFilter final : public fba::Component {
       } else {
         carver_.add_view(s);
       }
-    } else if (!has_bounds_ || !regions.has()) {
+    } else if (!has_bounds_ || !new_regions) {
       return;
     }
     publish();
@@ -159,6 +169,13 @@ class OctreeCarverFilter final : public fba::Component {
   }
 
  private:
+  static bool same_boxes(const std::vector<Eigen::AlignedBox3d>& a, const std::vector<Eigen::AlignedBox3d>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (!a[i].min().isApprox(b[i].min(), 0) || !a[i].max().isApprox(b[i].max(), 0)) return false;
+    return true;
+  }
+
   // The model seen from beside the first camera: turned 35 degrees around the model, raised 25
   // and framed whole, lit from the upper left, so that its sides and voxel steps show.
   static cv::Mat picture(const fba::Octree& model, const fba::CameraModel& first) {
@@ -340,6 +357,7 @@ class OctreeCarverFilter final : public fba::Component {
   const double margin_;
   const bool compare_uniform_;
   bool has_bounds_ = false;
+  std::vector<Eigen::AlignedBox3d> last_regions_;  // the regions of interest in force
   std::vector<fba::Silhouette> views_;  // every view so far (geometry_of): the checks at the end
   std::vector<fba::Silhouette> pending_;
   std::optional<fba::CameraModel> first_camera_;
