@@ -1,6 +1,7 @@
 // vision.octree_carver: the paper's Algorithms 1 and 2. Each silhouette refines one octree
 // model; regions of interest from grasp synthesis ask for detail where fingers may go. Every
 // update is published as an immutable snapshot.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -170,10 +171,7 @@ class OctreeCarverFilter final : public fba::Component {
 
  private:
   static bool same_boxes(const std::vector<Eigen::AlignedBox3d>& a, const std::vector<Eigen::AlignedBox3d>& b) {
-    if (a.size() != b.size()) return false;
-    for (std::size_t i = 0; i < a.size(); ++i)
-      if (!a[i].min().isApprox(b[i].min(), 0) || !a[i].max().isApprox(b[i].max(), 0)) return false;
-    return true;
+    return std::ranges::equal(a, b, [](const auto& x, const auto& y) { return x.min() == y.min() && x.max() == y.max(); });
   }
 
   // The model seen from beside the first camera: turned 35 degrees around the model, raised 25

@@ -286,16 +286,10 @@ TEST(RoiCriterion, RefinesOnlyNodesThatIntersectTheRegion) {
 
 // The target, with the default (conservative) leaf test. At depth 8 the model reaches
 // mean 0.978: a finest voxel projects to ~2 px, and the model's outline lies up to half a voxel
-// plus the tolerance outside the silhouette; depth 9 halves the voxel. Under the sanitizers, which
-// make a depth-9 carve take minutes, the same check runs at depth 7 with the mean that depth
-// reaches (measured: mean 0.9701, min 0.9541); the full targets stay with the plain build.
-#if FBA_TEST_SANITIZED
-constexpr int kDinoDepth = 7;
-constexpr double kDinoMeanIoU = 0.965, kDinoMinIoU = 0.95;
-#else
+// plus the tolerance outside the silhouette; depth 9 halves the voxel. Checked at depth 9 in every
+// build (a few seconds under the sanitizers).
 constexpr int kDinoDepth = 9;
 constexpr double kDinoMeanIoU = 0.98, kDinoMinIoU = 0.95;
-#endif
 
 TEST(DinoReprojection, IoUTargetsMetAtTheTestDepth) {
   CarverParams p;
