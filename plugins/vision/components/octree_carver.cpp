@@ -36,8 +36,8 @@ class OctreeCarverFilter final : public fba::Component {
                                                   .range(0, 1);
   static constexpr fba::Param<bool> kGraspContour{
       "grasp_contour", false,
-      "grasp criterion without regions of interest: split a node whose projection holds a contour point flatter than "
-      "curvature_threshold (flat or concave: where fingers may go)"};
+      "grasp criterion without regions of interest: split a node whose projection holds a point of the outer or a hole's "
+      "contour flatter than curvature_threshold (flat or concave: where fingers may go; a round hole's rim is concave)"};
   static constexpr auto kCurvatureThreshold = fba::Param<double>(
       "curvature_threshold", 0.01, "1/pixel: with grasp_contour, contour points of lower signed curvature (convex > 0) are graspable")
                                                   .range(-1, 1);

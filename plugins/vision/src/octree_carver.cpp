@@ -42,13 +42,20 @@ ViewData make_view(const fba::Silhouette& s, double curvature_threshold) {
   cv::Mat ones = s.mask > 0;
   ones /= 255;  // integral of 0/1: pixel counts
   cv::integral(ones, v.integral, CV_32S);
-  if (std::isfinite(curvature_threshold) && !s.contour.empty()) {
+  if (std::isfinite(curvature_threshold)) {
+    // Every boundary of the object is outline that fingers may hold: the outer contour and each
+    // hole's (the rim of a handle's hole). Their curvature has one sign convention (convex > 0,
+    // a hole's normal pointing into the hole), so a round hole's rim is concave and graspable.
     cv::Mat graspable = cv::Mat::zeros(s.mask.size(), CV_8UC1);
-    for (std::size_t i = 0; i < s.contour.size() && i < s.curvature.size(); ++i) {
-      const cv::Point q = s.contour[i];
-      if (s.curvature[i] < curvature_threshold && q.x >= 0 && q.y >= 0 && q.x < v.width && q.y < v.height)
-        graspable.at<std::uint8_t>(q) = 1;
-    }
+    auto mark = [&](const fba::Outline& o) {
+      for (std::size_t i = 0; i < o.contour.size() && i < o.curvature.size(); ++i) {
+        const cv::Point q = o.contour[i];
+        if (o.curvature[i] < curvature_threshold && q.x >= 0 && q.y >= 0 && q.x < v.width && q.y < v.height)
+          graspable.at<std::uint8_t>(q) = 1;
+      }
+    };
+    mark(s);
+    for (const auto& h : s.holes) mark(h);
     cv::integral(graspable, v.graspable_integral, CV_32S);
   }
   return v;

@@ -60,13 +60,17 @@ View prepare(const fba::Silhouette& s, double curvature_threshold) {
   v.mask = s.mask.data;
   v.step = s.mask.step;
   v.sum = summed_area(v.w, v.h, [&](int x, int y) { return v.mask[std::size_t(y) * v.step + std::size_t(x)] != 0; });
-  if (std::isfinite(curvature_threshold) && !s.contour.empty()) {
+  if (std::isfinite(curvature_threshold)) {
+    // Points of the outer contour and of every hole's contour (both outline of the object).
     std::vector<std::uint8_t> g(std::size_t(v.w) * std::size_t(v.h), 0);
-    for (std::size_t i = 0; i < s.contour.size() && i < s.curvature.size(); ++i) {
-      const cv::Point q = s.contour[i];
-      if (s.curvature[i] < curvature_threshold && q.x >= 0 && q.y >= 0 && q.x < v.w && q.y < v.h)
-        g[std::size_t(q.y) * std::size_t(v.w) + std::size_t(q.x)] = 1;
-    }
+    std::vector<const fba::Outline*> outlines{&s};
+    for (const auto& h : s.holes) outlines.push_back(&h);
+    for (const fba::Outline* o : outlines)
+      for (std::size_t i = 0; i < o->contour.size() && i < o->curvature.size(); ++i) {
+        const cv::Point q = o->contour[i];
+        if (o->curvature[i] < curvature_threshold && q.x >= 0 && q.y >= 0 && q.x < v.w && q.y < v.h)
+          g[std::size_t(q.y) * std::size_t(v.w) + std::size_t(q.x)] = 1;
+      }
     v.grasp_sum = summed_area(v.w, v.h, [&](int x, int y) { return g[std::size_t(y) * std::size_t(v.w) + std::size_t(x)] != 0; });
   }
   return v;

@@ -10,6 +10,7 @@
 
 #include "carve_common.hpp"
 #include "fba/geometry/viewpoints.hpp"
+#include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/octree_carver.hpp"
 #include "fba/vision/reference_carve.hpp"
 
@@ -144,4 +145,28 @@ TEST(GenericCriterion, FastCarverAndReferenceAgreeAtAThresholdBetween) {
     EXPECT_EQ(count_leaf_mismatches(ref, *fast.snapshot()), 0u) << t;
     if (t < 0.5) EXPECT_GT(fast.snapshot()->node_count, 1u) << t;  // the criterion split something
   }
+}
+
+// The grasp criterion's contour points come from every boundary of the silhouette with one sign
+// convention: on a ring, the hole's rim is concave (curvature -1/r, the normal into the hole), so
+// at threshold 0 all its points are graspable and none of the convex outer circle's are.
+TEST(GraspCriterion, HoleRimsAreConcaveAndCountAsGraspableContour) {
+  cv::Mat ring = cv::Mat::zeros(480, 640, CV_8UC1);
+  cv::circle(ring, {320, 240}, 140, cv::Scalar(255), cv::FILLED);
+  cv::circle(ring, {320, 240}, 80, cv::Scalar(0), cv::FILLED);
+  const ExtractionResult r = silhouette_from_mask(ring, camera_around(0, 20));
+  ASSERT_TRUE(r.ok()) << r.error;
+  const fba::Silhouette& s = *r.silhouette;
+  ASSERT_EQ(s.holes.size(), 1u);
+  const ViewData v = make_view(s, 0.0);
+  const std::int64_t all = rect_sum(v.graspable_integral, 0, 0, v.width - 1, v.height - 1);
+  // Every graspable point is within the hole's rim (radius ~81), and the rim's points (1 px
+  // apart along ~510 px) take as many pixels, less those that round to the same one.
+  EXPECT_EQ(rect_sum(v.graspable_integral, 320 - 90, 240 - 90, 320 + 90, 240 + 90), all);
+  EXPECT_GE(all, std::int64_t(0.7 * double(s.holes[0].contour.size())));
+  // Without its holes' contours the same mask has no graspable point at threshold 0.
+  fba::Silhouette outer_only = s;
+  outer_only.holes.clear();
+  const ViewData o = make_view(outer_only, 0.0);
+  EXPECT_EQ(rect_sum(o.graspable_integral, 0, 0, o.width - 1, o.height - 1), 0);
 }

@@ -34,7 +34,9 @@
 //    (generic criterion) or a grasp criterion asks: the node
 //    intersects a region of interest, or in some view where it is not wholly inside, its
 //    rectangle holds a contour point whose curvature is below curvature_threshold (a region that
-//    may be grasped). The share is measured over the projected node (the convex hull of its 8
+//    may be grasped); the points of the holes' contours count as the outer contour's do (a
+//    hole's rim is outline too, and with the outward normal pointing into the hole a round hole
+//    is concave, so graspable at a threshold of 0). The share is measured over the projected node (the convex hull of its 8
 //    projected corners, see hull_share in carve_common.hpp), not its rectangle, so that it does
 //    not depend on the viewing angle; a Partial node's share lies strictly between 0 and 1, so
 //    threshold 0 splits every Partial node (uniform refinement) and 1 switches the generic
@@ -74,8 +76,9 @@ struct CarverParams {
   // outside the silhouette wherever they meet its outline stay coarse, so that a grasp criterion
   // decides where detail goes; 1 switches it off.
   double occupancy_threshold = 0.0;
-  // Grasp criterion on the contour: split where a contour point with curvature (1/px) below
-  // this falls in the node's rectangle. -infinity (default) switches it off.
+  // Grasp criterion on the contour: split where a point of the outer or a hole's contour with
+  // curvature (1/px, convex > 0) below this falls in the node's rectangle. -infinity (default)
+  // switches it off.
   double curvature_threshold = -std::numeric_limits<double>::infinity();
   // Pixels: how far from a projection a silhouette pixel's square still counts (see above).
   // sqrt(2)/2 keeps the carve conservative for perfect masks of silhouettes at least one pixel
