@@ -91,10 +91,10 @@ INSTANTIATE_TEST_SUITE_P(Ycb, CarveSim, ::testing::Values("YcbMustardBottle", "Y
 
 // The whole pipeline on rendered images (contour extraction included, the root box estimated
 // from the silhouettes) against the mesh's true voxelisation at the model's resolution.
-// Nothing truly occupied may be carved. The issue's IoU target (0.90) is defined with perfect
-// silhouettes and the object's box, and is asserted in fba_evaluate_tests; here the root comes
-// from viewing cones, and at 64^3 a flat-faced box's IoU moves by about 0.01 with where the
-// lattice falls against its faces (the cracker box: 0.895 here, 0.904 there), hence 0.88.
+// Nothing truly occupied may be carved, and the issue's IoU target (0.90) holds. The task takes 20
+// views: at 8 the cracker box's visual hull keeps wedges along its edges that no view cuts, and it
+// scored 0.895 here (0.904 with perfect masks and its own box); see tasks/carve_sim.yaml. Measured
+// at 20 views: mustard 0.944, can 0.941, banana 0.948, cracker box 0.938.
 TEST_P(CarveSim, ModelMatchesTheMesh) {
   const std::string mesh = std::string(FBA_SHARED_DATA_DIR) + "/ycb/" + GetParam() + "/model.obj";
   fba::LoadOptions o;
@@ -113,7 +113,7 @@ TEST_P(CarveSim, ModelMatchesTheMesh) {
   const auto lost = fba::geometry::carved_away(truth, carved);
   RecordProperty("iou", std::to_string(iou));
   RecordProperty("carved_away", std::to_string(lost));
-  EXPECT_GE(iou, 0.88) << GetParam();
+  EXPECT_GE(iou, 0.90) << GetParam();
   EXPECT_EQ(lost, 0u) << GetParam();
   // The task scores itself the same way (vision.model_accuracy, into summary.json's events).
   const auto accuracy = std::find_if(r.events.begin(), r.events.end(), [](const fba::Event& e) { return e.name == "accuracy"; });
