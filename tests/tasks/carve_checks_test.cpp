@@ -3,10 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <string>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include <fba/task.hpp>
 #include <fba/types/octree.hpp>
+
+#include "fba/geometry/mesh_io.hpp"
+#include "fba/vision/octree_carver.hpp"
 
 #include "support/built_plugins.hpp"
 
@@ -72,6 +78,37 @@ TEST(CarveChecks, TheDinoAsWrittenPassesEveryCheck) {
   EXPECT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
   EXPECT_EQ(find_event(r, "suspect_model"), nullptr);
   EXPECT_EQ(find_event(r, "model_warning"), nullptr);
+}
+
+// With an output folder the carver writes the last model's surface (model.ply) and a picture of
+// it (model.png); it builds the surface once for both, after releasing the carver, and the file
+// holds exactly the mesh that vision::write_ply writes for the published model.
+TEST(CarveOutputs, ModelPlyIsTheLastModelsSurfaceAndThePictureShowsIt) {
+  const auto dir = std::filesystem::path(::testing::TempDir()) /
+                   ("carve_outputs_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  fba::LoadOptions lo;
+  lo.overrides = {{"carver.max_depth=6"}};
+  fba::RunOptions o;
+  o.executor = fba::ExecutorKind::Deterministic;
+  o.timeout_s = 300;
+  o.output_dir = dir;
+  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/carve_dino.yaml", registry(), lo), o);
+  const auto& models = task.tap("carver.octree", 1);
+  const auto r = task.run();
+  ASSERT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
+  ASSERT_FALSE(models.empty());
+  const fba::TriangleMesh expected = fba::vision::occupied_surface_mesh(models.back().get<fba::Octree>());
+  const fba::TriangleMesh written = fba::geometry::load_mesh(dir / "model.ply");
+  ASSERT_GT(expected.triangles.size(), 1000u);
+  EXPECT_EQ(written.vertices, expected.vertices);
+  EXPECT_EQ(written.triangles, expected.triangles);
+  const cv::Mat picture = cv::imread((dir / "model.png").string(), cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(picture.empty());
+  const int object = cv::countNonZero(picture < 250);  // on a white background
+  EXPECT_GT(object, picture.total() / 50) << "of " << picture.total() << " pixels";
+  std::filesystem::remove_all(dir);
 }
 
 // Algorithm 2 with the grasp criterion alone: coarse where the contour is convex, fine where it
