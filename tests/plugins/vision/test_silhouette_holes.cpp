@@ -1,11 +1,13 @@
 // Objects you can see through, rendered by the simulated camera's renderer: the extraction keeps
 // their through-holes in the silhouette, and the carver carves them out.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -57,6 +59,43 @@ TriangleMesh mug() {
   return geometry::grid_to_mesh(g);
 }
 
+// Scissors lying flat (8 mm thick, centred on z = 0): two tapered blades crossing at the pivot,
+// handles back to two finger loops (inner radius 12 mm, outer 19 mm) centred at (-0.055,
+// +-0.025), as voxels turned into a closed surface.
+constexpr double kLoopX = -0.055, kLoopY = 0.025, kLoopInner = 0.012, kLoopOuter = 0.019, kHalfThickness = 0.004;
+
+TriangleMesh scissors() {
+  // Distance from p to the segment [a, b] in the xy plane.
+  auto to_segment = [](const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    const Eigen::Vector2d d = b - a;
+    const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    return std::make_pair((p - a - t * d).norm(), t);
+  };
+  geometry::VoxelGrid g(Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.1), Eigen::Vector3d::Constant(0.1)), 96);
+  for (int k = 0; k < g.n; ++k)
+    for (int j = 0; j < g.n; ++j)
+      for (int i = 0; i < g.n; ++i) {
+        const Eigen::Vector3d c = g.centre(i, j, k);
+        if (std::abs(c.z()) >= kHalfThickness) continue;
+        const Eigen::Vector2d p = c.head<2>();
+        bool in = false;
+        for (double side : {-1.0, 1.0}) {
+          // A blade from just behind the pivot to its tip, 7 degrees off the x axis, 7 mm wide at
+          // the pivot narrowing to 1 mm.
+          const double a = side * 7 * std::numbers::pi / 180;
+          const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+          const auto [blade, t] = to_segment(p, -0.01 * dir, 0.09 * dir);
+          in = in || blade < 0.0035 - 0.003 * t;
+          // The handle, from the pivot to the loop's rim, and the loop.
+          const Eigen::Vector2d loop(kLoopX, side * kLoopY);
+          const double r = (p - loop).norm();
+          in = in || (r >= kLoopInner && (r <= kLoopOuter || to_segment(p, Eigen::Vector2d::Zero(), loop).first < 0.004));
+        }
+        if (in) g.set(i, j, k);
+      }
+  return geometry::grid_to_mesh(g);
+}
+
 struct Carved {
   std::vector<Silhouette> silhouettes;
   std::vector<cv::Mat> rendered_masks;
@@ -92,16 +131,21 @@ Carved render_extract(const TriangleMesh& mesh, const vision::ExtractionParams& 
   return out;
 }
 
-// ... and carves them with uniform detail.
-Carved render_extract_carve(const TriangleMesh& mesh, const vision::ExtractionParams& p, int views = 12) {
-  Carved out = render_extract(mesh, p, views);
+// The silhouettes carved with uniform detail, as a grid.
+geometry::VoxelGrid carve(const TriangleMesh& mesh, const std::vector<Silhouette>& silhouettes) {
   vision::CarverParams cp;
   cp.max_depth = kDepth;
   cp.detail_after_views = 0;
   vision::OctreeCarver carver(cp);
   carver.set_bounds(root_cube(mesh));
-  carver.add_views(out.silhouettes);
-  out.model = geometry::rasterize_octree(*carver.snapshot());
+  carver.add_views(silhouettes);
+  return geometry::rasterize_octree(*carver.snapshot());
+}
+
+// Renders, extracts and carves.
+Carved render_extract_carve(const TriangleMesh& mesh, const vision::ExtractionParams& p, int views = 12) {
+  Carved out = render_extract(mesh, p, views);
+  out.model = carve(mesh, out.silhouettes);
   return out;
 }
 
@@ -129,7 +173,8 @@ Counts count_in(const geometry::VoxelGrid& g, const std::function<bool(const Eig
 
 // The rule checked on each object: (a) the hole is in the masks, which hold every rendered
 // object pixel; (b) the carve empties the through-hole that the filled silhouettes leave full;
-// (c) it is closer to the true voxelisation, and still never carves a true voxel.
+// (c) it is closer to the true voxelisation, as close as the renderer's exact masks get, and
+// still never carves a true voxel.
 void check_through_hole(const TriangleMesh& mesh, const std::function<bool(const Eigen::Vector3d&)>& hole) {
   const Carved with = render_extract_carve(mesh, params(true));
   const Carved filled = render_extract_carve(mesh, params(false));
@@ -155,8 +200,16 @@ void check_through_hole(const TriangleMesh& mesh, const std::function<bool(const
   const double iou_with = geometry::iou(truth, with.model), iou_filled = geometry::iou(truth, filled.model);
   EXPECT_GT(iou_with, iou_filled + 0.02) << "with holes " << iou_with << ", filled " << iou_filled;
   EXPECT_EQ(geometry::carved_away(truth, with.model), 0u);
+  // For scale: the renderer's own masks (exact), carved the same way.
+  std::vector<Silhouette> exact = with.silhouettes;
+  for (std::size_t v = 0; v < exact.size(); ++v) exact[v].mask = with.rendered_masks[v];
+  const double iou_exact = geometry::iou(truth, carve(mesh, exact));
   ::testing::Test::RecordProperty("iou_with_holes", std::to_string(iou_with));
   ::testing::Test::RecordProperty("iou_holes_filled", std::to_string(iou_filled));
+  ::testing::Test::RecordProperty("iou_exact_masks", std::to_string(iou_exact));
+  std::printf("voxel IoU against the true voxelisation: %.4f with holes, %.4f holes filled, %.4f exact masks\n", iou_with,
+              iou_filled, iou_exact);
+  EXPECT_GE(iou_with, iou_exact - 0.01);  // the extracted silhouettes lose (almost) nothing against exact masks
 }
 
 }  // namespace
@@ -229,4 +282,14 @@ TEST(ThroughHoles, GraspCriterionRefinesAlongTheRimOfTheHandlesHole) {
   EXPECT_GE(with_holes, 0.95 * double(uniform));  // measured 290 of 293
   EXPECT_LT(10 * without, with_holes);            // measured 0
   EXPECT_GT(holes->node_count, outer->node_count);
+}
+
+// Scissors' finger loops, the example of holes that a filled silhouette never carves.
+// Measured: voxel IoU 0.389 with holes (the same with exact masks) against 0.290 with the holes
+// filled. Twelve views bound an 8 mm plate loosely, hence the low IoU either way.
+TEST(ThroughHoles, ScissorsFingerLoopsAreKeptInTheSilhouettesAndCarved) {
+  check_through_hole(scissors(), [](const Eigen::Vector3d& p) {
+    const double r = std::min(std::hypot(p.x() - kLoopX, p.y() - kLoopY), std::hypot(p.x() - kLoopX, p.y() + kLoopY));
+    return r < 0.6 * kLoopInner && std::abs(p.z()) < 0.8 * kHalfThickness;
+  });
 }
