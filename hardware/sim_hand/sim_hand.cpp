@@ -11,6 +11,7 @@
 #include <fba/types/grasp_execution.hpp>
 
 #include "fba/geometry/mesh_io.hpp"
+#include "hand_ports.hpp"
 #include "lift_test.hpp"
 
 namespace {
@@ -30,11 +31,10 @@ nlohmann::json to_json(const fba::GraspExecution& e) {
 
 class SimHand final : public fba::Component {
  public:
-  static constexpr fba::In<fba::Grasp> kGrasp{"grasp", "the grasp to execute, in the frame the 'frame' parameter names"};
-  static constexpr fba::Out<fba::GraspExecution> kResult{"result", "what the lift test measured: held, slip, real contacts, reason"};
-  static constexpr fba::EventOut kHeld{"held", "the object was lifted and held; payload: the result as JSON"};
-  static constexpr fba::EventOut kDropped{
-      "dropped", "the grasp failed (out of reach, collision, no contact, dropped); payload: the result as JSON with the reason"};
+  static constexpr auto kGrasp = fba::hand::kGrasp;  // grasps in the frame the 'frame' parameter names
+  static constexpr auto kResult = fba::hand::kResult;
+  static constexpr auto kHeld = fba::hand::kHeld;
+  static constexpr auto kDropped = fba::hand::kDropped;
   static constexpr fba::Param<std::filesystem::path> kMesh{
       "mesh", fba::required, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up; it rests on the table at z = 0"};
   static constexpr auto kObjectX = fba::Param<double>("object_x", 0.0, "the object's position on the table, metres").range(-1, 1);

@@ -1,0 +1,348 @@
+// hw.robotiq_3f through the component harness, against the gripper emulator on a pseudo-terminal:
+// libmodbus's real serial code on both ends. Activation, grasps that hold and grasps that do not,
+// and each fault ending in a report that names the device and the reason, never a hang.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include <fba/testing.hpp>
+#include <fba/types/grasp.hpp>
+#include <fba/types/grasp_execution.hpp>
+
+#include "fba/can/pty.hpp"
+#include "fba/emulators/robotiq_3f.hpp"
+#include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
+
+using fba::emulators::Robotiq3fEmulator;
+using fba::emulators::Robotiq3fOptions;
+using fba::testing::ComponentHarness;
+
+namespace {
+
+const fba::Registry& registry() { return fba::test::built_plugins(); }
+
+// The emulator in a thread of its own on the master end of a pseudo-terminal.
+class EmulatedHand {
+ public:
+  explicit EmulatedHand(Robotiq3fOptions options = quick())
+      : pty_(fba::can::open_pty()), emulator_(std::move(pty_.master), "emulator", options), thread_([this] { emulator_.run(); }) {}
+  ~EmulatedHand() {
+    emulator_.stop();
+    thread_.join();
+  }
+  const std::string& device() const { return pty_.slave_path; }
+  Robotiq3fEmulator& emulator() { return emulator_; }
+
+  static Robotiq3fOptions quick() {
+    Robotiq3fOptions o;
+    o.activation_s = 0.05;
+    return o;
+  }
+
+ private:
+  fba::can::Pty pty_;
+  Robotiq3fEmulator emulator_;
+  std::thread thread_;
+};
+
+// Generous answer times: the emulator's thread may wait for a core on a loaded machine.
+fba::testing::Params params(const std::string& device, fba::testing::Params more = {}) {
+  fba::testing::Params p{{"device", device}, {"response_timeout", 1.0}, {"retries", 1}, {"poll_period", 0.01}, {"hold_time", 0.2}};
+  for (auto& [k, v] : more) p[k] = v;
+  return p;
+}
+
+// A grasp of the emulator's default object (0.06 m across, centred): 0.1 m open, fingers 0.03 m apart.
+fba::Grasp grasp(double aperture = 0.1, double spread = 0.03) {
+  fba::Grasp g;
+  g.contacts[0].position = {0.03, 0, 0.05};
+  g.contacts[1].position = {-0.026, 0.015, 0.05};
+  g.contacts[2].position = {-0.026, -0.015, 0.05};
+  g.aperture = aperture;
+  g.spread = spread;
+  return g;
+}
+
+std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::string& name) {
+  std::vector<fba::Event> out;
+  for (const auto& e : events)
+    if (e.name == name) out.push_back(e);
+  return out;
+}
+
+// Runs `action` once the emulator's state satisfies `when` (polled), from a thread of its own.
+class When {
+ public:
+  When(Robotiq3fEmulator& emu, std::function<bool(const Robotiq3fEmulator::State&)> when, std::function<void()> action)
+      : thread_([&emu, when = std::move(when), action = std::move(action), this] {
+          while (!cancel_ && !when(emu.state())) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+          if (!cancel_) action();
+        }) {}
+  ~When() {
+    cancel_ = true;
+    thread_.join();
+  }
+
+ private:
+  std::atomic<bool> cancel_{false};
+  std::thread thread_;
+};
+
+bool closing(const Robotiq3fEmulator::State& s) { return s.go && s.axes[0].request == 255 && s.axes[0].position > 1; }
+
+}  // namespace
+
+TEST(Robotiq3fSpec, PortsAndEventsAreSimHands) {
+  const auto real = registry().find("hw.robotiq_3f");
+  ASSERT_TRUE(real);
+  const auto sim = registry().find("sim.hand");
+  if (!sim) GTEST_SKIP() << "sim.hand is not built here (no MuJoCo): nothing to compare with";
+  auto ports = [](const std::vector<fba::PortSpec>& list) {
+    std::vector<std::tuple<std::string, std::string, bool>> out;
+    for (const auto& p : list) out.emplace_back(p.name, p.type->name, p.required);
+    return out;
+  };
+  auto events = [](const fba::Spec& s) {
+    std::vector<std::string> out;
+    for (const auto& e : s.events()) out.push_back(e.name);
+    return out;
+  };
+  EXPECT_EQ(ports(real->spec.inputs()), ports(sim->spec.inputs()));
+  EXPECT_EQ(ports(real->spec.outputs()), ports(sim->spec.outputs()));
+  EXPECT_EQ(events(real->spec), events(sim->spec));
+}
+
+TEST(Robotiq3f, ActivatesWhenTheTaskStarts) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  const auto s = hand.emulator().state();
+  EXPECT_TRUE(s.activated);
+  EXPECT_EQ(s.imc, 3);
+  EXPECT_EQ(s.mode, 0);  // auto runs in basic mode
+}
+
+TEST(Robotiq3f, GraspThatTouchesTheObjectWithEveryFingerIsHeld) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  h.push("grasp", grasp());
+  ASSERT_EQ(h.run(), 1);
+  ASSERT_EQ(h.failure(), "");
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_TRUE(results[0].held) << results[0].reason;
+  ASSERT_EQ(results[0].contacts.size(), 3u);
+  EXPECT_EQ(results[0].contacts[0].link, "finger_a");
+  EXPECT_EQ(results[0].contacts[0].position, grasp().contacts[0].position);
+  EXPECT_GE(results[0].hold_s, 0.2);
+  ASSERT_EQ(named(h.events(), "held").size(), 1u);
+  const auto payload = nlohmann::json::parse(named(h.events(), "held")[0].payload);
+  EXPECT_EQ(payload["fingers"][0]["object"], "stopped by contact while closing");
+  // The fingers stopped on the object, not at the request: thumb 0.03 m from the centre.
+  const auto s = hand.emulator().state();
+  EXPECT_NEAR(s.axes[0].position, 255 * (1 - 0.03 / 0.0775), 1.0);
+  EXPECT_EQ(s.axes[0].request, 255);
+  // The spread set the scissor (individual scissor control): 0.03 of 0.12 m.
+  EXPECT_EQ(s.axes[3].request, std::lround(255 * (1 - 0.03 / 0.12)));
+}
+
+TEST(Robotiq3f, GraspWithNothingBetweenTheFingersIsNotHeldAndSaysWhy) {
+  auto options = EmulatedHand::quick();
+  options.object = false;
+  EmulatedHand hand(options);
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  h.push("grasp", grasp());
+  ASSERT_EQ(h.run(), 1);
+  ASSERT_EQ(h.failure(), "");
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_FALSE(results[0].held);
+  EXPECT_NE(results[0].reason.find("no contact: the fingers closed without touching anything"), std::string::npos) << results[0].reason;
+  EXPECT_TRUE(results[0].contacts.empty());
+  EXPECT_EQ(named(h.events(), "dropped").size(), 1u);
+}
+
+TEST(Robotiq3f, SpreadWiderThanTheObjectMissesWithFingersBAndC) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  h.push("grasp", grasp(0.1, 0.1));  // B and C 0.1 m apart pass beside a 0.06 m object
+  ASSERT_EQ(h.run(), 1);
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_FALSE(results[0].held);
+  EXPECT_NE(results[0].reason.find("no contact on B, C"), std::string::npos) << results[0].reason;
+  ASSERT_EQ(results[0].contacts.size(), 1u);
+  EXPECT_EQ(results[0].contacts[0].link, "finger_a");
+}
+
+TEST(Robotiq3f, ObjectSlippingOutDuringTheHoldIsDropped) {
+  EmulatedHand hand;
+  // A long hold: the object slips out during it however slowly this machine runs.
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
+  When slip(
+      hand.emulator(), [](const auto& s) { return s.axes[0].contact == 2 && s.axes[1].contact == 2 && s.axes[2].contact == 2; },
+      [&] { hand.emulator().remove_object(); });
+  h.push("grasp", grasp());
+  ASSERT_EQ(h.run(), 1);
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_FALSE(results[0].held);
+  EXPECT_NE(results[0].reason.find("dropped: finger"), std::string::npos) << results[0].reason;
+  EXPECT_NE(results[0].reason.find("lost its contact"), std::string::npos) << results[0].reason;
+  EXPECT_EQ(named(h.events(), "dropped").size(), 1u);
+}
+
+TEST(Robotiq3f, ScissorModePinchesBetweenFingersBAndC) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device(), {{"mode", std::string("scissor")}}));
+  EXPECT_EQ(hand.emulator().state().mode, 3);
+  h.push("grasp", grasp());
+  ASSERT_EQ(h.run(), 1);
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_TRUE(results[0].held) << results[0].reason;
+  ASSERT_EQ(results[0].contacts.size(), 1u);
+  EXPECT_EQ(results[0].contacts[0].link, "scissor");
+}
+
+TEST(Robotiq3f, SafeStateStopsThenOpens) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  h.push("grasp", grasp());
+  ASSERT_EQ(h.run(), 1);
+  h.safe_state();
+  const auto s = hand.emulator().state();
+  for (int axis = 0; axis < 3; ++axis) {
+    EXPECT_EQ(s.axes[axis].request, 0);
+    EXPECT_EQ(s.axes[axis].position, 0);
+  }
+}
+
+// --- Faults: each ends in a report naming the device and the reason, and safe_state() returns.
+
+TEST(Robotiq3fFaults, GripperThatStopsAnsweringIsATimeoutNamingTheDevice) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  When silence(hand.emulator(), closing, [&] { hand.emulator().silence(); });
+  h.push("grasp", grasp());
+  h.run();
+  const std::string failure = h.failure();
+  EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
+  EXPECT_NE(failure.find("no answer within 1 s (Modbus timeout"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("2 tries"), std::string::npos) << failure;
+  // The hand cannot be reached: safe_state() says so, in bounded time, rather than waiting.
+  try {
+    h.safe_state();
+    ADD_FAILURE() << "safe_state() reached a gripper that does not answer";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find(hand.device()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("safe state (stop)"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Robotiq3fFaults, LineThatDisappearsMidMotionIsReportedAtOnce) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  When pull(hand.emulator(), closing, [&] { hand.emulator().disconnect(); });
+  h.push("grasp", grasp());
+  h.run();
+  const std::string failure = h.failure();
+  EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
+  EXPECT_NE(failure.find("closing"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("the serial line is gone"), std::string::npos) << failure;
+  try {
+    h.safe_state();
+    ADD_FAILURE() << "safe_state() reached a gripper whose line is gone";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("the serial line is gone"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Robotiq3fFaults, AnswersWithBadCrcsFailTheGraspThenTheSafeStateIsReached) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  hand.emulator().corrupt_replies(-1);
+  h.push("grasp", grasp());
+  h.run();
+  const std::string failure = h.failure();
+  EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
+  EXPECT_NE(failure.find("CRC was wrong"), std::string::npos) << failure;
+  hand.emulator().corrupt_replies(0);  // the noise stops: the hand stops and opens
+  h.safe_state();
+  const auto s = hand.emulator().state();
+  EXPECT_TRUE(s.go);
+  EXPECT_EQ(s.axes[0].request, 0);
+}
+
+TEST(Robotiq3fFaults, OneBurstOfGarbageIsRetriedAndTheGraspHolds) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  hand.emulator().inject_garbage();
+  h.push("grasp", grasp());
+  ASSERT_EQ(h.run(), 1);
+  ASSERT_EQ(h.failure(), "");
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_TRUE(results[0].held) << results[0].reason;
+}
+
+TEST(Robotiq3fFaults, FaultCodeFromTheGripperNamesTheFaultAndTheHandStops) {
+  EmulatedHand hand;
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  When fault(hand.emulator(), closing, [&] { hand.emulator().inject_fault(0x0D); });
+  h.push("grasp", grasp());
+  h.run();
+  const std::string failure = h.failure();
+  EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
+  EXPECT_NE(failure.find("fault 0x0D activation fault"), std::string::npos) << failure;
+  h.safe_state();  // a fault that needs a reset: stopped, not opened
+  EXPECT_FALSE(hand.emulator().state().go);
+}
+
+TEST(Robotiq3fFaults, GraspOutsideTheHandsRangeIsRefusedBeforeAnythingIsSent) {
+  EmulatedHand hand;
+  for (const auto& [bad, why] : std::vector<std::pair<fba::Grasp, std::string>>{
+           {grasp(0.5, 0.03), "aperture must be in (0, 0.155 m]"},
+           {grasp(0.1, 0.2), "spread must be in [0, 0.12 m]"},
+           {grasp(std::numeric_limits<double>::quiet_NaN(), 0.03), "aperture must be in"},
+           {grasp(0.1, -0.01), "spread must be in"}}) {
+    ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+    const auto before = hand.emulator().state().requests;
+    h.push("grasp", bad);
+    h.run();
+    const std::string failure = h.failure();
+    EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
+    EXPECT_NE(failure.find("refused before sending"), std::string::npos) << failure;
+    EXPECT_NE(failure.find(why), std::string::npos) << failure;
+    EXPECT_EQ(hand.emulator().state().requests, before);
+  }
+}
+
+TEST(Robotiq3fFaults, GripperOnAnotherSlaveIdFailsTheStartNamingTheDevice) {
+  EmulatedHand hand;
+  try {
+    ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device(), {{"slave_id", 10}}));
+    FAIL() << "started without a gripper on slave 10";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("(slave 10)"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no answer"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Robotiq3fFaults, MissingSerialLineFailsTheStartNamingIt) {
+  fba::test::TempDir dir;
+  const std::string device = dir.file("ttyUSB9");
+  try {
+    ComponentHarness h(registry(), "hw.robotiq_3f", params(device));
+    FAIL() << "started on a serial line that does not exist";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find(device), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cannot open the serial line"), std::string::npos) << e.what();
+  }
+}

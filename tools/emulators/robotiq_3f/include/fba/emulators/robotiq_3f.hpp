@@ -1,0 +1,105 @@
+// A Robotiq 3-Finger Adaptive Gripper emulator: a Modbus RTU server (libmodbus) on one end of a serial
+// line, with the gripper's command registers (1000, function 16) and status registers (2000, functions
+// 3 and 4), activation, grasping modes, individual finger and scissor control, finger motion at the
+// commanded speed, and an object that stops the fingers it touches (object detection per finger).
+// Written from the gripper's manual, not from the driver in hardware/robotiq_3f, so the driver's tests
+// against it check both readings of the manual.
+//
+// The object is a cylinder standing between the fingers: `object_width` across, its axis
+// `object_offset` from the hand's centre towards the thumb (finger A). A finger at position p (0 open,
+// 255 closed) is (max_aperture / 2) (1 - p / 255) from the centre; fingers B and C are spread sideways
+// by the scissor (max_spread (1 - s / 255) apart), so a spread wider than the object passes beside it.
+//
+// Faults can be injected while it runs: it stops answering, sends bad CRCs, puts noise on the line,
+// reports a fault code, drops the object, or closes the line (a pulled cable).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "fba/can/fd.hpp"
+
+typedef struct _modbus modbus_t;
+struct _modbus_mapping_t;
+
+namespace fba::emulators {
+
+struct Robotiq3fOptions {
+  int slave_id = 9;
+  double activation_s = 1.0;   // how long activation takes
+  double max_aperture = 0.155;  // metres, thumb to fingers, fully open
+  double max_spread = 0.12;     // metres, finger B to finger C, scissor at 0
+  bool object = true;
+  double object_width = 0.06;  // metres
+  double object_offset = 0.0;  // metres, towards the thumb
+};
+
+class Robotiq3fEmulator {
+ public:
+  // `line`: the emulator's end (a pseudo-terminal's master); `name` names it in messages.
+  Robotiq3fEmulator(can::Fd line, std::string name, Robotiq3fOptions options);
+  ~Robotiq3fEmulator();
+  Robotiq3fEmulator(const Robotiq3fEmulator&) = delete;
+  Robotiq3fEmulator& operator=(const Robotiq3fEmulator&) = delete;
+
+  // Answers requests and moves the fingers until stop() or the line is gone. Returns why it ended:
+  // "stopped", "disconnected (fault injection)", or the line's error.
+  std::string run();
+  void stop() { stop_ = true; }
+
+  // Fault injection, safe from any thread; acted on by run() within a few milliseconds.
+  void silence();                 // answers nothing from now on
+  void corrupt_replies(int n);    // the next n answers carry a wrong CRC (-1: every answer)
+  void inject_garbage();          // noise on the line before the next answer
+  void inject_fault(int code);    // gFLT = code; motion stops until a reset and activation clear it
+  void remove_object();           // the object slips out: fingers in contact close on to their request
+  void disconnect();              // closes the line
+
+  // For tests.
+  struct Axis {
+    double position = 0;  // 0..255
+    int request = 0, speed = 0, force = 0;
+    int contact = 0;  // gDTx
+  };
+  struct State {
+    bool activated = false;
+    int mode = 0;
+    bool go = false;
+    int imc = 0;
+    int fault = 0;
+    std::array<Axis, 4> axes;
+    std::uint64_t requests = 0;  // requests answered
+  };
+  State state() const;
+
+ private:
+  void handle(const std::uint8_t* request, int length);
+  void apply_command(const std::array<std::uint16_t, 8>& registers);
+  void update(std::chrono::steady_clock::time_point now);
+  std::array<std::uint16_t, 8> status_registers() const;
+  void send_corrupted(const std::uint8_t* request);
+
+  can::Fd line_;
+  std::string name_;
+  Robotiq3fOptions options_;
+  modbus_t* ctx_ = nullptr;
+  _modbus_mapping_t* mapping_ = nullptr;
+
+  mutable std::mutex mutex_;  // guards the state and the fault requests below
+  State state_;
+  std::array<std::uint16_t, 8> command_{};
+  double activation_left_ = 0;
+  bool individual_fingers_ = false, individual_scissor_ = false;
+  bool silent_ = false, disconnect_ = false;
+  int corrupt_ = 0, garbage_ = 0;
+  std::chrono::steady_clock::time_point last_update_;
+  std::atomic<bool> stop_{false};
+};
+
+}  // namespace fba::emulators
