@@ -183,7 +183,7 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
     std::lock_guard lock(mutex_);
     guarded([&] {
       const auto period = std::chrono::milliseconds(std::max<std::int64_t>(1, std::llround(1000 / ctx_(kRate))));
-      for (step(); moving_ || !pending_.empty(); step()) master_->spin_for(period);
+      for (step(); moving_ || !pending_.empty(); step()) arm_->wait(period);
     });
   }
 

@@ -265,8 +265,12 @@ void CanopenArm::move_and_wait(const std::vector<double>& targets, double speed,
   while (!reached()) {
     if (Clock::now() >= deadline)
       guarded([&]() -> int { throw Error(fmt::format("the move did not end within {} ms", timeout.count())); });
-    master_.spin_for(std::chrono::milliseconds(5));
+    wait(std::chrono::milliseconds(5));
   }
+}
+
+void CanopenArm::wait(std::chrono::milliseconds duration) {
+  guarded([&] { master_.spin_for(duration); });
 }
 
 std::vector<double> CanopenArm::read_positions() {

@@ -79,6 +79,9 @@ class CanopenArm {
   ArmSample sample(std::chrono::milliseconds timeout);
   // move_to, then waits for reached() at most `timeout` (ArmStopped on a fault or on the timeout).
   void move_and_wait(const std::vector<double>& targets, double speed, std::chrono::milliseconds timeout);
+  // Processes the bus's traffic (heartbeats, EMCY, PDOs) for `duration`; a fault or an interrupt on
+  // the way throws ArmStopped after quick-stopping every joint, as everywhere.
+  void wait(std::chrono::milliseconds duration);
   // Joint positions from the drives' actual positions (ArmStopped if a drive cannot be read).
   std::vector<double> positions();
   // Sends quick stop to every joint, each independently of the others' failures; returns the
