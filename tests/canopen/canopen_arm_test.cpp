@@ -69,6 +69,17 @@ TEST_P(CanopenArmTest, JointsMoveTogetherTheLongestAtTheScaledMaximumVelocity) {
   EXPECT_NEAR(velocity(3), 25'000, 1);
 }
 
+TEST_P(CanopenArmTest, EveryJointTakesItsSetPointOnTheSameSync) {
+  const auto syncs = emulator().syncs_seen();
+  arm_->move_to({0.5, 0.5, 0.5, 0.5, 0.5, 0.5}, 0.01);
+  // Started together: at the same instant every joint has covered the same share of its way.
+  const auto s = arm_->sample(1s);
+  EXPECT_EQ(emulator().syncs_seen(), syncs + 3);  // bit 4 up with the targets, then down; the sample
+  const double share = (s.positions[0] + 0.1) / 0.6;
+  for (int n = 2; n <= 6; ++n)
+    EXPECT_NEAR((s.positions[n - 1] + 0.1 * n) / (0.5 + 0.1 * n), share, 0.002) << "joint " << n;
+}
+
 TEST_P(CanopenArmTest, ACommandBeyondTheLimitsIsRefusedWithNothingSent) {
   const std::vector<std::vector<double>> refused{
       {0, 0, 2.6, 0, 0, 0}, {0, 0, 0, NAN, 0, 0}, {0, 0, 0, 0, 0, -INFINITY}, {0, 0, 0}};
@@ -144,7 +155,7 @@ TEST_P(CanopenArmTest, ASampleIsEveryDrivesPdosAnsweringOneSync) {
   const auto syncs = emulator().syncs_seen();
   arm_->move_to({2, 2, 2, 2, 2, 2}, 0.01);  // a slow move: seconds
   const auto moving = arm_->sample(1s);
-  EXPECT_EQ(emulator().syncs_seen(), syncs + 1);
+  EXPECT_EQ(emulator().syncs_seen(), syncs + 3);  // the move's two, and the sample's, whose answers came
   EXPECT_FALSE(moving.reached);
   for (int n = 1; n <= 6; ++n) EXPECT_GT(moving.velocities[n - 1], 0) << "joint " << n;
   ArmSample last;

@@ -1,6 +1,7 @@
 #include "fba/canopen/arm.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -121,6 +122,9 @@ void CanopenArm::start() {
       master_.configure_tpdo(j.node, 1,
                              PdoConfig{{{cia402::od::kStatusword, 0, 16}, {cia402::od::kPositionActual, 0, 32}}, 1});
       master_.configure_tpdo(j.node, 2, PdoConfig{{{cia402::od::kVelocityActual, 0, 32}}, 1});
+      // Set-points by RPDO taking effect on the next SYNC: every joint starts its move at once.
+      master_.configure_rpdo(j.node, 1,
+                             PdoConfig{{{cia402::od::kControlword, 0, 16}, {cia402::od::kTargetPosition, 0, 32}}, 1});
       master_.nmt(NmtCommand::start, j.node);
       if (options_.heartbeat_ms > 0) master_.watch_heartbeat(j.node, options_.heartbeat_timeout);
     }
@@ -178,7 +182,36 @@ double CanopenArm::move_to(const std::vector<double>& targets, double speed) {
       master_.write<std::uint32_t>(joints_[i].node, cia402::od::kProfileDeceleration, 0,
                                    at_least_one(distance * path_acceleration));
     }
-    for (std::size_t i = 0; i < joints_.size(); ++i) drives_[i].start_move(counts[i], options_.enable_timeout);
+    // The CiA 402 set-point handshake for all joints at once: bit 4 (new set-point) up with the
+    // target on one SYNC, every drive acknowledges (statusword bit 12), bit 4 down on the next SYNC.
+    const std::uint16_t base = cia402::cw::kEnableOperation | cia402::cw::kChangeImmediately;
+    auto set_point = [&](std::uint16_t controlword) {
+      for (std::size_t i = 0; i < joints_.size(); ++i) {
+        const auto t = static_cast<std::uint32_t>(counts[i]);
+        const std::array<std::uint8_t, 6> data{static_cast<std::uint8_t>(controlword),
+                                               static_cast<std::uint8_t>(controlword >> 8),
+                                               static_cast<std::uint8_t>(t),
+                                               static_cast<std::uint8_t>(t >> 8),
+                                               static_cast<std::uint8_t>(t >> 16),
+                                               static_cast<std::uint8_t>(t >> 24)};
+        master_.send_rpdo(joints_[i].node, 1, data);
+      }
+      master_.send_sync();
+    };
+    set_point(base | cia402::cw::kNewSetPoint);
+    const auto deadline = Clock::now() + options_.enable_timeout;
+    for (std::size_t i = 0; i < joints_.size(); ++i) {
+      for (std::uint16_t s = drives_[i].statusword(); !(s & cia402::sw::kSetPointAcknowledge);
+           s = drives_[i].statusword()) {
+        check_drive(i, s);
+        if (Clock::now() > deadline)
+          throw JointFailure(joints_[i].node,
+                             fmt::format("{}: no set-point acknowledge within {} ms (statusword 0x{:04X})",
+                                         joint_name(joints_[i]), options_.enable_timeout.count(), s));
+        master_.spin_for(std::chrono::milliseconds(1));
+      }
+    }
+    set_point(base);
     return duration;
   });
 }
@@ -232,11 +265,11 @@ ArmSample CanopenArm::sample(std::chrono::milliseconds timeout) {
           return true;
         },
         timeout);
+    for (const ArmJoint& j : joints_) master_.throw_if_faulted(j.node);  // the fault first: it is why others wait
     ArmSample out;
     out.reached = true;
     for (std::size_t i = 0; i < n; ++i) {
       const ArmJoint& j = joints_[i];
-      master_.throw_if_faulted(j.node);
       if (!answered(i))
         throw JointFailure(j.node, fmt::format("{}: its PDOs did not answer the SYNC within {} ms", joint_name(j),
                                                timeout.count()));

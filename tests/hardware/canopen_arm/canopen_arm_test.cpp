@@ -16,12 +16,15 @@
 #include <fba/can/pty.hpp>
 #include <fba/can/slcan_adapter.hpp>
 #include <fba/emulators/canopen_arm.hpp>
+#include <fba/task.hpp>
+#include <fba/task_config.hpp>
 #include <fba/testing.hpp>
 #include <fba/types/joint_state.hpp>
 #include <fba/types/pose.hpp>
 
 #include "arm_model.hpp"
 #include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
 
 using fba::testing::ComponentHarness;
 using namespace std::chrono_literals;
@@ -173,7 +176,7 @@ TEST_F(CanopenArmComponent, EnablesEveryDriveAndPublishesWhereItStands) {
 }
 
 TEST_F(CanopenArmComponent, MovesToAReachableCameraPoseAndArrivesWithTheJointStatesMatching) {
-  make();
+  make({{"speed_scale", 0.3}});  // a move of a second or two: several joint states on the way
   tick();
   const fba::Pose target = pose_of({0.3, -0.5, 0.6, -0.4, 0.5, 0.2});
   h().push("target", target);
@@ -196,10 +199,19 @@ TEST_F(CanopenArmComponent, MovesToAReachableCameraPoseAndArrivesWithTheJointSta
   EXPECT_LT((poses[1].world_from_frame.translation() - target.world_from_frame.translation()).norm(), 1e-3);
   EXPECT_LT(fba::arm::angle_between(poses[1].world_from_frame, target.world_from_frame), 1e-2);
   EXPECT_TRUE(poses[1].world_from_frame.isApprox(pose_of(last.positions).world_from_frame, 1e-9));
-  // Synchronised: every joint that had to move was still moving half-way through.
-  const auto& middle = states[states.size() / 2];
-  for (std::size_t j = 0; j < 6; ++j)
-    if (std::abs(last.positions[j]) > 0.05) EXPECT_NE(middle.velocities[j], 0.0) << "joint " << j;
+  // Synchronised: in every state along the way, the joints that move far have covered the same
+  // share of their distance (the drives sample their positions on the same SYNC).
+  for (std::size_t k = 1; k + 1 < states.size(); ++k) {
+    std::optional<double> share;
+    for (std::size_t j = 0; j < 6; ++j) {
+      if (std::abs(last.positions[j]) < 0.05) continue;
+      const double s = states[k].positions[j] / last.positions[j];  // every joint started at 0
+      EXPECT_GE(s, -1e-9) << "state " << k << ", joint " << j;
+      EXPECT_LE(s, 1 + 1e-9) << "state " << k << ", joint " << j;
+      if (share) EXPECT_NEAR(s, *share, 0.02) << "state " << k << ", joint " << j;
+      else share = s;
+    }
+  }
 }
 
 TEST_F(CanopenArmComponent, AJointTargetOutsideTheLimitsIsRefusedBeforeAnyFrameIsSent) {
@@ -331,4 +343,54 @@ TEST_F(CanopenArmComponent, AConfigurationThatDoesNotFitTheArmIsRefusedNamingThe
   } catch (const std::exception& e) {
     EXPECT_TRUE(contains(e.what(), "bitrate")) << e.what();
   }
+}
+
+// In a task under the threaded executor: the runtime's own threads call process(), interrupt()
+// and safe_state().
+class CanopenArmInATask : public ::testing::Test {
+ protected:
+  fba::TaskConfig task(const std::string& extra = "") {
+    const std::string yaml = "task: real_arm\nexecutor: threaded\ncomponents:\n"
+                             "  arm:\n    type: hw.canopen_arm\n    params:\n"
+                             "      device: " + emulator_.device() + "\n"
+                             "      node_ids: [1, 2, 3, 4, 5, 6]\n"
+                             "      counts_per_rad: [100000, 100000, 100000, 100000, 100000, 100000]\n"
+                             "      heartbeat_period_ms: 20\n      heartbeat_timeout_ms: 1000\n"
+                             "      sdo_timeout_ms: 1000\n" + extra;
+    return fba::load_task_text(yaml, "real_arm.yaml", dir_.path(), registry());
+  }
+  void wait_until_enabled() {
+    for (int i = 0; i < 100'000 && !(emulator_.enabled(1) && emulator_.enabled(6)); ++i) std::this_thread::sleep_for(1ms);
+  }
+
+  fba::test::TempDir dir_;
+  Emulator emulator_;
+};
+
+TEST_F(CanopenArmInATask, ADriveFaultStopsTheTaskAsARuntimeErrorNamingTheDriveAndTheArmIsQuickStopped) {
+  fba::Task t(task());
+  fba::RunResult result;
+  std::jthread run([&] { result = t.run(); });
+  wait_until_enabled();
+  emulator_->inject_fault(3, 0x7121);
+  run.join();
+  EXPECT_EQ(result.outcome, fba::Outcome::RuntimeError) << result.reason;
+  EXPECT_TRUE(contains(result.reason, "joint 'elbow_joint': node 3: EMCY 0x7121")) << result.reason;
+  ASSERT_EQ(result.safe_states.size(), 1u);
+  EXPECT_EQ(result.safe_states[0].status, "reached") << result.safe_states[0].message;
+  for (int node : {1, 2, 4, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+TEST_F(CanopenArmInATask, AStopFromOutsideInterruptsTheDriverAndQuickStopsEveryJoint) {
+  fba::Task t(task());
+  fba::RunResult result;
+  std::jthread run([&] { result = t.run(); });
+  wait_until_enabled();
+  t.request_stop(fba::Outcome::Interrupted, "the test stops the task");  // as a signal does
+  run.join();
+  EXPECT_EQ(result.outcome, fba::Outcome::Interrupted) << result.reason;
+  EXPECT_TRUE(result.stuck.empty());
+  ASSERT_EQ(result.safe_states.size(), 1u);
+  EXPECT_EQ(result.safe_states[0].status, "reached") << result.safe_states[0].message;
+  for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
 }

@@ -64,7 +64,8 @@ class CanopenArm {
 
   // Every node operational, its heartbeat watched, its software limits set from the joint limits,
   // its TPDO1 (statusword, position actual) and TPDO2 (velocity actual) sent on every SYNC, its
-  // drive enabled in profile position mode.
+  // RPDO1 (controlword, target position) taking effect on the next SYNC, its drive enabled in
+  // profile position mode.
   void start();
   // Checks every target (count, finite, within limits, representable in counts) and `speed`
   // (0 < speed <= 1 of the joints' maximum velocities and accelerations) and throws LimitError with
