@@ -51,6 +51,7 @@ nlohmann::json pose_json(const Eigen::Isometry3d& t) {
 }
 
 std::string check_bus(const fba::ParamValues& p);
+std::string check_rate(const fba::ParamValues& p);
 
 class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPorts {
  public:
@@ -112,6 +113,7 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
              kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kHeartbeatPeriod,
              kHeartbeatTimeout, kSdoTimeout, kEnableTimeout, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
         .check(kDevice, check_bus)
+        .check(kRate, check_rate)
         .blocking();
   }
 
@@ -396,6 +398,16 @@ std::string check_bus(const fba::ParamValues& p) {
     return std::string("parameter 'bitrate': ") + e.what();
   }
   return {};
+}
+
+// The bus is read only while a tick runs: ticks further apart than the heartbeat timeout would
+// leave the drives' heartbeats piling up unread in the line.
+std::string check_rate(const fba::ParamValues& p) {
+  const double period_ms = 1000 / p(CanopenArmComponent::kRate);
+  const int timeout_ms = p(CanopenArmComponent::kHeartbeatTimeout);
+  if (period_ms < timeout_ms) return {};
+  return fmt::format("a tick every {:g} ms is not shorter than heartbeat_timeout_ms {}: raise the rate", period_ms,
+                     timeout_ms);
 }
 
 }  // namespace

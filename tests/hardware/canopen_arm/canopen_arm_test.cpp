@@ -338,6 +338,12 @@ TEST_F(CanopenArmComponent, AConfigurationThatDoesNotFitTheArmIsRefusedNamingThe
     EXPECT_TRUE(contains(e.what(), "is neither slcan:DEVICE")) << e.what();
   }
   try {
+    make({{"rate", 0.5}});  // a tick every 2 s, a heartbeat timeout of 1 s
+    FAIL() << "ticks further apart than the heartbeat timeout";
+  } catch (const std::exception& e) {
+    EXPECT_TRUE(contains(e.what(), "is not shorter than heartbeat_timeout_ms 1000")) << e.what();
+  }
+  try {
     make({{"bitrate", 300000}});
     FAIL() << "a bitrate SLCAN does not have";
   } catch (const std::exception& e) {
