@@ -16,6 +16,7 @@
 #include <fba/types/pose.hpp>
 
 #include "arm_model.hpp"
+#include "arm_ports.hpp"
 
 namespace {
 
@@ -37,19 +38,8 @@ nlohmann::json pose_json(const Eigen::Isometry3d& t) {
 
 nlohmann::json joints_json(const Eigen::VectorXd& q) { return std::vector<double>(q.data(), q.data() + q.size()); }
 
-class SimArm final : public fba::Component {
+class SimArm final : public fba::Component, public fba::arm::ArmPorts {
  public:
-  static constexpr fba::OptionalIn<fba::Pose> kTarget{
-      "target", "move the camera to this pose (world_from_frame of the camera link, in base_link's frame)"};
-  static constexpr fba::OptionalIn<fba::JointState> kJointTarget{
-      "joint_target", "move the joints to these positions (by name, or all in the arm's order when names are empty)"};
-  static constexpr fba::Out<fba::JointState> kJointState{"joint_state", "the joints, at `rate` while the arm moves and when it stops"};
-  static constexpr fba::Out<fba::Pose> kCameraPose{
-      "camera_pose", "the camera's pose where each motion ends (and where the arm starts): wire it to sim.camera's pose"};
-  static constexpr fba::EventOut kArrived{"arrived", "a motion ended; payload: the camera pose and the joints, JSON"};
-  static constexpr fba::EventOut kUnreachable{
-      "unreachable", "a target was refused (no IK solution within the limits and tolerances, or a joint outside its limits); "
-                     "payload: the target and why, JSON"};
   static constexpr fba::Param<std::filesystem::path> kUrdf{
       "urdf", "", "the arm's URDF; empty: the project's wrist_camera_arm.urdf (a UR5-like 6R arm, camera on the wrist)"};
   static constexpr fba::Param<std::string> kBaseLink{"base_link", "world", "the frame target poses are given in"};

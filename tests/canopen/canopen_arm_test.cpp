@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -68,6 +69,17 @@ TEST_P(CanopenArmTest, JointsMoveTogetherTheLongestAtTheScaledMaximumVelocity) {
   EXPECT_NEAR(velocity(3), 25'000, 1);
 }
 
+TEST_P(CanopenArmTest, EveryJointTakesItsSetPointOnTheSameSync) {
+  const auto syncs = emulator().syncs_seen();
+  arm_->move_to({0.5, 0.5, 0.5, 0.5, 0.5, 0.5}, 0.01);
+  // Started together: at the same instant every joint has covered the same share of its way.
+  const auto s = arm_->sample(1s);
+  EXPECT_EQ(emulator().syncs_seen(), syncs + 3);  // bit 4 up with the targets, then down; the sample
+  const double share = (s.positions[0] + 0.1) / 0.6;
+  for (int n = 2; n <= 6; ++n)
+    EXPECT_NEAR((s.positions[n - 1] + 0.1 * n) / (0.5 + 0.1 * n), share, 0.002) << "joint " << n;
+}
+
 TEST_P(CanopenArmTest, ACommandBeyondTheLimitsIsRefusedWithNothingSent) {
   const std::vector<std::vector<double>> refused{
       {0, 0, 2.6, 0, 0, 0}, {0, 0, 0, NAN, 0, 0}, {0, 0, 0, 0, 0, -INFINITY}, {0, 0, 0}};
@@ -123,6 +135,54 @@ TEST_P(CanopenArmTest, TheLineVanishingStopsTheArmWithAClearError) {
     EXPECT_TRUE(contains(e.what(), master_->bus().name())) << e.what();
     EXPECT_TRUE(contains(e.what(), "quick stop failed on 6 of 6 joints")) << e.what();
   }
+}
+
+TEST_P(CanopenArmTest, AccelerationsAreScaledLikeVelocitiesSoTheJointsStayInStep) {
+  // As above: distances 1.0, 0.5, 0.25 rad; the default acceleration is ten times the velocity.
+  const double seconds = arm_->move_to({0.9, 0.3, -0.05, -0.4, -0.5, -1.6}, 0.5);
+  auto acceleration = [&](int node) { return static_cast<double>(master_->read<std::uint32_t>(node, 0x6083, 0)); };
+  EXPECT_NEAR(acceleration(1), 2'000'000, 1);  // 200 rad/s^2 * 10,000 counts/rad, for the longest
+  EXPECT_NEAR(acceleration(2), 1'000'000, 1);
+  EXPECT_NEAR(acceleration(3), 500'000, 1);
+  EXPECT_EQ(master_->read<std::uint32_t>(3, 0x6084, 0), master_->read<std::uint32_t>(3, 0x6083, 0));
+  EXPECT_NEAR(seconds, 1.0 / 10 + 10.0 / 200, 1e-9);  // cruise 1 rad at 10 rad/s, plus one ramp of 0.05 s
+}
+
+TEST_P(CanopenArmTest, ASampleIsEveryDrivesPdosAnsweringOneSync) {
+  const auto before = arm_->sample(1s);
+  for (int n = 1; n <= 6; ++n) EXPECT_NEAR(before.positions[n - 1], -0.1 * n, 1e-12);  // drive 0, zero 1000 n
+  EXPECT_TRUE(before.reached);
+  const auto syncs = emulator().syncs_seen();
+  arm_->move_to({2, 2, 2, 2, 2, 2}, 0.01);  // a slow move: seconds
+  const auto moving = arm_->sample(1s);
+  EXPECT_EQ(emulator().syncs_seen(), syncs + 3);  // the move's two, and the sample's, whose answers came
+  EXPECT_FALSE(moving.reached);
+  for (int n = 1; n <= 6; ++n) EXPECT_GT(moving.velocities[n - 1], 0) << "joint " << n;
+  ArmSample last;
+  do last = arm_->sample(1s);
+  while (!last.reached && last.positions[0] < -0.09);  // until joint 1 has visibly moved
+  EXPECT_GT(last.positions[0], -0.1);
+  const auto now = arm_->positions();  // through SDO, a little later
+  for (int n = 1; n <= 6; ++n) EXPECT_GE(now[n - 1], last.positions[n - 1]) << "joint " << n;
+}
+
+TEST_P(CanopenArmTest, AnInterruptFromAnotherThreadEndsAWaitAndTheJointsStillGetQuickStop) {
+  arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);  // 100 s
+  std::jthread stopper([&] {  // joins however the test ends
+    std::this_thread::sleep_for(20ms);
+    master_->interrupt();
+  });
+  try {
+    arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s);
+    FAIL() << "the wait outlived the interrupt";
+  } catch (const ArmStopped& e) {
+    EXPECT_TRUE(contains(e.what(), "interrupted")) << e.what();
+  }
+  stopper.join();
+  master_->resume();
+  // The quick stops went out during the interrupt, unconfirmed; once resumed, they are confirmed.
+  EXPECT_TRUE(arm_->quick_stop_all().empty());
+  for (int node = 1; node <= 6; ++node) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
 }
 
 TEST(CanopenArmConfiguration, ImpossibleJointsAreRefused) {

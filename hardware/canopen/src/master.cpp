@@ -84,6 +84,8 @@ std::optional<PdoSample> Master::tpdo(int node, int number) const {
 }
 
 void Master::step(Clock::time_point deadline) {
+  if (interrupted_)
+    throw Interrupted(fmt::format("{}: the wait was interrupted (the application is stopping)", bus_.name()));
   auto now = Clock::now();
   auto until = std::min(deadline, now + kTick);
   if (options_.sync_period.count() > 0) until = std::min(until, next_sync_);

@@ -51,6 +51,7 @@ struct CanopenArmEmulator::Node {
   int id;
   bool silent = false;
   std::uint8_t nmt = kPreOperational;
+  std::uint64_t sdo_downloads = 0;  // SDO download requests heard (each a command to the drive)
   std::map<std::uint32_t, Entry> od;
   Clock::time_point last_heartbeat;
   // TPDO and RPDO run-time state, per PDO number 0..3.
@@ -267,6 +268,11 @@ std::int32_t CanopenArmEmulator::position(int id) const {
 std::uint16_t CanopenArmEmulator::statusword(int id) const {
   std::lock_guard lock(mutex_);
   return fba::emulators::statusword(node(id));
+}
+
+std::uint64_t CanopenArmEmulator::sdo_downloads(int id) const {
+  std::lock_guard lock(mutex_);
+  return node(id).sdo_downloads;
 }
 
 std::string CanopenArmEmulator::run() {
@@ -542,6 +548,7 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
         static_cast<std::uint32_t>(frame.data[6]) << 16 | static_cast<std::uint32_t>(frame.data[7]) << 24;
     switch (command >> 5) {
       case 1: {  // initiate download
+        ++n.sdo_downloads;
         if (!(command & 0x02)) {
           send(sdo_abort(id, index, sub, kAbortCommand));  // segmented transfers: not offered
           return;

@@ -24,6 +24,14 @@ struct ArmJoint {
   double lower;            // joint limits, radians (or metres)
   double upper;
   double max_velocity;  // radians (metres) per second, > 0
+  double max_acceleration = 0;  // radians (metres) per second squared; 0: ten times max_velocity per second
+};
+
+// The arm as its drives' PDOs report it, answering one SYNC.
+struct ArmSample {
+  std::vector<double> positions;   // joint units (0x6064 through the scale and zero)
+  std::vector<double> velocities;  // joint units per second (0x606C)
+  bool reached = false;            // every drive reports "target reached" (statusword bit 10)
 };
 
 struct ArmOptions {
@@ -55,17 +63,26 @@ class CanopenArm {
   const std::vector<ArmJoint>& joints() const { return joints_; }
 
   // Every node operational, its heartbeat watched, its software limits set from the joint limits,
-  // its drive enabled in profile position mode.
+  // its TPDO1 (statusword, position actual) and TPDO2 (velocity actual) sent on every SYNC, its
+  // RPDO1 (controlword, target position) taking effect on the next SYNC, its drive enabled in
+  // profile position mode.
   void start();
   // Checks every target (count, finite, within limits, representable in counts) and `speed`
-  // (0 < speed <= 1 of the joints' maximum velocities) and throws LimitError with nothing sent if
-  // one fails; then starts one move in which every joint arrives at the same time.
-  void move_to(const std::vector<double>& targets, double speed = 1.0);
+  // (0 < speed <= 1 of the joints' maximum velocities and accelerations) and throws LimitError with
+  // nothing sent if one fails; then starts one move in which every joint starts, accelerates and
+  // arrives together. Returns the move's planned duration, seconds.
+  double move_to(const std::vector<double>& targets, double speed = 1.0);
   // Whether every joint has reached its target. Throws ArmStopped, after quick-stopping every
   // joint, if a drive faulted, left "operation enabled", sent an EMCY or fell silent.
   bool reached();
+  // Sends SYNC and waits at most `timeout` for every drive's TPDOs answering it. Throws ArmStopped,
+  // after quick-stopping every joint, as reached() does, and when a drive does not answer in time.
+  ArmSample sample(std::chrono::milliseconds timeout);
   // move_to, then waits for reached() at most `timeout` (ArmStopped on a fault or on the timeout).
   void move_and_wait(const std::vector<double>& targets, double speed, std::chrono::milliseconds timeout);
+  // Processes the bus's traffic (heartbeats, EMCY, PDOs) for `duration`; a fault or an interrupt on
+  // the way throws ArmStopped after quick-stopping every joint, as everywhere.
+  void wait(std::chrono::milliseconds duration);
   // Joint positions from the drives' actual positions (ArmStopped if a drive cannot be read).
   std::vector<double> positions();
   // Sends quick stop to every joint, each independently of the others' failures; returns the
@@ -75,7 +92,10 @@ class CanopenArm {
  private:
   template <class F>
   auto guarded(F&& f) -> decltype(f());
+  // Throws (for guarded()) when a drive has faulted or is not in "operation enabled".
+  void check_drive(std::size_t joint, std::uint16_t statusword);
   std::int32_t to_counts(std::size_t joint, double value) const;
+  double acceleration(std::size_t joint) const;  // units per second squared
   std::vector<double> read_positions();
 
   Master& master_;

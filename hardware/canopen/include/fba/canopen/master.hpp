@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <concepts>
 #include <cstdint>
@@ -66,6 +67,12 @@ struct Fault {
   Kind kind;
   int node;
   std::string message;  // names the node and the reason
+};
+
+// Master::interrupt() ended a wait: the application is stopping.
+class Interrupted : public Error {
+ public:
+  using Error::Error;
 };
 
 // A node reported a fault (or went silent) while the master waited on it.
@@ -160,6 +167,12 @@ class Master {
   void throw_if_faulted(int node) const;
   const std::vector<Emergency>& emergencies() const { return emergencies_; }
 
+  // From any thread: every wait in progress or to come throws Interrupted at its next step (within
+  // a few milliseconds) until resume(); frames are still sent, so a quick stop still goes out.
+  void interrupt() { interrupted_ = true; }
+  void resume() { interrupted_ = false; }
+  bool interrupted() const { return interrupted_; }
+
  private:
   struct HeartbeatWatch {
     std::chrono::milliseconds timeout;
@@ -190,6 +203,7 @@ class Master {
   // The SDO in flight: its server's node id, and the answer once it arrives.
   int sdo_node_ = 0;
   std::optional<can::Frame> sdo_reply_;
+  std::atomic<bool> interrupted_{false};
 };
 
 }  // namespace fba::canopen

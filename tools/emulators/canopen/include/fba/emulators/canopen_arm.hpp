@@ -52,6 +52,8 @@ class CanopenArmEmulator {
   // For tests: a node's actual position and controlword-driven state bits.
   std::int32_t position(int node) const;
   std::uint16_t statusword(int node) const;
+  // How many SDO downloads (writes) the node has heard: a driver's commands.
+  std::uint64_t sdo_downloads(int node) const;
   std::uint64_t syncs_seen() const { return syncs_; }
 
   struct Node;

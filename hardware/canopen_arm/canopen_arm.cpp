@@ -1,0 +1,415 @@
+// hw.canopen_arm: the task's real arm, one CiA 402 drive per joint on a CANopen bus (SLCAN adapter
+// or SocketCAN), the twin of sim.arm with the same ports and events (arm_ports.hpp) and the same
+// URDF for kinematics and limits. It enables the drives, turns camera poses into joint targets by
+// IK, checks every target against the URDF's limits before anything is sent, makes synchronised
+// profile position moves, and publishes joint states from the drives' PDOs while they move.
+// Any fault (a drive's EMCY or fault state, a silent drive, the line gone, persistent noise)
+// quick-stops every joint and ends process() with an error naming the bus, the joint, its node and
+// the reason, so the task's on_error policy applies.
+#include <dlfcn.h>
+
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <variant>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
+
+#include <fba/can/open_bus.hpp>
+#include <fba/can/slcan.hpp>
+#include <fba/canopen/arm.hpp>
+#include <fba/component.hpp>
+#include <fba/types/joint_state.hpp>
+#include <fba/types/pose.hpp>
+
+#include "arm_model.hpp"
+#include "arm_ports.hpp"
+
+namespace {
+
+using fba::arm::ArmModel;
+using Clock = std::chrono::steady_clock;
+namespace canopen = fba::canopen;
+
+// The project's arm, installed beside the plugins (FBA_ROBOTS_FROM_PLUGIN is relative to them).
+std::filesystem::path default_urdf() {
+  Dl_info info{};
+  if (!dladdr(reinterpret_cast<void*>(&default_urdf), &info) || !info.dli_fname) return "wrist_camera_arm.urdf";
+  return (std::filesystem::path(info.dli_fname).parent_path() / FBA_ROBOTS_FROM_PLUGIN / "wrist_camera_arm.urdf")
+      .lexically_normal();
+}
+
+nlohmann::json pose_json(const Eigen::Isometry3d& t) {
+  const Eigen::Quaterniond q(t.linear());
+  const Eigen::Vector3d p = t.translation();
+  return {{"position", {p.x(), p.y(), p.z()}}, {"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
+}
+
+std::string check_bus(const fba::ParamValues& p);
+std::string check_rate(const fba::ParamValues& p);
+
+class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPorts {
+ public:
+  static constexpr fba::Param<std::string> kDevice{
+      "device", fba::required,
+      "the CAN bus: slcan:/dev/ttyUSB0 (an SLCAN adapter on a serial line), can0 or socketcan:can0 (SocketCAN)"};
+  static constexpr auto kBitrate = fba::Param<int>(
+      "bitrate", 500000, "the CAN bitrate, bit/s, set on an SLCAN adapter (SocketCAN: set on the interface)");
+  static inline const auto kNodeIds = fba::Param<std::vector<double>>(
+      "node_ids", fba::required, "each joint's CANopen node id (1..127), in the arm's joint order")
+                                          .range(1, 127);
+  static inline const auto kCountsPerRad = fba::Param<std::vector<double>>(
+      "counts_per_rad", fba::required,
+      "each joint's encoder scale: drive position units per radian (per metre for a prismatic joint); negative "
+      "when the drive counts the other way");
+  static inline const auto kZeroCounts = fba::Param<std::vector<double>>(
+      "zero_counts", std::vector<double>{}, "each joint's drive position at joint position 0; empty: 0 for every joint");
+  static constexpr fba::Param<std::filesystem::path> kUrdf{
+      "urdf", "", "the arm's URDF (kinematics and joint limits); empty: the project's wrist_camera_arm.urdf"};
+  static constexpr fba::Param<std::string> kBaseLink{"base_link", "world", "the frame target poses are given in"};
+  static constexpr fba::Param<std::string> kCameraLink{"camera_link", "camera",
+                                                       "the camera's optical frame (z forward, x right, y down)"};
+  static constexpr auto kSpeed =
+      fba::Param<double>("speed_scale", 0.5, "share of each joint's URDF velocity limit used by motions").range(0.01, 1.0);
+  static constexpr auto kAcceleration =
+      fba::Param<double>("acceleration", 3.0, "joint acceleration limit, rad/s^2 (m/s^2), every joint").range(0.01, 100.0);
+  static constexpr auto kRate =
+      fba::Param<double>("rate", 50.0, "joint states per second while moving (the drives are sampled with a SYNC each)")
+          .range(0.1, 1000.0);
+  static constexpr auto kPositionTolerance =
+      fba::Param<double>("position_tolerance", 1e-4, "how close IK must bring the camera to a target, m").range(1e-9, 0.1);
+  static constexpr auto kOrientationTolerance =
+      fba::Param<double>("orientation_tolerance", 1e-3, "how close IK must turn the camera to a target, rad")
+          .range(1e-9, 0.5);
+  static constexpr auto kAttempts =
+      fba::Param<int>("ik_attempts", 32, "IK starts: the current joints, then random seeds").range(1, 10000);
+  static constexpr auto kPublishInitial = fba::Param<bool>(
+      "publish_initial", true, "publish the joint state and camera pose where the arm starts, at the first tick");
+  static constexpr auto kHeartbeatPeriod =
+      fba::Param<int>("heartbeat_period_ms", 50, "the heartbeat period each drive is given (object 0x1017)").range(1, 10000);
+  static constexpr auto kHeartbeatTimeout = fba::Param<int>(
+      "heartbeat_timeout_ms", 300, "a drive not heard for this long is lost: the arm stops").range(1, 60000);
+  static constexpr auto kSdoTimeout = fba::Param<int>(
+      "sdo_timeout_ms", 200, "how long a drive may take to answer an SDO, or its PDOs a SYNC").range(1, 10000);
+  static constexpr auto kEnableTimeout = fba::Param<int>(
+      "enable_timeout_ms", 2000, "how long a drive may take to reach \"operation enabled\" or take a set-point")
+                                              .range(1, 60000);
+  static constexpr auto kNoiseLimit = fba::Param<int>(
+      "noise_limit", 100, "bad frames (line noise) tolerated within one second; more and the line is not trusted")
+                                          .range(0, 1000000);
+
+  static fba::Spec spec() {
+    return fba::Spec::actuator("hw.canopen_arm",
+                               "Real arm of CiA 402 drives on a CANopen bus (SLCAN or SocketCAN), one node per joint, "
+                               "kinematics and limits from a URDF (the twin of sim.arm): moves to camera poses or joint "
+                               "targets with synchronised profile position moves, quick-stops on any fault.")
+        .add(kTarget, kJointTarget, kJointState, kCameraPose, kArrived, kUnreachable, kDevice, kBitrate, kNodeIds,
+             kCountsPerRad, kZeroCounts, kUrdf, kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate,
+             kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kHeartbeatPeriod,
+             kHeartbeatTimeout, kSdoTimeout, kEnableTimeout, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
+        .check(kDevice, check_bus)
+        .check(kRate, check_rate)
+        .blocking();
+  }
+
+  explicit CanopenArmComponent(fba::Context& ctx)
+      : ctx_(ctx),
+        model_(ctx(kUrdf).empty() ? default_urdf() : ctx(kUrdf), ctx(kBaseLink), ctx(kCameraLink)),
+        sdo_timeout_(ctx(kSdoTimeout)),
+        noise_limit_(static_cast<std::uint64_t>(ctx(kNoiseLimit))),
+        publish_initial_(ctx(kPublishInitial)) {
+    const std::size_t n = model_.size();
+    const std::vector<double> nodes = ctx(kNodeIds), counts = ctx(kCountsPerRad), zeros = ctx(kZeroCounts);
+    auto per_joint = [&](const char* param, std::size_t size, bool may_be_empty) {
+      if (size == n || (may_be_empty && size == 0)) return;
+      throw std::runtime_error(fmt::format("parameter '{}' has {} values; the arm from '{}' to '{}' has {} joints ({})",
+                                           param, size, model_.base_link(), model_.tip_link(), n, names()));
+    };
+    per_joint("node_ids", nodes.size(), false);
+    per_joint("counts_per_rad", counts.size(), false);
+    per_joint("zero_counts", zeros.size(), true);
+    std::vector<canopen::ArmJoint> joints;
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& name = model_.joint_names()[i];
+      const auto& limits = model_.limits()[i];
+      if (nodes[i] != std::round(nodes[i]))
+        throw std::runtime_error(fmt::format("parameter 'node_ids': {} (joint '{}') is not a whole number", nodes[i], name));
+      if (zeros.size() == n && (zeros[i] != std::round(zeros[i]) || std::abs(zeros[i]) > 2147483647.0))
+        throw std::runtime_error(
+            fmt::format("parameter 'zero_counts': {} (joint '{}') is not a whole 32-bit drive position", zeros[i], name));
+      if (!std::isfinite(limits.lower) || !std::isfinite(limits.upper))
+        throw std::runtime_error(fmt::format("joint '{}' of '{}' has no finite limits (a continuous joint): "
+                                             "hw.canopen_arm needs limits to check every command against",
+                                             name, ctx(kUrdf).string()));
+      joints.push_back(canopen::ArmJoint{.name = name,
+                                         .node = static_cast<int>(nodes[i]),
+                                         .counts_per_unit = counts[i],
+                                         .zero = zeros.empty() ? 0 : static_cast<std::int32_t>(zeros[i]),
+                                         .lower = limits.lower,
+                                         .upper = limits.upper,
+                                         .max_velocity = limits.velocity * ctx(kSpeed),
+                                         .max_acceleration = ctx(kAcceleration)});
+    }
+    ik_.position_tolerance = ctx(kPositionTolerance);
+    ik_.orientation_tolerance = ctx(kOrientationTolerance);
+    ik_.attempts = ctx(kAttempts);
+    // A wrong device is a configuration error, reported before the task runs.
+    bus_ = fba::can::open_bus(ctx(kDevice), ctx(kBitrate));
+    master_ = std::make_unique<canopen::Master>(*bus_, canopen::MasterOptions{.sdo_timeout = sdo_timeout_});
+    arm_ = std::make_unique<canopen::CanopenArm>(
+        *master_, std::move(joints),
+        canopen::ArmOptions{.heartbeat_ms = static_cast<std::uint16_t>(ctx(kHeartbeatPeriod)),
+                            .heartbeat_timeout = std::chrono::milliseconds(ctx(kHeartbeatTimeout)),
+                            .enable_timeout = std::chrono::milliseconds(ctx(kEnableTimeout))});
+    ctx.set_trigger({fba::TriggerPolicy::Periodic, 1.0 / ctx(kRate)});
+    ctx.log().info("{} joints from '{}' to '{}' ({}) on {}", n, model_.base_link(), model_.tip_link(), names(),
+                   bus_->name());
+  }
+
+  void process() override {
+    std::lock_guard lock(mutex_);
+    guarded([&] {
+      if (auto in = ctx_(kTarget); in.has()) pending_.emplace_back(in.get());
+      if (auto in = ctx_(kJointTarget); in.has()) pending_.emplace_back(in.get());
+      step();
+    });
+  }
+
+  // The targets' producers are done: the motion under way and those pending run to their end.
+  void end_of_stream() override {
+    std::lock_guard lock(mutex_);
+    guarded([&] {
+      const auto period = std::chrono::milliseconds(std::max<std::int64_t>(1, std::llround(1000 / ctx_(kRate))));
+      for (step(); moving_ || !pending_.empty(); step()) arm_->wait(period);
+    });
+  }
+
+  // Quick stop of every joint; bounded: each drive gets one SDO timeout to confirm.
+  void safe_state() override {
+    std::unique_lock lock(mutex_, std::defer_lock);
+    // process() ends within a few milliseconds of interrupt(); a wait this long means it is stuck.
+    if (!lock.try_lock_for(std::chrono::seconds(3)))
+      throw std::runtime_error(fmt::format("{}: the driver's thread did not let go of the bus within 3 s; no quick stop "
+                                           "was sent",
+                                           bus_->name()));
+    if (!started_) return;  // the drives were never enabled by this run
+    master_->resume();
+    moving_ = false;
+    pending_.clear();
+    const auto failures = arm_->quick_stop_all();
+    if (!failures.empty())
+      throw std::runtime_error(fmt::format("{}: quick stop failed on {} of {} joints: {}", bus_->name(),
+                                           failures.size(), model_.size(), fmt::join(failures, "; ")));
+    ctx_.log().info("safe state: every joint quick-stopped");
+  }
+
+  // From the runtime's thread at shutdown: every wait on the bus ends within a few milliseconds.
+  void interrupt() override {
+    interrupted_ = true;
+    master_->interrupt();
+  }
+
+ private:
+  using Request = std::variant<fba::Pose, fba::JointState>;
+
+  // Runs `f`; a fault (the arm already quick-stopped by CanopenArm) ends the call with an error
+  // naming the bus. An interrupt is not a fault: the task is stopping, safe_state() follows.
+  template <class F>
+  void guarded(F&& f) {
+    if (interrupted_) return;
+    try {
+      f();
+    } catch (const std::exception& e) {
+      if (interrupted_) return;
+      throw std::runtime_error(fmt::format("hw.canopen_arm on {}: {}", bus_->name(), e.what()));
+    }
+  }
+
+  // One tick: start the drives the first time, sample them, publish, end or start motions.
+  void step() {
+    const std::int64_t now = ctx_.now_ns();
+    if (!started_) {
+      started_ = true;  // from here on safe_state() quick-stops, even when start() fails half-way
+      arm_->start();
+    }
+    check_noise();
+    const canopen::ArmSample s = arm_->sample(sdo_timeout_);
+    joints_ = Eigen::Map<const Eigen::VectorXd>(s.positions.data(), static_cast<Eigen::Index>(s.positions.size()));
+    if (publish_initial_) {
+      publish_initial_ = false;
+      publish_state(s, now);
+      ctx_(kCameraPose).emit(pose_at(joints_, now), now);
+    }
+    if (moving_) {
+      publish_state(s, now);
+      if (s.reached) {
+        moving_ = false;
+        const fba::Pose pose = pose_at(joints_, now);
+        ctx_(kCameraPose).emit(pose, now);
+        ctx_.emit(kArrived, nlohmann::json{{"pose", pose_json(pose.world_from_frame)}, {"joints", s.positions}}.dump());
+      } else if (Clock::now() > deadline_) {
+        const auto failures = arm_->quick_stop_all();
+        throw std::runtime_error(fmt::format(
+            "arm stopped: the move did not end within {:.1f} s (twice its planned {:.1f} s, and 1 s); {}",
+            std::chrono::duration<double>(deadline_ - move_start_).count(), planned_s_,
+            failures.empty() ? "every joint was sent quick stop" : "quick stop failed: " + failures.front()));
+      }
+    }
+    while (!moving_ && !pending_.empty()) {
+      const Request r = std::move(pending_.front());
+      pending_.pop_front();
+      start(r);
+    }
+  }
+
+  // Plans a motion to a request from where the joints are, and starts it, or refuses it with
+  // 'unreachable' (nothing is sent then).
+  void start(const Request& r) {
+    nlohmann::json target;
+    std::string why;
+    Eigen::VectorXd goal;
+    if (const auto* pose = std::get_if<fba::Pose>(&r)) {
+      target = {{"pose", pose_json(pose->world_from_frame)}};
+      const auto ik = model_.inverse(pose->world_from_frame, joints_, ik_);
+      if (ik.ok) goal = ik.joints;
+      else why = ik.why;
+    } else {
+      const auto& js = std::get<fba::JointState>(r);
+      target = {{"names", js.names}, {"positions", js.positions}};
+      why = joint_goal(js, goal);
+    }
+    if (why.empty()) {
+      try {
+        planned_s_ = arm_->move_to(std::vector<double>(goal.data(), goal.data() + goal.size()));
+        moving_ = true;
+        move_start_ = Clock::now();
+        deadline_ = move_start_ + std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(2 * planned_s_ + 1.0));
+        ctx_.log().debug("moving to {} in {:.3f} s", target.dump(), planned_s_);
+        return;
+      } catch (const canopen::LimitError& e) {  // beyond what the drive's counts hold: refused, nothing sent
+        why = e.what();
+      }
+    }
+    ctx_.log().warn("unreachable target {}: {}", target.dump(), why);
+    ctx_.emit(kUnreachable, nlohmann::json{{"target", target}, {"reason", why}}.dump());
+  }
+
+  // The joint vector a JointState asks for (by name, or in order), or why it cannot be had.
+  std::string joint_goal(const fba::JointState& js, Eigen::VectorXd& goal) const {
+    const auto& names = model_.joint_names();
+    goal = joints_;
+    if (js.names.empty()) {
+      if (js.positions.size() != names.size())
+        return fmt::format("{} positions without names; the arm has {} joints ({})", js.positions.size(), names.size(),
+                           this->names());
+      goal = Eigen::Map<const Eigen::VectorXd>(js.positions.data(), static_cast<Eigen::Index>(js.positions.size()));
+    } else {
+      if (js.names.size() != js.positions.size())
+        return fmt::format("{} names but {} positions", js.names.size(), js.positions.size());
+      for (std::size_t i = 0; i < js.names.size(); ++i) {
+        const auto it = std::find(names.begin(), names.end(), js.names[i]);
+        if (it == names.end()) return fmt::format("no joint '{}'; the arm's joints are {}", js.names[i], this->names());
+        goal(it - names.begin()) = js.positions[i];
+      }
+    }
+    return model_.limit_violation(goal);
+  }
+
+  // Line noise is skipped by the bus and counted; a burst is tolerated, a line that keeps
+  // producing more than noise_limit bad frames a second is not.
+  void check_noise() {
+    const auto now = Clock::now();
+    const std::uint64_t total = bus_->discarded();
+    noise_.push_back({now, total});
+    while (noise_.size() > 1 && noise_[1].first <= now - std::chrono::seconds(1)) noise_.pop_front();
+    const std::uint64_t recent = total - noise_.front().second;
+    if (total > noise_reported_) {
+      ctx_.log().warn("{}: {} bad frames skipped so far (the last: {})", bus_->name(), total, bus_->last_discard_reason());
+      noise_reported_ = total;
+    }
+    if (recent <= noise_limit_) return;
+    const auto failures = arm_->quick_stop_all();
+    throw std::runtime_error(fmt::format(
+        "arm stopped: the line is too noisy to trust: {} bad frames within {:.1f} s (noise_limit {} a second; the last: "
+        "{}); {}",
+        recent, std::chrono::duration<double>(now - noise_.front().first).count(), noise_limit_,
+        bus_->last_discard_reason(),
+        failures.empty() ? "every joint was sent quick stop" : "quick stop failed: " + failures.front()));
+  }
+
+  void publish_state(const canopen::ArmSample& s, std::int64_t stamp_ns) {
+    fba::JointState js;
+    js.names = model_.joint_names();
+    js.positions = s.positions;
+    js.velocities = s.velocities;
+    js.stamp = static_cast<double>(stamp_ns) * 1e-9;
+    ctx_(kJointState).emit(std::move(js), stamp_ns);
+  }
+
+  fba::Pose pose_at(const Eigen::VectorXd& q, std::int64_t stamp_ns) const {
+    fba::Pose p;
+    p.world_from_frame = model_.forward(q);
+    p.stamp = static_cast<double>(stamp_ns) * 1e-9;
+    return p;
+  }
+
+  std::string names() const { return fmt::format("{}", fmt::join(model_.joint_names(), ", ")); }
+
+  fba::Context& ctx_;
+  const ArmModel model_;
+  fba::arm::IkOptions ik_;
+  const std::chrono::milliseconds sdo_timeout_;
+  const std::uint64_t noise_limit_;
+  std::unique_ptr<fba::can::CanBus> bus_;
+  std::unique_ptr<canopen::Master> master_;
+  std::unique_ptr<canopen::CanopenArm> arm_;
+  // process(), end_of_stream() and safe_state() take turns on the bus (the master is single-threaded).
+  std::timed_mutex mutex_;
+  std::atomic<bool> interrupted_{false};
+  bool started_ = false;
+  bool publish_initial_;
+  Eigen::VectorXd joints_;  // where the drives last said they are
+  bool moving_ = false;
+  double planned_s_ = 0;
+  Clock::time_point move_start_, deadline_;
+  // Targets that came during a motion, in order: each starts when the one before ends.
+  std::deque<Request> pending_;
+  std::deque<std::pair<Clock::time_point, std::uint64_t>> noise_;  // (when, bad frames so far), the last second
+  std::uint64_t noise_reported_ = 0;
+};
+
+// The bus's form and the bitrate, checked where `fba-run --check` sees them (nothing is opened).
+std::string check_bus(const fba::ParamValues& p) {
+  const std::string device = p(CanopenArmComponent::kDevice);
+  const bool slcan = device.rfind("slcan:", 0) == 0;
+  const std::string interface = device.rfind("socketcan:", 0) == 0 ? device.substr(10) : device;
+  if (slcan ? device.size() == 6 : interface.empty() || interface.find_first_of("/:") != std::string::npos)
+    return "'" + device + "' is neither slcan:DEVICE (slcan:/dev/ttyUSB0) nor a SocketCAN interface (can0, socketcan:can0)";
+  if (!slcan) return {};
+  try {
+    fba::can::slcan::bitrate_code(p(CanopenArmComponent::kBitrate));
+  } catch (const std::invalid_argument& e) {
+    return std::string("parameter 'bitrate': ") + e.what();
+  }
+  return {};
+}
+
+// The bus is read only while a tick runs: ticks further apart than the heartbeat timeout would
+// leave the drives' heartbeats piling up unread in the line.
+std::string check_rate(const fba::ParamValues& p) {
+  const double period_ms = 1000 / p(CanopenArmComponent::kRate);
+  const int timeout_ms = p(CanopenArmComponent::kHeartbeatTimeout);
+  if (period_ms < timeout_ms) return {};
+  return fmt::format("a tick every {:g} ms is not shorter than heartbeat_timeout_ms {}: raise the rate", period_ms,
+                     timeout_ms);
+}
+
+}  // namespace
+
+FBA_COMPONENT(CanopenArmComponent);

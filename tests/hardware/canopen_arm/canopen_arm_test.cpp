@@ -1,0 +1,402 @@
+// hw.canopen_arm through the component harness against the CANopen arm emulator, which plays six
+// CiA 402 drives behind an SLCAN adapter on a pseudo-terminal: the component opens the terminal by
+// its path, as it would /dev/ttyUSB0, so the real serial code runs. The harness clock is the
+// task's; the drives move in real time, so the tests tick until something happens (with a bound on
+// the ticks that only catches a hang, never a slow machine).
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include <fba/can/pty.hpp>
+#include <fba/can/slcan_adapter.hpp>
+#include <fba/emulators/canopen_arm.hpp>
+#include <fba/task.hpp>
+#include <fba/task_config.hpp>
+#include <fba/testing.hpp>
+#include <fba/types/joint_state.hpp>
+#include <fba/types/pose.hpp>
+
+#include "arm_model.hpp"
+#include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
+
+using fba::testing::ComponentHarness;
+using namespace std::chrono_literals;
+
+namespace {
+
+constexpr double kCounts = 100'000;  // drive units per radian
+
+const fba::Registry& registry() { return fba::test::built_plugins(); }
+
+const fba::arm::ArmModel& arm() {
+  static const fba::arm::ArmModel model(std::string(FBA_ROBOTS_DIR) + "/wrist_camera_arm.urdf", "world", "camera");
+  return model;
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::string& name) {
+  std::vector<fba::Event> out;
+  for (const auto& e : events)
+    if (e.name == name) out.push_back(e);
+  return out;
+}
+
+// The emulator in a thread of its own, behind an SLCAN adapter on a new pseudo-terminal.
+class Emulator {
+ public:
+  Emulator() : pty_(fba::can::open_pty()) {
+    auto adapter = std::make_unique<fba::can::slcan::SlcanAdapter>(std::move(pty_.master), "emulator");
+    noise_ = fba::emulators::noise_for(*adapter);
+    adapter_ = std::move(adapter);
+    fba::emulators::CanopenArmOptions options;
+    options.nodes = {1, 2, 3, 4, 5, 6};
+    emulator_ = std::make_unique<fba::emulators::CanopenArmEmulator>(*adapter_, options, noise_);
+    thread_ = std::thread([this] { emulator_->run(); });
+  }
+  ~Emulator() {
+    emulator_->stop();
+    thread_.join();
+  }
+  std::string device() const { return "slcan:" + pty_.slave_path; }
+  fba::emulators::CanopenArmEmulator* operator->() { return emulator_.get(); }
+  bool quick_stopped(int node) { return (emulator_->statusword(node) & 0x6F) == 0x07; }
+  bool enabled(int node) { return (emulator_->statusword(node) & 0x6F) == 0x27; }
+
+ private:
+  fba::can::Pty pty_;
+  std::unique_ptr<fba::can::CanBus> adapter_;
+  std::function<void()> noise_;
+  std::unique_ptr<fba::emulators::CanopenArmEmulator> emulator_;
+  std::thread thread_;
+};
+
+class CanopenArmComponent : public ::testing::Test {
+ protected:
+  // Generous timeouts: the emulator's thread may wait for a core on a loaded machine, and a
+  // timeout is not what these tests are about (except where one sets its own).
+  fba::testing::Params params(fba::testing::Params more = {}) {
+    fba::testing::Params p{{"device", emulator_.device()},
+                           {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
+                           {"counts_per_rad", std::vector<double>(6, kCounts)},
+                           {"speed_scale", 1.0},
+                           {"heartbeat_period_ms", 20},
+                           {"heartbeat_timeout_ms", 1000},
+                           {"sdo_timeout_ms", 1000}};
+    for (auto& [k, v] : more) p[k] = v;
+    return p;
+  }
+  void make(fba::testing::Params more = {}) {
+    harness_.emplace(registry(), "hw.canopen_arm", params(std::move(more)),
+                     std::vector<std::string>{"target", "joint_target"});
+  }
+  ComponentHarness& h() { return *harness_; }
+  // One period of the task's clock and its invocation; the drives get a millisecond to move.
+  void tick() {
+    h().tick();
+    h().run();
+    std::this_thread::sleep_for(1ms);
+  }
+  // Ticks until `done` or the component fails; the bound only catches a hang.
+  template <class F>
+  void tick_until(F done) {
+    for (int i = 0; i < 100'000 && !done() && h().failure().empty(); ++i) tick();
+  }
+  void tick_until_arrived(std::size_t n = 1) {
+    tick_until([&] { return named(h().events(), "arrived").size() >= n; });
+  }
+  void tick_until_failed() {
+    tick_until([] { return false; });
+  }
+  // A long move of every joint (about 5 s at speed_scale 0.2), so that a fault comes in the middle of it.
+  void start_long_move() {
+    h().push("joint_target", fba::JointState{{}, {3, -3, 3, -3, 3, -3}, {}, 0});
+    tick();
+    tick_until([&] { return std::abs(emulator_->position(1)) > 0.05 * kCounts; });
+    ASSERT_TRUE(h().failure().empty()) << h().failure();
+    ASSERT_TRUE(named(h().events(), "arrived").empty());
+  }
+
+  Emulator emulator_;  // before the harness: the component's line goes first
+  std::optional<ComponentHarness> harness_;
+};
+
+fba::Pose pose_of(const std::vector<double>& joints) {
+  fba::Pose p;
+  p.world_from_frame = arm().forward(Eigen::Map<const Eigen::VectorXd>(joints.data(), 6));
+  return p;
+}
+
+}  // namespace
+
+TEST(CanopenArmSpec, HasExactlyTheInputsOutputsAndEventsOfSimArm) {
+  const auto real = registry().find("hw.canopen_arm"), sim = registry().find("sim.arm");
+  ASSERT_TRUE(real && sim);
+  const fba::Spec &a = real->spec, &b = sim->spec;
+  EXPECT_EQ(a.kind(), b.kind());
+  auto same_ports = [](const std::vector<fba::PortSpec>& x, const std::vector<fba::PortSpec>& y) {
+    ASSERT_EQ(x.size(), y.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      EXPECT_EQ(x[i].name, y[i].name);
+      EXPECT_EQ(x[i].type, y[i].type) << x[i].name;
+      EXPECT_EQ(x[i].required, y[i].required) << x[i].name;
+      EXPECT_EQ(x[i].same_as, y[i].same_as) << x[i].name;
+      EXPECT_EQ(x[i].doc, y[i].doc) << x[i].name;
+    }
+  };
+  same_ports(a.inputs(), b.inputs());
+  same_ports(a.outputs(), b.outputs());
+  ASSERT_EQ(a.events().size(), b.events().size());
+  for (std::size_t i = 0; i < a.events().size(); ++i) {
+    EXPECT_EQ(a.events()[i].name, b.events()[i].name);
+    EXPECT_EQ(a.events()[i].doc, b.events()[i].doc);
+  }
+  EXPECT_EQ(a.inputs().size(), 2u);  // target, joint_target: the comparison compared something
+  EXPECT_EQ(a.events().size(), 2u);  // arrived, unreachable
+}
+
+TEST_F(CanopenArmComponent, EnablesEveryDriveAndPublishesWhereItStands) {
+  make();
+  tick();
+  ASSERT_TRUE(h().failure().empty()) << h().failure();
+  for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_.enabled(node)) << "node " << node;
+  const auto states = h().values<fba::JointState>("joint_state");
+  ASSERT_EQ(states.size(), 1u);
+  EXPECT_EQ(states[0].names, arm().joint_names());
+  EXPECT_EQ(states[0].positions, std::vector<double>(6, 0.0));  // the emulator's drives start at 0
+  ASSERT_EQ(h().values<fba::Pose>("camera_pose").size(), 1u);
+  EXPECT_TRUE(h().values<fba::Pose>("camera_pose")[0].world_from_frame.isApprox(pose_of(std::vector<double>(6, 0.0)).world_from_frame));
+}
+
+TEST_F(CanopenArmComponent, MovesToAReachableCameraPoseAndArrivesWithTheJointStatesMatching) {
+  make({{"speed_scale", 0.3}});  // a move of a second or two: several joint states on the way
+  tick();
+  const fba::Pose target = pose_of({0.3, -0.5, 0.6, -0.4, 0.5, 0.2});
+  h().push("target", target);
+  tick_until_arrived();
+  ASSERT_TRUE(h().failure().empty()) << h().failure();
+  ASSERT_EQ(named(h().events(), "arrived").size(), 1u);
+  EXPECT_TRUE(named(h().events(), "unreachable").empty());
+
+  const auto states = h().values<fba::JointState>("joint_state");
+  ASSERT_GT(states.size(), 2u) << "joint states while moving, not only at the ends";
+  const auto& last = states.back();
+  // The last state is the drives' actual positions, and the arrival's joints are the same.
+  for (int node = 1; node <= 6; ++node)
+    EXPECT_NEAR(last.positions[node - 1], emulator_->position(node) / kCounts, 1e-9) << "node " << node;
+  const auto arrived = nlohmann::json::parse(named(h().events(), "arrived")[0].payload);
+  EXPECT_EQ(arrived["joints"].get<std::vector<double>>(), last.positions);
+  // Where the camera is: the target, within IK's tolerance and the encoders' resolution.
+  const auto poses = h().values<fba::Pose>("camera_pose");
+  ASSERT_EQ(poses.size(), 2u);  // where it started, where it arrived
+  EXPECT_LT((poses[1].world_from_frame.translation() - target.world_from_frame.translation()).norm(), 1e-3);
+  EXPECT_LT(fba::arm::angle_between(poses[1].world_from_frame, target.world_from_frame), 1e-2);
+  EXPECT_TRUE(poses[1].world_from_frame.isApprox(pose_of(last.positions).world_from_frame, 1e-9));
+  // Synchronised: in every state along the way, the joints that move far have covered the same
+  // share of their distance (the drives sample their positions on the same SYNC).
+  for (std::size_t k = 1; k + 1 < states.size(); ++k) {
+    std::optional<double> share;
+    for (std::size_t j = 0; j < 6; ++j) {
+      if (std::abs(last.positions[j]) < 0.05) continue;
+      const double s = states[k].positions[j] / last.positions[j];  // every joint started at 0
+      EXPECT_GE(s, -1e-9) << "state " << k << ", joint " << j;
+      EXPECT_LE(s, 1 + 1e-9) << "state " << k << ", joint " << j;
+      if (share) EXPECT_NEAR(s, *share, 0.02) << "state " << k << ", joint " << j;
+      else share = s;
+    }
+  }
+}
+
+TEST_F(CanopenArmComponent, AJointTargetOutsideTheLimitsIsRefusedBeforeAnyFrameIsSent) {
+  make();
+  tick();
+  std::vector<std::uint64_t> before;
+  for (int node = 1; node <= 6; ++node) before.push_back(emulator_->sdo_downloads(node));
+  h().push("joint_target", fba::JointState{{"elbow_joint"}, {3.5}, {}, 0});
+  tick();
+  for (int i = 0; i < 5; ++i) tick();
+  ASSERT_TRUE(h().failure().empty()) << h().failure();
+  const auto refused = named(h().events(), "unreachable");
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_TRUE(contains(refused[0].payload, "joint 'elbow_joint' at 3.5 rad is outside [-3.14159, 3.14159]"))
+      << refused[0].payload;
+  for (int node = 1; node <= 6; ++node) {
+    EXPECT_EQ(emulator_->sdo_downloads(node), before[node - 1]) << "node " << node << " was sent a command";
+    EXPECT_EQ(emulator_->position(node), 0) << "node " << node;
+  }
+  // An unreachable pose too, and the arm still takes the next good target.
+  fba::Pose far = pose_of(std::vector<double>(6, 0.0));
+  far.world_from_frame.translation() = Eigen::Vector3d(5, 0, 0);
+  h().push("target", far);
+  h().push("joint_target", fba::JointState{{"elbow_joint"}, {0.5}, {}, 0});
+  tick_until_arrived();
+  EXPECT_EQ(named(h().events(), "unreachable").size(), 2u);
+  EXPECT_EQ(emulator_->position(3), std::lround(0.5 * kCounts));
+}
+
+TEST_F(CanopenArmComponent, AnEmcyFromADriveStopsEveryJointAndTheTaskNamingTheJointAndTheCode) {
+  make({{"speed_scale", 0.2}});
+  tick();
+  start_long_move();
+  emulator_->inject_fault(4, 0x2310);
+  tick_until_failed();
+  const std::string why = h().failure();
+  EXPECT_TRUE(contains(why, emulator_.device())) << why;
+  EXPECT_TRUE(contains(why, "joint 'wrist_1_joint'")) << why;
+  EXPECT_TRUE(contains(why, "node 4")) << why;
+  EXPECT_TRUE(contains(why, "EMCY 0x2310 (continuous over-current)")) << why;
+  EXPECT_TRUE(contains(why, "every joint was sent quick stop")) << why;
+  for (int node : {1, 2, 3, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+TEST_F(CanopenArmComponent, ADriveThatStopsAnsweringStopsEveryOtherJointNamingIt) {
+  make({{"speed_scale", 0.2}, {"heartbeat_timeout_ms", 400}, {"sdo_timeout_ms", 2000}});
+  tick();
+  start_long_move();
+  emulator_->silence(2);
+  tick_until_failed();
+  const std::string why = h().failure();
+  EXPECT_TRUE(contains(why, "joint 'shoulder_lift_joint'")) << why;
+  EXPECT_TRUE(contains(why, "node 2: heartbeat lost")) << why;
+  EXPECT_TRUE(contains(why, "quick stop failed on 1 of 6 joints")) << why;  // node 2 cannot hear it
+  for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+TEST_F(CanopenArmComponent, TheSerialLineVanishingMidMotionEndsWithAClearReportNeverAHang) {
+  make({{"speed_scale", 0.2}});
+  tick();
+  start_long_move();
+  emulator_->disconnect();
+  tick_until_failed();
+  const std::string why = h().failure();
+  EXPECT_TRUE(contains(why, emulator_.device())) << why;
+  EXPECT_TRUE(contains(why, "quick stop failed on 6 of 6 joints")) << why;
+  // The safe state cannot be reached on a dead line: said, not hung.
+  try {
+    h().safe_state();
+    FAIL() << "a quick stop went out on a closed line";
+  } catch (const std::exception& e) {
+    EXPECT_TRUE(contains(e.what(), "quick stop failed on 6 of 6 joints")) << e.what();
+  }
+}
+
+TEST_F(CanopenArmComponent, LineNoiseIsToleratedWhileItStaysBelowTheLimit) {
+  make();
+  tick();
+  h().push("joint_target", fba::JointState{{}, {0.4, -0.3, 0.2, -0.1, 0.3, 0.5}, {}, 0});
+  tick();
+  emulator_->inject_garbage();
+  tick_until_arrived();
+  ASSERT_TRUE(h().failure().empty()) << h().failure();
+  for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_.enabled(node)) << "node " << node;
+  EXPECT_EQ(emulator_->position(6), std::lround(0.5 * kCounts));
+}
+
+TEST_F(CanopenArmComponent, PersistentLineNoiseStopsTheArm) {
+  make({{"speed_scale", 0.2}, {"noise_limit", 10}});
+  tick();
+  start_long_move();
+  for (int i = 0; i < 5; ++i) emulator_->inject_garbage();  // 8 bad lines each, within the second
+  tick_until_failed();
+  const std::string why = h().failure();
+  EXPECT_TRUE(contains(why, "the line is too noisy to trust")) << why;
+  EXPECT_TRUE(contains(why, "noise_limit 10")) << why;
+  EXPECT_TRUE(contains(why, "every joint was sent quick stop")) << why;
+  for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+TEST_F(CanopenArmComponent, SafeStateQuickStopsEveryJointMidMotion) {
+  make({{"speed_scale", 0.2}});
+  tick();
+  start_long_move();
+  h().interrupt();  // as the runtime does at a stop: the driver's waits end, it sends nothing more
+  tick();
+  EXPECT_TRUE(h().failure().empty()) << h().failure();
+  h().safe_state();
+  for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+TEST_F(CanopenArmComponent, AConfigurationThatDoesNotFitTheArmIsRefusedNamingTheParameter) {
+  try {
+    make({{"node_ids", std::vector<double>{1, 2, 3}}});
+    FAIL() << "three node ids for six joints";
+  } catch (const std::exception& e) {
+    EXPECT_TRUE(contains(e.what(), "parameter 'node_ids' has 3 values")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "has 6 joints")) << e.what();
+  }
+  try {
+    make({{"device", std::string("/dev/ttyUSB0")}});
+    FAIL() << "a device without slcan:";
+  } catch (const std::exception& e) {
+    EXPECT_TRUE(contains(e.what(), "is neither slcan:DEVICE")) << e.what();
+  }
+  try {
+    make({{"rate", 0.5}});  // a tick every 2 s, a heartbeat timeout of 1 s
+    FAIL() << "ticks further apart than the heartbeat timeout";
+  } catch (const std::exception& e) {
+    EXPECT_TRUE(contains(e.what(), "is not shorter than heartbeat_timeout_ms 1000")) << e.what();
+  }
+  try {
+    make({{"bitrate", 300000}});
+    FAIL() << "a bitrate SLCAN does not have";
+  } catch (const std::exception& e) {
+    EXPECT_TRUE(contains(e.what(), "bitrate")) << e.what();
+  }
+}
+
+// In a task under the threaded executor: the runtime's own threads call process(), interrupt()
+// and safe_state().
+class CanopenArmInATask : public ::testing::Test {
+ protected:
+  fba::TaskConfig task(const std::string& extra = "") {
+    const std::string yaml = "task: real_arm\nexecutor: threaded\ncomponents:\n"
+                             "  arm:\n    type: hw.canopen_arm\n    params:\n"
+                             "      device: " + emulator_.device() + "\n"
+                             "      node_ids: [1, 2, 3, 4, 5, 6]\n"
+                             "      counts_per_rad: [100000, 100000, 100000, 100000, 100000, 100000]\n"
+                             "      heartbeat_period_ms: 20\n      heartbeat_timeout_ms: 1000\n"
+                             "      sdo_timeout_ms: 1000\n" + extra;
+    return fba::load_task_text(yaml, "real_arm.yaml", dir_.path(), registry());
+  }
+  void wait_until_enabled() {
+    for (int i = 0; i < 100'000 && !(emulator_.enabled(1) && emulator_.enabled(6)); ++i) std::this_thread::sleep_for(1ms);
+  }
+
+  fba::test::TempDir dir_;
+  Emulator emulator_;
+};
+
+TEST_F(CanopenArmInATask, ADriveFaultStopsTheTaskAsARuntimeErrorNamingTheDriveAndTheArmIsQuickStopped) {
+  fba::Task t(task());
+  fba::RunResult result;
+  std::jthread run([&] { result = t.run(); });
+  wait_until_enabled();
+  emulator_->inject_fault(3, 0x7121);
+  run.join();
+  EXPECT_EQ(result.outcome, fba::Outcome::RuntimeError) << result.reason;
+  EXPECT_TRUE(contains(result.reason, "joint 'elbow_joint': node 3: EMCY 0x7121")) << result.reason;
+  ASSERT_EQ(result.safe_states.size(), 1u);
+  EXPECT_EQ(result.safe_states[0].status, "reached") << result.safe_states[0].message;
+  for (int node : {1, 2, 4, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+TEST_F(CanopenArmInATask, AStopFromOutsideInterruptsTheDriverAndQuickStopsEveryJoint) {
+  fba::Task t(task());
+  fba::RunResult result;
+  std::jthread run([&] { result = t.run(); });
+  wait_until_enabled();
+  t.request_stop(fba::Outcome::Interrupted, "the test stops the task");  // as a signal does
+  run.join();
+  EXPECT_EQ(result.outcome, fba::Outcome::Interrupted) << result.reason;
+  EXPECT_TRUE(result.stuck.empty());
+  ASSERT_EQ(result.safe_states.size(), 1u);
+  EXPECT_EQ(result.safe_states[0].status, "reached") << result.safe_states[0].message;
+  for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
