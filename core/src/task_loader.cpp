@@ -160,6 +160,7 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
   int line = 1, col = 0, depth = 0;
   char quote = 0;
   char prev = '\n';  // the previous character that is not a space
+  bool plain = false;  // inside a plain scalar of the flow root
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     const bool line_start = i == 0 || text[i - 1] == '\n';
@@ -187,6 +188,7 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
     }
     if (c == ' ' || c == '\t' || c == '\r') continue;
     if (c == '#' && (line_start || std::isspace(static_cast<unsigned char>(text[i - 1])))) {
+      plain = false;  // a comment ends a plain scalar
       while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
       continue;
     }
@@ -207,10 +209,19 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
       prev = c;
       continue;
     }
-    // Inside a flow root: quotes open only where a scalar starts.
-    if ((c == '"' || c == '\'') && (prev == '[' || prev == '{' || prev == ',' || prev == ':' || prev == '\n')) quote = c;
-    else if (c == '[' || c == '{') ++depth;
-    else if ((c == ']' || c == '}') && --depth == 0) at = At::AfterRoot;
+    // Inside a flow root. A quote opens a scalar only where a node starts, as yaml-cpp reads it: not
+    // inside a plain scalar, which goes on across lines and through a ':' with no space after it
+    // ('{a:"b}' and '{a: b\n"c}' hold no quoted scalar; the fuzzer found the first).
+    const char next = i + 1 < text.size() ? text[i + 1] : '\n';
+    const bool json_key = !plain && (prev == '"' || prev == '\'');  // '"a":b' needs no space
+    if ((c == '"' || c == '\'') && !plain) quote = c;
+    else if (c == '[' || c == '{') ++depth, plain = false;
+    else if (c == ']' || c == '}') {
+      plain = false;
+      if (--depth == 0) at = At::AfterRoot;
+    } else if (c == ',') plain = false;
+    else if ((c == ':' || c == '?') && (json_key || std::isspace(static_cast<unsigned char>(next)) || std::strchr(",[]{}", next))) plain = false;
+    else plain = true;
     prev = c;
   }
   return true;
