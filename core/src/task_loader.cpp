@@ -1471,7 +1471,9 @@ TaskConfig load_task_text(const std::string& text, const std::string& name, cons
   return load_root(text, name, dir, {}, registry, options);
 }
 
-void register_composite_file(Registry& registry, const fs::path& file) {
+namespace {
+// The file parsed and its mappings checked; its inner types are not looked up yet.
+std::shared_ptr<CompositeDef> parse_composite_file(const fs::path& file) {
   const std::string shown = file.string();
   std::string problem;
   const std::string text = read_text(file, problem);
@@ -1482,10 +1484,31 @@ void register_composite_file(Registry& registry, const fs::path& file) {
   if (!root->IsMap() || !(*root)["composite"]) throw ConfigError({Diagnostic{Location{shown, 0, 0}, "not a composite definition (no 'composite:' key)"}});
   auto def = std::make_shared<CompositeDef>(CompositeDef{fs::absolute(file), shown, *root});
   check_mappings(def->root, Source{shown, def->file.parent_path()}, d);
+  if (!d.empty()) throw ConfigError(d);
+  return def;
+}
+}  // namespace
+
+std::string composite_file_type(const fs::path& file) {
+  const auto def = parse_composite_file(file);
+  const YAML::Node name = def->root["composite"];
+  if (!name.IsScalar() || name.Scalar().empty())
+    throw ConfigError({Diagnostic{at(Source{def->shown, def->file.parent_path()}, name), "'composite:' needs the composite's type name"}});
+  return name.Scalar();
+}
+
+std::shared_ptr<const TypeEntry> read_composite_file(const Registry& registry, const fs::path& file) {
+  const auto def = parse_composite_file(file);
+  std::vector<Diagnostic> d;
   Loader loader(registry, {});
   Spec spec = loader.composite_spec_public(*def, d);
   if (!d.empty()) throw ConfigError(d);
-  registry.add_composite(std::move(spec), def, shown);
+  return std::make_shared<const TypeEntry>(TypeEntry{std::move(spec), nullptr, def, nullptr, def->shown});
+}
+
+void register_composite_file(Registry& registry, const fs::path& file) {
+  const auto entry = read_composite_file(registry, file);
+  registry.add_composite(entry->spec, entry->composite, entry->origin);
 }
 
 }  // namespace fba
