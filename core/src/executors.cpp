@@ -273,10 +273,12 @@ class ThreadedExecutor final : public Executor {
   Graph& g_;
   int threads_ = 2;
   const Clock::time_point start_ = Clock::now();
-  std::mutex queue_mutex_;
+  // Priority-inheriting locks (pi_mutex.hpp): workers take them on every hop. The condition
+  // variables must then be the _any kind; waking is not priority-ordered, the lock hand-off is.
+  PiMutex queue_mutex_;
   std::deque<Node*> queue_;
   std::atomic<std::size_t> queued_{0};  // queue_.size(), for spinners to watch without the lock
-  std::condition_variable work_cv_;
+  std::condition_variable_any work_cv_;
   int spin_limit_ = 1;
   int spinners_ = 0, sleepers_ = 0, waking_ = 0;  // under queue_mutex_; waking_ <= sleepers_
   std::size_t dedicated_started_ = 0;
@@ -284,11 +286,11 @@ class ThreadedExecutor final : public Executor {
   std::vector<std::thread> workers_;
   std::vector<std::unique_ptr<Dedicated>> dedicated_;
   std::thread timer_thread_;
-  std::mutex timer_mutex_;
-  std::condition_variable timer_cv_;
+  PiMutex timer_mutex_;
+  std::condition_variable_any timer_cv_;
   TimerQueue timers_;
-  std::mutex main_mutex_;
-  std::condition_variable main_cv_;
+  PiMutex main_mutex_;
+  std::condition_variable_any main_cv_;
   bool poked_ = false;
 };
 

@@ -20,6 +20,7 @@
 #include "fba/task.hpp"
 #include "fba/task_config.hpp"
 #include "fba/thread_pool.hpp"
+#include "pi_mutex.hpp"
 
 namespace fba::detail {
 
@@ -64,8 +65,9 @@ const std::string* intern_name(std::string_view name);
 
 // One connection's storage, in front of one input.
 //
-// The lock is a mutex, not a spinlock: under real-time priorities a spinning waiter can keep
-// the preempted holder from ever running. Packets leaving the buffer (displaced, dropped, or an
+// The lock is a priority-inheriting mutex, not a spinlock or a plain mutex: under real-time
+// priorities a spinning waiter can keep the preempted holder from ever running, and a plain mutex
+// lets a medium-priority thread delay a high-priority waiter without bound. Packets leaving the buffer (displaced, dropped, or an
 // input's previous sample) are destroyed after it is released: one may be a whole frame.
 struct Buffer {
   BufferPolicy policy = BufferPolicy::Lossless;
@@ -77,7 +79,7 @@ struct Buffer {
   Node* consumer = nullptr;  // null for taps
   std::string from, to;      // "component.port", for messages and statistics
 
-  std::mutex mutex;
+  PiMutex mutex;
   std::deque<Packet> queue;  // Lossless and DropOldest
   Packet latest;             // Latest
   std::atomic<std::size_t> size{0};   // readable without the lock, for scheduling decisions
@@ -175,7 +177,7 @@ class Node {
   std::shared_ptr<spdlog::logger> logger;
   std::unique_ptr<Context> context;
   std::shared_ptr<Component> component;  // swapped under component_mutex (restarts)
-  std::mutex component_mutex;
+  PiMutex component_mutex;
   std::atomic<const char*> call{nullptr};  // the component method running now, if any
   // 0 not attempted, 1 attempting, 2 reached, 3 failed: a crash or forced exit knows what is left.
   std::atomic<int> safe_state_progress{0};
@@ -197,7 +199,7 @@ class Node {
 
   Counter invocations, errors, restarts, lost_to_restarts;
   std::atomic<std::int64_t> last_tick_ns{-1};  // for the stall warning: when the next tick is due
-  std::mutex stage_mutex;
+  PiMutex stage_mutex;  // components set their stage from process()
   std::string stage;
 
  private:
@@ -282,14 +284,14 @@ class Graph {
   int worker_threads = 2;
 
  private:
-  std::mutex pool_mutex_;
+  PiMutex pool_mutex_;
   std::unique_ptr<ThreadPool> pool_;
   Node& node(const std::string& name);
   // After the executor stopped: interrupts, joins within the grace, and safe states; returns
   // the calls that did not return.
   std::vector<StuckCall> stop();
   std::atomic<bool> stopping_{false};
-  std::mutex result_mutex_;
+  PiMutex result_mutex_;  // events are recorded from workers
   RunResult result_;
   // Each event is stored once; the final event is one of them (or, past the list's bound, its own).
   std::vector<std::shared_ptr<const Event>> events_;

@@ -32,11 +32,25 @@ struct PluginSlot {
   bool loaded = false;
   std::map<std::string, std::shared_ptr<const TypeEntry>, std::less<>> entries;
 };
+
+// A composite file found on the path, known by its name until a task uses it: reading it whole
+// looks up its inner types, which loads their plugins, so that waits until then.
+struct CompositeSlot {
+  std::filesystem::path file;
+  std::shared_ptr<const TypeEntry> entry;  // once read
+  std::string error;                       // why it cannot be used
+  bool reading = false;                    // being read: a composite that uses it again is a cycle
+};
 }  // namespace detail
 
 namespace {
 
+using detail::CompositeSlot;
 using detail::PluginSlot;
+
+// Composites are read rarely, and one may use another: one lock for all of them, re-entered by
+// the thread that reads a composite that uses another.
+std::recursive_mutex composite_mutex;
 
 // Runs the plugin's code for the first time: dlopen, its static initialisers, its specs. Every
 // check that can be made from the files was made before (Registry::add_plugin).
@@ -172,6 +186,10 @@ bool Registry::has_type(std::string_view name, std::string* origin) const {
     if (origin) *origin = it->second->file;
     return true;
   }
+  if (auto it = composite_files_.find(name); it != composite_files_.end()) {
+    if (origin) *origin = it->second->file.string();
+    return true;
+  }
   return false;
 }
 
@@ -295,28 +313,45 @@ std::vector<PluginError> Registry::load_path(const std::vector<fs::path>& dirs) 
       }
     }
   }
-  // Composites may use each other: register in passes until no more can be resolved.
-  std::vector<std::pair<fs::path, std::string>> pending;
-  for (auto& c : composites) pending.emplace_back(c, "");
-  for (bool progress = true; progress && !pending.empty();) {
-    progress = false;
-    for (auto it = pending.begin(); it != pending.end();) {
-      try {
-        register_composite_file(*this, it->first);
-        it = pending.erase(it);
-        progress = true;
-      } catch (const std::exception& e) {
-        it->second = e.what();
-        ++it;
-      }
+  // Composites are known by name only, after every plugin: a task that uses one reads it then
+  // (find), so its inner types' plugins are loaded only for the tasks that use it.
+  for (const auto& c : composites) {
+    try {
+      const std::string name = composite_file_type(c);
+      if (std::string first; has_type(name, &first))
+        throw std::logic_error("component type '" + name + "' is registered twice: by " + first + " and by " + c.string());
+      auto slot = std::make_shared<CompositeSlot>();
+      slot->file = c;
+      composite_files_.emplace(name, std::move(slot));
+    } catch (const std::exception& e) {
+      errors.emplace_back(c.string(), std::string("composite not usable: ") + e.what());
     }
   }
-  for (auto& [file, why] : pending) errors.emplace_back(file.string(), "composite not usable: " + why);
   return errors;
+}
+
+std::shared_ptr<const TypeEntry> Registry::resolve_composite(CompositeSlot& slot) const {
+  std::lock_guard lock(composite_mutex);
+  if (!slot.entry && slot.error.empty()) {
+    if (slot.reading)
+      throw PluginError(slot.file.string(), "composite not usable: it contains itself, through the composites it uses");
+    slot.reading = true;
+    try {
+      slot.entry = read_composite_file(*this, slot.file);
+    } catch (const PluginError& e) {  // an inner type's plugin, or a composite it uses
+      slot.error = "composite not usable: it uses " + e.file() + ", which cannot be used: " + e.reason();
+    } catch (const std::exception& e) {
+      slot.error = std::string("composite not usable: ") + e.what();
+    }
+    slot.reading = false;
+  }
+  if (!slot.error.empty()) throw PluginError(slot.file.string(), slot.error);
+  return slot.entry;
 }
 
 std::shared_ptr<const TypeEntry> Registry::find(std::string_view type_name) const {
   if (auto it = types_.find(type_name); it != types_.end()) return it->second;
+  if (auto c = composite_files_.find(type_name); c != composite_files_.end()) return resolve_composite(*c->second);
   auto it = plugin_types_.find(type_name);
   if (it == plugin_types_.end()) return nullptr;
   PluginSlot& slot = *it->second;
@@ -331,6 +366,12 @@ std::shared_ptr<const TypeEntry> Registry::find(std::string_view type_name) cons
 std::vector<const TypeEntry*> Registry::types() const {
   std::vector<const TypeEntry*> out;
   for (const auto& [_, t] : types_) out.push_back(t.get());
+  for (const auto& [_, c] : composite_files_) {
+    try {
+      out.push_back(resolve_composite(*c).get());
+    } catch (const PluginError&) {  // load_path or a task's find() reports it
+    }
+  }
   for (const auto& slot : plugins_) {
     std::lock_guard lock(slot->mutex);
     if (slot->loaded)
@@ -343,12 +384,20 @@ std::vector<std::string> Registry::type_names() const {
   std::vector<std::string> out;
   for (const auto& [name, _] : types_) out.push_back(name);
   for (const auto& [name, _] : plugin_types_) out.push_back(name);
+  for (const auto& [name, _] : composite_files_) out.push_back(name);
   std::sort(out.begin(), out.end());
   return out;
 }
 
 std::string Registry::interface_json(std::string_view type_name) const {
   if (auto it = types_.find(type_name); it != types_.end()) return detail::spec_json(it->second->spec);
+  if (auto it = composite_files_.find(type_name); it != composite_files_.end()) {
+    try {
+      return detail::spec_json(resolve_composite(*it->second)->spec);
+    } catch (const PluginError&) {
+      return "";
+    }
+  }
   if (auto it = plugin_types_.find(type_name); it != plugin_types_.end())
     for (const auto& t : it->second->manifest.types)
       if (t.name == type_name) return t.interface;

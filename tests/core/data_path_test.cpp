@@ -47,7 +47,7 @@ class DataPathBoth : public ::testing::TestWithParam<ExecutorKind> {};
 
 // A payload whose destructor checks, from another thread, whether a buffer's lock is held.
 struct LockProbe {
-  std::mutex* lock = nullptr;
+  fba::detail::PiMutex* lock = nullptr;
   bool* freed_under_lock = nullptr;
   ~LockProbe() {
     bool free = false;

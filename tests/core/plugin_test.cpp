@@ -279,6 +279,69 @@ TEST(Plugin, CheckingATaskMapsOnlyThePluginsItUses) {
   EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{"fba-examples.so"});
 }
 
+// A composite file on the plugin path whose inner component comes from the marker plugin.
+void write_marker_composite(const fs::path& dir) {
+  std::ofstream(dir / "marker_source.yaml") << "composite: test.marker_source\n"
+                                               "outputs:\n  out: m.out\n"
+                                               "components:\n  m: { type: test.marker }\n";
+}
+
+TEST(Plugin, CheckingACompositeTaskMapsOnlyThePluginsItsComponentsUse) {
+  // The examples with their shipped composite (examples.relay, used by the task), and a composite
+  // whose inner type comes from a plugin the task does not use: that plugin's code never runs.
+  const fs::path dir = temp_dir();
+  copy_plugin(examples(), dir);
+  fs::copy_file(fs::path(FBA_TEST_PLUGIN_DIR) / "relay.yaml", dir / "relay.yaml");
+  copy_plugin(bad("static_marker"), dir);
+  write_marker_composite(dir);
+  const fs::path marker = dir / "marker";
+  MarkerEnv env(marker);
+  fba::Registry r;
+  EXPECT_TRUE(r.load_path({dir}).empty());
+  EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{}) << "reading the path ran plugin code";
+  const auto task = fba::load_task(fs::path(FBA_TASKS_DIR) / "examples/composite.yaml", r);
+  EXPECT_EQ(task.components.size(), 8u);  // the relays' passthroughs, expanded
+  EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{"fba-examples.so"});
+  EXPECT_FALSE(fs::exists(marker)) << "a plugin that only an unused composite needs was loaded";
+  // The counterpart: a task that uses the composite loads its plugin.
+  fba::load_task_text("components:\n  s: { type: test.marker_source }\n", "t.yaml", dir, r);
+  EXPECT_TRUE(fs::exists(marker));
+}
+
+TEST(Plugin, ACompositeOverABrokenPluginFailsOnlyTheTasksThatUseIt) {
+  const fs::path dir = temp_dir();
+  const fs::path so = copy_plugin(bad("static_marker"), dir);
+  edit_manifest(so, [](auto& m) { m.abi_version = 999; });
+  write_marker_composite(dir);
+  fba::Registry r;
+  const auto errors = r.load_path({FBA_TEST_PLUGIN_DIR, dir});
+  ASSERT_EQ(errors.size(), 1u);  // the plugin; the composite is not read until a task uses it
+  EXPECT_EQ(errors[0].file(), so.string());
+  EXPECT_EQ(fba::load_task(fs::path(FBA_TASKS_DIR) / "examples/composite.yaml", r).components.size(), 8u);
+  try {
+    fba::load_task_text("components:\n  s: { type: test.marker_source }\n", "t.yaml", dir, r);
+    FAIL() << "a task using a composite over the broken plugin was accepted";
+  } catch (const fba::PluginError& e) {
+    EXPECT_EQ(e.file(), (dir / "marker_source.yaml").string());
+    EXPECT_NE(e.reason().find(so.string()), std::string::npos) << e.reason();
+    EXPECT_NE(e.reason().find("ABI 999"), std::string::npos) << e.reason();
+  }
+}
+
+TEST(Plugin, CompositesOnThePathThatUseEachOtherInACycleAreRefusedWhenUsed) {
+  const fs::path dir = temp_dir();
+  std::ofstream(dir / "a.yaml") << "composite: test.a\noutputs:\n  out: b.out\ncomponents:\n  b: { type: test.b }\n";
+  std::ofstream(dir / "b.yaml") << "composite: test.b\noutputs:\n  out: a.out\ncomponents:\n  a: { type: test.a }\n";
+  fba::Registry r;
+  EXPECT_TRUE(r.load_path({dir}).empty());
+  try {
+    r.find("test.a");
+    FAIL() << "a cycle of composites was accepted";
+  } catch (const fba::PluginError& e) {
+    EXPECT_NE(e.reason().find("contains itself"), std::string::npos) << e.reason();
+  }
+}
+
 TEST(Plugin, TwoLayoutsOfOneDataTypeAreRefusedNamingBothPlugins) {
   const fs::path dir = temp_dir();
   const fs::path large = copy_plugin(bad("blob_large"), dir);

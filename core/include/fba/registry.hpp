@@ -26,7 +26,8 @@ namespace fba {
 
 struct CompositeDef;  // task_config.hpp
 namespace detail {
-struct PluginSlot;  // registry.cpp
+struct PluginSlot;     // registry.cpp
+struct CompositeSlot;  // registry.cpp
 }
 
 // A loaded shared object. It stays mapped for the life of the process (see above).
@@ -101,21 +102,23 @@ class Registry {
 
   // Checks one plugin from its manifest and loads it now; throws PluginError.
   void load_plugin(const std::filesystem::path& file);
-  // Reads every plugin's manifest (*.so) and every composite (*.yaml) in the folders, in order;
-  // returns the failures instead of stopping at the first, so a user sees all of them. Loads
-  // no plugin code, except the plugins whose types a composite uses.
+  // Reads every plugin's manifest (*.so) and every composite's name (*.yaml) in the folders, in
+  // order; returns the failures instead of stopping at the first, so a user sees all of them.
+  // Loads no plugin code: a composite is read whole, and its inner types looked up, on first use.
   std::vector<PluginError> load_path(const std::vector<std::filesystem::path>& dirs);
 
   // Tasks hold their types (specs, factories, libraries) themselves: a task outlives the
   // registry it was loaded from. Loads the type's plugin on first use; throws PluginError when
-  // that plugin cannot be used. nullptr for an unknown name.
+  // that plugin (or a composite found on the path) cannot be used. nullptr for an unknown name.
   std::shared_ptr<const TypeEntry> find(std::string_view type_name) const;
-  // Built-in, composite and already loaded plugin types (plugins() lists the others).
+  // Built-in, composite and already loaded plugin types (plugins() lists the others). Reads the
+  // composites found on the path, loading the plugins their inner types come from.
   std::vector<const TypeEntry*> types() const;
   // Every known type name, including those of plugins not loaded yet.
   std::vector<std::string> type_names() const;
   // A type's interface as JSON (see fba-inspect --json), from its plugin's manifest when the
-  // plugin is not loaded; empty for an unknown name. Never loads a plugin.
+  // plugin is not loaded; empty for an unknown name. Loads a plugin only for a composite found on
+  // the path, which is read then (see types()).
   std::string interface_json(std::string_view type_name) const;
   std::vector<PluginRecord> plugins() const;
   std::vector<DataTypeRecord> data_types() const;
@@ -130,6 +133,9 @@ class Registry {
   std::map<std::string, std::shared_ptr<const TypeEntry>, std::less<>> types_;
   std::map<std::string, std::shared_ptr<detail::PluginSlot>, std::less<>> plugin_types_;
   std::vector<std::shared_ptr<detail::PluginSlot>> plugins_;
+  std::map<std::string, std::shared_ptr<detail::CompositeSlot>, std::less<>> composite_files_;
+  // A composite found on the path, read whole on first use; throws PluginError.
+  std::shared_ptr<const TypeEntry> resolve_composite(detail::CompositeSlot& slot) const;
 };
 
 // FBA_PLUGIN_PATH (colon-separated), then extra folders, then the plugins installed beside the

@@ -113,6 +113,12 @@ TaskConfig load_task_text(const std::string& text, const std::string& name, cons
 // Reads a composite definition (a YAML file with a `composite:` key) and registers it.
 // Throws ConfigError.
 void register_composite_file(Registry& registry, const std::filesystem::path& file);
+// The type name a composite file defines, read without looking up its inner types (so no plugin
+// is loaded). Throws ConfigError.
+std::string composite_file_type(const std::filesystem::path& file);
+// Reads and checks a composite definition against the registry's types (loading the plugins they
+// come from); registers nothing. Throws ConfigError.
+std::shared_ptr<const TypeEntry> read_composite_file(const Registry& registry, const std::filesystem::path& file);
 
 // The task graph as Graphviz DOT: components by kind, ports, buffer policies, feedback edges
 // dashed, composites as clusters, event rules.
