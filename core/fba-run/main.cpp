@@ -279,7 +279,7 @@ int run(int argc, char** argv) {
       "3 runtime error (also a timeout, a component that did not return after the stop, a summary that could not be "
       "written), 130 interrupted by SIGINT, 143 by SIGTERM.\n\nOptions");
   std::vector<std::string> sets, plugin_dirs;
-  std::string output_dir, executor, log_level = "info";
+  std::string output_dir, executor, profile, log_level = "info";
   double timeout = 0;
   double stop_grace = fba::RunOptions{}.stop_grace_s;
   double dot_every = 0;
@@ -289,7 +289,10 @@ int run(int argc, char** argv) {
       "dot-every", po::value(&dot_every),
       "while running, write the live graph (states, queue fills, rates) to OUTPUT-DIR/graph-live.dot every this many "
       "seconds; SIGUSR1 writes it at once")(
-      "set,s", po::value(&sets)->composing(), "override a parameter: component.param=value (repeatable)")(
+      "set,s", po::value(&sets)->composing(),
+      "override a parameter: component.param=value, or name=value for a task parameter (repeatable)")(
+      "profile", po::value(&profile),
+      "bind the task's device slots with this profile: NAME (profiles/NAME.yaml beside the task) or a file")(
       "plugin-path,p", po::value(&plugin_dirs)->composing(), "add a plugin folder (repeatable; also FBA_PLUGIN_PATH)")(
       "output-dir,o", po::value(&output_dir), "write the run's artefacts (summary.json, images, models) here")(
       "timeout,t", po::value(&timeout), "stop the run after this many seconds (exit 3)")(
@@ -362,6 +365,7 @@ int run(int argc, char** argv) {
 
   fba::LoadOptions load;
   for (const auto& s : sets) load.overrides.push_back({s});
+  load.profile = profile;
   fba::TaskConfig config;
   try {
     config = fba::load_task(task_file, registry, load);
@@ -379,6 +383,14 @@ int run(int argc, char** argv) {
   if (vm.count("check")) {
     std::cout << task_file.string() << ": ok (" << config.components.size() << " components, " << config.connections.size()
               << " connections, " << config.rules.size() << " event rules)\n";
+    // What a run would use: the task parameters' values, and per slot the bound type's interface,
+    // which is what must agree between two profiles of one task.
+    for (const auto& p : config.params)
+      std::cout << "parameter " << p.name << " = " << fba::to_string(p.value) << "  (" << fba::to_string(p.type) << ", " << p.source
+                << ")\n";
+    if (!config.profile.empty()) std::cout << "profile " << config.profile << " (" << config.profile_file.string() << ")\n";
+    for (const auto& slot : config.slots)
+      std::cout << "slot " << slot.name << ": " << slot.type->spec.type_name() << "\n" << fba::describe(fba::interface_of(slot.type->spec));
     return 0;
   }
   {
