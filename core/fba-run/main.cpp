@@ -8,6 +8,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -271,6 +272,35 @@ void install_crash_handlers() {
   for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL}) sigaction(sig, &sa, nullptr);
 }
 
+// --check with a profile: the other profiles beside the task, each loaded (without --set) and its
+// slots' interfaces compared with this one's. Two profiles fit the task alike when nothing differs.
+void compare_profiles(const fba::TaskConfig& config, const fba::Registry& registry) {
+  std::vector<fs::path> others;
+  std::error_code ec;
+  for (fs::directory_iterator it(config.file.parent_path() / "profiles", ec), end; !ec && it != end; it.increment(ec))
+    if (it->path().extension() == ".yaml" && !fs::equivalent(it->path(), config.profile_file, ec)) others.push_back(it->path());
+  std::sort(others.begin(), others.end());
+  for (const auto& other : others) {
+    fba::LoadOptions load;
+    load.profile = other.string();
+    std::cout << "profile " << other.stem().string() << " (" << other.string() << "): ";
+    try {
+      const fba::TaskConfig alt = fba::load_task(config.file, registry, load);
+      std::vector<std::string> diffs;
+      for (const auto& slot : config.slots)
+        for (const auto& d : fba::interface_differences(fba::slot_interface(config, slot.name), fba::slot_interface(alt, slot.name)))
+          diffs.push_back("slot " + slot.name + ": " + d);
+      if (diffs.empty()) std::cout << "the same interfaces in every slot\n";
+      else std::cout << diffs.size() << " difference(s)\n";
+      for (const auto& d : diffs) std::cout << "    " << d << "\n";
+    } catch (const fba::ConfigError& e) {
+      std::cout << "does not load (" << e.diagnostics().size() << " error(s), the first: " << e.diagnostics().front().str() << ")\n";
+    } catch (const std::exception& e) {
+      std::cout << "does not load: " << e.what() << "\n";
+    }
+  }
+}
+
 int run(int argc, char** argv) {
   auto& st = state();
   po::options_description visible(
@@ -391,6 +421,7 @@ int run(int argc, char** argv) {
     if (!config.profile.empty()) std::cout << "profile " << config.profile << " (" << config.profile_file.string() << ")\n";
     for (const auto& slot : config.slots)
       std::cout << "slot " << slot.name << ": " << slot.type->spec.type_name() << "\n" << fba::describe(fba::interface_of(slot.type->spec));
+    if (!config.slots.empty()) compare_profiles(config, registry);
     return 0;
   }
   {

@@ -696,9 +696,9 @@ class Loader {
     auto decls = param_decls(root["params"], src, "a task", d);
     const std::size_t from_task = decls.size();
     if (profile_.loaded)
-      for (auto& x : param_decls(profile_.root["params"], profile_.src, "a profile", d)) decls.push_back(std::move(x));
+      for (auto& x : param_decls(std::as_const(profile_.root)["params"], profile_.src, "a profile", d)) decls.push_back(std::move(x));
     for (auto& x : d) error(x.where, x.message);
-    for (const YAML::Node& params : {root["params"], profile_.loaded ? profile_.root["params"] : YAML::Node()})
+    for (const YAML::Node& params : {root["params"], profile_.loaded ? std::as_const(profile_.root)["params"] : YAML::Node()})
       if (params && params.IsMap())
         for (auto it = params.begin(); it != params.end(); ++it)
           if (it->first.IsScalar() && std::none_of(decls.begin(), decls.end(), [&](const auto& x) { return x.first.name == it->first.Scalar(); }))

@@ -9,6 +9,7 @@
 
 #include <fba/task.hpp>
 #include <fba/task_config.hpp>
+#include <nlohmann/json.hpp>
 
 #include "test_components.hpp"
 
@@ -197,6 +198,11 @@ TEST(Profiles, BindTheSlotsToTypesAndTheirParams) {
   EXPECT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
   ASSERT_TRUE(r.final_event);
   EXPECT_EQ(r.final_event->source, "sink");
+  // summary.json names the profile and the task parameters' values.
+  const auto summary = nlohmann::json::parse(fba::summary_json(r, task));
+  EXPECT_EQ(summary["profile"]["name"], "pass");
+  EXPECT_EQ(summary["params"]["n"]["value"], 4);
+  EXPECT_EQ(summary["params"]["n"]["source"], "--set");
 }
 
 TEST(Profiles, TheTasksProfileKeyIsTheDefaultAndOptionsOverrideIt) {
