@@ -8,6 +8,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -271,6 +272,35 @@ void install_crash_handlers() {
   for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL}) sigaction(sig, &sa, nullptr);
 }
 
+// --check with a profile: the other profiles beside the task, each loaded (without --set) and its
+// slots' interfaces compared with this one's. Two profiles fit the task alike when nothing differs.
+void compare_profiles(const fba::TaskConfig& config, const fba::Registry& registry) {
+  std::vector<fs::path> others;
+  std::error_code ec;
+  for (fs::directory_iterator it(config.file.parent_path() / "profiles", ec), end; !ec && it != end; it.increment(ec))
+    if (it->path().extension() == ".yaml" && !fs::equivalent(it->path(), config.profile_file, ec)) others.push_back(it->path());
+  std::sort(others.begin(), others.end());
+  for (const auto& other : others) {
+    fba::LoadOptions load;
+    load.profile = other.string();
+    std::cout << "profile " << other.stem().string() << " (" << other.string() << "): ";
+    try {
+      const fba::TaskConfig alt = fba::load_task(config.file, registry, load);
+      std::vector<std::string> diffs;
+      for (const auto& slot : config.slots)
+        for (const auto& d : fba::interface_differences(fba::slot_interface(config, slot.name), fba::slot_interface(alt, slot.name)))
+          diffs.push_back("slot " + slot.name + ": " + d);
+      if (diffs.empty()) std::cout << "the same interfaces in every slot\n";
+      else std::cout << diffs.size() << " difference(s)\n";
+      for (const auto& d : diffs) std::cout << "    " << d << "\n";
+    } catch (const fba::ConfigError& e) {
+      std::cout << "does not load (" << e.diagnostics().size() << " error(s), the first: " << e.diagnostics().front().str() << ")\n";
+    } catch (const std::exception& e) {
+      std::cout << "does not load: " << e.what() << "\n";
+    }
+  }
+}
+
 int run(int argc, char** argv) {
   auto& st = state();
   po::options_description visible(
@@ -279,7 +309,7 @@ int run(int argc, char** argv) {
       "3 runtime error (also a timeout, a component that did not return after the stop, a summary that could not be "
       "written), 130 interrupted by SIGINT, 143 by SIGTERM.\n\nOptions");
   std::vector<std::string> sets, plugin_dirs;
-  std::string output_dir, executor, log_level = "info";
+  std::string output_dir, executor, profile, log_level = "info";
   double timeout = 0;
   double stop_grace = fba::RunOptions{}.stop_grace_s;
   double dot_every = 0;
@@ -289,7 +319,10 @@ int run(int argc, char** argv) {
       "dot-every", po::value(&dot_every),
       "while running, write the live graph (states, queue fills, rates) to OUTPUT-DIR/graph-live.dot every this many "
       "seconds; SIGUSR1 writes it at once")(
-      "set,s", po::value(&sets)->composing(), "override a parameter: component.param=value (repeatable)")(
+      "set,s", po::value(&sets)->composing(),
+      "override a parameter: component.param=value, or name=value for a task parameter (repeatable)")(
+      "profile", po::value(&profile),
+      "bind the task's device slots with this profile: NAME (profiles/NAME.yaml beside the task) or a file")(
       "plugin-path,p", po::value(&plugin_dirs)->composing(), "add a plugin folder (repeatable; also FBA_PLUGIN_PATH)")(
       "output-dir,o", po::value(&output_dir), "write the run's artefacts (summary.json, images, models) here")(
       "timeout,t", po::value(&timeout), "stop the run after this many seconds (exit 3)")(
@@ -362,6 +395,7 @@ int run(int argc, char** argv) {
 
   fba::LoadOptions load;
   for (const auto& s : sets) load.overrides.push_back({s});
+  load.profile = profile;
   fba::TaskConfig config;
   try {
     config = fba::load_task(task_file, registry, load);
@@ -379,6 +413,15 @@ int run(int argc, char** argv) {
   if (vm.count("check")) {
     std::cout << task_file.string() << ": ok (" << config.components.size() << " components, " << config.connections.size()
               << " connections, " << config.rules.size() << " event rules)\n";
+    // What a run would use: the task parameters' values, and per slot the bound type's interface,
+    // which is what must agree between two profiles of one task.
+    for (const auto& p : config.params)
+      std::cout << "parameter " << p.name << " = " << fba::to_string(p.value) << "  (" << fba::to_string(p.type) << ", " << p.source
+                << ")\n";
+    if (!config.profile.empty()) std::cout << "profile " << config.profile << " (" << config.profile_file.string() << ")\n";
+    for (const auto& slot : config.slots)
+      std::cout << "slot " << slot.name << ": " << slot.type->spec.type_name() << "\n" << fba::describe(fba::interface_of(slot.type->spec));
+    if (!config.slots.empty()) compare_profiles(config, registry);
     return 0;
   }
   {

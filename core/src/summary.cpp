@@ -34,6 +34,16 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
   json j;
   j["task"] = task.name;
   j["task_file"] = task.file.string();
+  if (!task.profile.empty()) j["profile"] = {{"name", task.profile}, {"file", task.profile_file.string()}};
+  if (!task.params.empty()) {
+    json params = json::object();
+    for (const auto& p : task.params) {
+      json v;
+      std::visit([&](const auto& x) { v = x; }, p.value);
+      params[p.name] = {{"value", v}, {"source", p.source}};
+    }
+    j["params"] = params;
+  }
   j["outcome"] = to_string(r.outcome);
   j["exit_code"] = r.exit_code();
   j["reason"] = r.reason;

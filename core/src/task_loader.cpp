@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 #include <tuple>
+#include <utility>
 
 #include "fba/task_config.hpp"
 
@@ -81,6 +82,77 @@ const ComponentConfig* TaskConfig::find(std::string_view name) const {
   for (const auto& c : components)
     if (c.name == name) return &c;
   return nullptr;
+}
+
+const SlotConfig* TaskConfig::find_slot(std::string_view name) const {
+  for (const auto& s : slots)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+Interface interface_of(const Spec& spec) {
+  Interface i;
+  i.type = spec.type_name();
+  auto port = [](const PortSpec& p) {
+    return PortInterface{p.name, p.same_as.empty() ? p.type->name : "like input '" + p.same_as + "'", p.required};
+  };
+  for (const auto& p : spec.inputs()) i.inputs.push_back(port(p));
+  for (const auto& p : spec.outputs()) i.outputs.push_back(port(p));
+  for (const auto& e : spec.events()) i.events.push_back(e.name);
+  auto by_name = [](const PortInterface& a, const PortInterface& b) { return a.name < b.name; };
+  std::sort(i.inputs.begin(), i.inputs.end(), by_name);
+  std::sort(i.outputs.begin(), i.outputs.end(), by_name);
+  std::sort(i.events.begin(), i.events.end());
+  return i;
+}
+
+Interface slot_interface(const TaskConfig& task, std::string_view slot) {
+  const SlotConfig* s = task.find_slot(slot);
+  if (!s || !s->type) throw std::out_of_range("the task has no bound slot '" + std::string(slot) + "'");
+  return interface_of(s->type->spec);
+}
+
+namespace {
+std::string port_text(const PortInterface& p, bool input) {
+  return p.type + (input && !p.required ? ", optional" : "");
+}
+
+void port_differences(const std::vector<PortInterface>& a, const std::vector<PortInterface>& b, const Interface& ia,
+                      const Interface& ib, bool input, std::vector<std::string>& out) {
+  const std::string what = input ? "input" : "output";
+  for (const auto& p : a) {
+    auto q = std::find_if(b.begin(), b.end(), [&](const PortInterface& x) { return x.name == p.name; });
+    if (q == b.end()) out.push_back(what + " '" + p.name + "' (" + port_text(p, input) + "): only " + ia.type + " has it");
+    else if (!(*q == p))
+      out.push_back(what + " '" + p.name + "': " + port_text(p, input) + " in " + ia.type + ", " + port_text(*q, input) + " in " + ib.type);
+  }
+  for (const auto& q : b)
+    if (std::none_of(a.begin(), a.end(), [&](const PortInterface& x) { return x.name == q.name; }))
+      out.push_back(what + " '" + q.name + "' (" + port_text(q, input) + "): only " + ib.type + " has it");
+}
+}  // namespace
+
+std::vector<std::string> interface_differences(const Interface& a, const Interface& b) {
+  std::vector<std::string> out;
+  port_differences(a.inputs, b.inputs, a, b, true, out);
+  port_differences(a.outputs, b.outputs, a, b, false, out);
+  for (const auto& e : a.events)
+    if (std::find(b.events.begin(), b.events.end(), e) == b.events.end()) out.push_back("event '" + e + "': only " + a.type + " emits it");
+  for (const auto& e : b.events)
+    if (std::find(a.events.begin(), a.events.end(), e) == a.events.end()) out.push_back("event '" + e + "': only " + b.type + " emits it");
+  return out;
+}
+
+std::string describe(const Interface& i) {
+  auto ports = [](const std::vector<PortInterface>& v, bool input) {
+    std::string s;
+    for (const auto& p : v) s += (s.empty() ? "" : ", ") + p.name + " (" + port_text(p, input) + ")";
+    return s.empty() ? std::string("(none)") : s;
+  };
+  std::string events;
+  for (const auto& e : i.events) events += e + ", ";
+  return "    inputs:  " + ports(i.inputs, true) + "\n    outputs: " + ports(i.outputs, false) + "\n    events:  " + events +
+         "error, finished\n";
 }
 
 namespace {
@@ -407,7 +479,8 @@ using Bindings = std::map<std::string, Value>;
 
 class Loader {
  public:
-  Loader(const Registry& registry, const LoadOptions& options) : registry_(registry), require_inputs_(options.require_inputs) {
+  Loader(const Registry& registry, const LoadOptions& options)
+      : registry_(registry), require_inputs_(options.require_inputs), profile_option_(options.profile) {
     for (const auto& o : options.overrides) parse_override(o);
   }
 
@@ -421,7 +494,7 @@ class Loader {
       throw ConfigError(all_diagnostics());
     }
     report_mappings(root, src);
-    check_keys(root, src, {"task", "doc", "executor", "threads", "include", "components", "connections", "on"});
+    check_keys(root, src, {"task", "doc", "executor", "threads", "include", "params", "profile", "components", "connections", "on"});
     if (auto n = root["task"]) task.name = scalar(n, src, "the task's name");
     if (auto n = root["executor"]) {
       const std::string e = scalar(n, src, "the executor");
@@ -435,7 +508,12 @@ class Loader {
     if (!file.empty()) include_stack.insert(fs::weakly_canonical(file, ec).string());  // a task that includes itself
     load_includes(root, src, include_stack);
     if (!root["components"]) error(at(src, root), "a task needs 'components:' (a mapping of name: {type: ..., params: ...})");
-    expand(root, src, "", {}, task, {});
+    load_profile(root, src, task);
+    const Bindings bindings = task_params(root, src, task);
+    task_bindings_ = &bindings;
+    collect_param_users(root["components"], bindings);
+    expand(root, src, "", bindings, task, {});
+    check_profile_bindings(root, src, task);
     for (const auto& [key, o] : overrides_)
       if (!o.used) error(o.where, "--set " + key + ": the task has no component '" + o.comp + "' with a parameter '" + o.param + "'");
     // Nothing to run would leave the executor waiting for work that never comes.
@@ -507,14 +585,16 @@ class Loader {
   void parse_override(const Override& o) {
     Location where{"--set " + o.text, 0, 0};
     const auto eq = o.text.find('=');
-    const auto dot = o.text.rfind('.', eq);
-    if (eq == std::string::npos || dot == std::string::npos || dot == 0 || dot + 1 >= eq) {
-      error(where, "expected component.parameter=value");
+    const auto dot = eq == std::string::npos ? eq : o.text.rfind('.', eq);
+    const bool task_param = eq != std::string::npos && dot == std::string::npos;  // name=value
+    if (eq == std::string::npos || (task_param && !is_valid_name(o.text.substr(0, eq))) ||
+        (!task_param && (dot == 0 || dot + 1 >= eq))) {
+      error(where, "expected component.parameter=value, or parameter=value for a task parameter");
       return;
     }
     OverrideEntry e;
-    e.comp = o.text.substr(0, dot);
-    e.param = o.text.substr(dot + 1, eq - dot - 1);
+    e.comp = task_param ? "" : o.text.substr(0, dot);
+    e.param = task_param ? o.text.substr(0, eq) : o.text.substr(dot + 1, eq - dot - 1);
     try {
       e.value = YAML::Load(o.text.substr(eq + 1));
     } catch (const YAML::Exception& ex) {
@@ -523,7 +603,7 @@ class Loader {
     }
     e.where = where;
     report_mappings(e.value, Source{where.file, {}, false});
-    const std::string key = e.comp + "." + e.param;
+    const std::string key = task_param ? e.param : e.comp + "." + e.param;
     if (auto it = overrides_.find(key); it != overrides_.end()) {
       error(where, "'" + key + "' is set twice on the command line (also by " + it->second.where.file + ")");
       return;
@@ -575,6 +655,213 @@ class Loader {
       return lo;
     }
     return v;
+  }
+
+  // --- task parameters and profiles ----------------------------------------------------------
+
+  // The profile files next to a task (profiles/*.yaml), by name.
+  static std::vector<std::string> available_profiles(const fs::path& task_dir) {
+    std::vector<std::string> names;
+    std::error_code ec;
+    for (fs::directory_iterator it(task_dir / "profiles", ec), end; !ec && it != end; it.increment(ec))
+      if (it->path().extension() == ".yaml") names.push_back(it->path().stem().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+  static std::vector<std::string> slot_names(const YAML::Node& comps) {
+    std::vector<std::string> slots;
+    if (comps && comps.IsMap())
+      for (auto it = comps.begin(); it != comps.end(); ++it)
+        if (it->first.IsScalar() && it->second.IsMap() && it->second["profile"]) slots.push_back(it->first.Scalar());
+    return slots;
+  }
+
+  // Finds and reads the profile (--profile, else the task's `profile:`); a task with slots needs one.
+  void load_profile(const YAML::Node& root, const Source& src, TaskConfig& task) {
+    std::string name = profile_option_;
+    Location where{"--profile " + name, 0, 0};
+    fs::path base = fs::current_path();  // a path on the command line means what the shell means
+    std::string shown_base;
+    if (name.empty() && root["profile"]) {
+      name = scalar(root["profile"], src, "profile");
+      where = at(src, root["profile"]);
+      base = src.dir;
+      shown_base = fs::path(src.shown).parent_path().string();
+    }
+    const auto slots = slot_names(root["components"]);
+    const auto available = available_profiles(src.dir);
+    if (name.empty()) {
+      if (!slots.empty())
+        error(at(src, root["components"]), "the task has device slots (" + list_of(slots) +
+                                               ") and no profile binds them; choose one with --profile NAME or 'profile: NAME' in the task; "
+                                               "profiles next to the task: " + list_of(available));
+      return;
+    }
+    const bool is_path = name.find('/') != std::string::npos || fs::path(name).extension() == ".yaml";
+    const fs::path path = is_path ? (base / name).lexically_normal() : src.dir / "profiles" / (name + ".yaml");
+    const std::string shown = is_path ? (shown_base.empty() ? fs::path(name) : fs::path(shown_base) / name).lexically_normal().string()
+                                      : (fs::path(src.shown).parent_path() / "profiles" / (name + ".yaml")).string();
+    std::string problem;
+    const std::string text = read_text(path, problem);
+    if (!problem.empty()) {
+      error(where, "profile '" + name + "': the file " + problem + " (looked for " + path.string() + "); profiles next to the task: " +
+                       list_of(available));
+      return;
+    }
+    const Source psrc{shown, path.parent_path(), true, "the profile file"};
+    std::vector<Diagnostic> parse_errors;
+    const auto doc = parse_yaml(text, shown, parse_errors);
+    for (auto& x : parse_errors) error(x.where, x.message);
+    if (!doc) return;
+    if (!doc->IsMap()) {
+      error(Location{shown, 1, 1}, std::string("a profile is a mapping with the keys profile, doc, params, components; found ") + node_kind(*doc));
+      return;
+    }
+    report_mappings(*doc, psrc);
+    check_keys(*doc, psrc, {"profile", "doc", "params", "components"});
+    const YAML::Node comps = (*doc)["components"];
+    if (comps && !comps.IsMap()) {
+      error(at(psrc, comps), std::string("components of a profile: a mapping slot: {type: ..., params: ...}; found ") + node_kind(comps));
+      return;
+    }
+    profile_.loaded = true;
+    profile_.name = (*doc)["profile"] ? scalar((*doc)["profile"], psrc, "the profile's name") : name;
+    profile_.src = psrc;
+    profile_.root = *doc;
+    profile_.components = comps;
+    task.profile = profile_.name;
+    task.profile_file = path;
+  }
+
+  // The profile's entry for a slot: its key and its value.
+  std::optional<std::pair<YAML::Node, YAML::Node>> profile_entry(const std::string& slot) const {
+    if (!profile_.loaded || !profile_.components || !profile_.components.IsMap()) return std::nullopt;
+    for (auto it = profile_.components.begin(); it != profile_.components.end(); ++it)
+      if (it->first.IsScalar() && it->first.Scalar() == slot) return std::make_pair(YAML::Node(it->first), YAML::Node(it->second));
+    return std::nullopt;
+  }
+
+  // The task's and the profile's parameters: declared, then given by --set NAME=VALUE or their
+  // defaults. They are the bindings of ${name} in the task's components and the profile's.
+  Bindings task_params(const YAML::Node& root, const Source& src, TaskConfig& task) {
+    std::vector<Diagnostic> d;
+    auto decls = param_decls(root["params"], src, "a task", d);
+    const std::size_t from_task = decls.size();
+    if (profile_.loaded)
+      for (auto& x : param_decls(std::as_const(profile_.root)["params"], profile_.src, "a profile", d)) decls.push_back(std::move(x));
+    for (auto& x : d) error(x.where, x.message);
+    for (const YAML::Node& params : {root["params"], profile_.loaded ? std::as_const(profile_.root)["params"] : YAML::Node()})
+      if (params && params.IsMap())
+        for (auto it = params.begin(); it != params.end(); ++it)
+          if (it->first.IsScalar() && std::none_of(decls.begin(), decls.end(), [&](const auto& x) { return x.first.name == it->first.Scalar(); }))
+            failed_params_.insert(it->first.Scalar());  // a declaration with errors (reported)
+    Bindings b;
+    std::map<std::string, Location> declared;
+    for (std::size_t i = 0; i < decls.size(); ++i) {
+      const auto& [ps, where] = decls[i];
+      if (auto [first, fresh] = declared.emplace(ps.name, where); !fresh) {
+        error(where, "parameter '" + ps.name + "' is declared by the task already (at " + first->second.str() +
+                         "); a profile's parameters add to the task's, under names of their own");
+        continue;
+      }
+      TaskParam tp{ps.name, ps.type, {}, i < from_task ? "default" : "profile default", ps.doc, where};
+      if (auto o = overrides_.find(ps.name); o != overrides_.end()) {
+        o->second.used = true;
+        const Source cli{o->second.where.file, fs::current_path(), false, "the working folder"};
+        const auto v = param_value(ps, o->second.value, cli, {});
+        if (!v) {
+          failed_params_.insert(ps.name);
+          continue;
+        }
+        tp.value = *v;
+        tp.source = "--set";
+      } else if (ps.default_value) {
+        tp.value = *ps.default_value;
+      } else {
+        error(where, "task parameter '" + ps.name + "' has no default; set it with --set " + ps.name + "=VALUE");
+        failed_params_.insert(ps.name);
+        continue;
+      }
+      b[ps.name] = tp.value;
+      task.params.push_back(std::move(tp));
+    }
+    std::vector<std::string> names;
+    for (const auto& [n, _] : declared) names.push_back(n);
+    for (auto& [key, o] : overrides_)
+      if (o.comp.empty() && !o.used) {
+        o.used = true;
+        error(o.where, "--set " + key + ": the task has no parameter '" + key + "'; its parameters: " + list_of(names) +
+                           " (a component's parameter is set with --set component.parameter=value)");
+      }
+    return b;
+  }
+
+  // Which component parameters of the task (and its profile) take each task parameter.
+  void collect_param_users(const YAML::Node& comps, const Bindings& b) {
+    if (!comps || !comps.IsMap()) return;
+    static const std::regex ref(R"(\$\{([A-Za-z0-9_]+)\})");
+    for (auto it = comps.begin(); it != comps.end(); ++it) {
+      if (!it->first.IsScalar() || !it->second.IsMap()) continue;
+      const std::string name = it->first.Scalar();
+      YAML::Node c;
+      c.reset(it->second);
+      if (std::as_const(c)["profile"]) {
+        const auto bound = profile_entry(name);
+        if (!bound) continue;
+        c.reset(bound->second);
+      }
+      if (!c.IsMap() || !std::as_const(c)["params"]) continue;
+      const YAML::Node params = std::as_const(c)["params"];
+      if (!params.IsMap()) continue;
+      for (auto p = params.begin(); p != params.end(); ++p) {
+        if (!p->first.IsScalar() || !p->second.IsScalar()) continue;
+        const std::string v = p->second.Scalar();
+        for (std::sregex_iterator i(v.begin(), v.end(), ref), e; i != e; ++i)
+          if (b.count((*i)[1])) param_users_[(*i)[1]].push_back(name + "." + p->first.Scalar());
+      }
+    }
+  }
+
+  // Setting one user of a shared task parameter would split what the task means to be one value
+  // (the camera's object and the hand's): such a --set is refused, naming the parameter to set.
+  std::string shared_task_param(const std::string& full, const std::string& param, const YAML::Node& params) const {
+    if (full.find('/') != std::string::npos || !params || !params.IsMap()) return {};
+    const YAML::Node v = params[param];
+    if (!v || !v.IsScalar()) return {};
+    static const std::regex ref(R"(\$\{([A-Za-z0-9_]+)\})");
+    const std::string text = v.Scalar(), self = full + "." + param;
+    for (std::sregex_iterator i(text.begin(), text.end(), ref), e; i != e; ++i) {
+      const auto users = param_users_.find((*i)[1]);
+      if (users == param_users_.end() || users->second.size() < 2) continue;
+      std::vector<std::string> others;
+      for (const auto& u : users->second)
+        if (u != self) others.push_back(u);
+      return self + " comes from the task parameter '" + users->first + "' (also " + list_of(others) + "); set it with --set " +
+             users->first + "=...";
+    }
+    return {};
+  }
+
+  // A profile binds the task's slots and nothing else.
+  void check_profile_bindings(const YAML::Node& root, const Source& src, const TaskConfig& task) {
+    if (!profile_.loaded || !profile_.components) return;
+    const YAML::Node comps = root["components"];
+    const auto slots = slot_names(comps);
+    for (auto it = profile_.components.begin(); it != profile_.components.end(); ++it) {
+      if (!it->first.IsScalar()) continue;
+      const std::string name = it->first.Scalar();
+      if (std::find(slots.begin(), slots.end(), name) != slots.end()) continue;
+      const Location comps_at = comps ? at(src, comps) : Location{src.shown, 0, 0};
+      std::optional<Location> own;
+      if (comps && comps.IsMap())
+        for (auto c = comps.begin(); c != comps.end(); ++c)
+          if (c->first.IsScalar() && c->first.Scalar() == name) own = at(src, c->first);
+      error(at(profile_.src, it->first),
+            "profile '" + task.profile + "' binds '" + name + "', which is not a device slot of the task (" + src.shown + ")" +
+                (own ? ": the task defines it itself at " + own->str() : "; the task's components are at " + comps_at.str()) +
+                "; its slots: " + list_of(slots));
+    }
   }
 
   // --- types and composites --------------------------------------------------------------
@@ -659,6 +946,62 @@ class Loader {
     return acyclic;
   }
 
+  // The parameters a composite, a task or a profile declares: `name: {type, default, min, max, doc}`.
+  std::vector<std::pair<ParamSpec, Location>> param_decls(const YAML::Node& params, const Source& src, const std::string& owner,
+                                                          std::vector<Diagnostic>& d) {
+    std::vector<std::pair<ParamSpec, Location>> out;
+    if (!params) return out;
+    auto err = [&](const YAML::Node& n, std::string m) { d.push_back(Diagnostic{at(src, n), std::move(m)}); };
+    if (!params.IsMap()) {
+      err(params, "params of " + owner + ": a mapping name: {type, default, doc}; found " + node_kind(params));
+      return out;
+    }
+    for (auto it = params.begin(); it != params.end(); ++it) {
+      const std::string pname = it->first.IsScalar() ? it->first.Scalar() : "";
+      const YAML::Node p = it->second;
+      if (!is_valid_name(pname)) err(it->first, "parameter name '" + pname + "' must be letters, digits and '_'");
+      if (!p.IsMap() || !p["type"] || !p["type"].IsScalar()) {
+        err(p, "parameter '" + pname + "' needs {type: bool|int|double|string|path|list, default: ..., doc: ...}");
+        continue;
+      }
+      for (auto k = p.begin(); k != p.end(); ++k)
+        if (const std::string key = k->first.IsScalar() ? k->first.Scalar() : "?";
+            key != "type" && key != "default" && key != "min" && key != "max" && key != "doc")
+          err(k->first, "parameter '" + pname + "': unknown key '" + key + "'; valid keys: type, default, min, max, doc");
+      static const std::map<std::string, ParamType> types{{"bool", ParamType::Bool}, {"int", ParamType::Int}, {"double", ParamType::Double},
+                                                          {"string", ParamType::String}, {"path", ParamType::Path}, {"list", ParamType::DoubleList}};
+      auto t = types.find(p["type"].Scalar());
+      if (t == types.end()) {
+        err(p["type"], "parameter type '" + p["type"].Scalar() + "' is not one of: bool, int, double, string, path, list");
+        continue;
+      }
+      ParamSpec ps;
+      ps.name = pname;
+      ps.type = t->second;
+      for (const char* bound : {"min", "max"}) {
+        const YAML::Node b = p[bound];
+        if (!b) continue;
+        double x = 0;
+        if (!b.IsScalar() || !parse_double(b.Scalar(), x)) {
+          err(b, "parameter '" + pname + "': " + bound + " must be a finite number; found " +
+                     (b.IsScalar() ? "'" + b.Scalar() + "'" : std::string(node_kind(b))));
+          continue;
+        }
+        (std::string(bound) == "min" ? ps.min : ps.max) = x;
+      }
+      if (p["doc"] && p["doc"].IsScalar()) ps.doc = p["doc"].Scalar();
+      if (p["default"]) {
+        Loader probe(registry_, {});
+        auto v = probe.param_value(ps, p["default"], src, {});
+        for (auto& x : probe.diags()) d.push_back(x);
+        if (!v) continue;  // reported; without it every use would be reported as well
+        ps.default_value = *v;
+      }
+      out.emplace_back(std::move(ps), at(src, it->first));
+    }
+    return out;
+  }
+
   Spec composite_spec_checked(const CompositeDef& def) {
     std::vector<Diagnostic> d;
     Spec s = composite_spec_impl(def, d);
@@ -678,48 +1021,9 @@ class Loader {
     std::string type_name = name && name.IsScalar() ? name.Scalar() : "";
     if (type_name.empty()) err(name ? name : root, "'composite:' needs the composite's type name");
     Spec spec = Spec::composite(type_name.empty() ? "invalid" : type_name, root["doc"] && root["doc"].IsScalar() ? root["doc"].Scalar() : "");
-    if (const YAML::Node params = root["params"]) {
-      if (!params.IsMap()) err(params, "params of a composite: a mapping name: {type, default, doc}");
-      else
-        for (auto it = params.begin(); it != params.end(); ++it) {
-          const std::string pname = it->first.Scalar();
-          const YAML::Node p = it->second;
-          if (!is_valid_name(pname)) err(it->first, "parameter name '" + pname + "' must be letters, digits and '_'");
-          if (!p.IsMap() || !p["type"] || !p["type"].IsScalar()) {
-            err(p, "parameter '" + pname + "' needs {type: bool|int|double|string|path|list, default: ..., doc: ...}");
-            continue;
-          }
-          static const std::map<std::string, ParamType> types{{"bool", ParamType::Bool}, {"int", ParamType::Int}, {"double", ParamType::Double},
-                                                              {"string", ParamType::String}, {"path", ParamType::Path}, {"list", ParamType::DoubleList}};
-          auto t = types.find(p["type"].Scalar());
-          if (t == types.end()) {
-            err(p["type"], "parameter type '" + p["type"].Scalar() + "' is not one of: bool, int, double, string, path, list");
-            continue;
-          }
-          ParamSpec ps;
-          ps.name = pname;
-          ps.type = t->second;
-          for (const char* bound : {"min", "max"}) {
-            const YAML::Node b = p[bound];
-            if (!b) continue;
-            double x = 0;
-            if (!b.IsScalar() || !parse_double(b.Scalar(), x)) {
-              err(b, "parameter '" + pname + "': " + bound + " must be a finite number; found " +
-                         (b.IsScalar() ? "'" + b.Scalar() + "'" : std::string(node_kind(b))));
-              continue;
-            }
-            (std::string(bound) == "min" ? ps.min : ps.max) = x;
-          }
-          if (p["doc"] && p["doc"].IsScalar()) ps.doc = p["doc"].Scalar();
-          if (p["default"]) {
-            Loader probe(registry_, {});
-            auto v = probe.param_value(ps, p["default"], src, {});
-            for (auto& x : probe.diags()) d.push_back(x);
-            if (v) ps.default_value = *v;
-          }
-          spec.param(ps.name, ps.type, ps.default_value, ps.doc);
-          if (ps.min || ps.max) spec.range(ps.min, ps.max);
-        }
+    for (const auto& [ps, _] : param_decls(root["params"], src, "a composite", d)) {
+      spec.param(ps.name, ps.type, ps.default_value, ps.doc);
+      if (ps.min || ps.max) spec.range(ps.min, ps.max);
     }
     const YAML::Node comps = root["components"];
     auto inner_port = [&](const YAML::Node& n, bool input) -> const PortSpec* {
@@ -783,7 +1087,14 @@ class Loader {
  private:
   // --- parameters -------------------------------------------------------------------------
 
-  // Substitutes ${name} from a composite's bindings; nullopt when a name is unknown (reported
+  std::string unknown_reference(const std::string& name, const Bindings& b) const {
+    std::vector<std::string> known;
+    for (const auto& [k, _] : b) known.push_back(k);
+    return std::string("unknown ") + (&b == task_bindings_ ? "task" : "composite") + " parameter '${" + name +
+           "}'; the parameters here: " + list_of(known);
+  }
+
+  // Substitutes ${name} from a composite's (or the task's) bindings; nullopt when a name is unknown (reported
   // here, so that the caller does not report the unsubstituted text as a bad value as well).
   std::optional<YAML::Node> substitute(const YAML::Node& n, const Bindings& b, const Source& src, bool& whole, Value& whole_value) {
     whole = false;
@@ -793,7 +1104,10 @@ class Loader {
     std::smatch m;
     if (std::regex_match(s, m, ref)) {
       auto it = b.find(m[1]);
-      if (it == b.end()) { error(at(src, n), "unknown composite parameter '${" + m[1].str() + "}'"); return std::nullopt; }
+      if (it == b.end()) {
+        if (!failed_params_.count(m[1])) error(at(src, n), unknown_reference(m[1], b));
+        return std::nullopt;
+      }
       whole = true;
       whole_value = it->second;
       return n;
@@ -805,7 +1119,7 @@ class Loader {
       out.append(begin, s.cbegin() + i->position());
       auto it = b.find((*i)[1]);
       if (it == b.end()) {
-        error(at(src, n), "unknown composite parameter '${" + (*i)[1].str() + "}'");
+        if (!failed_params_.count((*i)[1])) error(at(src, n), unknown_reference((*i)[1], b));
         unknown = true;
       } else {
         out += to_string(it->second);
@@ -862,7 +1176,7 @@ class Loader {
                       (ps.type == ParamType::Double && std::holds_alternative<double>(bound)) ||
                       ((ps.type == ParamType::String || ps.type == ParamType::Path) && std::holds_alternative<std::string>(bound)) ||
                       (ps.type == ParamType::DoubleList && std::holds_alternative<std::vector<double>>(bound));
-      if (!ok) return expected(std::string("a ") + to_string(ps.type), "composite parameter of value '" + to_string(bound) + "'");
+      if (!ok) return expected(std::string("a ") + to_string(ps.type), "'" + to_string(bound) + "' (from a parameter)");
       v = bound;
       if (ps.type != ParamType::Path) return check_constraints(ps, *v, where);
       return v;
@@ -981,10 +1295,14 @@ class Loader {
       auto o = overrides_.find(full + "." + ps.name);
       if (o != overrides_.end()) {
         o->second.used = true;
-        // On the command line a relative path means what the shell means: the working folder.
-        const Source cli{o->second.where.file, fs::current_path(), false, "the working folder"};
-        if (auto v = param_value(ps, o->second.value, cli, {})) out[ps.name] = *v;
-        given.insert(ps.name);
+        if (const std::string shared = shared_task_param(full, ps.name, params); !shared.empty()) {
+          error(o->second.where, shared);
+        } else {
+          // On the command line a relative path means what the shell means: the working folder.
+          const Source cli{o->second.where.file, fs::current_path(), false, "the working folder"};
+          if (auto v = param_value(ps, o->second.value, cli, {})) out[ps.name] = *v;
+          given.insert(ps.name);
+        }
       }
       if (given.count(ps.name)) continue;
       if (ps.default_value) out[ps.name] = *ps.default_value;
@@ -1051,6 +1369,94 @@ class Loader {
     return true;
   }
 
+  // One component of `body` (or the one a profile binds to a slot, read with the profile's Source).
+  void read_component(const std::string& name, const std::string& full, const YAML::Node& c, const Source& src, const Location& where,
+                      const Bindings& bindings, TaskConfig& task, const std::vector<std::string>& composite_stack) {
+    auto reject = [&](const Location& place, const std::string& message) {
+      error(place, message);
+      kinds_[full] = nullptr;
+    };
+    if (!c.IsMap()) {
+      reject(at(src, c), "component '" + name + "': a mapping {type: ..., params: ...}; found " + node_kind(c));
+      return;
+    }
+    check_keys(c, src, {"type", "params", "trigger", "on_error", "thread", "doc"});
+    const YAML::Node type = c["type"];
+    if (!type || !type.IsScalar()) {
+      reject(where, "component '" + name + "' needs 'type:' (see fba-inspect for the types available)");
+      return;
+    }
+    const auto te = find_type(type.Scalar());
+    if (!te && broken_types_.count(type.Scalar())) {
+      kinds_[full] = nullptr;  // the composite's definition has its errors reported
+      return;
+    }
+    if (!te) {
+      const auto near = suggest(type.Scalar());
+      reject(at(src, type), "unknown component type '" + type.Scalar() + "'" +
+                                (near.empty() ? std::string("") : "; did you mean " + list_of(near) + "?") +
+                                " (fba-inspect lists the types found; --plugin-path adds plugin folders)");
+      return;
+    }
+    kinds_[full] = &te->spec;
+    if (te->composite) {
+      if (std::find(composite_stack.begin(), composite_stack.end(), te->spec.type_name()) != composite_stack.end()) {
+        error(at(src, type), "composite '" + te->spec.type_name() + "' contains itself");
+        return;
+      }
+      for (const char* k : {"trigger", "on_error", "thread"})
+        if (c[k]) error(at(src, c[k]), std::string("'") + k + "' applies to the components inside a composite, not to the composite");
+      const auto& def = *te->composite;
+      const Source inner{def.shown, def.file.parent_path()};
+      const auto vals = read_params(full, te->spec, c["params"], src, bindings, where);
+      // A parameter missing or invalid is reported already; expanding the body would only
+      // report each use of it as an unknown '${name}'.
+      if (vals.size() != te->spec.params().size()) return;
+      const Bindings b(vals.begin(), vals.end());
+      auto stack = composite_stack;
+      stack.push_back(te->spec.type_name());
+      expand(def.root, inner, full + "/", b, task, stack);
+      Exports ex;
+      for (const char* section : {"inputs", "outputs"}) {
+        const bool input = std::string(section) == "inputs";
+        const YAML::Node ports = def.root[section];
+        if (!ports || !ports.IsMap()) continue;
+        for (auto p = ports.begin(); p != ports.end(); ++p) {
+          YAML::Node t = p->second.IsMap() ? p->second[input ? "to" : "from"] : p->second;
+          if (!t || !t.IsScalar()) continue;
+          const std::string s = t.Scalar();
+          const auto dot = s.rfind('.');
+          if (dot == std::string::npos) continue;
+          (input ? ex.inputs : ex.outputs)[p->first.Scalar()] = Endpoint{full + "/" + s.substr(0, dot), s.substr(dot + 1)};
+        }
+      }
+      if (const YAML::Node evs = def.root["events"]; evs && evs.IsMap())
+        for (auto e = evs.begin(); e != evs.end(); ++e) {
+          if (!e->second.IsScalar()) continue;
+          const std::string s = e->second.Scalar();
+          const auto dot = s.rfind('.');
+          if (dot != std::string::npos) ex.events[e->first.Scalar()] = Endpoint{full + "/" + s.substr(0, dot), s.substr(dot + 1)};
+        }
+      exports_[full] = std::move(ex);
+      return;
+    }
+    ComponentConfig cc;
+    cc.name = full;
+    cc.type = te;
+    cc.where = where;
+    cc.trigger = te->spec.default_trigger();
+    cc.params = read_params(full, te->spec, c["params"], src, bindings, where);
+    check_params(cc, c["params"], src);
+    if (const YAML::Node t = c["trigger"]) read_trigger(t, src, bindings, cc);
+    if (const YAML::Node e = c["on_error"]) read_error_policy(e, src, bindings, cc);
+    if (const YAML::Node t = c["thread"]) {
+      const std::string s = text_of(t, bindings, src, "thread");
+      if (s == "dedicated") cc.dedicated_thread = true;
+      else if (s != "shared") error(at(src, t), "thread must be 'shared' (the worker pool, default) or 'dedicated'; found '" + s + "'");
+    }
+    task.components.push_back(std::move(cc));
+  }
+
   void expand(const YAML::Node& body, const Source& src, const std::string& prefix, const Bindings& bindings, TaskConfig& task,
               std::vector<std::string> composite_stack) {
     const YAML::Node comps = body["components"];
@@ -1079,85 +1485,37 @@ class Loader {
           continue;
         }
         const YAML::Node c = it->second;
-        if (!c.IsMap()) {
-          reject(at(src, c), "component '" + name + "': a mapping {type: ..., params: ...}; found " + node_kind(c));
-          continue;
-        }
-        check_keys(c, src, {"type", "params", "trigger", "on_error", "thread", "doc"});
-        const YAML::Node type = c["type"];
-        if (!type || !type.IsScalar()) {
-          reject(where, "component '" + name + "' needs 'type:' (see fba-inspect for the types available)");
-          continue;
-        }
-        const auto te = find_type(type.Scalar());
-        if (!te && broken_types_.count(type.Scalar())) {
-          kinds_[full] = nullptr;  // the composite's definition has its errors reported
-          continue;
-        }
-        if (!te) {
-          const auto near = suggest(type.Scalar());
-          reject(at(src, type), "unknown component type '" + type.Scalar() + "'" +
-                                    (near.empty() ? std::string("") : "; did you mean " + list_of(near) + "?") +
-                                    " (fba-inspect lists the types found; --plugin-path adds plugin folders)");
-          continue;
-        }
-        kinds_[full] = &te->spec;
-        if (te->composite) {
-          if (std::find(composite_stack.begin(), composite_stack.end(), te->spec.type_name()) != composite_stack.end()) {
-            error(at(src, type), "composite '" + te->spec.type_name() + "' contains itself");
+        if (prefix.empty() && c.IsMap() && c["profile"]) {  // a device slot: its profile says what fills it
+          check_keys(c, src, {"profile", "doc"});
+          const YAML::Node flag = c["profile"];
+          if (!flag.IsScalar() || flag.Scalar() != "true") {
+            reject(at(src, flag), "a device slot reads 'NAME: {profile: true, doc: ...}' (its profile binds it to a type); found profile: " +
+                                      (flag.IsScalar() ? "'" + flag.Scalar() + "'" : std::string(node_kind(flag))));
             continue;
           }
-          for (const char* k : {"trigger", "on_error", "thread"})
-            if (c[k]) error(at(src, c[k]), std::string("'") + k + "' applies to the components inside a composite, not to the composite");
-          const auto& def = *te->composite;
-          const Source inner{def.shown, def.file.parent_path()};
-          const auto vals = read_params(full, te->spec, c["params"], src, bindings, where);
-          // A parameter missing or invalid is reported already; expanding the body would only
-          // report each use of it as an unknown '${name}'.
-          if (vals.size() != te->spec.params().size()) continue;
-          const Bindings b(vals.begin(), vals.end());
-          auto stack = composite_stack;
-          stack.push_back(te->spec.type_name());
-          expand(def.root, inner, full + "/", b, task, stack);
-          Exports ex;
-          for (const char* section : {"inputs", "outputs"}) {
-            const bool input = std::string(section) == "inputs";
-            const YAML::Node ports = def.root[section];
-            if (!ports || !ports.IsMap()) continue;
-            for (auto p = ports.begin(); p != ports.end(); ++p) {
-              YAML::Node t = p->second.IsMap() ? p->second[input ? "to" : "from"] : p->second;
-              if (!t || !t.IsScalar()) continue;
-              const std::string s = t.Scalar();
-              const auto dot = s.rfind('.');
-              if (dot == std::string::npos) continue;
-              (input ? ex.inputs : ex.outputs)[p->first.Scalar()] = Endpoint{full + "/" + s.substr(0, dot), s.substr(dot + 1)};
-            }
+          SlotConfig slot;
+          slot.name = name;
+          slot.where = where;
+          if (c["doc"] && c["doc"].IsScalar()) slot.doc = c["doc"].Scalar();
+          const auto entry = profile_entry(name);
+          if (!profile_.loaded) {
+            kinds_[full] = nullptr;  // no profile: reported once for all slots
+            continue;
           }
-          if (const YAML::Node evs = def.root["events"]; evs && evs.IsMap())
-            for (auto e = evs.begin(); e != evs.end(); ++e) {
-              if (!e->second.IsScalar()) continue;
-              const std::string s = e->second.Scalar();
-              const auto dot = s.rfind('.');
-              if (dot != std::string::npos) ex.events[e->first.Scalar()] = Endpoint{full + "/" + s.substr(0, dot), s.substr(dot + 1)};
-            }
-          exports_[full] = std::move(ex);
+          if (!entry) {
+            reject(where, "slot '" + name + "' is not bound by profile '" + profile_.name + "' (" + Location{profile_.src.shown, 1, 1}.str() +
+                              "); a profile binds every slot: add '" + name + ": {type: ..., params: ...}' under its components");
+            continue;
+          }
+          slot.bound = at(profile_.src, entry->first);
+          const YAML::Node bound = entry->second;
+          const std::size_t before = task.components.size();
+          read_component(name, full, bound, profile_.src, slot.bound, bindings, task, composite_stack);
+          if (bound.IsMap() && bound["type"] && bound["type"].IsScalar()) slot.type = find_type(bound["type"].Scalar());
+          if (slot.type && (task.components.size() > before || slot.type->composite)) task.slots.push_back(std::move(slot));
           continue;
         }
-        ComponentConfig cc;
-        cc.name = full;
-        cc.type = te;
-        cc.where = where;
-        cc.trigger = te->spec.default_trigger();
-        cc.params = read_params(full, te->spec, c["params"], src, bindings, where);
-        check_params(cc, c["params"], src);
-        if (const YAML::Node t = c["trigger"]) read_trigger(t, src, bindings, cc);
-        if (const YAML::Node e = c["on_error"]) read_error_policy(e, src, bindings, cc);
-        if (const YAML::Node t = c["thread"]) {
-          const std::string s = text_of(t, bindings, src, "thread");
-          if (s == "dedicated") cc.dedicated_thread = true;
-          else if (s != "shared") error(at(src, t), "thread must be 'shared' (the worker pool, default) or 'dedicated'; found '" + s + "'");
-        }
-        task.components.push_back(std::move(cc));
+        read_component(name, full, c, src, where, bindings, task, composite_stack);
       }
 
     // Connections.
@@ -1478,6 +1836,17 @@ class Loader {
   std::set<std::string> broken_types_;  // composites whose definition has errors (reported)
   std::map<std::string, const Spec*> kinds_;  // every instance, composites included; null: could not be read
   std::map<std::string, Exports> exports_;
+  struct Profile {
+    bool loaded = false;
+    std::string name;
+    Source src;
+    YAML::Node root, components;
+  };
+  std::string profile_option_;
+  Profile profile_;
+  std::map<std::string, std::vector<std::string>> param_users_;  // task parameter -> "component.param" using it
+  const Bindings* task_bindings_ = nullptr;  // the task's (not a composite's): names them in messages
+  std::set<std::string> failed_params_;  // task parameters without a value (reported): their uses are not reported again
 };
 
 TaskConfig load_root(const std::string& text, const std::string& shown, const fs::path& dir, const fs::path& file,

@@ -82,9 +82,32 @@ struct EventRule {
   Location where;
 };
 
+// A task-level parameter (the task's or its profile's `params:`), as it was resolved.
+struct TaskParam {
+  std::string name;
+  ParamType type = ParamType::Int;
+  Value value;          // paths resolved
+  std::string source;   // "default", "profile default" or "--set"
+  std::string doc;
+  Location where;       // its declaration
+};
+
+// A device slot of the task (`arm: {profile: true}`) and the component type its profile binds.
+struct SlotConfig {
+  std::string name;  // also the name of the component that fills it
+  std::string doc;
+  std::shared_ptr<const TypeEntry> type;
+  Location where;  // in the task file
+  Location bound;  // in the profile
+};
+
 struct TaskConfig {
   std::string name;
   std::filesystem::path file;  // the task file
+  std::vector<TaskParam> params;
+  std::string profile;                  // the profile's name; empty without one
+  std::filesystem::path profile_file;
+  std::vector<SlotConfig> slots;
   std::vector<ComponentConfig> components;
   std::vector<ConnectionConfig> connections;
   std::vector<EventRule> rules;
@@ -92,9 +115,33 @@ struct TaskConfig {
   int threads = 0;  // 0: one per core (at least 2)
 
   const ComponentConfig* find(std::string_view name) const;
+  const SlotConfig* find_slot(std::string_view name) const;
 };
 
-// "component.param=value"; the value is read as YAML (so lists and numbers work).
+// What a component offers the task around it: the part of its spec that must agree for two types
+// to be interchangeable (parameters may differ). Ports and events sorted by name.
+struct PortInterface {
+  std::string name;
+  std::string type;  // a data type's name, "any", or "like input 'x'"
+  bool required = true;
+  bool operator==(const PortInterface&) const = default;
+};
+struct Interface {
+  std::string type;  // the component type
+  std::vector<PortInterface> inputs, outputs;
+  std::vector<std::string> events;  // declared ones; every type has error and finished too
+};
+Interface interface_of(const Spec& spec);
+// The interface of the type a slot is bound to; throws std::out_of_range for an unknown slot.
+Interface slot_interface(const TaskConfig& task, std::string_view slot);
+// What differs between two interfaces, one line each ("output 'frame': fba.Image in a, fba.Int in
+// b"); empty when they are interchangeable.
+std::vector<std::string> interface_differences(const Interface& a, const Interface& b);
+// Indented lines for --check: inputs, outputs and events.
+std::string describe(const Interface& i);
+
+// "component.param=value", or "name=value" for a task parameter; the value is read as YAML (so
+// lists and numbers work).
 struct Override {
   std::string text;
 };
@@ -102,6 +149,9 @@ struct Override {
 struct LoadOptions {
   std::vector<Override> overrides;
   bool require_inputs = true;  // the component harness feeds inputs itself
+  // The profile binding the task's slots: a name (profiles/NAME.yaml beside the task) or a path
+  // (with a '/' or ending in .yaml; relative to the working folder). Empty: the task's `profile:`.
+  std::string profile;
 };
 
 // Parses, expands composites and checks everything; throws ConfigError listing every problem.

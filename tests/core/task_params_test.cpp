@@ -1,0 +1,325 @@
+// Task-level parameters (`params:` of a task, `--set name=value`) and profiles that bind a task's
+// device slots to component types: substituted and checked like literals, every mistake reported
+// with its place.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <fba/task.hpp>
+#include <fba/task_config.hpp>
+#include <nlohmann/json.hpp>
+
+#include "test_components.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using fba::test::load;
+
+std::string errors_of(const std::string& yaml, const fba::LoadOptions& options = {}) {
+  try {
+    load(yaml, options);
+  } catch (const fba::ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+fba::LoadOptions with_sets(std::vector<std::string> sets, std::string profile = "") {
+  fba::LoadOptions o;
+  for (auto& s : sets) o.overrides.push_back({std::move(s)});
+  o.profile = std::move(profile);
+  return o;
+}
+
+// A folder of its own for each test, removed at the end.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::path(testing::TempDir()) / "fba_profiles_XXXXXX").string();
+    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  fs::path write(const std::string& name, const std::string& text) const {
+    fs::create_directories((path_ / name).parent_path());
+    std::ofstream(path_ / name, std::ios::binary) << text;
+    return path_ / name;
+  }
+
+ private:
+  fs::path path_;
+};
+
+std::string load_errors(const fs::path& file, const fba::LoadOptions& options = {}) {
+  try {
+    fba::load_task(file, fba::test::registry(), options);
+  } catch (const fba::ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const char* kParamTask = R"(
+params:
+  n: { type: int, default: 5, min: 1, doc: how many samples }
+  cap: { type: int, default: 4, doc: queue length }
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  sink: { type: examples.sink, params: { expected: "${n}" } }
+connections:
+  - { from: source.out, to: sink.in, capacity: "${cap}" }
+)";
+
+// A task with slots `source` and `pass`; the profiles bind them.
+const char* kSlotTask = R"(task: slotted
+params:
+  n: { type: int, default: 3, min: 1 }
+components:
+  source: { profile: true, doc: what produces the integers }
+  pass: { profile: true, doc: what forwards them }
+  sink: { type: examples.sink, params: { expected: "${n}" } }
+connections:
+  - source.out -> pass.in
+  - pass.out -> sink.in
+on: { sink.done: stop_success, sink.gap: stop_failure }
+)";
+
+const char* kPassProfile = R"(profile: pass
+doc: a counter and a passthrough
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  pass: { type: examples.passthrough }
+)";
+
+}  // namespace
+
+TEST(TaskParams, AreSubstitutedIntoComponentParamsAndCapacities) {
+  const auto task = load(kParamTask);
+  EXPECT_EQ(std::get<std::int64_t>(task.find("source")->params.at("count")), 5);
+  EXPECT_EQ(std::get<std::int64_t>(task.find("sink")->params.at("expected")), 5);
+  EXPECT_EQ(task.connections.at(0).capacity, 4u);
+  ASSERT_EQ(task.params.size(), 2u);
+  EXPECT_EQ(task.params[0].name, "n");
+  EXPECT_EQ(task.params[0].source, "default");
+}
+
+TEST(TaskParams, SetByNameWithoutADot) {
+  const auto task = load(kParamTask, with_sets({"n=7", "cap=2"}));
+  EXPECT_EQ(std::get<std::int64_t>(task.find("source")->params.at("count")), 7);
+  EXPECT_EQ(std::get<std::int64_t>(task.find("sink")->params.at("expected")), 7);
+  EXPECT_EQ(task.connections.at(0).capacity, 2u);
+  EXPECT_EQ(task.params[0].source, "--set");
+}
+
+TEST(TaskParams, ValuesAreCheckedByTheRulesOfALiteral) {
+  // The parameter's own range, at the --set.
+  EXPECT_NE(errors_of(kParamTask, with_sets({"n=0"})).find("--set n=0: error: parameter 'n' must be in [1, inf]; found 0"), std::string::npos);
+  // The capacity's range, at the place that uses the parameter.
+  const std::string e = errors_of(kParamTask, with_sets({"cap=0"}));
+  EXPECT_NE(e.find("test.yaml:9:48: error: capacity must be in [1, 1000000]; found 0"), std::string::npos) << e;
+  // The type of the component parameter it is substituted into.
+  const std::string t = errors_of(R"(
+params: { label: { type: string, default: many } }
+components:
+  source: { type: examples.counter, params: { count: "${label}" } }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)");
+  EXPECT_NE(t.find("test.yaml:4:54: error: parameter 'count' expects a int; found 'many' (from a parameter)"), std::string::npos) << t;
+}
+
+TEST(TaskParams, AnUnknownNameListsTheDeclaredOnes) {
+  const std::string e = errors_of(kParamTask, with_sets({"m=3"}));
+  EXPECT_NE(e.find("--set m=3: error: --set m: the task has no parameter 'm'; its parameters: cap, n"), std::string::npos) << e;
+  const std::string r = errors_of(R"(
+params: { n: { type: int, default: 1 } }
+components:
+  source: { type: examples.counter, params: { count: "${m}" } }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)");
+  EXPECT_NE(r.find("test.yaml:4:54: error: unknown task parameter '${m}'; the parameters here: n"), std::string::npos) << r;
+}
+
+TEST(TaskParams, OneWithoutADefaultMustBeSet) {
+  const char* yaml = R"(
+params:
+  n: { type: int, doc: how many }
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)";
+  const std::string e = errors_of(yaml);
+  EXPECT_NE(e.find("test.yaml:3:3: error: task parameter 'n' has no default; set it with --set n=VALUE"), std::string::npos) << e;
+  EXPECT_EQ(e.find("unknown parameter"), std::string::npos) << e;  // said once, not at every use
+  EXPECT_EQ(std::get<std::int64_t>(load(yaml, with_sets({"n=2"})).find("source")->params.at("count")), 2);
+}
+
+TEST(TaskParams, SettingOneUserOfASharedParameterIsRefused) {
+  const std::string e = errors_of(kParamTask, with_sets({"sink.expected=9"}));
+  EXPECT_NE(e.find("--set sink.expected=9: error: sink.expected comes from the task parameter 'n' (also source.count); "
+                   "set it with --set n=..."),
+            std::string::npos)
+      << e;
+  // A parameter with one user can be set either way.
+  const auto task = load(R"(
+params: { n: { type: int, default: 5 } }
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)", with_sets({"source.count=9"}));
+  EXPECT_EQ(std::get<std::int64_t>(task.find("source")->params.at("count")), 9);
+}
+
+TEST(Profiles, BindTheSlotsToTypesAndTheirParams) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", kSlotTask);
+  dir.write("profiles/pass.yaml", kPassProfile);
+  const auto task = fba::load_task(file, fba::test::registry(), with_sets({"n=4"}, "pass"));
+  EXPECT_EQ(task.profile, "pass");
+  ASSERT_EQ(task.slots.size(), 2u);
+  EXPECT_EQ(task.find("source")->type->spec.type_name(), "examples.counter");
+  EXPECT_EQ(std::get<std::int64_t>(task.find("source")->params.at("count")), 4);
+  EXPECT_EQ(task.find("pass")->type->spec.type_name(), "examples.passthrough");
+  EXPECT_EQ(task.find_slot("pass")->doc, "what forwards them");
+  EXPECT_EQ(task.find_slot("source")->bound.str(), (file.parent_path() / "profiles" / "pass.yaml").string() + ":4:3");
+  EXPECT_EQ(task.find_slot("source")->where.str(), file.string() + ":5:3");
+  // The bound task runs like any other.
+  fba::Task run(task, fba::test::with(fba::ExecutorKind::Deterministic));
+  const auto r = run.run();
+  EXPECT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
+  ASSERT_TRUE(r.final_event);
+  EXPECT_EQ(r.final_event->source, "sink");
+  // summary.json names the profile and the task parameters' values.
+  const auto summary = nlohmann::json::parse(fba::summary_json(r, task));
+  EXPECT_EQ(summary["profile"]["name"], "pass");
+  EXPECT_EQ(summary["params"]["n"]["value"], 4);
+  EXPECT_EQ(summary["params"]["n"]["source"], "--set");
+}
+
+TEST(Profiles, TheTasksProfileKeyIsTheDefaultAndOptionsOverrideIt) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", std::string(kSlotTask) + "profile: pass\n");
+  dir.write("profiles/pass.yaml", kPassProfile);
+  dir.write("profiles/faulty.yaml", R"(
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  pass: { type: examples.faulty }
+)");
+  EXPECT_EQ(fba::load_task(file, fba::test::registry()).find("pass")->type->spec.type_name(), "examples.passthrough");
+  EXPECT_EQ(fba::load_task(file, fba::test::registry(), with_sets({}, "faulty")).find("pass")->type->spec.type_name(), "examples.faulty");
+  // A path: relative to the working folder.
+  const auto by_path = fba::load_task(file, fba::test::registry(), with_sets({}, (dir.write("elsewhere/p.yaml", kPassProfile)).string()));
+  EXPECT_EQ(by_path.profile, "pass");
+}
+
+TEST(Profiles, ATaskWithSlotsAndNoProfileNamesTheProfilesBesideIt) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", kSlotTask);
+  dir.write("profiles/pass.yaml", kPassProfile);
+  dir.write("profiles/other.yaml", kPassProfile);
+  const std::string e = load_errors(file);
+  EXPECT_NE(e.find("task.yaml:5:3: error: the task has device slots (source, pass) and no profile binds them; choose one with "
+                   "--profile NAME or 'profile: NAME' in the task; profiles next to the task: other, pass"),
+            std::string::npos)
+      << e;
+  const std::string m = load_errors(file, with_sets({}, "nope"));
+  EXPECT_NE(m.find("--profile nope: error: profile 'nope': the file does not exist"), std::string::npos) << m;
+  EXPECT_NE(m.find("profiles next to the task: other, pass"), std::string::npos) << m;
+}
+
+TEST(Profiles, EverySlotIsBoundAndNothingElse) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", kSlotTask);
+  const auto profile = dir.write("profiles/bad.yaml", R"(profile: bad
+components:
+  source: { type: examples.counter }
+  sink: { type: examples.sink }
+  extra: { type: examples.sink }
+)");
+  const std::string e = load_errors(file, with_sets({}, "bad"));
+  const std::string p = (fs::path(file).parent_path() / "profiles" / "bad.yaml").string();
+  // The unbound slot at the task's line, naming the profile file.
+  EXPECT_NE(e.find("task.yaml:6:3: error: slot 'pass' is not bound by profile 'bad' (" + p + ":1:1)"), std::string::npos) << e;
+  // What the profile binds beyond the slots at the profile's line, naming the task's.
+  EXPECT_NE(e.find(p + ":4:3: error: profile 'bad' binds 'sink', which is not a device slot of the task (" + file.string() +
+                   "): the task defines it itself at " + file.string() + ":7:3; its slots: source, pass"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find(p + ":5:3: error: profile 'bad' binds 'extra', which is not a device slot"), std::string::npos) << e;
+  (void)profile;
+}
+
+TEST(Profiles, ProfileParamsJoinTheTasksAndRelativePathsResolveInTheProfilesFolder) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", R"(
+components:
+  reader: { profile: true }
+  other: { profile: true }
+  sink: { type: examples.sink }
+connections: [ reader.size -> sink.in ]
+)");
+  const auto data = dir.write("profiles/data.txt", "12345");
+  dir.write("profiles/files.yaml", R"(
+params:
+  file: { type: path, default: data.txt }
+components:
+  reader: { type: test.reader, params: { file: "${file}" } }
+  other: { type: test.reader, params: { file: data.txt } }
+)");
+  const auto task = fba::load_task(file, fba::test::registry(), with_sets({}, "files"));
+  EXPECT_EQ(std::get<std::string>(task.find("reader")->params.at("file")), data.string());
+  EXPECT_EQ(std::get<std::string>(task.find("other")->params.at("file")), data.string());
+  ASSERT_EQ(task.params.size(), 1u);
+  EXPECT_EQ(task.params[0].source, "profile default");
+  // --set on a bound component works as on any other.
+  const auto set = fba::load_task(file, fba::test::registry(), with_sets({"other.mode=lines"}, "files"));
+  EXPECT_EQ(std::get<std::string>(set.find("other")->params.at("mode")), "lines");
+}
+
+TEST(Profiles, AParameterDeclaredByTaskAndProfileIsAnError) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", kSlotTask);
+  dir.write("profiles/twice.yaml", std::string(kPassProfile) + "params: { n: { type: int, default: 2 } }\n");
+  const std::string e = load_errors(file, with_sets({}, "twice"));
+  EXPECT_NE(e.find("error: parameter 'n' is declared by the task already (at " + file.string() + ":3:3)"), std::string::npos) << e;
+}
+
+// The mechanism behind `fba-run --check --profile`: two profiles whose slots offer the same
+// interface are interchangeable; one that differs is found, and the difference said.
+TEST(Profiles, SlotInterfacesShowWhetherProfilesAreInterchangeable) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", kSlotTask);
+  dir.write("profiles/pass.yaml", kPassProfile);
+  dir.write("profiles/faulty.yaml", R"(
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  pass: { type: examples.faulty, params: { fail_after: 100 } }
+)");
+  dir.write("profiles/countdown.yaml", R"(
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  pass: { type: test.countdown }
+)");
+  const auto& reg = fba::test::registry();
+  const auto pass = fba::load_task(file, reg, with_sets({}, "pass"));
+  const auto faulty = fba::load_task(file, reg, with_sets({}, "faulty"));
+  const auto countdown = fba::load_task(file, reg, with_sets({}, "countdown"));
+  for (const char* slot : {"source", "pass"})
+    EXPECT_TRUE(fba::interface_differences(fba::slot_interface(pass, slot), fba::slot_interface(faulty, slot)).empty()) << slot;
+  const auto diff = fba::interface_differences(fba::slot_interface(pass, "pass"), fba::slot_interface(countdown, "pass"));
+  ASSERT_EQ(diff.size(), 2u);
+  EXPECT_EQ(diff[0], "input 'in': any in examples.passthrough, fba.Int in test.countdown");
+  EXPECT_EQ(diff[1], "output 'out': like input 'in' in examples.passthrough, fba.Int in test.countdown");
+  EXPECT_THROW(fba::slot_interface(pass, "sink"), std::out_of_range);  // a component, not a slot
+  const std::string text = fba::describe(fba::slot_interface(pass, "pass"));
+  EXPECT_EQ(text, "    inputs:  in (any)\n    outputs: out (like input 'in')\n    events:  error, finished\n");
+}

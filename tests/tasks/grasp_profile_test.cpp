@@ -1,0 +1,83 @@
+// tasks/grasp.yaml: the grasp loop with its arm, camera and hand as device slots, bound by a profile
+// (tasks/profiles/sim.yaml).
+#include <gtest/gtest.h>
+
+#include <fba/registry.hpp>
+#include <fba/task.hpp>
+
+#include "support/built_plugins.hpp"
+#include "tasks/fba_run_process.hpp"
+
+namespace {
+
+const fba::Registry& registry() { return fba::test::built_plugins(); }
+
+const std::string kGrasp = std::string(FBA_TASKS_DIR) + "/grasp.yaml";
+
+fba::LoadOptions profile(const std::string& name, std::vector<std::string> sets = {}) {
+  fba::LoadOptions o;
+  o.profile = name;
+  for (auto& s : sets) o.overrides.push_back({std::move(s)});
+  return o;
+}
+
+}  // namespace
+
+// As GraspSimTask's test of grasp_sim.yaml: the run ends on the hand's verdict, after the arm took
+// the camera to the initial views and synthesis selected a grasp.
+TEST(GraspTask, TheSimProfileRunsTheLoopToTheHandsVerdict) {
+  fba::RunOptions options;
+  options.executor = fba::ExecutorKind::Deterministic;
+  options.timeout_s = 600;  // a hang detector only: the run takes about a second
+  fba::Task task(fba::load_task(kGrasp, registry(), profile("sim")), options);
+  const auto r = task.run();
+  ASSERT_TRUE(r.final_event) << r.reason;
+  EXPECT_EQ(r.final_event->source, "hand") << r.reason;
+  bool selected = false;
+  std::size_t arrivals = 0;
+  for (const auto& e : r.events) {
+    selected = selected || (e.source == "synthesis" && e.name == "grasp_selected");
+    arrivals += e.source == "arm" && e.name == "arrived";
+  }
+  EXPECT_TRUE(selected);
+  EXPECT_GE(arrivals, 3u);
+  EXPECT_NE(r.final_event->payload.find("\"held\""), std::string::npos) << r.final_event->payload;
+}
+
+// The slots of grasp.yaml, bound by the sim profile, offer what grasp_sim.yaml's components offer:
+// the same loop.
+TEST(GraspTask, TheSimProfileBindsTheComponentsOfGraspSim) {
+  const auto grasp = fba::load_task(kGrasp, registry());  // the task's default profile: sim
+  EXPECT_EQ(grasp.profile, "sim");
+  const auto sim = fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_sim.yaml", registry());
+  for (const auto& [slot, component] : {std::pair{"arm", "arm"}, {"camera", "scene"}, {"hand", "hand"}}) {
+    const auto diff = fba::interface_differences(fba::slot_interface(grasp, slot), fba::interface_of(sim.find(component)->type->spec));
+    EXPECT_TRUE(diff.empty()) << slot << ": " << diff.front();
+  }
+}
+
+// The object is one parameter: the camera's mesh and the hand's cannot be set apart.
+TEST(GraspTask, TheObjectIsOneParameterOfCameraAndHand) {
+  try {
+    fba::load_task(kGrasp, registry(), profile("sim", {"camera.mesh=" + std::string(FBA_TASKS_DIR) + "/grasp.yaml"}));
+    FAIL() << "loaded";
+  } catch (const fba::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("camera.mesh comes from the task parameter 'mesh' (also hand.mesh); set it with --set mesh=..."),
+              std::string::npos)
+        << e.what();
+  }
+  const std::string mesh = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMustardBottle/model.obj";
+  const auto task = fba::load_task(kGrasp, registry(), profile("sim", {"mesh=" + mesh}));
+  EXPECT_EQ(std::get<std::string>(task.find("camera")->params.at("mesh")), mesh);
+  EXPECT_EQ(std::get<std::string>(task.find("hand")->params.at("mesh")), mesh);
+}
+
+TEST(GraspTask, CheckShowsTheParametersAndEachSlotsTypeAndInterface) {
+  const auto r = fba::test::fba_run({kGrasp, "--check", "--profile", "sim", "--set", "depth=7"});
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* line : {"parameter depth = 7  (int, --set)\n", "parameter mesh = ", "  (path, profile default)\n", "profile sim (",
+                           "slot arm: sim.arm\n", "slot camera: sim.camera\n    inputs:  pose (fba.Pose, optional)\n    outputs: frame (fba.Frame)\n",
+                           "slot hand: sim.hand\n    inputs:  grasp (fba.Grasp)\n    outputs: result (fba.GraspExecution)\n"
+                           "    events:  dropped, held, error, finished\n"})
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << " in:\n" << r.output;
+}
