@@ -496,34 +496,49 @@ struct Baseline {
   std::string error;
 };
 
-// One line of the summary table: the rows of one variant and one object (or all objects).
-std::string summary_line(const std::string& variant, const std::string& object, const std::vector<const Row*>& rows,
-                         const std::map<std::string, Baseline>& baselines, const Baseline* own) {
-  std::size_t selected = 0, evaluated = 0, fc = 0, above = 0, held = 0;
+// The figures of a group of runs (one variant, one object or all).
+struct Stats {
+  std::size_t runs = 0, selected = 0, evaluated = 0, fc = 0, above = 0, held = 0;
+  double median_eps = NAN, views = NAN, wall = NAN, cpu = NAN, nodes = NAN;
+};
+
+Stats stats_of(const std::vector<const Row*>& rows, const std::map<std::string, Baseline>& baselines) {
+  Stats st;
+  st.runs = rows.size();
   std::vector<double> eps, views, wall, cpu, nodes;
   for (const Row* r : rows) {
-    if (r->held.value_or(false)) ++held;
+    if (r->held.value_or(false)) ++st.held;
     if (r->wall_s >= 0) wall.push_back(r->wall_s);
     if (r->cpu_s >= 0) cpu.push_back(r->cpu_s);
     if (r->nodes >= 0) nodes.push_back(static_cast<double>(r->nodes));
     if (!r->selected) continue;
-    ++selected;
+    ++st.selected;
     if (r->views >= 0) views.push_back(r->views);
     if (!r->force_closure) continue;
-    ++evaluated;
-    fc += *r->force_closure;
+    ++st.evaluated;
+    st.fc += *r->force_closure;
     eps.push_back(r->epsilon);
     const auto b = baselines.find(r->mesh);
-    if (b != baselines.end() && b->second.figures && r->epsilon > b->second.figures->epsilon_p99) ++above;
+    if (b != baselines.end() && b->second.figures && r->epsilon > b->second.figures->epsilon_p99) ++st.above;
   }
+  if (!eps.empty()) st.median_eps = grasp::quantile(eps, 0.5);
+  st.views = mean(views);
+  st.wall = mean(wall);
+  st.cpu = mean(cpu);
+  st.nodes = mean(nodes);
+  return st;
+}
+
+// One line of the summary table: the rows of one variant and one object (or all objects).
+std::string summary_line(const std::string& variant, const std::string& object, const Stats& st, const Baseline* own) {
   char line[512];
   std::snprintf(line, sizeof line, "%-8s %-18s %4zu %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s", variant.c_str(),
-                object.c_str(), rows.size(), percent(selected, rows.size()).c_str(), percent(fc, evaluated).c_str(),
-                eps.empty() ? "-" : fixed(grasp::quantile(eps, 0.5), 4).c_str(),
-                own && own->figures ? fixed(own->figures->epsilon_p99, 4).c_str() : "-", percent(above, evaluated).c_str(),
+                object.c_str(), st.runs, percent(st.selected, st.runs).c_str(), percent(st.fc, st.evaluated).c_str(),
+                fixed(st.median_eps, 4).c_str(), own && own->figures ? fixed(own->figures->epsilon_p99, 4).c_str() : "-",
+                percent(st.above, st.evaluated).c_str(),
                 own && own->figures ? fixed(100 * own->figures->force_closure_share, 1, "%").c_str() : "-",
-                percent(held, rows.size()).c_str(), fixed(mean(views), 1).c_str(), fixed(mean(wall), 2).c_str(),
-                fixed(mean(cpu), 2).c_str(), fixed(mean(nodes), 0).c_str());
+                percent(st.held, st.runs).c_str(), fixed(st.views, 1).c_str(), fixed(st.wall, 2).c_str(), fixed(st.cpu, 2).c_str(),
+                fixed(st.nodes, 0).c_str());
   return line;
 }
 
@@ -550,20 +565,57 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
   std::snprintf(line, sizeof line, "%-8s %-18s %4s %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s\n", "variant", "object", "runs",
                 "grasp", "FC", "med_eps", "rand_p99", ">p99", "rand_FC", "held", "views", "wall_s", "cpu_s", "nodes");
   out << line;
-  for (const auto& v : l.variants) {
-    std::vector<std::string> objects;
+  // Objects in the list's order; the rows of one variant and one object ("" : all objects).
+  std::vector<std::string> objects;
+  for (const auto& r : rows)
+    if (std::find(objects.begin(), objects.end(), r.mesh) == objects.end()) objects.push_back(r.mesh);
+  auto group = [&](const std::string& variant, const std::string& mesh) {
+    std::vector<const Row*> mine;
     for (const auto& r : rows)
-      if (r.variant == v.name && std::find(objects.begin(), objects.end(), r.mesh) == objects.end()) objects.push_back(r.mesh);
-    std::vector<const Row*> all;
+      if (r.variant == variant && (mesh.empty() || r.mesh == mesh)) mine.push_back(&r);
+    return stats_of(mine, baselines);
+  };
+  for (const auto& v : l.variants) {
     for (const auto& mesh : objects) {
-      std::vector<const Row*> mine;
-      for (const auto& r : rows)
-        if (r.variant == v.name && r.mesh == mesh) mine.push_back(&r);
-      all.insert(all.end(), mine.begin(), mine.end());
       const auto b = baselines.find(mesh);
-      out << summary_line(v.name, object_name(mesh), mine, baselines, b == baselines.end() ? nullptr : &b->second) << "\n";
+      out << summary_line(v.name, object_name(mesh), group(v.name, mesh), b == baselines.end() ? nullptr : &b->second) << "\n";
     }
-    out << summary_line(v.name, "all", all, baselines, nullptr) << "\n";
+    out << summary_line(v.name, "all", group(v.name, ""), nullptr) << "\n";
+  }
+  // The variants side by side: the loop beside its baselines.
+  if (l.variants.size() > 1) {
+    const std::pair<const char*, std::string (*)(const Stats&)> figures[] = {
+        {"views", [](const Stats& st) { return fixed(st.views, 1); }},
+        {"nodes", [](const Stats& st) { return fixed(st.nodes, 0); }},
+        {"FC", [](const Stats& st) { return percent(st.fc, st.evaluated); }},
+        {"med_eps", [](const Stats& st) { return fixed(st.median_eps, 4); }},
+        {"held", [](const Stats& st) { return percent(st.held, st.runs); }}};
+    out << "\nside by side (" ;
+    for (std::size_t i = 0; i < l.variants.size(); ++i) out << (i ? " / " : "") << l.variants[i].name;
+    out << "):\n";
+    std::snprintf(line, sizeof line, "%-18s", "object");
+    out << line;
+    for (const auto& f : figures) {
+      std::snprintf(line, sizeof line, " %-*s", static_cast<int>(9 * l.variants.size()), f.first);
+      out << line;
+    }
+    out << "\n";
+    std::vector<std::string> keys = objects;
+    keys.push_back("");
+    for (const auto& mesh : keys) {
+      std::snprintf(line, sizeof line, "%-18s", mesh.empty() ? "all" : object_name(mesh).c_str());
+      out << line;
+      std::vector<Stats> per;
+      for (const auto& v : l.variants) per.push_back(group(v.name, mesh));
+      for (const auto& f : figures) {
+        out << " ";
+        for (const auto& st : per) {
+          std::snprintf(line, sizeof line, "%-9s", f.second(st).c_str());
+          out << line;
+        }
+      }
+      out << "\n";
+    }
   }
   out << "\ngrasp: runs with a grasp selected; FC: of those, force closure on the true mesh; med_eps: their median epsilon;\n"
          "rand_p99, rand_FC: the random contact sets' 99th percentile of epsilon and force-closure share on the same mesh;\n"
@@ -573,7 +625,8 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
   for (const auto& [mesh, b] : baselines)
     if (!b.error.empty()) out << "random baseline of " << mesh << ": " << b.error << "\n";
   out << "\n";
-  return out.str();
+  static const std::regex trailing(" +\n");
+  return std::regex_replace(out.str(), trailing, "\n");
 }
 
 nlohmann::json rows_json(const std::vector<Row>& rows) {

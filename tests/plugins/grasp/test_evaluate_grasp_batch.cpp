@@ -63,6 +63,7 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
                    << "fba_run_args: [-e, deterministic]\n"
                    << "pose_set:\n  - scene.mesh={posed_mesh}\n  - hand.mesh={mesh}\n  - hand.object_yaw={yaw}\n"
                    << "set: [carver.max_depth=4, synthesis.max_views=3]\n"
+                   << "variants:\n  - { name: loop }\n  - { name: uniform, set: [carver.occupancy_threshold=0] }\n"
                    << "runs:\n"
                    << "  - { mesh: " << mustard() << ", pose: [0, 0, 30] }\n"
                    << "  - { mesh: " << (dir_ / "no-such-mesh.obj").string() << " }\n";
@@ -73,17 +74,18 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   for (const char* column : {"variant", "object", "pose x y yaw", "outcome", "views", "FC", "epsilon", "held", "wall_s", "cpu_s",
                              "nodes", "reason", "runs", "grasp", "med_eps", "rand_p99", ">p99", "rand_FC"})
     EXPECT_NE(r.output.find(column), std::string::npos) << column << "\n" << r.output;
+  EXPECT_NE(line_starting(r.output, "uniform  YcbMustardBottle   0 0 30"), "") << r.output;
   // The mustard bottle ran to the task's own verdict, in its own folder, with figures.
-  const std::string ran = line_starting(r.output, "task     YcbMustardBottle   0 0 30");
+  const std::string ran = line_starting(r.output, "loop     YcbMustardBottle   0 0 30");
   ASSERT_FALSE(ran.empty()) << r.output;
   EXPECT_TRUE(ran.find("success") != std::string::npos || ran.find("failure") != std::string::npos) << ran;
-  EXPECT_TRUE(fs::exists(out / "task" / "01-YcbMustardBottle" / "summary.json"));
-  EXPECT_TRUE(fs::exists(out / "task" / "01-YcbMustardBottle" / "object.ply"));
-  const std::string mustard_summary = line_starting(r.output, "task     YcbMustardBottle      1 ");
+  EXPECT_TRUE(fs::exists(out / "loop" / "01-YcbMustardBottle" / "summary.json"));
+  EXPECT_TRUE(fs::exists(out / "loop" / "01-YcbMustardBottle" / "object.ply"));
+  const std::string mustard_summary = line_starting(r.output, "loop     YcbMustardBottle      1 ");
   EXPECT_FALSE(mustard_summary.empty()) << r.output;
-  EXPECT_NE(line_starting(r.output, "task     all                   2 "), "") << r.output;
+  EXPECT_NE(line_starting(r.output, "uniform  all                   2 "), "") << r.output;
   // The missing mesh is a row with the reason, not the end of the batch.
-  const std::string failed = line_starting(r.output, "task     no-such-mesh.obj");
+  const std::string failed = line_starting(r.output, "loop     no-such-mesh.obj");
   EXPECT_NE(failed.find("not run"), std::string::npos) << r.output;
   EXPECT_NE(failed.find("the mesh does not load"), std::string::npos) << failed;
   EXPECT_NE(failed.find("does not exist"), std::string::npos) << failed;
@@ -91,9 +93,13 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   std::ifstream in(out / "runs.json");
   const auto runs = nlohmann::json::parse(in, nullptr, false);
   ASSERT_TRUE(runs.is_array()) << "runs.json";
-  ASSERT_EQ(runs.size(), 2u);
+  ASSERT_EQ(runs.size(), 4u);  // loop: mustard, missing; uniform: mustard, missing
   EXPECT_GT(runs[0]["nodes"].get<long long>(), 0);
   EXPECT_EQ(runs[1]["outcome"], "not run");
+  EXPECT_EQ(runs[2]["variant"], "uniform");
+  // The variants side by side, per object and overall.
+  EXPECT_NE(r.output.find("side by side (loop / uniform):"), std::string::npos) << r.output;
+  EXPECT_NE(line_starting(r.output, "YcbMustardBottle   "), "") << r.output;
   EXPECT_TRUE(fs::exists(out / "table.txt"));
 }
 
