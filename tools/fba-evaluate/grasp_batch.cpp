@@ -420,8 +420,9 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
   if (!s.is_object()) {
     row.outcome = j.term_sent ? "timed out" : WIFSIGNALED(j.status) ? "crashed" : "no summary";
     row.wall_s = j.elapsed_s;
-    row.reason = (ended.empty() ? "exit " + std::to_string(WEXITSTATUS(j.status)) : ended) + ", no summary.json; fba-run said: " +
-                 last_line(j.dir / "log.txt");
+    const std::string said = last_line(j.dir / "log.txt");
+    row.reason = (ended.empty() ? "exit " + std::to_string(WEXITSTATUS(j.status)) : ended) + ", no summary.json; " +
+                 (said.empty() ? std::string("log.txt is empty") : "fba-run said: " + said);
     return row;
   }
   row.outcome = s.value("outcome", "?");

@@ -117,6 +117,28 @@ TEST_F(EvaluateGraspBatch, AMeshTheTaskCannotLoadIsARowWithFbaRunsReason) {
   EXPECT_NE(row.find("missing.obj"), std::string::npos) << row;
 }
 
+// A stand-in for fba-run that hangs or crashes: the batch carries on, each run a row saying so.
+TEST_F(EvaluateGraspBatch, AHungOrCrashedRunIsARowAndTheBatchGoesOn) {
+  const fs::path hang = dir_ / "hang.sh", crash = dir_ / "crash.sh";
+  std::ofstream(hang) << "#!/bin/sh\nexec sleep 60\n";
+  std::ofstream(crash) << "#!/bin/sh\nkill -SEGV $$\n";
+  for (const auto& f : {hang, crash}) fs::permissions(f, fs::perms::owner_all);
+  const fs::path l = dir_ / "list.yaml";
+  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp_sim.yaml\n"
+                   << "timeout_s: 0.5\n"
+                   << "runs:\n  - { mesh: " << mustard() << " }\n";
+  Result r = run("--batch " + l.string() + " --random 0 --fba-run " + hang.string() + " -o " + (dir_ / "hang").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::string row = line_starting(r.output, "task     YcbMustardBottle   0 0 0");
+  EXPECT_NE(row.find("timed out"), std::string::npos) << r.output;
+
+  r = run("--batch " + l.string() + " --random 0 --fba-run " + crash.string() + " -o " + (dir_ / "crash").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  row = line_starting(r.output, "task     YcbMustardBottle   0 0 0");
+  EXPECT_NE(row.find("crashed"), std::string::npos) << r.output;
+  EXPECT_NE(row.find("killed by signal 11"), std::string::npos) << row;
+}
+
 TEST_F(EvaluateGraspBatch, ABadListIsAClearErrorWithItsPlace) {
   const fs::path l = dir_ / "list.yaml";
   std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp_sim.yaml\n"
