@@ -1,6 +1,8 @@
 // fba-evaluate grasp: the quality of a grasp on the true object surface (force closure and the
 // Ferrari-Canny epsilon), compared with random contact sets and with synthesis on perfect samples.
+#include <algorithm>
 #include <cstdio>
+#include <numbers>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -10,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fba/geometry/mesh_io.hpp"
+#include "grasp_evaluation.hpp"
 #include "fba/grasp/grasp_json.hpp"
 #include "fba/grasp/object_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
@@ -31,6 +34,9 @@ const char* kHelp = R"(fba-evaluate grasp: grasp quality on the true object surf
   fba-evaluate grasp --mesh M.obj [M2.obj ...] --synthesise [--samples 3000] [--random 1000]
       Synthesis on samples of the mesh (a perfect model): the best candidate's and the top
       candidates' force closure and epsilon, beside the random figures (one row per mesh).
+  fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR]
+      Runs a task over a list of objects and poses with fba-run and prints the table of the grasp
+      issue's targets (see fba-evaluate grasp --batch LIST --help and docs/evaluating-grasps.md).
 
 The measure: Coulomb friction mu (--friction, 0.5), each cone as --cone-edges (8) edges with a
 unit normal component, torques divided by r_max (largest distance from the volume centre of
@@ -78,11 +84,53 @@ Eigen::Isometry3d parse_pose(const std::vector<double>& v) {
   return t;
 }
 
+}  // namespace
+
 TriangleMesh load_posed(const std::string& path, const Eigen::Isometry3d& pose) {
   TriangleMesh m = geometry::load_mesh(path);
   for (auto& v : m.vertices) v = (pose * v.cast<double>()).cast<float>();
   return m;
 }
+
+Eigen::Isometry3d table_pose(double x, double y, double yaw_deg) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() << x, y, 0;
+  t.linear() = Eigen::AngleAxisd(yaw_deg * std::numbers::pi / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return t;
+}
+
+std::optional<Grasp> summary_grasp(const nlohmann::json& j, const std::string& path) {
+  if (j.is_object() && j.contains("grasp")) return grasp::grasp_from_json(j["grasp"], path + ": grasp");
+  // fba-run's own summary: the last grasp_selected event (grasp.synthesis), whose payload is the
+  // grasp as JSON; the final event carries its payload itself when it is not in "events".
+  if (!j.is_object()) return std::nullopt;
+  const nlohmann::json* payload = nullptr;
+  std::string where;
+  if (j.contains("events") && j["events"].is_array())
+    for (std::size_t i = 0; i < j["events"].size(); ++i) {
+      const auto& e = j["events"][i];
+      if (e.is_object() && e.value("name", "") == "grasp_selected" && e.contains("payload"))
+        payload = &e["payload"], where = path + ": events[" + std::to_string(i) + "].payload";
+    }
+  const auto fe = j.find("final_event");
+  if (!payload && fe != j.end() && fe->is_object() && fe->value("name", "") == "grasp_selected" && fe->contains("payload"))
+    payload = &(*fe)["payload"], where = path + ": final_event.payload";
+  if (!payload) return std::nullopt;
+  if (!payload->is_string())
+    throw std::invalid_argument(where + ": expected the grasp as a JSON string; found " + std::string(payload->type_name()));
+  try {
+    return grasp::grasp_from_json(nlohmann::json::parse(payload->get<std::string>()), where);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw std::invalid_argument(where + " is not valid JSON: " + e.what());
+  }
+}
+
+std::string object_name(const std::string& mesh) {
+  const std::filesystem::path p(mesh);
+  return p.stem() == "model" && p.has_parent_path() ? p.parent_path().filename().string() : p.filename().string();
+}
+
+namespace {
 
 Grasp read_summary_grasp(const std::string& path) {
   std::ifstream in(path);
@@ -93,38 +141,9 @@ Grasp read_summary_grasp(const std::string& path) {
   } catch (const nlohmann::json::parse_error& e) {
     throw std::invalid_argument("summary '" + path + "' is not valid JSON: " + e.what());
   }
-  if (j.is_object() && j.contains("grasp")) return grasp::grasp_from_json(j["grasp"], path + ": grasp");
-  // fba-run's own summary: the last grasp_selected event (grasp.synthesis), whose payload is the
-  // grasp as JSON; the final event carries its payload itself when it is not in "events".
-  if (j.is_object()) {
-    const nlohmann::json* payload = nullptr;
-    std::string where;
-    if (j.contains("events") && j["events"].is_array())
-      for (std::size_t i = 0; i < j["events"].size(); ++i) {
-        const auto& e = j["events"][i];
-        if (e.is_object() && e.value("name", "") == "grasp_selected" && e.contains("payload"))
-          payload = &e["payload"], where = path + ": events[" + std::to_string(i) + "].payload";
-      }
-    const auto fe = j.find("final_event");
-    if (!payload && fe != j.end() && fe->is_object() && fe->value("name", "") == "grasp_selected" && fe->contains("payload"))
-      payload = &(*fe)["payload"], where = path + ": final_event.payload";
-    if (payload) {
-      if (!payload->is_string())
-        throw std::invalid_argument(where + ": expected the grasp as a JSON string; found " + std::string(payload->type_name()));
-      try {
-        return grasp::grasp_from_json(nlohmann::json::parse(payload->get<std::string>()), where);
-      } catch (const nlohmann::json::parse_error& e) {
-        throw std::invalid_argument(where + " is not valid JSON: " + e.what());
-      }
-    }
-  }
+  if (auto g = summary_grasp(j, path)) return *g;
   throw std::invalid_argument("summary '" + path +
                               "' has no \"grasp\" object and no grasp_selected event (see fba-evaluate grasp --help)");
-}
-
-std::string name_of(const std::string& mesh) {
-  const std::filesystem::path p(mesh);
-  return p.stem() == "model" && p.has_parent_path() ? p.parent_path().filename().string() : p.filename().string();
 }
 
 int evaluate_summary(const Options& o, const grasp::ObjectSurface& surface) {
@@ -150,7 +169,7 @@ int evaluate_summary(const Options& o, const grasp::ObjectSurface& surface) {
 }
 
 void table_row(const Options& o, const std::string& mesh, const grasp::ObjectSurface& surface) {
-  std::printf("%-22s", name_of(mesh).c_str());
+  std::printf("%-22s", object_name(mesh).c_str());
   if (o.random > 0) {
     const auto b = grasp::random_baseline(surface, o.random, o.seed, o.quality);
     std::printf(" %9.1f%% %9.4f", 100 * b.force_closure_share, b.epsilon_p99);
@@ -182,6 +201,7 @@ void table_row(const Options& o, const std::string& mesh, const grasp::ObjectSur
 }  // namespace
 
 int run_grasp(const std::vector<std::string>& args) {
+  if (std::find(args.begin(), args.end(), "--batch") != args.end()) return run_grasp_batch(args);
   Options o;
   po::options_description opts(kHelp);
   opts.add_options()("help,h", "this help")

@@ -13,6 +13,8 @@
 //       (fba YAML 'mask'), else fba's default extraction.
 //   fba-evaluate grasp --mesh M.obj --summary run/summary.json | --random 1000 | --synthesise
 //       Grasp quality on the true surface (grasp.cpp; see its --help).
+//   fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR]
+//       The grasp loop over objects and poses, run by fba-run, and the targets' table (grasp_batch.cpp).
 
 #include <cctype>
 #include <charconv>
@@ -351,6 +353,7 @@ int main(int argc, char** argv) {
       "usage: fba-evaluate synthetic --mesh M.obj [M2.obj ...] [--views 8] [--depth 6] [options]\n"
       "       fba-evaluate model --model carved.ply [--mesh truth.obj] [--images set] [--task T.yaml [--set c.p=v]] [--depth 6]\n"
       "       fba-evaluate grasp --mesh M.obj (--summary run/summary.json | --random 1000 | --synthesise)\n"
+      "       fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR]\n"
       "       fba-evaluate <command> --help\n";
   if (argc < 2) {
     std::cerr << usage;

@@ -53,6 +53,39 @@ TEST(GraspQuality, ThreeContactsAt120DegreesAroundACylinderAreForceClosure) {
   EXPECT_LE(q.epsilon, tightest + 1e-12);
 }
 
+// A case computed by hand: a contact at the centre of each face of a cube of half-side s, normals
+// inward, centre of mass at the centre, torque scale r_max = s. Contact e (a signed axis) sits at
+// s e with normal -e; its pyramid's first tangent is axis-aligned (the contacts' centroid is the
+// centre, so the measure takes n.unitOrthogonal()), so each cone edge is f = -e + mu t with
+// torque (s e / s) x f = mu (e x t).
+//  - 4 edges: t runs over the 4 axes orthogonal to e; the 24 wrenches are (-e + mu t, mu e x t).
+//    The weakest direction is a pure torque about the diagonal, u = (0, (1, 1, 1) / sqrt 3): every
+//    e x t is a signed axis, so the wrenches reach at most mu / sqrt 3 along u, and twelve of them
+//    reach it (those with e x t = +x, +y or +z), spanning the facet there. Force directions are
+//    stronger: the 4 edges of contact -e average to the unit force (e, 0), so the hull reaches at
+//    least |a|_inf >= 1/sqrt 3 > mu/sqrt 3 along any pure force a. Epsilon = mu / sqrt 3.
+//  - 8 edges: the diagonal tangents t = (p - q) / sqrt 2 (p, q the other two axes) add
+//    e x t = (e x p - e x q) / sqrt 2, whose component along the diagonal reaches 2 / sqrt 6:
+//    epsilon = mu sqrt(2/3) about the same diagonal.
+TEST(GraspQuality, ContactsAtTheFaceCentresOfACubeHaveTheHandComputedEpsilon) {
+  const double s = 0.05;
+  std::vector<GraspContact> contacts;
+  for (int axis = 0; axis < 3; ++axis)
+    for (double sign : {-1.0, 1.0}) {
+      Eigen::Vector3d e = Eigen::Vector3d::Zero();
+      e[axis] = sign;
+      contacts.push_back({s * e, -e});
+    }
+  for (double mu : {0.3, 0.5, 1.0}) {
+    const GraspQuality four = evaluate_grasp(contacts, Eigen::Vector3d::Zero(), s, {mu, 4});
+    ASSERT_TRUE(four.force_closure);
+    EXPECT_NEAR(four.epsilon, mu / std::sqrt(3.0), 1e-9) << "mu " << mu;
+    const GraspQuality eight = evaluate_grasp(contacts, Eigen::Vector3d::Zero(), s, {mu, 8});
+    ASSERT_TRUE(eight.force_closure);
+    EXPECT_NEAR(eight.epsilon, mu * std::sqrt(2.0 / 3.0), 1e-9) << "mu " << mu;
+  }
+}
+
 TEST(GraspQuality, EpsilonGrowsWithFriction) {
   const auto contacts = around_cylinder(0.04, {0, 120, 240});
   const double low = evaluate_grasp(contacts, Eigen::Vector3d::Zero(), 0.04, {0.3, 8}).epsilon;

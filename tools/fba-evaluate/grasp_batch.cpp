@@ -1,0 +1,731 @@
+// fba-evaluate grasp --batch: a task run by fba-run over a list of objects and poses, in variants
+// (the grasp loop and its baselines), each selected grasp evaluated on the true mesh placed as in
+// its run, summed up in the grasp issue's table. A run that fails, crashes or hangs is a row with
+// its reason; only a bad list or command line stops the tool.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <boost/program_options.hpp>
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "fba/geometry/mesh_io.hpp"
+#include "fba/grasp/object_surface.hpp"
+#include "grasp_evaluation.hpp"
+
+extern char** environ;
+
+namespace fba::evaluate {
+namespace {
+
+namespace fs = std::filesystem;
+namespace po = boost::program_options;
+using Clock = std::chrono::steady_clock;
+
+const char* kHelp = R"(fba-evaluate grasp --batch: the grasp loop over objects and poses, and its targets' table.
+
+  fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR] [--fba-run PATH] [--random 1000]
+
+Each run of LIST is run once per variant by fba-run, as a child process writing its own folder
+DIR/<variant>/<NN>-<object>/ (summary.json, log.txt). The grasp each run selected is placed on the
+true mesh, stood where the run stood it, and evaluated (force closure, Ferrari-Canny epsilon:
+friction 0.5, 8 cone edges, torque / r_max); each mesh gets --random random contact sets for
+comparison. The table (also DIR/table.txt; every run's figures in DIR/runs.json) gives per
+variant, per object and overall: runs, % with a grasp selected, % of those force closure, their
+median epsilon against the random sets' 99th percentile, % held in the lift test, mean views
+until a grasp was selected, wall and CPU seconds per run, and octree nodes processed.
+
+LIST (paths relative to it):
+  task: grasp_sim.yaml                 the task file
+  fba_run_args: [-e, deterministic]    optional: more fba-run arguments, verbatim
+  timeout_s: 600                       optional: a run still going after this is stopped (SIGTERM,
+                                       SIGKILL 20 s later) and is a row "timed out"
+  pose_set:                            how a run's object and pose reach the task, as --set
+    - scene.mesh={posed_mesh}          overrides; {mesh}: the mesh's absolute path, {x} {y}
+    - hand.mesh={mesh}                 (metres) {yaw} (degrees): the run's pose, {posed_mesh}: a
+    - hand.object_yaw={yaw}            PLY of the mesh turned by yaw about z, then moved by (x, y)
+  set: [synthesis.max_views=10]        optional: overrides for every run
+  variants:                            optional (default: one, "task"): each run once per variant
+    - { name: loop }
+    - { name: ring, set: [planner.views=ring, planner.movement_weight=1000, planner.min_gain=0] }
+  runs:
+    - { mesh: ../data/ycb/YcbBanana/model.obj, pose: [0.01, 0, 30], set: [...] }
+
+The pose [x, y, yaw] says where the grasps' frame has the object: the mesh turned by yaw degrees
+about z, then moved by (x, y) metres (sim.hand's object_x, object_y, object_yaw with frame: mesh).
+Each grasp is evaluated on the mesh placed so. Views: the grasp's views when one was selected, else
+the views in the carver's model (vision.octree_carver's `updated` events); nodes: the carver's
+nodes visited summed over its updates. Components are found by type, not by name.
+
+Exit status: 0 when the batch was run and evaluated (whatever the runs' outcomes), 2 for a bad
+list or command line.
+
+Options)";
+
+struct RunSpec {
+  std::string mesh;  // absolute
+  double x = 0, y = 0, yaw = 0;
+  std::vector<std::string> set;
+};
+
+struct Variant {
+  std::string name;
+  std::vector<std::string> set;
+};
+
+struct BatchList {
+  fs::path file;
+  fs::path task;
+  std::vector<std::string> fba_run_args, pose_set, set;
+  double timeout_s = 600;
+  std::vector<Variant> variants;
+  std::vector<RunSpec> runs;
+};
+
+class ListReader {
+ public:
+  explicit ListReader(fs::path file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& what) const {
+    std::string where = file_.string();
+    if (at.IsDefined() && at.Mark().line >= 0)
+      where += ":" + std::to_string(at.Mark().line + 1) + ":" + std::to_string(at.Mark().column + 1);
+    throw std::invalid_argument(where + ": " + what);
+  }
+
+  static std::string found(const YAML::Node& n) {
+    if (n.IsScalar()) return "'" + n.Scalar() + "'";
+    if (n.IsSequence()) return "a list";
+    if (n.IsMap()) return "a mapping";
+    return "nothing";
+  }
+
+  std::string text(const YAML::Node& n, const std::string& what) const {
+    if (!n.IsScalar() || n.Scalar().empty()) fail(n, what + ": expected a text, found " + found(n));
+    return n.Scalar();
+  }
+
+  double number(const YAML::Node& n, const std::string& what) const {
+    double v = 0;
+    if (n.IsScalar()) {
+      const std::string& s = n.Scalar();
+      const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+      if (r.ec == std::errc() && r.ptr == s.data() + s.size() && std::isfinite(v)) return v;
+    }
+    fail(n, what + ": expected a number, found " + found(n));
+  }
+
+  std::vector<std::string> texts(const YAML::Node& map, const char* key, const std::string& what) const {
+    std::vector<std::string> out;
+    const YAML::Node n = map[key];
+    if (!n) return out;
+    if (!n.IsSequence()) fail(n, what + ": expected a list of texts, found " + found(n));
+    for (const auto& item : n) out.push_back(text(item, what));
+    return out;
+  }
+
+  fs::path path(const std::string& p) const {
+    const fs::path q(p);
+    return fs::absolute(q.is_absolute() ? q : file_.parent_path() / q).lexically_normal();
+  }
+
+  void check_keys(const YAML::Node& map, std::initializer_list<const char*> keys, const std::string& what) const {
+    for (const auto& kv : map) {
+      const std::string k = kv.first.Scalar();
+      if (std::none_of(keys.begin(), keys.end(), [&](const char* known) { return k == known; })) {
+        std::string list;
+        for (const char* known : keys) list += std::string(list.empty() ? "" : ", ") + known;
+        fail(kv.first, what + ": unknown key '" + k + "'; expected one of " + list);
+      }
+    }
+  }
+
+ private:
+  fs::path file_;
+};
+
+// The placeholders pose_set may use; any other {word} is a mistake in the list.
+void check_placeholders(const ListReader& r, const YAML::Node& at, const std::string& s) {
+  static const std::regex word(R"(\{([A-Za-z_]+)\})");
+  static const std::set<std::string> known = {"mesh", "posed_mesh", "x", "y", "yaw"};
+  for (auto it = std::sregex_iterator(s.begin(), s.end(), word); it != std::sregex_iterator(); ++it)
+    if (!known.count((*it)[1].str()))
+      r.fail(at, "pose_set: unknown placeholder " + (*it)[0].str() + " in '" + s + "'; expected {mesh}, {posed_mesh}, {x}, {y} or {yaw}");
+}
+
+BatchList read_list(const std::string& file) {
+  BatchList l;
+  l.file = fs::absolute(file).lexically_normal();
+  if (!fs::is_regular_file(l.file)) throw std::invalid_argument("--batch: the list '" + file + "' is not a readable file");
+  ListReader r(l.file);
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(l.file.string());
+  } catch (const YAML::Exception& e) {
+    throw std::invalid_argument(l.file.string() + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
+                                ": not valid YAML: " + e.msg);
+  }
+  if (!root.IsMap()) r.fail(root, "expected a mapping with task, pose_set and runs; found " + ListReader::found(root));
+  r.check_keys(root, {"task", "fba_run_args", "timeout_s", "pose_set", "set", "variants", "runs"}, "the list");
+  if (!root["task"]) r.fail(root, "expected a key 'task' naming the task file");
+  l.task = r.path(r.text(root["task"], "task"));
+  if (!fs::is_regular_file(l.task)) r.fail(root["task"], "task: no such file " + l.task.string());
+  l.fba_run_args = r.texts(root, "fba_run_args", "fba_run_args");
+  if (root["timeout_s"]) {
+    l.timeout_s = r.number(root["timeout_s"], "timeout_s");
+    if (!(l.timeout_s > 0)) r.fail(root["timeout_s"], "timeout_s: expected seconds > 0");
+  }
+  l.pose_set = r.texts(root, "pose_set", "pose_set");
+  for (std::size_t i = 0; i < l.pose_set.size(); ++i) check_placeholders(r, root["pose_set"][i], l.pose_set[i]);
+  l.set = r.texts(root, "set", "set");
+  if (const YAML::Node v = root["variants"]) {
+    if (!v.IsSequence() || v.size() == 0) r.fail(v, "variants: expected a list of {name, set}, found " + ListReader::found(v));
+    for (const auto& item : v) {
+      if (!item.IsMap()) r.fail(item, "variants: expected {name: ..., set: [...]}, found " + ListReader::found(item));
+      r.check_keys(item, {"name", "set"}, "a variant");
+      Variant var{r.text(item["name"], "variant name"), r.texts(item, "set", "variant set")};
+      if (var.name.find_first_of("/ ") != std::string::npos) r.fail(item["name"], "variant name: expected no '/' or space (it names a folder)");
+      for (const auto& other : l.variants)
+        if (other.name == var.name) r.fail(item["name"], "variant '" + var.name + "' is given twice");
+      l.variants.push_back(std::move(var));
+    }
+  } else {
+    l.variants.push_back({"task", {}});
+  }
+  const YAML::Node runs = root["runs"];
+  if (!runs || !runs.IsSequence() || runs.size() == 0)
+    r.fail(runs ? runs : root, "runs: expected a list of {mesh, pose: [x, y, yaw], set: [...]}, found " + ListReader::found(runs));
+  for (const auto& item : runs) {
+    if (!item.IsMap()) r.fail(item, "a run: expected {mesh: ..., pose: [x, y, yaw]}, found " + ListReader::found(item));
+    r.check_keys(item, {"mesh", "pose", "set"}, "a run");
+    RunSpec s;
+    if (!item["mesh"]) r.fail(item, "a run: expected a key 'mesh'");
+    s.mesh = r.path(r.text(item["mesh"], "mesh")).string();  // a missing file is that run's row, not the batch's end
+    if (const YAML::Node p = item["pose"]) {
+      if (!p.IsSequence() || p.size() != 3) r.fail(p, "pose: expected [x, y, yaw] (metres, metres, degrees), found " + ListReader::found(p));
+      s.x = r.number(p[0], "pose x");
+      s.y = r.number(p[1], "pose y");
+      s.yaw = r.number(p[2], "pose yaw");
+    }
+    s.set = r.texts(item, "set", "run set");
+    l.runs.push_back(std::move(s));
+  }
+  return l;
+}
+
+std::string shortest(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+std::string replace_all(std::string s, const std::string& from, const std::string& to) {
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+  return s;
+}
+
+// One child run: what to start, and how it ended.
+struct Job {
+  const RunSpec* run = nullptr;
+  const Variant* variant = nullptr;
+  std::string object;
+  fs::path dir;
+  std::vector<std::string> argv;
+  std::string setup_error;  // the run could not be started: why
+  pid_t pid = -1;
+  Clock::time_point started;
+  bool term_sent = false, kill_sent = false;
+  int status = 0;
+  double elapsed_s = 0, cpu_s = 0;
+};
+
+// Builds the job's command line; writes the posed mesh when the list asks for it.
+void prepare(Job& job, const BatchList& l, const std::string& fba_run) {
+  const RunSpec& r = *job.run;
+  fs::create_directories(job.dir);
+  const fs::path posed = job.dir / "object.ply";
+  std::vector<std::string> sets = l.set;
+  for (const auto& t : l.pose_set) {
+    std::string s = replace_all(t, "{mesh}", r.mesh);
+    s = replace_all(s, "{posed_mesh}", posed.string());
+    s = replace_all(s, "{x}", shortest(r.x));
+    s = replace_all(s, "{y}", shortest(r.y));
+    s = replace_all(s, "{yaw}", shortest(r.yaw));
+    if (t.find("{posed_mesh}") != std::string::npos && !fs::exists(posed)) {
+      try {
+        geometry::write_ply(load_posed(r.mesh, table_pose(r.x, r.y, r.yaw)), posed);
+      } catch (const std::exception& e) {
+        job.setup_error = std::string("the mesh does not load: ") + e.what();
+        return;
+      }
+    }
+    sets.push_back(std::move(s));
+  }
+  sets.insert(sets.end(), job.variant->set.begin(), job.variant->set.end());
+  sets.insert(sets.end(), r.set.begin(), r.set.end());
+  job.argv = {fba_run, l.task.string(), "-o", job.dir.string()};
+  job.argv.insert(job.argv.end(), l.fba_run_args.begin(), l.fba_run_args.end());
+  for (const auto& s : sets) job.argv.insert(job.argv.end(), {"--set", s});
+  std::ofstream(job.dir / "command.txt") << [&] {
+    std::string line;
+    for (const auto& a : job.argv) line += (line.empty() ? "" : " ") + a;
+    return line + "\n";
+  }();
+}
+
+void start(Job& job) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string log = (job.dir / "log.txt").string();
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  std::vector<char*> argv;
+  for (auto& a : job.argv) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  job.started = Clock::now();
+  const int e = posix_spawnp(&job.pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (e != 0) {
+    job.pid = -1;
+    job.setup_error = "cannot start '" + job.argv[0] + "': " + std::strerror(e) + " (give --fba-run PATH)";
+  }
+}
+
+// Runs the jobs, at most `parallel` at a time; each line of progress on stderr.
+void run_all(std::vector<Job>& jobs, int parallel, double timeout_s) {
+  std::size_t next = 0, running = 0, done = 0;
+  std::map<pid_t, Job*> by_pid;
+  auto progress = [&](const Job& j, const std::string& what) {
+    std::fprintf(stderr, "[%zu/%zu] %s %s: %s\n", done, jobs.size(), j.variant->name.c_str(), j.dir.filename().c_str(), what.c_str());
+  };
+  while (done < jobs.size()) {
+    while (running < static_cast<std::size_t>(parallel) && next < jobs.size()) {
+      Job& j = jobs[next++];
+      if (j.setup_error.empty()) start(j);
+      if (!j.setup_error.empty()) {
+        ++done;
+        progress(j, j.setup_error);
+        continue;
+      }
+      by_pid[j.pid] = &j;
+      ++running;
+    }
+    if (running == 0) continue;
+    int status = 0;
+    rusage usage{};
+    const pid_t pid = wait4(-1, &status, WNOHANG, &usage);
+    if (pid > 0 && by_pid.count(pid)) {
+      Job& j = *by_pid[pid];
+      by_pid.erase(pid);
+      --running;
+      ++done;
+      j.status = status;
+      j.elapsed_s = std::chrono::duration<double>(Clock::now() - j.started).count();
+      j.cpu_s = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+      progress(j, WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : "signal " + std::to_string(WTERMSIG(status)));
+      continue;
+    }
+    if (pid < 0 && errno != EINTR && errno != ECHILD) throw std::runtime_error(std::string("waiting for fba-run: ") + std::strerror(errno));
+    // A run past its time is asked to stop in order (it then writes its summary), then killed.
+    for (auto& [p, j] : by_pid) {
+      const double age = std::chrono::duration<double>(Clock::now() - j->started).count();
+      if (age > timeout_s && !j->term_sent) {
+        kill(p, SIGTERM);
+        j->term_sent = true;
+      } else if (age > timeout_s + 20 && !j->kill_sent) {
+        kill(p, SIGKILL);
+        j->kill_sent = true;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+}
+
+// What one run gave.
+struct Row {
+  std::string variant, object, mesh, pose, dir;
+  std::string outcome;  // the summary's outcome, or how the child ended without one
+  std::string reason;
+  bool selected = false;
+  std::optional<bool> force_closure;
+  double epsilon = 0, score = 0;
+  std::optional<bool> held;
+  int views = -1;
+  double wall_s = -1, cpu_s = -1;
+  long long nodes = -1;
+};
+
+std::string last_line(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+std::string clip(std::string s, std::size_t n) {
+  for (auto& c : s)
+    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+  return s.size() > n ? s.substr(0, n - 3) + "..." : s;
+}
+
+// A JSON event payload, or null when it is not JSON.
+nlohmann::json payload_json(const nlohmann::json& e) {
+  if (!e.contains("payload") || !e["payload"].is_string()) return nullptr;
+  return nlohmann::json::parse(e["payload"].get<std::string>(), nullptr, false);
+}
+
+// Reads the run's summary.json and evaluates its grasp on the placed mesh.
+Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
+  Row row;
+  row.variant = j.variant->name;
+  row.object = j.object;
+  row.mesh = j.run->mesh;
+  row.pose = shortest(j.run->x) + " " + shortest(j.run->y) + " " + shortest(j.run->yaw);
+  row.dir = j.dir.string();
+  if (!j.setup_error.empty()) {
+    row.outcome = "not run";
+    row.reason = j.setup_error;
+    return row;
+  }
+  row.cpu_s = j.cpu_s;
+  std::string ended;
+  if (WIFSIGNALED(j.status)) ended = std::string("killed by signal ") + std::to_string(WTERMSIG(j.status)) + " (" + strsignal(WTERMSIG(j.status)) + ")";
+  if (j.term_sent) ended = "timed out (stopped after the list's timeout_s)" + (ended.empty() ? "" : "; " + ended);
+  const fs::path summary = j.dir / "summary.json";
+  nlohmann::json s;
+  if (std::ifstream in(summary); in) s = nlohmann::json::parse(in, nullptr, false);
+  if (!s.is_object()) {
+    row.outcome = j.term_sent ? "timed out" : WIFSIGNALED(j.status) ? "crashed" : "no summary";
+    row.wall_s = j.elapsed_s;
+    const std::string said = last_line(j.dir / "log.txt");
+    row.reason = (ended.empty() ? "exit " + std::to_string(WEXITSTATUS(j.status)) : ended) + ", no summary.json; " +
+                 (said.empty() ? std::string("log.txt is empty") : "fba-run said: " + said);
+    return row;
+  }
+  row.outcome = s.value("outcome", "?");
+  row.wall_s = s.value("wall_time_s", j.elapsed_s);
+  row.reason = s.value("reason", "");
+  if (!ended.empty()) row.reason = ended + "; " + row.reason;
+
+  // Components by type: the task's names are its own.
+  std::map<std::string, std::string> type_of;
+  if (s.contains("components") && s["components"].is_object())
+    for (const auto& [name, c] : s["components"].items())
+      if (c.is_object()) type_of[name] = c.value("type", "");
+  nlohmann::json events = s.contains("events") && s["events"].is_array() ? s["events"] : nlohmann::json::array();
+  if (s.contains("final_event") && s["final_event"].is_object() && s["final_event"].contains("payload"))
+    events.push_back(s["final_event"]);
+  int model_views = -1;
+  for (const auto& e : events) {
+    if (!e.is_object()) continue;
+    const std::string type = type_of[e.value("source", "")], name = e.value("name", "");
+    if (type == "vision.octree_carver" && name == "updated") {
+      const auto p = payload_json(e);
+      if (p.is_object()) {
+        model_views = p.value("views", model_views);
+        row.nodes = std::max<long long>(row.nodes, 0) + p.value("nodes_visited", 0LL);
+      }
+    } else if (type == "sim.hand" && (name == "held" || name == "dropped")) {
+      row.held = name == "held";
+      const auto p = payload_json(e);
+      if (name == "dropped" && p.is_object() && p.contains("reason")) row.reason = "dropped: " + p.value("reason", "");
+    } else if (type == "grasp.synthesis" && name == "grasp_synthesis_failed") {
+      row.reason = "synthesis failed: " + e.value("payload", "");
+    }
+  }
+  row.views = model_views;
+  try {
+    if (const auto g = summary_grasp(s, summary.string())) {
+      row.selected = true;
+      row.score = g->scores.total;
+      if (!g->views.empty()) row.views = static_cast<int>(g->views.size());
+      const grasp::ObjectSurface surface(load_posed(j.run->mesh, table_pose(j.run->x, j.run->y, j.run->yaw)));
+      std::array<GraspContact, 3> placed;
+      for (int k = 0; k < 3; ++k) placed[k] = surface.place(g->contacts[k]).contact;
+      const auto q = surface.evaluate(placed, quality);
+      row.force_closure = q.force_closure;
+      row.epsilon = q.epsilon;
+    }
+  } catch (const std::exception& e) {
+    row.reason = std::string("grasp not evaluated: ") + e.what() + (row.reason.empty() ? "" : "; " + row.reason);
+  }
+  return row;
+}
+
+double mean(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return v.empty() ? NAN : s / v.size();
+}
+
+std::string fixed(double v, int decimals, const char* unit = "") {
+  if (!std::isfinite(v) || v < 0) return "-";  // no figure (a run that did not start has no time)
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f%s", decimals, v, unit);
+  return buf;
+}
+
+std::string percent(std::size_t part, std::size_t whole) {
+  return whole == 0 ? "-" : fixed(100.0 * part / whole, 0, "%");
+}
+
+struct Baseline {
+  std::optional<grasp::RandomBaseline> figures;
+  std::string error;
+};
+
+// The figures of a group of runs (one variant, one object or all).
+struct Stats {
+  std::size_t runs = 0, selected = 0, evaluated = 0, fc = 0, above = 0, held = 0;
+  double median_eps = NAN, views = NAN, wall = NAN, cpu = NAN, nodes = NAN;
+};
+
+Stats stats_of(const std::vector<const Row*>& rows, const std::map<std::string, Baseline>& baselines) {
+  Stats st;
+  st.runs = rows.size();
+  std::vector<double> eps, views, wall, cpu, nodes;
+  for (const Row* r : rows) {
+    if (r->held.value_or(false)) ++st.held;
+    if (r->wall_s >= 0) wall.push_back(r->wall_s);
+    if (r->cpu_s >= 0) cpu.push_back(r->cpu_s);
+    if (r->nodes >= 0) nodes.push_back(static_cast<double>(r->nodes));
+    if (!r->selected) continue;
+    ++st.selected;
+    if (r->views >= 0) views.push_back(r->views);
+    if (!r->force_closure) continue;
+    ++st.evaluated;
+    st.fc += *r->force_closure;
+    eps.push_back(r->epsilon);
+    const auto b = baselines.find(r->mesh);
+    if (b != baselines.end() && b->second.figures && r->epsilon > b->second.figures->epsilon_p99) ++st.above;
+  }
+  if (!eps.empty()) st.median_eps = grasp::quantile(eps, 0.5);
+  st.views = mean(views);
+  st.wall = mean(wall);
+  st.cpu = mean(cpu);
+  st.nodes = mean(nodes);
+  return st;
+}
+
+// One line of the summary table: the rows of one variant and one object (or all objects).
+std::string summary_line(const std::string& variant, const std::string& object, const Stats& st, const Baseline* own) {
+  char line[512];
+  std::snprintf(line, sizeof line, "%-8s %-18s %4zu %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s", variant.c_str(),
+                object.c_str(), st.runs, percent(st.selected, st.runs).c_str(), percent(st.fc, st.evaluated).c_str(),
+                fixed(st.median_eps, 4).c_str(), own && own->figures ? fixed(own->figures->epsilon_p99, 4).c_str() : "-",
+                percent(st.above, st.evaluated).c_str(),
+                own && own->figures ? fixed(100 * own->figures->force_closure_share, 1, "%").c_str() : "-",
+                percent(st.held, st.runs).c_str(), fixed(st.views, 1).c_str(), fixed(st.wall, 2).c_str(), fixed(st.cpu, 2).c_str(),
+                fixed(st.nodes, 0).c_str());
+  return line;
+}
+
+std::string make_table(const BatchList& l, const std::vector<Row>& rows, const std::map<std::string, Baseline>& baselines,
+                       std::size_t random_sets) {
+  std::ostringstream out;
+  out << "fba-evaluate grasp --batch " << l.file.filename().string() << ": task " << l.task.filename().string() << ", "
+      << l.runs.size() << " runs x " << l.variants.size() << " variant(s); random baseline: " << random_sets
+      << " contact sets per mesh\n\n";
+  char line[1024];
+  std::snprintf(line, sizeof line, "%-8s %-18s %-16s %-10s %5s %4s %7s %5s %7s %7s %9s  %s\n", "variant", "object", "pose x y yaw",
+                "outcome", "views", "FC", "epsilon", "held", "wall_s", "cpu_s", "nodes", "reason");
+  out << line;
+  for (const auto& r : rows) {
+    std::snprintf(line, sizeof line, "%-8s %-18s %-16s %-10s %5s %4s %7s %5s %7s %7s %9s  %s\n", r.variant.c_str(), r.object.c_str(),
+                  r.pose.c_str(), r.outcome.c_str(), r.views >= 0 ? std::to_string(r.views).c_str() : "-",
+                  !r.selected ? "-" : !r.force_closure ? "?" : *r.force_closure ? "yes" : "no",
+                  r.force_closure ? fixed(r.epsilon, 4).c_str() : "-", !r.held ? "-" : *r.held ? "yes" : "no",
+                  fixed(r.wall_s, 2).c_str(), fixed(r.cpu_s, 2).c_str(), r.nodes >= 0 ? std::to_string(r.nodes).c_str() : "-",
+                  clip(r.reason, 240).c_str());
+    out << line;
+  }
+  out << "\n";
+  std::snprintf(line, sizeof line, "%-8s %-18s %4s %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s\n", "variant", "object", "runs",
+                "grasp", "FC", "med_eps", "rand_p99", ">p99", "rand_FC", "held", "views", "wall_s", "cpu_s", "nodes");
+  out << line;
+  // Objects in the list's order; the rows of one variant and one object ("" : all objects).
+  std::vector<std::string> objects;
+  for (const auto& r : rows)
+    if (std::find(objects.begin(), objects.end(), r.mesh) == objects.end()) objects.push_back(r.mesh);
+  auto group = [&](const std::string& variant, const std::string& mesh) {
+    std::vector<const Row*> mine;
+    for (const auto& r : rows)
+      if (r.variant == variant && (mesh.empty() || r.mesh == mesh)) mine.push_back(&r);
+    return stats_of(mine, baselines);
+  };
+  for (const auto& v : l.variants) {
+    for (const auto& mesh : objects) {
+      const auto b = baselines.find(mesh);
+      out << summary_line(v.name, object_name(mesh), group(v.name, mesh), b == baselines.end() ? nullptr : &b->second) << "\n";
+    }
+    out << summary_line(v.name, "all", group(v.name, ""), nullptr) << "\n";
+  }
+  // The variants side by side: the loop beside its baselines.
+  if (l.variants.size() > 1) {
+    const std::pair<const char*, std::string (*)(const Stats&)> figures[] = {
+        {"views", [](const Stats& st) { return fixed(st.views, 1); }},
+        {"nodes", [](const Stats& st) { return fixed(st.nodes, 0); }},
+        {"FC", [](const Stats& st) { return percent(st.fc, st.evaluated); }},
+        {"med_eps", [](const Stats& st) { return fixed(st.median_eps, 4); }},
+        {"held", [](const Stats& st) { return percent(st.held, st.runs); }}};
+    out << "\nside by side (" ;
+    for (std::size_t i = 0; i < l.variants.size(); ++i) out << (i ? " / " : "") << l.variants[i].name;
+    out << "):\n";
+    std::snprintf(line, sizeof line, "%-18s", "object");
+    out << line;
+    for (const auto& f : figures) {
+      std::snprintf(line, sizeof line, " %-*s", static_cast<int>(9 * l.variants.size()), f.first);
+      out << line;
+    }
+    out << "\n";
+    std::vector<std::string> keys = objects;
+    keys.push_back("");
+    for (const auto& mesh : keys) {
+      std::snprintf(line, sizeof line, "%-18s", mesh.empty() ? "all" : object_name(mesh).c_str());
+      out << line;
+      std::vector<Stats> per;
+      for (const auto& v : l.variants) per.push_back(group(v.name, mesh));
+      for (const auto& f : figures) {
+        out << " ";
+        for (const auto& st : per) {
+          std::snprintf(line, sizeof line, "%-9s", f.second(st).c_str());
+          out << line;
+        }
+      }
+      out << "\n";
+    }
+  }
+  out << "\ngrasp: runs with a grasp selected; FC: of those, force closure on the true mesh; med_eps: their median epsilon;\n"
+         "rand_p99, rand_FC: the random contact sets' 99th percentile of epsilon and force-closure share on the same mesh;\n"
+         ">p99: selected grasps whose epsilon is above their mesh's rand_p99; held: runs held through the lift test;\n"
+         "views: mean views until the grasp was selected; wall_s: the run's wall time (fba-run's summary), cpu_s: the\n"
+         "fba-run process's CPU time, both per run; nodes: mean octree nodes the carver visited per run.\n";
+  for (const auto& [mesh, b] : baselines)
+    if (!b.error.empty()) out << "random baseline of " << mesh << ": " << b.error << "\n";
+  out << "\n";
+  static const std::regex trailing(" +\n");
+  return std::regex_replace(out.str(), trailing, "\n");
+}
+
+nlohmann::json rows_json(const std::vector<Row>& rows) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& r : rows) {
+    nlohmann::json j{{"variant", r.variant}, {"object", r.object}, {"mesh", r.mesh}, {"pose", r.pose}, {"dir", r.dir},
+                     {"outcome", r.outcome}, {"reason", r.reason}, {"selected", r.selected}, {"views", r.views},
+                     {"wall_s", r.wall_s}, {"cpu_s", r.cpu_s}, {"nodes", r.nodes}};
+    if (r.selected) j["score"] = r.score;
+    if (r.force_closure) j["force_closure"] = *r.force_closure, j["epsilon"] = r.epsilon;
+    if (r.held) j["held"] = *r.held;
+    a.push_back(j);
+  }
+  return a;
+}
+
+// fba-run beside this program (the build's or the installed bin folder), else on PATH.
+std::string default_fba_run() {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec && fs::exists(self.parent_path() / "fba-run")) return (self.parent_path() / "fba-run").string();
+  return "fba-run";
+}
+
+std::string folder_name(std::size_t index, const std::string& object) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "%02zu-", index + 1);
+  return buf + object;
+}
+
+}  // namespace
+
+int run_grasp_batch(const std::vector<std::string>& args) {
+  std::string list_file, out_dir, fba_run = default_fba_run();
+  int jobs = 1;
+  std::size_t random_sets = 1000;
+  std::uint64_t seed = 1;
+  grasp::QualityParams quality;
+  po::options_description opts(kHelp);
+  opts.add_options()("help,h", "this help")("batch", po::value(&list_file)->required(), "the list of runs (YAML)")(
+      "jobs,j", po::value(&jobs)->default_value(jobs), "runs at a time")(
+      "output,o", po::value(&out_dir), "folder of the runs and the table; default: a new folder under the temporary folder")(
+      "fba-run", po::value(&fba_run)->default_value(fba_run), "the fba-run program")(
+      "random", po::value(&random_sets)->default_value(random_sets), "random contact sets per mesh (0: none)")(
+      "seed", po::value(&seed)->default_value(seed), "seed of the random sets");
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(opts).run(), vm);
+  if (vm.count("help")) {
+    std::cout << opts << "\n";
+    return 0;
+  }
+  po::notify(vm);
+  if (jobs < 1 || jobs > 64) throw std::invalid_argument("--jobs: expected 1..64 runs at a time, found " + std::to_string(jobs));
+  const BatchList list = read_list(list_file);
+  if (out_dir.empty()) {
+    std::string t = (fs::temp_directory_path() / "fba-grasp-batch-XXXXXX").string();
+    if (!mkdtemp(t.data())) throw std::runtime_error("cannot create a folder under " + fs::temp_directory_path().string());
+    out_dir = t;
+  }
+  const fs::path out = fs::absolute(out_dir);
+  fs::create_directories(out);
+  std::fprintf(stderr, "fba-evaluate grasp --batch: %zu runs x %zu variant(s) into %s\n", list.runs.size(), list.variants.size(),
+               out.c_str());
+
+  std::vector<Job> all;
+  for (const auto& v : list.variants)
+    for (std::size_t i = 0; i < list.runs.size(); ++i) {
+      Job j;
+      j.run = &list.runs[i];
+      j.variant = &v;
+      j.object = object_name(list.runs[i].mesh);
+      j.dir = out / v.name / folder_name(i, j.object);
+      prepare(j, list, fba_run);
+      all.push_back(std::move(j));
+    }
+  run_all(all, jobs, list.timeout_s);
+
+  std::vector<Row> rows;
+  for (const auto& j : all) rows.push_back(evaluate_job(j, quality));
+  // Per mesh, as the file has it: force closure and epsilon do not change when the whole object
+  // and its contacts move together (the pyramids turn with the grasp), so one baseline serves
+  // every pose.
+  std::map<std::string, Baseline> baselines;
+  for (const auto& r : list.runs) {
+    if (baselines.count(r.mesh) || random_sets == 0) continue;
+    Baseline& b = baselines[r.mesh];
+    try {
+      b.figures = grasp::random_baseline(grasp::ObjectSurface(geometry::load_mesh(r.mesh)), random_sets, seed, quality);
+    } catch (const std::exception& e) {
+      b.error = e.what();
+    }
+  }
+  const std::string table = make_table(list, rows, baselines, random_sets);
+  std::cout << table << std::flush;
+  std::ofstream(out / "table.txt") << table;
+  std::ofstream(out / "runs.json") << rows_json(rows).dump(2) << "\n";
+  return 0;
+}
+
+}  // namespace fba::evaluate
