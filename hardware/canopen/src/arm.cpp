@@ -196,7 +196,7 @@ double CanopenArm::move_to(const std::vector<double>& targets, double speed) {
                                                static_cast<std::uint8_t>(t >> 24)};
         master_.send_rpdo(joints_[i].node, 1, data);
       }
-      master_.send_sync();
+      sync(options_.enable_timeout);  // its TPDO answers taken in here, so no later sample takes them for its own
     };
     set_point(base | cia402::cw::kNewSetPoint);
     const auto deadline = Clock::now() + options_.enable_timeout;
@@ -245,34 +245,39 @@ bool CanopenArm::reached() {
   });
 }
 
+void CanopenArm::sync(std::chrono::milliseconds timeout) {
+  const std::size_t n = joints_.size();
+  auto count = [&](std::size_t i, int pdo) {
+    const auto s = master_.tpdo(joints_[i].node, pdo);
+    return s ? s->count : 0;
+  };
+  std::vector<std::uint64_t> before(2 * n);
+  for (std::size_t i = 0; i < n; ++i) before[2 * i] = count(i, 1), before[2 * i + 1] = count(i, 2);
+  auto answered = [&](std::size_t i) { return count(i, 1) > before[2 * i] && count(i, 2) > before[2 * i + 1]; };
+  master_.send_sync();
+  // Done when every drive answered, or as soon as one faulted (that fault is the news).
+  master_.spin_until(
+      [&] {
+        if (!master_.faults().empty()) return true;
+        for (std::size_t i = 0; i < n; ++i)
+          if (!answered(i)) return false;
+        return true;
+      },
+      timeout);
+  for (const ArmJoint& j : joints_) master_.throw_if_faulted(j.node);  // the fault first: it is why others wait
+  for (std::size_t i = 0; i < n; ++i)
+    if (!answered(i))
+      throw JointFailure(joints_[i].node, fmt::format("{}: its PDOs did not answer the SYNC within {} ms",
+                                                      joint_name(joints_[i]), timeout.count()));
+}
+
 ArmSample CanopenArm::sample(std::chrono::milliseconds timeout) {
   return guarded([&] {
-    const std::size_t n = joints_.size();
-    auto count = [&](std::size_t i, int pdo) {
-      const auto s = master_.tpdo(joints_[i].node, pdo);
-      return s ? s->count : 0;
-    };
-    std::vector<std::uint64_t> before(2 * n);
-    for (std::size_t i = 0; i < n; ++i) before[2 * i] = count(i, 1), before[2 * i + 1] = count(i, 2);
-    auto answered = [&](std::size_t i) { return count(i, 1) > before[2 * i] && count(i, 2) > before[2 * i + 1]; };
-    master_.send_sync();
-    // Done when every drive answered, or as soon as one faulted (that fault is the news).
-    master_.spin_until(
-        [&] {
-          if (!master_.faults().empty()) return true;
-          for (std::size_t i = 0; i < n; ++i)
-            if (!answered(i)) return false;
-          return true;
-        },
-        timeout);
-    for (const ArmJoint& j : joints_) master_.throw_if_faulted(j.node);  // the fault first: it is why others wait
+    sync(timeout);
     ArmSample out;
     out.reached = true;
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < joints_.size(); ++i) {
       const ArmJoint& j = joints_[i];
-      if (!answered(i))
-        throw JointFailure(j.node, fmt::format("{}: its PDOs did not answer the SYNC within {} ms", joint_name(j),
-                                               timeout.count()));
       const can::Frame state = master_.tpdo(j.node, 1)->frame, velocity = master_.tpdo(j.node, 2)->frame;
       if (state.dlc != 6 || velocity.dlc != 4)
         throw JointFailure(j.node, fmt::format("{}: its PDOs have {} and {} bytes, expected 6 (statusword, position) "
