@@ -172,7 +172,8 @@ TEST_F(CanopenArmComponent, EnablesEveryDriveAndPublishesWhereItStands) {
   EXPECT_EQ(states[0].names, arm().joint_names());
   EXPECT_EQ(states[0].positions, std::vector<double>(6, 0.0));  // the emulator's drives start at 0
   ASSERT_EQ(h().values<fba::Pose>("camera_pose").size(), 1u);
-  EXPECT_TRUE(h().values<fba::Pose>("camera_pose")[0].world_from_frame.isApprox(pose_of(std::vector<double>(6, 0.0)).world_from_frame));
+  EXPECT_TRUE(h().values<fba::Pose>("camera_pose")[0].world_from_frame.isApprox(
+      pose_of(std::vector<double>(6, 0.0)).world_from_frame));
 }
 
 TEST_F(CanopenArmComponent, MovesToAReachableCameraPoseAndArrivesWithTheJointStatesMatching) {
@@ -208,8 +209,10 @@ TEST_F(CanopenArmComponent, MovesToAReachableCameraPoseAndArrivesWithTheJointSta
       const double s = states[k].positions[j] / last.positions[j];  // every joint started at 0
       EXPECT_GE(s, -1e-9) << "state " << k << ", joint " << j;
       EXPECT_LE(s, 1 + 1e-9) << "state " << k << ", joint " << j;
-      if (share) EXPECT_NEAR(s, *share, 0.02) << "state " << k << ", joint " << j;
-      else share = s;
+      if (share)
+        EXPECT_NEAR(s, *share, 0.02) << "state " << k << ", joint " << j;
+      else
+        share = s;
     }
   }
 }
@@ -356,17 +359,22 @@ TEST_F(CanopenArmComponent, AConfigurationThatDoesNotFitTheArmIsRefusedNamingThe
 class CanopenArmInATask : public ::testing::Test {
  protected:
   fba::TaskConfig task(const std::string& extra = "") {
-    const std::string yaml = "task: real_arm\nexecutor: threaded\ncomponents:\n"
-                             "  arm:\n    type: hw.canopen_arm\n    params:\n"
-                             "      device: " + emulator_.device() + "\n"
-                             "      node_ids: [1, 2, 3, 4, 5, 6]\n"
-                             "      counts_per_rad: [100000, 100000, 100000, 100000, 100000, 100000]\n"
-                             "      heartbeat_period_ms: 20\n      heartbeat_timeout_ms: 1000\n"
-                             "      sdo_timeout_ms: 1000\n" + extra;
+    const std::string yaml =
+        "task: real_arm\nexecutor: threaded\ncomponents:\n"
+        "  arm:\n    type: hw.canopen_arm\n    params:\n"
+        "      device: " +
+        emulator_.device() +
+        "\n"
+        "      node_ids: [1, 2, 3, 4, 5, 6]\n"
+        "      counts_per_rad: [100000, 100000, 100000, 100000, 100000, 100000]\n"
+        "      heartbeat_period_ms: 20\n      heartbeat_timeout_ms: 1000\n"
+        "      sdo_timeout_ms: 1000\n" +
+        extra;
     return fba::load_task_text(yaml, "real_arm.yaml", dir_.path(), registry());
   }
   void wait_until_enabled() {
-    for (int i = 0; i < 100'000 && !(emulator_.enabled(1) && emulator_.enabled(6)); ++i) std::this_thread::sleep_for(1ms);
+    for (int i = 0; i < 100'000 && !(emulator_.enabled(1) && emulator_.enabled(6)); ++i)
+      std::this_thread::sleep_for(1ms);
   }
 
   fba::test::TempDir dir_;

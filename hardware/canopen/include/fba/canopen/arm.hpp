@@ -23,7 +23,7 @@ struct ArmJoint {
   std::int32_t zero = 0;   // the drive's position at joint position 0
   double lower;            // joint limits, radians (or metres)
   double upper;
-  double max_velocity;  // radians (metres) per second, > 0
+  double max_velocity;          // radians (metres) per second, > 0
   double max_acceleration = 0;  // radians (metres) per second squared; 0: ten times max_velocity per second
 };
 
