@@ -58,8 +58,10 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
   static constexpr fba::Param<std::string> kDevice{
       "device", fba::required,
       "the CAN bus: slcan:/dev/ttyUSB0 (an SLCAN adapter on a serial line), can0 or socketcan:can0 (SocketCAN)"};
-  static constexpr auto kBitrate = fba::Param<int>(
-      "bitrate", 500000, "the CAN bitrate, bit/s, set on an SLCAN adapter (SocketCAN: set on the interface)");
+  static constexpr auto kBitrate =
+      fba::Param<int>("bitrate", 500000,
+                      "the CAN bitrate, bit/s, set on an SLCAN adapter (SocketCAN: set on the interface)")
+          .range(10000, 1000000);
   static inline const auto kNodeIds =
       fba::Param<std::vector<double>>("node_ids", fba::required,
                                       "each joint's CANopen node id (1..127), in the arm's joint order")
