@@ -272,6 +272,34 @@ TEST_F(CanopenArmComponent, ADriveThatStopsAnsweringStopsEveryOtherJointNamingIt
   for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
 }
 
+TEST_F(CanopenArmComponent, ADriveRebootingMidMotionStopsTheArmNamingIt) {
+  make({{"speed_scale", 0.2}});
+  tick();
+  start_long_move();
+  emulator_->reboot(5);  // a power glitch: its configuration is gone, it is pre-operational again
+  tick_until_failed();
+  const std::string why = h().failure();
+  EXPECT_TRUE(contains(why, "joint 'wrist_2_joint': node 5: rebooted unasked")) << why;
+  for (int node : {1, 2, 3, 4, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+// No tick comes after the end of the stream: the move under way and those waiting run to their end.
+TEST_F(CanopenArmComponent, AtTheEndOfTheStreamTheMovesUnderWayAndPendingAreCompleted) {
+  make();
+  tick();
+  h().push("joint_target", fba::JointState{{"wrist_3_joint"}, {0.3}, {}, 0});
+  tick();
+  h().push("joint_target", fba::JointState{{"wrist_3_joint"}, {-0.2}, {}, 0});
+  tick();  // taken in: it waits for the first move's end
+  h().close("joint_target");
+  h().close("target");
+  h().run();
+  EXPECT_TRUE(h().failure().empty()) << h().failure();
+  EXPECT_EQ(named(h().events(), "arrived").size(), 2u);
+  EXPECT_EQ(emulator_->position(6), std::lround(-0.2 * kCounts));
+  EXPECT_TRUE(h().finished());
+}
+
 TEST_F(CanopenArmComponent, TheSerialLineVanishingMidMotionEndsWithAClearReportNeverAHang) {
   make({{"speed_scale", 0.2}});
   tick();
