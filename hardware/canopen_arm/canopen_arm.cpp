@@ -58,31 +58,38 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
   static constexpr fba::Param<std::string> kDevice{
       "device", fba::required,
       "the CAN bus: slcan:/dev/ttyUSB0 (an SLCAN adapter on a serial line), can0 or socketcan:can0 (SocketCAN)"};
-  static constexpr auto kBitrate = fba::Param<int>(
-      "bitrate", 500000, "the CAN bitrate, bit/s, set on an SLCAN adapter (SocketCAN: set on the interface)");
-  static inline const auto kNodeIds = fba::Param<std::vector<double>>(
-      "node_ids", fba::required, "each joint's CANopen node id (1..127), in the arm's joint order")
-                                          .range(1, 127);
+  static constexpr auto kBitrate =
+      fba::Param<int>("bitrate", 500000,
+                      "the CAN bitrate, bit/s, set on an SLCAN adapter (SocketCAN: set on the interface)")
+          .range(10000, 1000000);
+  static inline const auto kNodeIds =
+      fba::Param<std::vector<double>>("node_ids", fba::required,
+                                      "each joint's CANopen node id (1..127), in the arm's joint order")
+          .range(1, 127);
   static inline const auto kCountsPerRad = fba::Param<std::vector<double>>(
       "counts_per_rad", fba::required,
       "each joint's encoder scale: drive position units per radian (per metre for a prismatic joint); negative "
       "when the drive counts the other way");
-  static inline const auto kZeroCounts = fba::Param<std::vector<double>>(
-      "zero_counts", std::vector<double>{}, "each joint's drive position at joint position 0; empty: 0 for every joint");
+  static inline const auto kZeroCounts =
+      fba::Param<std::vector<double>>("zero_counts", std::vector<double>{},
+                                      "each joint's drive position at joint position 0; empty: 0 for every joint");
   static constexpr fba::Param<std::filesystem::path> kUrdf{
       "urdf", "", "the arm's URDF (kinematics and joint limits); empty: the project's wrist_camera_arm.urdf"};
   static constexpr fba::Param<std::string> kBaseLink{"base_link", "world", "the frame target poses are given in"};
   static constexpr fba::Param<std::string> kCameraLink{"camera_link", "camera",
                                                        "the camera's optical frame (z forward, x right, y down)"};
   static constexpr auto kSpeed =
-      fba::Param<double>("speed_scale", 0.5, "share of each joint's URDF velocity limit used by motions").range(0.01, 1.0);
+      fba::Param<double>("speed_scale", 0.5, "share of each joint's URDF velocity limit used by motions")
+          .range(0.01, 1.0);
   static constexpr auto kAcceleration =
-      fba::Param<double>("acceleration", 3.0, "joint acceleration limit, rad/s^2 (m/s^2), every joint").range(0.01, 100.0);
+      fba::Param<double>("acceleration", 3.0, "joint acceleration limit, rad/s^2 (m/s^2), every joint")
+          .range(0.01, 100.0);
   static constexpr auto kRate =
       fba::Param<double>("rate", 50.0, "joint states per second while moving (the drives are sampled with a SYNC each)")
           .range(0.1, 1000.0);
   static constexpr auto kPositionTolerance =
-      fba::Param<double>("position_tolerance", 1e-4, "how close IK must bring the camera to a target, m").range(1e-9, 0.1);
+      fba::Param<double>("position_tolerance", 1e-4, "how close IK must bring the camera to a target, m")
+          .range(1e-9, 0.1);
   static constexpr auto kOrientationTolerance =
       fba::Param<double>("orientation_tolerance", 1e-3, "how close IK must turn the camera to a target, rad")
           .range(1e-9, 0.5);
@@ -91,27 +98,33 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
   static constexpr auto kPublishInitial = fba::Param<bool>(
       "publish_initial", true, "publish the joint state and camera pose where the arm starts, at the first tick");
   static constexpr auto kHeartbeatPeriod =
-      fba::Param<int>("heartbeat_period_ms", 50, "the heartbeat period each drive is given (object 0x1017)").range(1, 10000);
-  static constexpr auto kHeartbeatTimeout = fba::Param<int>(
-      "heartbeat_timeout_ms", 300, "a drive not heard for this long is lost: the arm stops").range(1, 60000);
-  static constexpr auto kSdoTimeout = fba::Param<int>(
-      "sdo_timeout_ms", 200, "how long a drive may take to answer an SDO, or its PDOs a SYNC").range(1, 10000);
-  static constexpr auto kEnableTimeout = fba::Param<int>(
-      "enable_timeout_ms", 2000, "how long a drive may take to reach \"operation enabled\" or take a set-point")
-                                              .range(1, 60000);
-  static constexpr auto kNoiseLimit = fba::Param<int>(
-      "noise_limit", 100, "bad frames (line noise) tolerated within one second; more and the line is not trusted")
-                                          .range(0, 1000000);
+      fba::Param<int>("heartbeat_period_ms", 50, "the heartbeat period each drive is given (object 0x1017)")
+          .range(1, 10000);
+  static constexpr auto kHeartbeatTimeout =
+      fba::Param<int>("heartbeat_timeout_ms", 300, "a drive not heard for this long is lost: the arm stops")
+          .range(1, 60000);
+  static constexpr auto kSdoTimeout =
+      fba::Param<int>("sdo_timeout_ms", 200, "how long a drive may take to answer an SDO, or its PDOs a SYNC")
+          .range(1, 10000);
+  static constexpr auto kEnableTimeout =
+      fba::Param<int>("enable_timeout_ms", 2000,
+                      "how long a drive may take to reach \"operation enabled\" or take a set-point")
+          .range(1, 60000);
+  static constexpr auto kNoiseLimit =
+      fba::Param<int>("noise_limit", 100,
+                      "bad frames (line noise) tolerated within one second; more and the line is not trusted")
+          .range(0, 1000000);
 
   static fba::Spec spec() {
-    return fba::Spec::actuator("hw.canopen_arm",
-                               "Real arm of CiA 402 drives on a CANopen bus (SLCAN or SocketCAN), one node per joint, "
-                               "kinematics and limits from a URDF (the twin of sim.arm): moves to camera poses or joint "
-                               "targets with synchronised profile position moves, quick-stops on any fault.")
+    return fba::Spec::actuator(
+               "hw.canopen_arm",
+               "Real arm of CiA 402 drives on a CANopen bus (SLCAN or SocketCAN), one node per joint, "
+               "kinematics and limits from a URDF (the twin of sim.arm): moves to camera poses or joint "
+               "targets with synchronised profile position moves, quick-stops on any fault.")
         .add(kTarget, kJointTarget, kJointState, kCameraPose, kArrived, kUnreachable, kDevice, kBitrate, kNodeIds,
              kCountsPerRad, kZeroCounts, kUrdf, kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate,
-             kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kHeartbeatPeriod,
-             kHeartbeatTimeout, kSdoTimeout, kEnableTimeout, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
+             kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kHeartbeatPeriod, kHeartbeatTimeout,
+             kSdoTimeout, kEnableTimeout, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
         .check(kDevice, check_bus)
         .check(kRate, check_rate)
         .blocking();
@@ -138,14 +151,16 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
       const auto& name = model_.joint_names()[i];
       const auto& limits = model_.limits()[i];
       if (nodes[i] != std::round(nodes[i]))
-        throw std::runtime_error(fmt::format("parameter 'node_ids': {} (joint '{}') is not a whole number", nodes[i], name));
-      if (zeros.size() == n && (zeros[i] != std::round(zeros[i]) || std::abs(zeros[i]) > 2147483647.0))
         throw std::runtime_error(
-            fmt::format("parameter 'zero_counts': {} (joint '{}') is not a whole 32-bit drive position", zeros[i], name));
+            fmt::format("parameter 'node_ids': {} (joint '{}') is not a whole number", nodes[i], name));
+      if (zeros.size() == n && (zeros[i] != std::round(zeros[i]) || std::abs(zeros[i]) > 2147483647.0))
+        throw std::runtime_error(fmt::format(
+            "parameter 'zero_counts': {} (joint '{}') is not a whole 32-bit drive position", zeros[i], name));
       if (!std::isfinite(limits.lower) || !std::isfinite(limits.upper))
-        throw std::runtime_error(fmt::format("joint '{}' of '{}' has no finite limits (a continuous joint): "
-                                             "hw.canopen_arm needs limits to check every command against",
-                                             name, ctx(kUrdf).string()));
+        throw std::runtime_error(
+            fmt::format("joint '{}' of '{}' has no finite limits (a continuous joint): "
+                        "hw.canopen_arm needs limits to check every command against",
+                        name, ctx(kUrdf).string()));
       joints.push_back(canopen::ArmJoint{.name = name,
                                          .node = static_cast<int>(nodes[i]),
                                          .counts_per_unit = counts[i],
@@ -194,9 +209,10 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
     std::unique_lock lock(mutex_, std::defer_lock);
     // process() ends within a few milliseconds of interrupt(); a wait this long means it is stuck.
     if (!lock.try_lock_for(std::chrono::seconds(3)))
-      throw std::runtime_error(fmt::format("{}: the driver's thread did not let go of the bus within 3 s; no quick stop "
-                                           "was sent",
-                                           bus_->name()));
+      throw std::runtime_error(
+          fmt::format("{}: the driver's thread did not let go of the bus within 3 s; no quick stop "
+                      "was sent",
+                      bus_->name()));
     if (!started_) return;  // the drives were never enabled by this run
     master_->resume();
     moving_ = false;
@@ -276,8 +292,10 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
     if (const auto* pose = std::get_if<fba::Pose>(&r)) {
       target = {{"pose", pose_json(pose->world_from_frame)}};
       const auto ik = model_.inverse(pose->world_from_frame, joints_, ik_);
-      if (ik.ok) goal = ik.joints;
-      else why = ik.why;
+      if (ik.ok)
+        goal = ik.joints;
+      else
+        why = ik.why;
     } else {
       const auto& js = std::get<fba::JointState>(r);
       target = {{"names", js.names}, {"positions", js.positions}};
@@ -288,8 +306,8 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
         planned_s_ = arm_->move_to(std::vector<double>(goal.data(), goal.data() + goal.size()));
         moving_ = true;
         move_start_ = Clock::now();
-        deadline_ = move_start_ + std::chrono::duration_cast<Clock::duration>(
-                                      std::chrono::duration<double>(2 * planned_s_ + 1.0));
+        deadline_ = move_start_ +
+                    std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(2 * planned_s_ + 1.0));
         ctx_.log().debug("moving to {} in {:.3f} s", target.dump(), planned_s_);
         return;
       } catch (const canopen::LimitError& e) {  // beyond what the drive's counts hold: refused, nothing sent
@@ -330,17 +348,19 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
     while (noise_.size() > 1 && noise_[1].first <= now - std::chrono::seconds(1)) noise_.pop_front();
     const std::uint64_t recent = total - noise_.front().second;
     if (total > noise_reported_) {
-      ctx_.log().warn("{}: {} bad frames skipped so far (the last: {})", bus_->name(), total, bus_->last_discard_reason());
+      ctx_.log().warn("{}: {} bad frames skipped so far (the last: {})", bus_->name(), total,
+                      bus_->last_discard_reason());
       noise_reported_ = total;
     }
     if (recent <= noise_limit_) return;
     const auto failures = arm_->quick_stop_all();
-    throw std::runtime_error(fmt::format(
-        "arm stopped: the line is too noisy to trust: {} bad frames within {:.1f} s (noise_limit {} a second; the last: "
-        "{}); {}",
-        recent, std::chrono::duration<double>(now - noise_.front().first).count(), noise_limit_,
-        bus_->last_discard_reason(),
-        failures.empty() ? "every joint was sent quick stop" : "quick stop failed: " + failures.front()));
+    throw std::runtime_error(
+        fmt::format("arm stopped: the line is too noisy to trust: {} bad frames within {:.1f} s (noise_limit {} a "
+                    "second; the last: "
+                    "{}); {}",
+                    recent, std::chrono::duration<double>(now - noise_.front().first).count(), noise_limit_,
+                    bus_->last_discard_reason(),
+                    failures.empty() ? "every joint was sent quick stop" : "quick stop failed: " + failures.front()));
   }
 
   void publish_state(const canopen::ArmSample& s, std::int64_t stamp_ns) {
@@ -390,7 +410,8 @@ std::string check_bus(const fba::ParamValues& p) {
   const bool slcan = device.rfind("slcan:", 0) == 0;
   const std::string interface = device.rfind("socketcan:", 0) == 0 ? device.substr(10) : device;
   if (slcan ? device.size() == 6 : interface.empty() || interface.find_first_of("/:") != std::string::npos)
-    return "'" + device + "' is neither slcan:DEVICE (slcan:/dev/ttyUSB0) nor a SocketCAN interface (can0, socketcan:can0)";
+    return "'" + device +
+           "' is neither slcan:DEVICE (slcan:/dev/ttyUSB0) nor a SocketCAN interface (can0, socketcan:can0)";
   if (!slcan) return {};
   try {
     fba::can::slcan::bitrate_code(p(CanopenArmComponent::kBitrate));

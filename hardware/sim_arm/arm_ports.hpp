@@ -14,13 +14,16 @@ struct ArmPorts {
       "target", "move the camera to this pose (world_from_frame of the camera link, in base_link's frame)"};
   static constexpr fba::OptionalIn<fba::JointState> kJointTarget{
       "joint_target", "move the joints to these positions (by name, or all in the arm's order when names are empty)"};
-  static constexpr fba::Out<fba::JointState> kJointState{"joint_state", "the joints, at `rate` while the arm moves and when it stops"};
+  static constexpr fba::Out<fba::JointState> kJointState{"joint_state",
+                                                         "the joints, at `rate` while the arm moves and when it stops"};
   static constexpr fba::Out<fba::Pose> kCameraPose{
-      "camera_pose", "the camera's pose where each motion ends (and where the arm starts): wire it to the camera's pose"};
+      "camera_pose",
+      "the camera's pose where each motion ends (and where the arm starts): wire it to the camera's pose"};
   static constexpr fba::EventOut kArrived{"arrived", "a motion ended; payload: the camera pose and the joints, JSON"};
   static constexpr fba::EventOut kUnreachable{
-      "unreachable", "a target was refused (no IK solution within the limits and tolerances, or a joint outside its limits); "
-                     "payload: the target and why, JSON"};
+      "unreachable",
+      "a target was refused (no IK solution within the limits and tolerances, or a joint outside its limits); "
+      "payload: the target and why, JSON"};
 };
 
 }  // namespace fba::arm

@@ -168,7 +168,8 @@ TEST_P(CanopenArmTest, ASampleIsEveryDrivesPdosAnsweringOneSync) {
 
 TEST_P(CanopenArmTest, AnInterruptFromAnotherThreadEndsAWaitAndTheJointsStillGetQuickStop) {
   arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);  // 100 s
-  std::jthread stopper([&] {  // joins however the test ends
+  // A jthread: joined however the test ends.
+  std::jthread stopper([&] {
     std::this_thread::sleep_for(20ms);
     master_->interrupt();
   });

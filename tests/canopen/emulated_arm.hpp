@@ -40,8 +40,14 @@ class EmulatedArm {
     thread_ = std::thread([this] { emulator_->run(); });
     // Generous answer times: the emulator's thread may wait for a core on a loaded machine.
     if (transport == Transport::slcan_pty) {
-      host_ = std::make_unique<can::slcan::SlcanBus>(pty_.slave_path,
-                                                     can::slcan::Options{.reply_timeout = std::chrono::seconds(2)});
+      try {
+        host_ = std::make_unique<can::slcan::SlcanBus>(pty_.slave_path,
+                                                       can::slcan::Options{.reply_timeout = std::chrono::seconds(2)});
+      } catch (...) {  // the emulator's thread ends first: a failed open is a failure, not std::terminate
+        emulator_->stop();
+        thread_.join();
+        throw;
+      }
     }
   }
   ~EmulatedArm() {

@@ -43,8 +43,9 @@ CanopenArm::CanopenArm(Master& master, std::vector<ArmJoint> joints, ArmOptions 
       throw std::invalid_argument(
           fmt::format("CANopen arm: {}: maximum velocity {} must be more than 0", joint_name(j), j.max_velocity));
     if (!(j.max_acceleration >= 0) || !std::isfinite(j.max_acceleration))
-      throw std::invalid_argument(fmt::format("CANopen arm: {}: maximum acceleration {} must be 0 (the default) or more",
-                                              joint_name(j), j.max_acceleration));
+      throw std::invalid_argument(
+          fmt::format("CANopen arm: {}: maximum acceleration {} must be 0 (the default) or more", joint_name(j),
+                      j.max_acceleration));
     drives_.emplace_back(master_, j.node);
   }
 }
@@ -132,7 +133,8 @@ void CanopenArm::start() {
       drives_[i].enable(options_.enable_timeout);
       const auto v =
           static_cast<std::uint32_t>(std::max(1.0, std::abs(joints_[i].max_velocity * joints_[i].counts_per_unit)));
-      drives_[i].set_profile(v, static_cast<std::uint32_t>(std::max(1.0, std::abs(acceleration(i) * joints_[i].counts_per_unit))));
+      drives_[i].set_profile(
+          v, static_cast<std::uint32_t>(std::max(1.0, std::abs(acceleration(i) * joints_[i].counts_per_unit))));
     }
   });
 }
@@ -188,15 +190,13 @@ double CanopenArm::move_to(const std::vector<double>& targets, double speed) {
     auto set_point = [&](std::uint16_t controlword) {
       for (std::size_t i = 0; i < joints_.size(); ++i) {
         const auto t = static_cast<std::uint32_t>(counts[i]);
-        const std::array<std::uint8_t, 6> data{static_cast<std::uint8_t>(controlword),
-                                               static_cast<std::uint8_t>(controlword >> 8),
-                                               static_cast<std::uint8_t>(t),
-                                               static_cast<std::uint8_t>(t >> 8),
-                                               static_cast<std::uint8_t>(t >> 16),
-                                               static_cast<std::uint8_t>(t >> 24)};
+        const std::array<std::uint8_t, 6> data{
+            static_cast<std::uint8_t>(controlword), static_cast<std::uint8_t>(controlword >> 8),
+            static_cast<std::uint8_t>(t),           static_cast<std::uint8_t>(t >> 8),
+            static_cast<std::uint8_t>(t >> 16),     static_cast<std::uint8_t>(t >> 24)};
         master_.send_rpdo(joints_[i].node, 1, data);
       }
-      master_.send_sync();
+      sync(options_.enable_timeout);  // its TPDO answers taken in here, so no later sample takes them for its own
     };
     set_point(base | cia402::cw::kNewSetPoint);
     const auto deadline = Clock::now() + options_.enable_timeout;
@@ -245,34 +245,39 @@ bool CanopenArm::reached() {
   });
 }
 
+void CanopenArm::sync(std::chrono::milliseconds timeout) {
+  const std::size_t n = joints_.size();
+  auto count = [&](std::size_t i, int pdo) {
+    const auto s = master_.tpdo(joints_[i].node, pdo);
+    return s ? s->count : 0;
+  };
+  std::vector<std::uint64_t> before(2 * n);
+  for (std::size_t i = 0; i < n; ++i) before[2 * i] = count(i, 1), before[2 * i + 1] = count(i, 2);
+  auto answered = [&](std::size_t i) { return count(i, 1) > before[2 * i] && count(i, 2) > before[2 * i + 1]; };
+  master_.send_sync();
+  // Done when every drive answered, or as soon as one faulted (that fault is the news).
+  master_.spin_until(
+      [&] {
+        if (!master_.faults().empty()) return true;
+        for (std::size_t i = 0; i < n; ++i)
+          if (!answered(i)) return false;
+        return true;
+      },
+      timeout);
+  for (const ArmJoint& j : joints_) master_.throw_if_faulted(j.node);  // the fault first: it is why others wait
+  for (std::size_t i = 0; i < n; ++i)
+    if (!answered(i))
+      throw JointFailure(joints_[i].node, fmt::format("{}: its PDOs did not answer the SYNC within {} ms",
+                                                      joint_name(joints_[i]), timeout.count()));
+}
+
 ArmSample CanopenArm::sample(std::chrono::milliseconds timeout) {
   return guarded([&] {
-    const std::size_t n = joints_.size();
-    auto count = [&](std::size_t i, int pdo) {
-      const auto s = master_.tpdo(joints_[i].node, pdo);
-      return s ? s->count : 0;
-    };
-    std::vector<std::uint64_t> before(2 * n);
-    for (std::size_t i = 0; i < n; ++i) before[2 * i] = count(i, 1), before[2 * i + 1] = count(i, 2);
-    auto answered = [&](std::size_t i) { return count(i, 1) > before[2 * i] && count(i, 2) > before[2 * i + 1]; };
-    master_.send_sync();
-    // Done when every drive answered, or as soon as one faulted (that fault is the news).
-    master_.spin_until(
-        [&] {
-          if (!master_.faults().empty()) return true;
-          for (std::size_t i = 0; i < n; ++i)
-            if (!answered(i)) return false;
-          return true;
-        },
-        timeout);
-    for (const ArmJoint& j : joints_) master_.throw_if_faulted(j.node);  // the fault first: it is why others wait
+    sync(timeout);
     ArmSample out;
     out.reached = true;
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < joints_.size(); ++i) {
       const ArmJoint& j = joints_[i];
-      if (!answered(i))
-        throw JointFailure(j.node, fmt::format("{}: its PDOs did not answer the SYNC within {} ms", joint_name(j),
-                                               timeout.count()));
       const can::Frame state = master_.tpdo(j.node, 1)->frame, velocity = master_.tpdo(j.node, 2)->frame;
       if (state.dlc != 6 || velocity.dlc != 4)
         throw JointFailure(j.node, fmt::format("{}: its PDOs have {} and {} bytes, expected 6 (statusword, position) "
@@ -282,7 +287,8 @@ ArmSample CanopenArm::sample(std::chrono::milliseconds timeout) {
       check_drive(i, word);
       const auto le32 = [](const std::uint8_t* b) {
         return static_cast<std::int32_t>(static_cast<std::uint32_t>(b[0]) | static_cast<std::uint32_t>(b[1]) << 8 |
-                                         static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24);
+                                         static_cast<std::uint32_t>(b[2]) << 16 |
+                                         static_cast<std::uint32_t>(b[3]) << 24);
       };
       out.positions.push_back((static_cast<double>(le32(&state.data[2])) - j.zero) / j.counts_per_unit);
       out.velocities.push_back(static_cast<double>(le32(&velocity.data[0])) / j.counts_per_unit);

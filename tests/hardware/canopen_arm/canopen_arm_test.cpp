@@ -172,7 +172,8 @@ TEST_F(CanopenArmComponent, EnablesEveryDriveAndPublishesWhereItStands) {
   EXPECT_EQ(states[0].names, arm().joint_names());
   EXPECT_EQ(states[0].positions, std::vector<double>(6, 0.0));  // the emulator's drives start at 0
   ASSERT_EQ(h().values<fba::Pose>("camera_pose").size(), 1u);
-  EXPECT_TRUE(h().values<fba::Pose>("camera_pose")[0].world_from_frame.isApprox(pose_of(std::vector<double>(6, 0.0)).world_from_frame));
+  EXPECT_TRUE(h().values<fba::Pose>("camera_pose")[0].world_from_frame.isApprox(
+      pose_of(std::vector<double>(6, 0.0)).world_from_frame));
 }
 
 TEST_F(CanopenArmComponent, MovesToAReachableCameraPoseAndArrivesWithTheJointStatesMatching) {
@@ -208,8 +209,10 @@ TEST_F(CanopenArmComponent, MovesToAReachableCameraPoseAndArrivesWithTheJointSta
       const double s = states[k].positions[j] / last.positions[j];  // every joint started at 0
       EXPECT_GE(s, -1e-9) << "state " << k << ", joint " << j;
       EXPECT_LE(s, 1 + 1e-9) << "state " << k << ", joint " << j;
-      if (share) EXPECT_NEAR(s, *share, 0.02) << "state " << k << ", joint " << j;
-      else share = s;
+      if (share)
+        EXPECT_NEAR(s, *share, 0.02) << "state " << k << ", joint " << j;
+      else
+        share = s;
     }
   }
 }
@@ -267,6 +270,34 @@ TEST_F(CanopenArmComponent, ADriveThatStopsAnsweringStopsEveryOtherJointNamingIt
   EXPECT_TRUE(contains(why, "node 2: heartbeat lost")) << why;
   EXPECT_TRUE(contains(why, "quick stop failed on 1 of 6 joints")) << why;  // node 2 cannot hear it
   for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+TEST_F(CanopenArmComponent, ADriveRebootingMidMotionStopsTheArmNamingIt) {
+  make({{"speed_scale", 0.2}});
+  tick();
+  start_long_move();
+  emulator_->reboot(5);  // a power glitch: its configuration is gone, it is pre-operational again
+  tick_until_failed();
+  const std::string why = h().failure();
+  EXPECT_TRUE(contains(why, "joint 'wrist_2_joint': node 5: rebooted unasked")) << why;
+  for (int node : {1, 2, 3, 4, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+// No tick comes after the end of the stream: the move under way and those waiting run to their end.
+TEST_F(CanopenArmComponent, AtTheEndOfTheStreamTheMovesUnderWayAndPendingAreCompleted) {
+  make();
+  tick();
+  h().push("joint_target", fba::JointState{{"wrist_3_joint"}, {0.3}, {}, 0});
+  tick();
+  h().push("joint_target", fba::JointState{{"wrist_3_joint"}, {-0.2}, {}, 0});
+  tick();  // taken in: it waits for the first move's end
+  h().close("joint_target");
+  h().close("target");
+  h().run();
+  EXPECT_TRUE(h().failure().empty()) << h().failure();
+  EXPECT_EQ(named(h().events(), "arrived").size(), 2u);
+  EXPECT_EQ(emulator_->position(6), std::lround(-0.2 * kCounts));
+  EXPECT_TRUE(h().finished());
 }
 
 TEST_F(CanopenArmComponent, TheSerialLineVanishingMidMotionEndsWithAClearReportNeverAHang) {
@@ -356,17 +387,22 @@ TEST_F(CanopenArmComponent, AConfigurationThatDoesNotFitTheArmIsRefusedNamingThe
 class CanopenArmInATask : public ::testing::Test {
  protected:
   fba::TaskConfig task(const std::string& extra = "") {
-    const std::string yaml = "task: real_arm\nexecutor: threaded\ncomponents:\n"
-                             "  arm:\n    type: hw.canopen_arm\n    params:\n"
-                             "      device: " + emulator_.device() + "\n"
-                             "      node_ids: [1, 2, 3, 4, 5, 6]\n"
-                             "      counts_per_rad: [100000, 100000, 100000, 100000, 100000, 100000]\n"
-                             "      heartbeat_period_ms: 20\n      heartbeat_timeout_ms: 1000\n"
-                             "      sdo_timeout_ms: 1000\n" + extra;
+    const std::string yaml =
+        "task: real_arm\nexecutor: threaded\ncomponents:\n"
+        "  arm:\n    type: hw.canopen_arm\n    params:\n"
+        "      device: " +
+        emulator_.device() +
+        "\n"
+        "      node_ids: [1, 2, 3, 4, 5, 6]\n"
+        "      counts_per_rad: [100000, 100000, 100000, 100000, 100000, 100000]\n"
+        "      heartbeat_period_ms: 20\n      heartbeat_timeout_ms: 1000\n"
+        "      sdo_timeout_ms: 1000\n" +
+        extra;
     return fba::load_task_text(yaml, "real_arm.yaml", dir_.path(), registry());
   }
   void wait_until_enabled() {
-    for (int i = 0; i < 100'000 && !(emulator_.enabled(1) && emulator_.enabled(6)); ++i) std::this_thread::sleep_for(1ms);
+    for (int i = 0; i < 100'000 && !(emulator_.enabled(1) && emulator_.enabled(6)); ++i)
+      std::this_thread::sleep_for(1ms);
   }
 
   fba::test::TempDir dir_;

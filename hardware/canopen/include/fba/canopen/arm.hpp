@@ -23,7 +23,7 @@ struct ArmJoint {
   std::int32_t zero = 0;   // the drive's position at joint position 0
   double lower;            // joint limits, radians (or metres)
   double upper;
-  double max_velocity;  // radians (metres) per second, > 0
+  double max_velocity;          // radians (metres) per second, > 0
   double max_acceleration = 0;  // radians (metres) per second squared; 0: ten times max_velocity per second
 };
 
@@ -92,6 +92,10 @@ class CanopenArm {
  private:
   template <class F>
   auto guarded(F&& f) -> decltype(f());
+  // Sends SYNC and waits for every drive's TPDO1 and TPDO2 answering it; throws (for guarded()) on
+  // a fault or when one does not answer within `timeout`. Every SYNC goes through here, so no answer
+  // to an earlier one is still on its way to be taken for the answer to the next.
+  void sync(std::chrono::milliseconds timeout);
   // Throws (for guarded()) when a drive has faulted or is not in "operation enabled".
   void check_drive(std::size_t joint, std::uint16_t statusword);
   std::int32_t to_counts(std::size_t joint, double value) const;
