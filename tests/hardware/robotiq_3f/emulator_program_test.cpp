@@ -1,6 +1,7 @@
 // fba-robotiq-3f-emulator as a person runs it: it prints its pseudo-terminal, links it where asked,
 // and hw.robotiq_3f opens that link as it would /dev/ttyUSB0; scheduled faults reach the driver;
 // bad options are refused with the usage.
+#include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
@@ -8,16 +9,13 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <fba/testing.hpp>
+#include <fba/types/grasp.hpp>
+#include <fba/types/grasp_execution.hpp>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-
-#include <fba/testing.hpp>
-#include <fba/types/grasp.hpp>
-#include <fba/types/grasp_execution.hpp>
 
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
@@ -60,7 +58,8 @@ class Child {
   std::string read_until(const std::string& needle, std::chrono::milliseconds limit = 60s) {
     const auto deadline = std::chrono::steady_clock::now() + limit;
     while (output_.find(needle) == std::string::npos) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
       if (left.count() <= 0) break;
       pollfd p{out_, POLLIN, 0};
       if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) break;
@@ -95,7 +94,7 @@ fba::Grasp grasp() {
 }
 
 fba::testing::Params params(const std::string& device) {
-  return {{"device", device}, {"response_timeout", 1.0}, {"retries", 1}, {"poll_period", 0.01}, {"hold_time", 0.2}};
+  return {{"device", device}, {"response_timeout", 2.0}, {"retries", 1}, {"poll_period", 0.01}, {"hold_time", 0.2}};
 }
 
 }  // namespace

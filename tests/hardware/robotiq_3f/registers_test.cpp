@@ -1,11 +1,11 @@
 // The register codec against the example frames of Robotiq's 3-Finger Gripper manual (its Modbus
 // RTU example: close at full speed and force, and the status when the grip is completed), so the
 // driver's reading of the manual is checked against the manual, not only against the emulator.
+#include "registers.hpp"
+
 #include <gtest/gtest.h>
 
 #include <stdexcept>
-
-#include "registers.hpp"
 
 namespace rq = fba::robotiq;
 
@@ -72,7 +72,7 @@ TEST(Robotiq3fRegisters, GripCompletedStatusDecodesAsTheManualExplainsIt) {
 }
 
 TEST(Robotiq3fRegisters, ActivationInProgressAndCompletedDecodeAsTheManualSays) {
-  EXPECT_EQ(rq::decode({0x1100}).imc, 1);  // 09 03 02 11 00: activation in progress
+  EXPECT_EQ(rq::decode({0x1100}).imc, 1);        // 09 03 02 11 00: activation in progress
   const rq::Status done = rq::decode({0x3100});  // 09 03 02 31 00: activation completed
   EXPECT_TRUE(done.activated);
   EXPECT_EQ(done.imc, 3);
@@ -80,7 +80,8 @@ TEST(Robotiq3fRegisters, ActivationInProgressAndCompletedDecodeAsTheManualSays) 
 }
 
 TEST(Robotiq3fRegisters, FaultCodesAreNamedAndOnlyTheSelfClearingOnesAreTransient) {
-  EXPECT_EQ(rq::fault_text(0x0D), "0x0D activation fault, verify that no interference or other error occurred (major: reset required)");
+  EXPECT_EQ(rq::fault_text(0x0D),
+            "0x0D activation fault, verify that no interference or other error occurred (major: reset required)");
   EXPECT_EQ(rq::fault_text(0x03), "0x03 a fault code the manual does not list");
   for (int code : {0x05, 0x06, 0x09, 0x0A}) EXPECT_TRUE(rq::fault_is_transient(code)) << code;
   for (int code : {0x07, 0x0B, 0x0D, 0x0E, 0x0F}) EXPECT_FALSE(rq::fault_is_transient(code)) << code;

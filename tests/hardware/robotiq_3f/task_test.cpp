@@ -6,13 +6,12 @@
 
 #include <atomic>
 #include <chrono>
-#include <thread>
-
 #include <fba/component.hpp>
 #include <fba/registry.hpp>
 #include <fba/task.hpp>
 #include <fba/task_config.hpp>
 #include <fba/types/grasp.hpp>
+#include <thread>
 
 #include "fba/can/pty.hpp"
 #include "fba/emulators/robotiq_3f.hpp"
@@ -26,7 +25,9 @@ class GraspSource final : public fba::Component {
   static constexpr fba::Out<fba::Grasp> kGrasp{"grasp", "one grasp"};
   static constexpr auto kAperture = fba::Param<double>("aperture", 0.1, "metres");
   static constexpr auto kSpread = fba::Param<double>("spread", 0.03, "metres");
-  static fba::Spec spec() { return fba::Spec::sensor("test.grasp_source", "Emits one grasp.").add(kGrasp, kAperture, kSpread); }
+  static fba::Spec spec() {
+    return fba::Spec::sensor("test.grasp_source", "Emits one grasp.").add(kGrasp, kAperture, kSpread);
+  }
   explicit GraspSource(fba::Context& ctx) : ctx_(ctx) {}
   void process() override {
     fba::Grasp g;
@@ -53,7 +54,10 @@ const fba::Registry& registry() {
 
 class EmulatedHand {
  public:
-  EmulatedHand() : pty_(fba::can::open_pty()), emulator_(std::move(pty_.master), "emulator", options()), thread_([this] { emulator_.run(); }) {}
+  EmulatedHand()
+      : pty_(fba::can::open_pty()),
+        emulator_(std::move(pty_.master), "emulator", options()),
+        thread_([this] { emulator_.run(); }) {}
   ~EmulatedHand() {
     emulator_.stop();
     thread_.join();
@@ -72,10 +76,14 @@ class EmulatedHand {
   std::thread thread_;
 };
 
-std::string task_yaml(const std::string& device, double aperture) {
+std::string task_yaml(const std::string& device, double aperture, double hold_time = 0.2) {
   return "task: grasp_real_hand\ncomponents:\n"
-         "  source: { type: test.grasp_source, params: { aperture: " + std::to_string(aperture) + " } }\n"
-         "  hand: { type: hw.robotiq_3f, params: { device: " + device + ", response_timeout: 1.0, retries: 1, poll_period: 0.01, hold_time: 0.2 } }\n"
+         "  source: { type: test.grasp_source, params: { aperture: " +
+         std::to_string(aperture) +
+         " } }\n"
+         "  hand: { type: hw.robotiq_3f, params: { device: " +
+         device +
+         ", response_timeout: 2.0, retries: 1, poll_period: 0.01, hold_time: " + std::to_string(hold_time) + " } }\n"
          "connections:\n  - source.grasp -> hand.grasp\n"
          "on:\n  hand.held: stop_success\n  hand.dropped: stop_failure\n";
 }
@@ -129,7 +137,8 @@ TEST(Robotiq3fTask, LineDisappearingMidCloseStopsTheTaskNamingTheDeviceAndTheSaf
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
   });
-  fba::Task task(fba::load_task_text(task_yaml(hand.device(), 0.1), "grasp.yaml", dir.path(), registry()));
+  // A long hold: the line goes before the grasp could end, however slowly this machine runs.
+  fba::Task task(fba::load_task_text(task_yaml(hand.device(), 0.1, 60), "grasp.yaml", dir.path(), registry()));
   const auto result = task.run();
   done = true;
   pull.join();
