@@ -20,7 +20,9 @@ std::string seconds_text(double s) {
   return text;
 }
 
-bool line_gone(int error) { return error == EIO || error == ECONNRESET || error == EBADF || error == ENXIO || error == EPIPE; }
+bool line_gone(int error) {
+  return error == EIO || error == ECONNRESET || error == EBADF || error == ENXIO || error == EPIPE;
+}
 
 }  // namespace
 
@@ -62,7 +64,8 @@ void Gripper::transact(const std::string& what, const std::string& doing, const 
     const int error = errno;
     if (line_gone(error)) fail(doing, what + ": the serial line is gone (" + std::strerror(error) + ")");
     if (error == ETIMEDOUT)
-      reason = "no answer within " + seconds_text(options_.response_timeout_s) + " (Modbus timeout: the gripper is off, on another slave id or not wired)";
+      reason = "no answer within " + seconds_text(options_.response_timeout_s) +
+               " (Modbus timeout: the gripper is off, on another slave id or not wired)";
     else if (error == EMBBADCRC)
       reason = "the answer's CRC was wrong (noise on the line)";
     else if (error >= EMBXILFUN && error <= EMBXGTAR)
@@ -97,7 +100,8 @@ Status Gripper::read(const std::string& doing) {
 
 Status Gripper::wait_until(const std::function<bool(const Status&)>& done, double timeout_s, double poll_s,
                            const std::string& doing, const std::atomic<bool>* interrupted) {
-  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
+  const auto deadline =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
   for (;;) {
     const Status s = read(doing);
     if (s.fault != 0 && !fault_is_transient(s.fault)) fail(doing, "the gripper reports fault " + fault_text(s.fault));
@@ -121,7 +125,8 @@ void Gripper::activate(Mode mode, double timeout_s, double poll_s, const std::at
 
 std::string describe(const Status& s) {
   std::string text = std::string(s.activated ? "active" : "reset") + ", mode " + to_string(s.mode) + ", " +
-                     (s.go ? "go" : "stopped") + ", gIMC " + std::to_string(s.imc) + ", gSTA " + std::to_string(s.motion);
+                     (s.go ? "go" : "stopped") + ", gIMC " + std::to_string(s.imc) + ", gSTA " +
+                     std::to_string(s.motion);
   for (int axis = 0; axis < kAxes; ++axis)
     text += std::string(", ") + axis_name(axis) + " " + std::to_string(s.axes[axis].position) + "/255 (" +
             to_string(s.axes[axis].contact) + ")";

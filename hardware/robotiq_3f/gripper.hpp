@@ -19,11 +19,11 @@ class DeviceError : public std::runtime_error {
 };
 
 struct LineOptions {
-  std::string device;              // the serial line, e.g. /dev/ttyUSB0
-  int baud = 115200;               // 8N1
+  std::string device;  // the serial line, e.g. /dev/ttyUSB0
+  int baud = 115200;   // 8N1
   int slave = 9;
   double response_timeout_s = 0.5;  // per request
-  int retries = 2;                 // after a timeout or a garbled answer; a line that is gone is not retried
+  int retries = 2;                  // after a timeout or a garbled answer; a line that is gone is not retried
 };
 
 class Gripper {
@@ -44,8 +44,8 @@ class Gripper {
   // Polls the status every `poll_s` until `done` says so. Throws DeviceError when the device reports
   // a fault that does not clear by itself, when `timeout_s` passes (with the last status), or when
   // `interrupted` becomes true.
-  Status wait_until(const std::function<bool(const Status&)>& done, double timeout_s, double poll_s, const std::string& doing,
-                    const std::atomic<bool>* interrupted = nullptr);
+  Status wait_until(const std::function<bool(const Status&)>& done, double timeout_s, double poll_s,
+                    const std::string& doing, const std::atomic<bool>* interrupted = nullptr);
 
   // Resets (rACT = 0), activates in `mode` and waits until gIMC = 3.
   void activate(Mode mode, double timeout_s, double poll_s, const std::atomic<bool>* interrupted = nullptr);

@@ -34,7 +34,8 @@ namespace {
 
 std::uint8_t byte_of(int value, int axis, const char* field) {
   if (value < 0 || value > 255)
-    throw std::out_of_range(std::string(field) + " of axis " + axis_name(axis) + " must be 0..255, not " + std::to_string(value));
+    throw std::out_of_range(std::string(field) + " of axis " + axis_name(axis) + " must be 0..255, not " +
+                            std::to_string(value));
   return static_cast<std::uint8_t>(value);
 }
 
@@ -87,8 +88,12 @@ std::string fault_text(int code) {
     case 0x09: what = "the communication chip is not ready, it may be booting (minor)"; break;
     case 0x0A: what = "changing mode fault, interference on the scissor for less than 20 s (minor)"; break;
     case 0x0B: what = "automatic release in progress (minor)"; break;
-    case 0x0D: what = "activation fault, verify that no interference or other error occurred (major: reset required)"; break;
-    case 0x0E: what = "changing mode fault, interference on the scissor for more than 20 s (major: reset required)"; break;
+    case 0x0D:
+      what = "activation fault, verify that no interference or other error occurred (major: reset required)";
+      break;
+    case 0x0E:
+      what = "changing mode fault, interference on the scissor for more than 20 s (major: reset required)";
+      break;
     case 0x0F: what = "automatic release completed (major: reset and activation required)"; break;
     default: what = "a fault code the manual does not list"; break;
   }

@@ -31,10 +31,10 @@ struct AxisRequest {
 };
 
 struct Command {
-  bool activate = false;           // rACT
-  Mode mode = Mode::basic;         // rMOD
-  bool go = false;                 // rGTO: move to the requested positions
-  bool auto_release = false;       // rATR
+  bool activate = false;            // rACT
+  Mode mode = Mode::basic;          // rMOD
+  bool go = false;                  // rGTO: move to the requested positions
+  bool auto_release = false;        // rATR
   bool individual_fingers = false;  // rICF: A, B and C each follow their own request (else all follow A's)
   bool individual_scissor = false;  // rICS: the scissor follows its own request (else the mode's)
   std::array<AxisRequest, kAxes> axes;
@@ -51,17 +51,17 @@ const char* to_string(Contact c);
 struct AxisStatus {
   int requested = 0;  // echo of the position request
   int position = 0;
-  int current = 0;    // motor current, in the device's units of 10 mA
+  int current = 0;  // motor current, in the device's units of 10 mA
   Contact contact = Contact::moving;
 };
 
 struct Status {
-  bool activated = false;  // gACT
+  bool activated = false;   // gACT
   Mode mode = Mode::basic;  // gMOD
-  bool go = false;         // gGTO
-  int imc = 0;             // gIMC: 0 reset or automatic release, 1 activating, 2 changing mode, 3 ready
-  int motion = 0;          // gSTA: 0 moving, 1 one or two fingers stopped early, 2 all stopped early, 3 all at request
-  int fault = 0;           // gFLT
+  bool go = false;          // gGTO
+  int imc = 0;              // gIMC: 0 reset or automatic release, 1 activating, 2 changing mode, 3 ready
+  int motion = 0;           // gSTA: 0 moving, 1 one or two fingers stopped early, 2 all stopped early, 3 all at request
+  int fault = 0;            // gFLT
   std::array<AxisStatus, kAxes> axes;
 };
 

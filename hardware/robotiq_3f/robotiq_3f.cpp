@@ -8,16 +8,14 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <fba/component.hpp>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <nlohmann/json.hpp>
-
-#include <fba/component.hpp>
 
 #include "gripper.hpp"
 #include "hand_ports.hpp"
@@ -60,48 +58,66 @@ class Robotiq3f final : public fba::Component {
   static constexpr auto kResult = fba::hand::kResult;
   static constexpr auto kHeld = fba::hand::kHeld;
   static constexpr auto kDropped = fba::hand::kDropped;
-  static constexpr fba::Param<std::string> kDevice{"device", fba::required, "the serial line of the gripper, e.g. /dev/ttyUSB0"};
-  static constexpr auto kBaud = fba::Param<int>("baud", 115200, "the line's speed, bit/s (8N1); the gripper's default is 115200").range(1200, 4000000);
-  static constexpr auto kSlave = fba::Param<int>("slave_id", 9, "the gripper's Modbus slave id (default 9)").range(1, 247);
+  static constexpr fba::Param<std::string> kDevice{"device", fba::required,
+                                                   "the serial line of the gripper, e.g. /dev/ttyUSB0"};
+  static constexpr auto kBaud =
+      fba::Param<int>("baud", 115200, "the line's speed, bit/s (8N1); the gripper's default is 115200")
+          .range(1200, 4000000);
+  static constexpr auto kSlave =
+      fba::Param<int>("slave_id", 9, "the gripper's Modbus slave id (default 9)").range(1, 247);
   static constexpr auto kResponseTimeout =
       fba::Param<double>("response_timeout", 0.5, "how long to wait for each answer, seconds").range(0.01, 10);
   static constexpr auto kRetries =
-      fba::Param<int>("retries", 2, "requests repeated after a timeout or a garbled answer before the device counts as failed").range(0, 10);
-  static constexpr auto kPollPeriod = fba::Param<double>("poll_period", 0.05, "status polling period while waiting, seconds").range(0.005, 1);
-  static constexpr auto kSpeed = fba::Param<int>("speed", 255, "finger speed, 0 (22 mm/s) to 255 (110 mm/s)").range(0, 255);
+      fba::Param<int>("retries", 2,
+                      "requests repeated after a timeout or a garbled answer before the device counts as failed")
+          .range(0, 10);
+  static constexpr auto kPollPeriod =
+      fba::Param<double>("poll_period", 0.05, "status polling period while waiting, seconds").range(0.005, 1);
+  static constexpr auto kSpeed =
+      fba::Param<int>("speed", 255, "finger speed, 0 (22 mm/s) to 255 (110 mm/s)").range(0, 255);
   static constexpr auto kForce = fba::Param<int>("force", 150, "closing force, 0 (15 N) to 255 (60 N)").range(0, 255);
   static constexpr auto kMode =
-      fba::Param<std::string>("mode", "auto",
-                              "grasping mode: basic, pinch, wide or scissor (the mode places the scissor), or auto: basic "
-                              "mode with the scissor set from each grasp's spread (individual scissor control)")
+      fba::Param<std::string>(
+          "mode", "auto",
+          "grasping mode: basic, pinch, wide or scissor (the mode places the scissor), or auto: basic "
+          "mode with the scissor set from each grasp's spread (individual scissor control)")
           .choices({"auto", "basic", "pinch", "wide", "scissor"});
   static constexpr auto kMaxAperture =
-      fba::Param<double>("max_aperture", 0.155, "thumb-to-fingers opening with the fingers at position 0 (fully open), metres; "
-                                                "positions scale linearly to 0 at 255").range(0.01, 1);
+      fba::Param<double>("max_aperture", 0.155,
+                         "thumb-to-fingers opening with the fingers at position 0 (fully open), metres; "
+                         "positions scale linearly to 0 at 255")
+          .range(0.01, 1);
   static constexpr auto kMaxSpread =
-      fba::Param<double>("max_spread", 0.12, "distance between fingers B and C with the scissor at 0 (apart), metres; it "
-                                             "scales linearly to 0 at 255").range(0.01, 1);
+      fba::Param<double>("max_spread", 0.12,
+                         "distance between fingers B and C with the scissor at 0 (apart), metres; it "
+                         "scales linearly to 0 at 255")
+          .range(0.01, 1);
   static constexpr auto kHoldTime =
-      fba::Param<double>("hold_time", 0.5, "how long every finger must keep its contact for the grasp to count as held, seconds").range(0, 60);
+      fba::Param<double>("hold_time", 0.5,
+                         "how long every finger must keep its contact for the grasp to count as held, seconds")
+          .range(0, 60);
   static constexpr auto kActivationTimeout =
       fba::Param<double>("activation_timeout", 30, "the longest activation or mode change, seconds").range(0.1, 120);
   static constexpr auto kMotionTimeout =
       fba::Param<double>("motion_timeout", 10, "the longest pregrasp or close, seconds").range(0.1, 120);
   static constexpr auto kSafeTimeout =
-      fba::Param<double>("safe_state_timeout", 5, "the longest the hand may take to open in safe_state(), seconds").range(0.1, 60);
+      fba::Param<double>("safe_state_timeout", 5, "the longest the hand may take to open in safe_state(), seconds")
+          .range(0.1, 60);
 
   static fba::Spec spec() {
-    return fba::Spec::actuator("hw.robotiq_3f",
-                               "The Robotiq 3-Finger Adaptive Gripper over Modbus RTU (libmodbus): executes grasps as a "
-                               "pregrasp then a close under force control, and reports the fingers' object contacts "
-                               "(the twin of sim.hand).")
-        .add(kGrasp, kResult, kHeld, kDropped, kDevice, kBaud, kSlave, kResponseTimeout, kRetries, kPollPeriod, kSpeed, kForce,
-             kMode, kMaxAperture, kMaxSpread, kHoldTime, kActivationTimeout, kMotionTimeout, kSafeTimeout)
+    return fba::Spec::actuator(
+               "hw.robotiq_3f",
+               "The Robotiq 3-Finger Adaptive Gripper over Modbus RTU (libmodbus): executes grasps as a "
+               "pregrasp then a close under force control, and reports the fingers' object contacts "
+               "(the twin of sim.hand).")
+        .add(kGrasp, kResult, kHeld, kDropped, kDevice, kBaud, kSlave, kResponseTimeout, kRetries, kPollPeriod, kSpeed,
+             kForce, kMode, kMaxAperture, kMaxSpread, kHoldTime, kActivationTimeout, kMotionTimeout, kSafeTimeout)
         .blocking();
   }
 
   explicit Robotiq3f(fba::Context& ctx) : ctx_(ctx), mode_(mode_named(ctx(kMode))) {
-    gripper_ = std::make_unique<Gripper>(rq::LineOptions{ctx(kDevice), ctx(kBaud), ctx(kSlave), ctx(kResponseTimeout), ctx(kRetries)});
+    gripper_ = std::make_unique<Gripper>(
+        rq::LineOptions{ctx(kDevice), ctx(kBaud), ctx(kSlave), ctx(kResponseTimeout), ctx(kRetries)});
     gripper_->activate(mode_.value_or(Mode::basic), ctx(kActivationTimeout), ctx(kPollPeriod), &interrupted_);
     ctx.log().info("{}: activated in {} mode", gripper_->name(), ctx(kMode));
   }
@@ -118,7 +134,8 @@ class Robotiq3f final : public fba::Component {
       c.mode = plan.mode;
       c.go = false;
       gripper_->write(c, "changing to " + std::string(rq::to_string(plan.mode)) + " mode");
-      gripper_->wait_until([&](const Status& st) { return st.imc == 3 && st.mode == plan.mode; }, ctx_(kActivationTimeout), poll,
+      gripper_->wait_until([&](const Status& st) { return st.imc == 3 && st.mode == plan.mode; },
+                           ctx_(kActivationTimeout), poll,
                            "changing to " + std::string(rq::to_string(plan.mode)) + " mode", &interrupted_);
     }
     move(plan, plan.open_position, "pregrasp");
@@ -128,10 +145,12 @@ class Robotiq3f final : public fba::Component {
     nlohmann::json fingers = nlohmann::json::array();
     std::string missing;
     for (int axis : plan.axes)
-      if (s.axes[axis].contact != Contact::while_closing) missing += std::string(missing.empty() ? "" : ", ") + rq::axis_name(axis);
+      if (s.axes[axis].contact != Contact::while_closing)
+        missing += std::string(missing.empty() ? "" : ", ") + rq::axis_name(axis);
     if (!missing.empty()) {
-      result.reason = count_contacts(s, plan) == 0 ? "no contact: the fingers closed without touching anything (" + rq::describe(s) + ")"
-                                                   : "no contact on " + missing + " (" + rq::describe(s) + ")";
+      result.reason = count_contacts(s, plan) == 0
+                          ? "no contact: the fingers closed without touching anything (" + rq::describe(s) + ")"
+                          : "no contact on " + missing + " (" + rq::describe(s) + ")";
     } else {
       hold(plan, s, result);
     }
@@ -145,7 +164,8 @@ class Robotiq3f final : public fba::Component {
                          {"current", s.axes[axis].current},
                          {"object", rq::to_string(s.axes[axis].contact)}});
     result.stamp = static_cast<double>(ctx_.now_ns()) * 1e-9;
-    ctx_.log().info("{}: {}{}", gripper_->name(), result.held ? "held" : "not held", result.reason.empty() ? "" : ": " + result.reason);
+    ctx_.log().info("{}: {}{}", gripper_->name(), result.held ? "held" : "not held",
+                    result.reason.empty() ? "" : ": " + result.reason);
     ctx_.emit(result.held ? kHeld : kDropped, to_json(result, fingers).dump());
     ctx_(kResult).emit(std::move(result));
   }
@@ -158,7 +178,8 @@ class Robotiq3f final : public fba::Component {
     const double request_s = ctx_(kResponseTimeout) * (ctx_(kRetries) + 1) + ctx_(kPollPeriod);
     std::unique_lock lock(mutex_, std::defer_lock);
     if (!lock.try_lock_for(std::chrono::duration<double>(request_s + 1.0)))
-      throw DeviceError(gripper_->name() + ": safe state: the gripper's line is still busy with a request that does not return");
+      throw DeviceError(gripper_->name() +
+                        ": safe state: the gripper's line is still busy with a request that does not return");
     Command c = gripper_->last_command();
     c.go = false;
     gripper_->write(c, "safe state (stop)");
@@ -172,8 +193,8 @@ class Robotiq3f final : public fba::Component {
     c.individual_fingers = c.mode != Mode::scissor;  // in scissor mode A's request opens the scissor
     for (int axis : {rq::kA, rq::kB, rq::kC}) c.axes[axis] = AxisRequest{0, ctx_(kSpeed), ctx_(kForce)};
     gripper_->write(c, "safe state (open)");
-    gripper_->wait_until([&](const Status& st) { return echoed(st, c) && st.motion != 0; }, ctx_(kSafeTimeout), ctx_(kPollPeriod),
-                         "safe state (open)");
+    gripper_->wait_until([&](const Status& st) { return echoed(st, c) && st.motion != 0; }, ctx_(kSafeTimeout),
+                         ctx_(kPollPeriod), "safe state (open)");
     ctx_.log().info("{}: safe state: stopped and opened", gripper_->name());
   }
 
@@ -199,14 +220,16 @@ class Robotiq3f final : public fba::Component {
     const std::string who = gripper_->name() + ": grasp refused before sending: ";
     const double max_aperture = ctx_(kMaxAperture), max_spread = ctx_(kMaxSpread);
     if (!std::isfinite(g.aperture) || g.aperture <= 0 || g.aperture > max_aperture)
-      throw DeviceError(who + "the pregrasp aperture must be in (0, " + metres(max_aperture) + "] (max_aperture), not " + metres(g.aperture));
+      throw DeviceError(who + "the pregrasp aperture must be in (0, " + metres(max_aperture) +
+                        "] (max_aperture), not " + metres(g.aperture));
     Plan p;
     p.open_position = static_cast<int>(std::lround(255.0 * (1.0 - g.aperture / max_aperture)));
     if (mode_) {
       p.mode = *mode_;
     } else {
       if (!std::isfinite(g.spread) || g.spread < 0 || g.spread > max_spread)
-        throw DeviceError(who + "the pregrasp spread must be in [0, " + metres(max_spread) + "] (max_spread), not " + metres(g.spread));
+        throw DeviceError(who + "the pregrasp spread must be in [0, " + metres(max_spread) + "] (max_spread), not " +
+                          metres(g.spread));
       p.individual_scissor = true;
       p.scissor_position = static_cast<int>(std::lround(255.0 * (1.0 - g.spread / max_spread)));
     }
@@ -231,8 +254,8 @@ class Robotiq3f final : public fba::Component {
     for (int axis : {rq::kA, rq::kB, rq::kC}) c.axes[axis] = AxisRequest{position, ctx_(kSpeed), ctx_(kForce)};
     c.axes[rq::kScissor] = AxisRequest{plan.scissor_position, ctx_(kSpeed), ctx_(kForce)};
     gripper_->write(c, doing);
-    return gripper_->wait_until([&](const Status& s) { return echoed(s, c) && s.motion != 0; }, ctx_(kMotionTimeout), ctx_(kPollPeriod),
-                                doing, &interrupted_);
+    return gripper_->wait_until([&](const Status& s) { return echoed(s, c) && s.motion != 0; }, ctx_(kMotionTimeout),
+                                ctx_(kPollPeriod), doing, &interrupted_);
   }
 
   // Every finger must keep its contact for hold_time.
@@ -277,7 +300,11 @@ class Robotiq3f final : public fba::Component {
                           {"position", {c.position.x(), c.position.y(), c.position.z()}},
                           {"normal", {c.normal.x(), c.normal.y(), c.normal.z()}},
                           {"force", c.force}});
-    return {{"held", e.held}, {"hold_s", e.hold_s}, {"reason", e.reason}, {"contacts", std::move(contacts)}, {"fingers", fingers}};
+    return {{"held", e.held},
+            {"hold_s", e.hold_s},
+            {"reason", e.reason},
+            {"contacts", std::move(contacts)},
+            {"fingers", fingers}};
   }
 
   fba::Context& ctx_;

@@ -28,12 +28,15 @@ std::uint16_t crc16(const std::uint8_t* data, std::size_t size) {
   std::uint16_t crc = 0xFFFF;
   for (std::size_t i = 0; i < size; ++i) {
     crc ^= data[i];
-    for (int bit = 0; bit < 8; ++bit) crc = (crc & 1) ? static_cast<std::uint16_t>((crc >> 1) ^ 0xA001) : static_cast<std::uint16_t>(crc >> 1);
+    for (int bit = 0; bit < 8; ++bit)
+      crc = (crc & 1) ? static_cast<std::uint16_t>((crc >> 1) ^ 0xA001) : static_cast<std::uint16_t>(crc >> 1);
   }
   return crc;
 }
 
-bool line_gone(int error) { return error == EIO || error == ECONNRESET || error == EBADF || error == ENXIO || error == EPIPE; }
+bool line_gone(int error) {
+  return error == EIO || error == ECONNRESET || error == EBADF || error == ENXIO || error == EPIPE;
+}
 
 }  // namespace
 
@@ -48,8 +51,8 @@ Robotiq3fEmulator::Robotiq3fEmulator(can::Fd line, std::string name, Robotiq3fOp
   modbus_set_indication_timeout(ctx_, 0, 10'000);  // returns every 10 ms to move the fingers
   // Holding registers from the commands to the end of the status (function 3 reads the status too),
   // input registers over the status (function 4).
-  mapping_ = modbus_mapping_new_start_address(0, 0, 0, 0, kCommandAddress, kStatusAddress + kRegisters - kCommandAddress,
-                                              kStatusAddress, kRegisters);
+  mapping_ = modbus_mapping_new_start_address(
+      0, 0, 0, 0, kCommandAddress, kStatusAddress + kRegisters - kCommandAddress, kStatusAddress, kRegisters);
   if (!mapping_) {
     modbus_free(ctx_);
     throw std::runtime_error(name_ + ": libmodbus: cannot make the register map: " + modbus_strerror(errno));
@@ -120,7 +123,8 @@ void Robotiq3fEmulator::handle(const std::uint8_t* request, int length) {
     if (corrupt_ > 0) --corrupt_;
     if (!read) {  // the command arrived; only its answer is spoilt
       for (int i = 0; i < count; ++i)
-        command_[address - base + i] = static_cast<std::uint16_t>(request[header + 6 + 2 * i] << 8 | request[header + 7 + 2 * i]);
+        command_[address - base + i] =
+            static_cast<std::uint16_t>(request[header + 6 + 2 * i] << 8 | request[header + 7 + 2 * i]);
       apply_command(command_);
     }
     send_corrupted(request);
@@ -141,7 +145,8 @@ void Robotiq3fEmulator::send_corrupted(const std::uint8_t* request) {
   if (function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS) {
     frame.insert(frame.end(), request + header + 1, request + header + 5);
   } else {
-    const int address = request[header + 1] << 8 | request[header + 2], count = request[header + 3] << 8 | request[header + 4];
+    const int address = request[header + 1] << 8 | request[header + 2],
+              count = request[header + 3] << 8 | request[header + 4];
     frame.push_back(static_cast<std::uint8_t>(2 * count));
     const auto status = status_registers();
     for (int i = 0; i < count; ++i) {
@@ -207,7 +212,9 @@ void Robotiq3fEmulator::update(std::chrono::steady_clock::time_point now) {
   last_update_ = now;
   State& s = state_;
   const double half = options_.max_aperture / 2;
-  auto units_per_s = [&](int speed) { return 255.0 * (0.022 + 0.088 * speed / 255.0) / half; };  // 22 to 110 mm/s at the tip
+  auto units_per_s = [&](int speed) {
+    return 255.0 * (0.022 + 0.088 * speed / 255.0) / half;
+  };                 // 22 to 110 mm/s at the tip
   if (s.imc == 1) {  // activation: fingers open, scissor to the mode's place
     activation_left_ -= dt;
     if (activation_left_ > 0) return;
@@ -219,11 +226,12 @@ void Robotiq3fEmulator::update(std::chrono::steady_clock::time_point now) {
     return;
   }
   if (s.fault != 0 && s.fault != 0x05 && s.fault != 0x06) return;  // a fault freezes the hand
-  if (s.imc == 2) {  // mode change: the scissor moves to the mode's place
+  if (s.imc == 2) {                                                // mode change: the scissor moves to the mode's place
     Axis& sc = s.axes[kS];
     const double target = individual_scissor_ ? sc.request : scissor_for_mode(s.mode);
     const double step = units_per_s(255) * dt;
-    sc.position = std::abs(target - sc.position) <= step ? target : sc.position + std::copysign(step, target - sc.position);
+    sc.position =
+        std::abs(target - sc.position) <= step ? target : sc.position + std::copysign(step, target - sc.position);
     if (sc.position == target) {
       s.imc = 3;
       sc.request = static_cast<int>(target);
@@ -239,7 +247,8 @@ void Robotiq3fEmulator::update(std::chrono::steady_clock::time_point now) {
     const double r = options_.object_width / 2, x = options_.object_offset;
     auto position_at = [&](double reach) { return reach <= 0 ? kNever : std::max(0.0, 255.0 * (1 - reach / half)); };
     if (s.mode == kScissorMode && !individual_scissor_) {
-      touch[kS] = options_.object_width >= options_.max_spread ? 0 : 255.0 * (1 - options_.object_width / options_.max_spread);
+      touch[kS] =
+          options_.object_width >= options_.max_spread ? 0 : 255.0 * (1 - options_.object_width / options_.max_spread);
     } else {
       touch[kA] = position_at(x + r);
       const double side = options_.max_spread * (1 - s.axes[kS].position / 255.0) / 2;  // B and C off the centre line
@@ -270,17 +279,18 @@ void Robotiq3fEmulator::update(std::chrono::steady_clock::time_point now) {
 std::array<std::uint16_t, 8> Robotiq3fEmulator::status_registers() const {
   const State& s = state_;
   // gSTA over the fingers that grasp: the scissor in scissor mode, else A, B and C.
-  std::vector<int> grasping = s.mode == kScissorMode && !individual_scissor_ ? std::vector<int>{kS} : std::vector<int>{kA, kB, kC};
+  std::vector<int> grasping =
+      s.mode == kScissorMode && !individual_scissor_ ? std::vector<int>{kS} : std::vector<int>{kA, kB, kC};
   int moving = 0, early = 0;
   for (int axis : grasping) {
     moving += s.axes[axis].contact == 0;
     early += s.axes[axis].contact == 1 || s.axes[axis].contact == 2;
   }
   int motion = 0;
-  if (s.go && s.imc == 3 && moving == 0)
-    motion = early == 0 ? 3 : early == static_cast<int>(grasping.size()) ? 2 : 1;
+  if (s.go && s.imc == 3 && moving == 0) motion = early == 0 ? 3 : early == static_cast<int>(grasping.size()) ? 2 : 1;
   std::uint8_t b[2 * kRegisters] = {};
-  b[0] = static_cast<std::uint8_t>((s.activated ? 1 : 0) | (s.mode << 1) | (s.go ? 1 << 3 : 0) | (s.imc << 4) | (motion << 6));
+  b[0] = static_cast<std::uint8_t>((s.activated ? 1 : 0) | (s.mode << 1) | (s.go ? 1 << 3 : 0) | (s.imc << 4) |
+                                   (motion << 6));
   for (int axis = 0; axis < 4; ++axis) {
     const Axis& a = s.axes[axis];
     b[1] |= static_cast<std::uint8_t>((a.contact & 3) << (2 * axis));
@@ -290,7 +300,8 @@ std::array<std::uint16_t, 8> Robotiq3fEmulator::status_registers() const {
     b[5 + 3 * axis] = static_cast<std::uint8_t>(a.contact == 0 ? 10 : a.contact == 2 ? 10 + a.force / 4 : 0);
   }
   b[2] = static_cast<std::uint8_t>(s.fault);
-  if (s.mode == kScissorMode && !individual_scissor_) b[3] = static_cast<std::uint8_t>(s.axes[kS].request);  // A's request, echoed
+  if (s.mode == kScissorMode && !individual_scissor_)
+    b[3] = static_cast<std::uint8_t>(s.axes[kS].request);  // A's request, echoed
   std::array<std::uint16_t, 8> r{};
   for (int i = 0; i < kRegisters; ++i) r[i] = static_cast<std::uint16_t>(b[2 * i] << 8 | b[2 * i + 1]);
   return r;

@@ -32,7 +32,7 @@ namespace fba::emulators {
 
 struct Robotiq3fOptions {
   int slave_id = 9;
-  double activation_s = 1.0;   // how long activation takes
+  double activation_s = 1.0;    // how long activation takes
   double max_aperture = 0.155;  // metres, thumb to fingers, fully open
   double max_spread = 0.12;     // metres, finger B to finger C, scissor at 0
   bool object = true;
@@ -54,12 +54,12 @@ class Robotiq3fEmulator {
   void stop() { stop_ = true; }
 
   // Fault injection, safe from any thread; acted on by run() within a few milliseconds.
-  void silence();                 // answers nothing from now on
-  void corrupt_replies(int n);    // the next n answers carry a wrong CRC (-1: every answer)
-  void inject_garbage();          // noise on the line before the next answer
-  void inject_fault(int code);    // gFLT = code; motion stops until a reset and activation clear it
-  void remove_object();           // the object slips out: fingers in contact close on to their request
-  void disconnect();              // closes the line
+  void silence();               // answers nothing from now on
+  void corrupt_replies(int n);  // the next n answers carry a wrong CRC (-1: every answer)
+  void inject_garbage();        // noise on the line before the next answer
+  void inject_fault(int code);  // gFLT = code; motion stops until a reset and activation clear it
+  void remove_object();         // the object slips out: fingers in contact close on to their request
+  void disconnect();            // closes the line
 
   // For tests.
   struct Axis {

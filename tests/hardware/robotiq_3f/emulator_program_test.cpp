@@ -1,0 +1,150 @@
+// fba-robotiq-3f-emulator as a person runs it: it prints its pseudo-terminal, links it where asked,
+// and hw.robotiq_3f opens that link as it would /dev/ttyUSB0; scheduled faults reach the driver;
+// bad options are refused with the usage.
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fba/testing.hpp>
+#include <fba/types/grasp.hpp>
+#include <fba/types/grasp_execution.hpp>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
+
+extern char** environ;
+
+using namespace std::chrono_literals;
+using fba::testing::ComponentHarness;
+
+namespace {
+
+// A child process with its stdout and stderr on a pipe; killed and reaped when it goes out of scope.
+class Child {
+ public:
+  explicit Child(std::vector<std::string> args) {
+    int fds[2];
+    if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
+    posix_spawn_file_actions_addclose(&actions, fds[0]);
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(fds[1]);
+    out_ = fds[0];
+    if (rc != 0) throw std::runtime_error("cannot start " + args[0]);
+  }
+  ~Child() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+    ::close(out_);
+  }
+  // Output until `needle` appears, the output ends, or `limit` passes (a hung program, not a speed check).
+  std::string read_until(const std::string& needle, std::chrono::milliseconds limit = 60s) {
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    while (output_.find(needle) == std::string::npos) {
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) break;
+      pollfd p{out_, POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) break;
+      char buffer[512];
+      const ssize_t n = ::read(out_, buffer, sizeof buffer);
+      if (n <= 0) break;
+      output_.append(buffer, static_cast<std::size_t>(n));
+    }
+    return output_;
+  }
+  // The exit status after `signal` (0: none sent).
+  int wait(int signal) {
+    if (signal) ::kill(pid_, signal);
+    int status = 0;
+    ::waitpid(pid_, &status, 0);
+    pid_ = -1;
+    read_until("\x01", 1s);  // what is left in the pipe
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+
+ private:
+  pid_t pid_ = -1;
+  int out_ = -1;
+  std::string output_;
+};
+
+fba::Grasp grasp() {
+  fba::Grasp g;
+  g.aperture = 0.1;
+  g.spread = 0.03;
+  return g;
+}
+
+fba::testing::Params params(const std::string& device) {
+  return {{"device", device}, {"response_timeout", 2.0}, {"retries", 1}, {"poll_period", 0.01}, {"hold_time", 0.2}};
+}
+
+}  // namespace
+
+TEST(Robotiq3fEmulatorProgram, DriverOnItsLinkHoldsTheObjectAndTheProgramEndsOnSigterm) {
+  fba::test::TempDir dir;
+  const std::string link = dir.file("hand");
+  Child emulator({FBA_ROBOTIQ_EMULATOR, "--link", link, "--activation-s", "0.05", "--object-width", "0.05"});
+  ASSERT_NE(emulator.read_until("(link " + link + ")").find("Modbus RTU slave 9 on /dev/pts/"), std::string::npos);
+  {
+    ComponentHarness h(fba::test::built_plugins(), "hw.robotiq_3f", params(link));
+    h.push("grasp", grasp());
+    ASSERT_EQ(h.run(), 1);
+    ASSERT_EQ(h.failure(), "");
+    const auto results = h.values<fba::GraspExecution>("result");
+    ASSERT_EQ(results.size(), 1u);
+    EXPECT_TRUE(results[0].held) << results[0].reason;
+  }
+  EXPECT_EQ(emulator.wait(SIGTERM), 0);
+  EXPECT_NE(emulator.read_until("stopped").find("Robotiq 3-Finger emulator: stopped"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(std::filesystem::symlink_status(link)));
+}
+
+TEST(Robotiq3fEmulatorProgram, ScheduledDisconnectReachesTheDriverAsALineThatIsGone) {
+  fba::test::TempDir dir;
+  const std::string link = dir.file("hand");
+  Child emulator({FBA_ROBOTIQ_EMULATOR, "--link", link, "--activation-s", "0.05", "--disconnect-after", "1"});
+  emulator.read_until("(link " + link + ")");
+  // Grasps until the line goes (during activation, if this machine is slow enough: the same report).
+  std::string report;
+  try {
+    ComponentHarness h(fba::test::built_plugins(), "hw.robotiq_3f", params(link));
+    for (int i = 0; i < 1000 && report.empty(); ++i) {
+      h.push("grasp", grasp());
+      h.run();
+      report = h.failure();
+    }
+  } catch (const std::exception& e) {
+    report = e.what();
+  }
+  EXPECT_NE(report.find(link), std::string::npos) << report;
+  EXPECT_NE(report.find("the serial line is gone"), std::string::npos) << report;
+  EXPECT_EQ(emulator.wait(0), 0);
+  EXPECT_NE(emulator.read_until("disconnected").find("disconnected (fault injection)"), std::string::npos);
+}
+
+TEST(Robotiq3fEmulatorProgram, BadOptionIsRefusedWithTheUsage) {
+  Child emulator({FBA_ROBOTIQ_EMULATOR, "--fault-after", "1:ZZ"});
+  EXPECT_EQ(emulator.wait(0), 2);
+  const std::string out = emulator.read_until("usage:");
+  EXPECT_NE(out.find("--fault-after: 'ZZ' is not an integer"), std::string::npos) << out;
+  EXPECT_NE(out.find("usage: fba-robotiq-3f-emulator"), std::string::npos) << out;
+}
