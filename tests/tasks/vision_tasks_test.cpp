@@ -2,12 +2,15 @@
 // issue asks for.
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
+#include <string>
 
 #include <gtest/gtest.h>
 
 #include <fba/registry.hpp>
 
 #include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
 #include <fba/task.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/silhouette.hpp>
@@ -133,6 +136,8 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   fba::RunOptions options;
   options.executor = fba::ExecutorKind::Deterministic;
   options.timeout_s = 600;  // a hang detector only: the run takes a few seconds
+  const fba::test::TempDir out;
+  options.output_dir = out.path();
   fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_sim.yaml", registry()), options);
   const auto r = task.run();
   ASSERT_TRUE(r.final_event) << r.reason;
@@ -154,4 +159,15 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   ASSERT_NE(list, std::string::npos) << selected;
   const auto end = selected.find(']', list);
   EXPECT_GE(std::count(selected.begin() + list, selected.begin() + end, ','), 3) << selected;  // at least 4 views
+  // The grasp drawn on the model and on the last camera image: PNGs of the camera's size (the
+  // header's IHDR chunk holds the width and height, big-endian, at bytes 16 and 20).
+  for (const char* name : {"grasp_model.png", "grasp_view.png"}) {
+    std::ifstream in(out.path() / name, std::ios::binary);
+    unsigned char header[24] = {};
+    ASSERT_TRUE(in.read(reinterpret_cast<char*>(header), sizeof header)) << name;
+    EXPECT_EQ(std::string(reinterpret_cast<char*>(header) + 1, 3), "PNG") << name;
+    auto be32 = [&](int at) { return (header[at] << 24) | (header[at + 1] << 16) | (header[at + 2] << 8) | header[at + 3]; };
+    EXPECT_EQ(be32(16), 640) << name;
+    EXPECT_EQ(be32(20), 480) << name;
+  }
 }
