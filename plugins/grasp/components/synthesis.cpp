@@ -227,7 +227,16 @@ class GraspSynthesisFilter final : public fba::Component {
     look.background_top = look.background_bottom = {255, 255, 255};
     look.ambient = 0.3;
     look.diffuse = 0.7;
-    cv::Mat on_model = fba::geometry::render(fba::vision::occupied_surface_mesh(model), camera, look).colour;
+    // The model near the grasp only: parts no view covered stay occupied and would hide it.
+    fba::TriangleMesh near = fba::vision::occupied_surface_mesh(model);
+    const Eigen::Vector3f centre = ((g.contacts[0].position + g.contacts[1].position + g.contacts[2].position) / 3).cast<float>();
+    const float reach = static_cast<float>(g.aperture);
+    std::erase_if(near.triangles, [&](const auto& t) {
+      for (int k = 0; k < 3; ++k)
+        if ((near.vertices[static_cast<std::size_t>(t[k])] - centre).norm() > reach) return true;
+      return false;
+    });
+    cv::Mat on_model = fba::geometry::render(near, camera, look).colour;
     cv::Mat on_image = last_frame_->image.clone();
     if (on_image.channels() == 1) cv::cvtColor(on_image, on_image, cv::COLOR_GRAY2BGR);
     const Eigen::Matrix<double, 3, 4> P = camera.projection();
