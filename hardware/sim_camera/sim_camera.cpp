@@ -10,6 +10,7 @@
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/renderer.hpp"
 #include "fba/geometry/viewpoints.hpp"
+#include "object_placement.hpp"
 
 namespace {
 
@@ -21,6 +22,19 @@ class SimCamera final : public fba::Component {
   static constexpr fba::Out<fba::Frame> kFrame{"frame", "the rendered image with its intrinsics and pose"};
   static constexpr fba::Param<std::filesystem::path> kMesh{
       "mesh", fba::required, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up"};
+  // The object's placement, with the same names and meanings as sim.hand's, so that a task gives
+  // both the same values and the camera renders the object the hand grasps.
+  static constexpr auto kObjectX = fba::Param<double>("object_x", 0.0, "the object's position on the table, metres").range(-1, 1);
+  static constexpr auto kObjectY = fba::Param<double>("object_y", 0.0, "the object's position on the table, metres").range(-1, 1);
+  static constexpr auto kObjectYaw = fba::Param<double>("object_yaw", 0.0, "the object's turn about z, degrees").range(-360, 360);
+  static constexpr auto kObjectRest = fba::Param<std::string>(
+      "object_rest", "upright", "how the object lies on the table: as the mesh stands, or on its side (turned 90 deg about the mesh's x)")
+      .choices({"upright", "side"});
+  static constexpr auto kWorld =
+      fba::Param<std::string>("frame", "mesh",
+                              "the world the object is rendered in: 'mesh', the mesh file's own coordinates (turned and moved by "
+                              "object_rest, object_yaw, object_x, object_y, not raised), or 'table', where it rests on z = 0 (as sim.hand)")
+          .choices({"mesh", "table"});
   static constexpr auto kWidth = fba::Param<int>("width", 640, "image width, pixels").range(16, 8192);
   static constexpr auto kHeight = fba::Param<int>("height", 480, "image height, pixels").range(16, 8192);
   static constexpr auto kFx = fba::Param<double>("fx", 600.0, "focal length, pixels").at_least(1);
@@ -40,7 +54,8 @@ class SimCamera final : public fba::Component {
 
   static fba::Spec spec() {
     return fba::Spec::sensor("sim.camera", "Renders an object mesh as a calibrated camera would see it (the twin of vision.camera).")
-        .add(kPose, kFrame, kMesh, kWidth, kHeight, kFx, kFy, kViewpoints, kViews, kMinElevation, kMaxElevation, kDistance,
+        .add(kPose, kFrame, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kWorld, kWidth, kHeight, kFx, kFy, kViewpoints, kViews,
+             kMinElevation, kMaxElevation, kDistance,
              kObjectGrey, kBackgroundGrey, kNoise, kSeed)
         .add(kMinElevation <= kMaxElevation);
   }
@@ -48,7 +63,11 @@ class SimCamera final : public fba::Component {
   explicit SimCamera(fba::Context& ctx) : ctx_(ctx), mesh_name_(ctx(kMesh).stem().string()) {
     auto loaded = fba::geometry::load_mesh_with_warnings(ctx(kMesh));
     for (const auto& w : loaded.warnings) ctx.log().info("{}", w);
-    mesh_ = std::move(loaded.mesh);
+    const fba::sim_hand::ObjectPlacement placement{ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw) * kDegree, ctx(kObjectRest)};
+    double raise = 0;
+    mesh_ = fba::sim_hand::place_in_mesh_frame(loaded.mesh, placement, raise);
+    if (ctx(kWorld) == "table")
+      for (auto& v : mesh_.vertices) v.z() += static_cast<float>(raise);
     const int w = ctx(kWidth), h = ctx(kHeight);
     const double fx = ctx(kFx), fy = ctx(kFy) > 0 ? ctx(kFy) : fx;
     camera_ = fba::geometry::make_camera(w, h, fx, fy, (w - 1) / 2.0, (h - 1) / 2.0);

@@ -1,6 +1,7 @@
 #include "lift_test.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -78,18 +79,6 @@ std::string format_m(double v) { return fmt::format("{:.3f} m", v); }
 
 }  // namespace
 
-TriangleMesh place_on_table(const TriangleMesh& mesh, const ObjectPlacement& placement) {
-  const Eigen::Matrix3f r = Eigen::AngleAxisf(static_cast<float>(placement.yaw), Eigen::Vector3f::UnitZ()).toRotationMatrix();
-  TriangleMesh placed = mesh;
-  float min_z = INFINITY;
-  for (auto& v : placed.vertices) {
-    v = r * v + Eigen::Vector3f(static_cast<float>(placement.x), static_cast<float>(placement.y), 0);
-    min_z = std::min(min_z, v.z());
-  }
-  for (auto& v : placed.vertices) v.z() -= min_z;
-  return placed;
-}
-
 const std::string& LiftTest::hand_model() {
   static const std::string text(kHandModel);
   return text;
@@ -114,8 +103,11 @@ struct LiftTest::Impl {
   // The hand's geometry, read from the model: the fully open fingers' distance from the palm's
   // centre along x, the pad's distance from the palm's frame along z, the pad's radius, the spread range,
   // the closing slides' travel.
-  double base_x = 0, pad_distance = 0, pad_radius = 0, spread_min = 0, spread_max = 0, travel = 0;
+  // pad_to_end: from the pad to the end of the distal phalanx's straight part.
+  double base_x = 0, pad_distance = 0, pad_radius = 0, pad_to_end = 0, spread_min = 0, spread_max = 0, travel = 0;
   long steps = 0;
+  std::atomic<bool> stop{false};
+  struct Stopped {};  // thrown out of a step once stop is set
 
   ~Impl() {
     if (d) mj_deleteData(d);
@@ -135,6 +127,14 @@ struct LiftTest::Impl {
 
   bool is_hand(int geom) const { return m->body_rootid[m->geom_bodyid[geom]] == palm_body; }
   bool is_object(int geom) const { return m->geom_bodyid[geom] == object_body; }
+
+  bool hand_touches_table() const {
+    for (int i = 0; i < d->ncon; ++i) {
+      const mjContact& c = d->contact[i];
+      if (c.dist <= 0 && ((is_hand(c.geom1) && c.geom2 == table_geom) || (is_hand(c.geom2) && c.geom1 == table_geom))) return true;
+    }
+    return false;
+  }
 
   // The first contact between the hand and anything, as "<hand part> touches <other>"; empty if none.
   std::string hand_collision() const {
@@ -250,6 +250,7 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
   s.pad_distance = s.m->body_pos[3 * thumb_base + 2] + s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_2") + 2] +
                    s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_3") + 2] + s.m->site_pos[3 * s.id(mjOBJ_SITE, "thumb_pad") + 2];
   s.pad_radius = s.m->geom_size[3 * s.id(mjOBJ_GEOM, "thumb_3")];
+  s.pad_to_end = s.m->site_pos[3 * s.id(mjOBJ_SITE, "thumb_pad") + 2];
   const int spread = s.fingers[1].spread_joint;
   s.spread_min = 2 * s.m->jnt_range[2 * spread];
   s.spread_max = 2 * s.m->jnt_range[2 * spread + 1];
@@ -262,7 +263,27 @@ const TriangleMesh& LiftTest::object() const { return impl_->object; }
 double LiftTest::simulated_s() const { return static_cast<double>(impl_->steps) * impl_->m->opt.timestep; }
 long LiftTest::steps() const { return impl_->steps; }
 
+void LiftTest::stop() { impl_->stop.store(true); }
+
 GraspExecution LiftTest::run(const Grasp& grasp) {
+  auto& s = *impl_;
+  try {
+    if (s.stop.load()) throw Impl::Stopped{};
+    return run_steps(grasp);
+  } catch (const Impl::Stopped&) {
+    // Open the hand: every closing slide back to its stop, and the simulation ends there.
+    for (int i = 0; i < static_cast<int>(0.2 / s.m->opt.timestep); ++i) {
+      for (const auto& finger : s.fingers) s.d->ctrl[finger.close_actuator] = -s.params.finger_force;
+      mj_step(s.m, s.d);
+      ++s.steps;
+    }
+    GraspExecution result;
+    result.reason = "stopped (safe state): the hand opened and the simulation ended";
+    return result;
+  }
+}
+
+GraspExecution LiftTest::run_steps(const Grasp& grasp) {
   auto& s = *impl_;
   mjModel* m = s.m;
   mjData* d = s.d;
@@ -317,8 +338,7 @@ GraspExecution LiftTest::run(const Grasp& grasp) {
   double along = 0;
   for (const auto& c : grasp.contacts) along += c.position.dot(a) / 3;
   const Eigen::Vector3d centre = u * (thumb.dot(u) + mid.dot(u)) / 2 + y * mid.dot(y) + a * along;
-  const Eigen::Vector3d grasp_palm = centre - a * depth;
-  const Eigen::Vector3d pregrasp_palm = grasp_palm - a * p.pregrasp_distance;
+  Eigen::Vector3d grasp_palm = centre - a * depth;
 
   // The hand at the pregrasp: palm pose, fingers open, spread set.
   const Eigen::Quaterniond q(r);
@@ -344,6 +364,18 @@ GraspExecution LiftTest::run(const Grasp& grasp) {
     }
     mj_forward(m, d);
   };
+  // The fingers are straight, so they may touch nearer their tips than the pads: where the pads at
+  // the contacts would put a fingertip on the table (a low object, such as a banana lying flat),
+  // the hand stays higher, by at most what keeps the contacts on the fingers' straight part.
+  constexpr double kStep = 0.001, kMargin = 0.003;
+  for (double raise = 0; raise <= s.pad_to_end - kMargin; raise += kStep) {
+    pose_hand(centre - a * (depth + raise), initial_travel);
+    if (s.hand_touches_table()) continue;
+    grasp_palm = centre - a * (depth + raise);
+    break;
+  }
+  const Eigen::Vector3d pregrasp_palm = grasp_palm - a * p.pregrasp_distance;
+
   // The pregrasp opening: the grasp's aperture if the way in is clear, else wider (as far as the
   // hand opens): a finger whose contact normal is far from its closing direction passes the
   // surface closer than its contact. The way in is checked at poses along it.
@@ -379,6 +411,7 @@ GraspExecution LiftTest::run(const Grasp& grasp) {
                   : std::clamp(kHoldGain * (open_travel - d->qpos[m->jnt_qposadr[finger.close_joint]]), -p.finger_force,
                                p.finger_force);
     }
+    if (s.stop.load()) throw Impl::Stopped{};
     mj_step(m, d);
     ++s.steps;
   };

@@ -12,6 +12,7 @@
 #include "fba/types/grasp.hpp"
 #include "fba/types/grasp_execution.hpp"
 #include "fba/types/mesh.hpp"
+#include "object_placement.hpp"
 
 namespace fba::sim_hand {
 
@@ -20,15 +21,6 @@ namespace fba::sim_hand {
 class LiftTestError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
-};
-
-// Where the object stands: the mesh (metres, z up) turned by yaw about z, moved by (x, y), and
-// raised or lowered so that its lowest point rests on the table (z = 0). Grasps are given in
-// this world frame.
-struct ObjectPlacement {
-  double x = 0;
-  double y = 0;
-  double yaw = 0;  // radians
 };
 
 struct LiftTestParams {
@@ -66,6 +58,10 @@ class LiftTest {
   // Throws std::invalid_argument for a grasp with non-finite values or a zero approach.
   GraspExecution run(const Grasp& grasp);
 
+  // The safe state, from any thread: a run in progress opens the hand and ends (held = false, the
+  // reason says so), and later runs end at once the same way.
+  void stop();
+
   // The object as placed, world frame: for computing contacts on it.
   const TriangleMesh& object() const;
   // Simulated seconds and physics steps of the last run.
@@ -77,10 +73,8 @@ class LiftTest {
 
  private:
   struct Impl;
+  GraspExecution run_steps(const Grasp& grasp);
   std::unique_ptr<Impl> impl_;
 };
-
-// The mesh moved to its place on the table (see ObjectPlacement).
-TriangleMesh place_on_table(const TriangleMesh& mesh, const ObjectPlacement& placement);
 
 }  // namespace fba::sim_hand

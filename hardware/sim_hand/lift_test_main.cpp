@@ -4,7 +4,7 @@
 // (plugins/grasp) on N samples of the true surface and lift-tests its best candidates.
 //
 //   fba-lift-test MESH [--grasp summary.json | --synthesise N [--candidates K]] [--x M] [--y M]
-//                      [--yaw DEG] [--mass KG] [--force N] [--height F] [--thumb-angle DEG] [--repeat N]
+//                      [--yaw DEG] [--rest upright|side] [--mass KG] [--force N] [--height F] [--thumb-angle DEG] [--repeat N]
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -25,7 +25,7 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: fba-lift-test MESH [--grasp FILE.json] [--x M] [--y M] [--yaw DEG] [--mass KG] [--force N]\n"
+    "usage: fba-lift-test MESH [--grasp FILE.json] [--x M] [--y M] [--yaw DEG] [--rest upright|side] [--mass KG] [--force N]\n"
     "                     [--height F] [--thumb-angle DEG] [--repeat N]\n"
     "  --grasp        a grasp as JSON (a run's summary.json with a \"grasp\" member, or the grasp itself);\n"
     "                 default: the ring grasp at height F of the object (default 0.5) from above\n"
@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
   }
   std::map<std::string, std::string> opt{{"--x", "0"},    {"--y", "0"},      {"--yaw", "0"},         {"--mass", "0.3"},
                                          {"--force", "10"}, {"--height", "0.5"}, {"--thumb-angle", "180"}, {"--repeat", "1"},
-                                         {"--grasp", ""}, {"--synthesise", "0"}, {"--candidates", "1"}};
+                                         {"--grasp", ""}, {"--synthesise", "0"}, {"--candidates", "1"}, {"--rest", "upright"}};
   for (int i = 2; i < argc; i += 2) {
     if (!opt.count(argv[i]) || i + 1 >= argc) {
       std::cerr << "fba-lift-test: unknown option or missing value: " << argv[i] << "\n" << kUsage;
@@ -87,8 +87,8 @@ int main(int argc, char** argv) {
     fba::sim_hand::LiftTestParams params;
     params.mass = std::stod(opt["--mass"]);
     params.finger_force = std::stod(opt["--force"]);
-    fba::sim_hand::LiftTest test(mesh, {std::stod(opt["--x"]), std::stod(opt["--y"]), std::stod(opt["--yaw"]) * M_PI / 180},
-                                 params);
+    fba::sim_hand::LiftTest test(
+        mesh, {std::stod(opt["--x"]), std::stod(opt["--y"]), std::stod(opt["--yaw"]) * M_PI / 180, opt["--rest"]}, params);
     std::printf("scene built (mesh loaded, MuJoCo model compiled) in %.3f s wall time\n",
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count());
     if (const int samples = std::stoi(opt["--synthesise"]); samples > 0) return synthesised(test, samples, std::stoi(opt["--candidates"]));

@@ -40,6 +40,9 @@ class SimHand final : public fba::Component {
   static constexpr auto kObjectX = fba::Param<double>("object_x", 0.0, "the object's position on the table, metres").range(-1, 1);
   static constexpr auto kObjectY = fba::Param<double>("object_y", 0.0, "the object's position on the table, metres").range(-1, 1);
   static constexpr auto kObjectYaw = fba::Param<double>("object_yaw", 0.0, "the object's turn about z, degrees").range(-360, 360);
+  static constexpr auto kObjectRest = fba::Param<std::string>(
+      "object_rest", "upright", "how the object lies on the table: as the mesh stands, or on its side (turned 90 deg about the mesh's x)")
+      .choices({"upright", "side"});
   static constexpr auto kMass = fba::Param<double>("mass", 0.3, "the object's mass, kg").range(0.001, 10);
   static constexpr auto kFriction = fba::Param<double>("friction", 0.5, "sliding friction of object, table and fingers").range(0.01, 2);
   static constexpr auto kLiftHeight = fba::Param<double>("lift_height", 0.1, "how far the hand lifts the object, metres").range(0.001, 1);
@@ -47,26 +50,29 @@ class SimHand final : public fba::Component {
   static constexpr auto kFrame =
       fba::Param<std::string>("frame", "table",
                               "the frame of grasps and reported contacts: 'table', where the object rests on z = 0, or 'mesh', "
-                              "the mesh file's own coordinates (turned and moved by object_yaw, object_x, object_y), the "
-                              "world sim.camera renders the same mesh in")
+                              "the mesh file's own coordinates (turned and moved by object_rest, object_yaw, object_x, object_y, not "
+                              "raised); sim.camera has the same parameters, so that both see the same object")
           .choices({"table", "mesh"});
   static constexpr auto kFingerForce =
       fba::Param<double>("finger_force", 10.0, "force at each finger's pad when closing, newtons; the thumb pushes twice as hard").range(0.1, 100);
 
   static fba::Spec spec() {
-    return fba::Spec::filter("sim.hand",
+    return fba::Spec::actuator("sim.hand",
                              "A three-fingered hand executing grasps in the MuJoCo physics engine: it lifts the object and "
                              "holds it, and reports the real contacts, whether it held and how far it slipped "
                              "(the twin of hw.robotiq_3f).")
-        .add(kGrasp, kResult, kHeld, kDropped, kMesh, kObjectX, kObjectY, kObjectYaw, kMass, kFriction, kLiftHeight, kHoldTime,
+        .add(kGrasp, kResult, kHeld, kDropped, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kMass, kFriction, kLiftHeight, kHoldTime,
              kFingerForce, kFrame);
   }
 
   explicit SimHand(fba::Context& ctx) : ctx_(ctx), test_(make_test(ctx, table_shift_)) {
     if (ctx(kFrame) == "table") table_shift_ = 0;
-    ctx.log().info("{}: {} triangles on the table at ({:.3f}, {:.3f}), yaw {:.1f} deg", ctx(kMesh).stem().string(),
-                   test_.object().triangles.size(), ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw));
+    ctx.log().info("{}: {} triangles on the table at ({:.3f}, {:.3f}), yaw {:.1f} deg, {}", ctx(kMesh).stem().string(),
+                   test_.object().triangles.size(), ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw), ctx(kObjectRest));
   }
+
+  // Opens the hand and ends the simulation, as the real hand opens on its way out of a run.
+  void safe_state() override { test_.stop(); }
 
   void process() override {
     fba::Grasp grasp = ctx_(kGrasp).get();
@@ -81,19 +87,21 @@ class SimHand final : public fba::Component {
   }
 
  private:
-  // table_shift: how far the mesh is raised to rest on the table (turning it about z does not
-  // change its lowest point).
+  static fba::sim_hand::ObjectPlacement placement(fba::Context& ctx) {
+    return {ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw) * kDegree, ctx(kObjectRest)};
+  }
+  // table_shift: how far the placed mesh is raised to rest on the table.
   static fba::sim_hand::LiftTest make_test(fba::Context& ctx, double& table_shift) {
     auto loaded = fba::geometry::load_mesh_with_warnings(ctx(kMesh));
     for (const auto& w : loaded.warnings) ctx.log().info("{}", w);
-    table_shift = -fba::geometry::mesh_bounds(loaded.mesh).min().z();
+    fba::sim_hand::place_in_mesh_frame(loaded.mesh, placement(ctx), table_shift);
     fba::sim_hand::LiftTestParams p;
     p.mass = ctx(kMass);
     p.friction = ctx(kFriction);
     p.lift_height = ctx(kLiftHeight);
     p.hold_s = ctx(kHoldTime);
     p.finger_force = ctx(kFingerForce);
-    return fba::sim_hand::LiftTest(loaded.mesh, {ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw) * kDegree}, p);
+    return fba::sim_hand::LiftTest(loaded.mesh, placement(ctx), p);
   }
 
   fba::Context& ctx_;

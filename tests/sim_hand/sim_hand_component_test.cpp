@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -85,6 +86,35 @@ TEST(SimHand, BadGraspGivesDroppedWithTheReason) {
   EXPECT_EQ(payload["held"], false);
   EXPECT_EQ(payload["reason"], results[0].reason);
   EXPECT_NE(results[0].reason.find("no contact"), std::string::npos) << results[0].reason;
+}
+
+// The safe state opens the hand and ends the simulation: a grasp that would hold is not executed
+// after it, and the result says why.
+TEST(SimHand, AfterTheSafeStateNoGraspIsExecuted) {
+  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}});
+  h.safe_state();
+  h.push<fba::Grasp>("grasp", can_grasp(0, 0, 0, 0));
+  h.run();
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_FALSE(results[0].held);
+  EXPECT_NE(results[0].reason.find("safe state"), std::string::npos) << results[0].reason;
+}
+
+// object_rest: side lays the can on its side (its axis along y after the quarter turn about x),
+// where the ring grasp at its mid height, from above, still holds it.
+TEST(SimHand, AnObjectLaidOnItsSideRestsOnTheTable) {
+  const auto mesh = fba::geometry::load_mesh(kCan);
+  const auto upright = fba::geometry::mesh_bounds(fba::sim_hand::place_on_table(mesh, {}));
+  fba::sim_hand::ObjectPlacement side;
+  side.rest = "side";
+  const auto placed = fba::sim_hand::place_on_table(mesh, side);
+  const auto lying = fba::geometry::mesh_bounds(placed);
+  EXPECT_NEAR(lying.min().z(), 0.0, 1e-6);
+  EXPECT_NEAR(lying.sizes().y(), upright.sizes().z(), 1e-4);  // the can's height now lies along y
+  EXPECT_NEAR(lying.sizes().z(), upright.sizes().y(), 1e-4);
+  side.rest = "sideways";
+  EXPECT_THROW(fba::sim_hand::place_on_table(mesh, side), std::invalid_argument);
 }
 
 TEST(SimHand, MissingMeshIsAClearError) {

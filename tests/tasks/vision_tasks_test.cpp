@@ -2,12 +2,15 @@
 // issue asks for.
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
+#include <string>
 
 #include <gtest/gtest.h>
 
 #include <fba/registry.hpp>
 
 #include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
 #include <fba/task.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/silhouette.hpp>
@@ -125,25 +128,46 @@ TEST_P(CarveSim, ModelMatchesTheMesh) {
   EXPECT_NE(accuracy->payload.find("\"mesh_inside_box\": true"), std::string::npos) << accuracy->payload;
 }
 
-// The whole simulated loop is wired: the planner's initial views reach the arm, the camera
-// renders from where the arm took it, the model is carved, synthesis selects a grasp and the
-// hand runs the lift test on it; the run ends on the hand's verdict (held or dropped, with the
-// lift test's reason), not on a stall or a time-out.
-TEST(GraspSimTask, TheLoopRunsFromTheArmsViewsToTheHandsLiftTest) {
+// The whole simulated loop, exploration included: the planner's initial views reach the arm, the
+// camera renders from where the arm took it, the model is carved, synthesis finds no contact that
+// two views pin down yet and asks for views, the planner moves the arm to new ones, and once a
+// grasp is selected the hand holds the object through the lift test (the mustard bottle).
+TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds) {
   fba::RunOptions options;
   options.executor = fba::ExecutorKind::Deterministic;
-  options.timeout_s = 600;  // a hang detector only: the run takes about a second
+  options.timeout_s = 600;  // a hang detector only: the run takes a few seconds
+  const fba::test::TempDir out;
+  options.output_dir = out.path();
   fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_sim.yaml", registry()), options);
   const auto r = task.run();
   ASSERT_TRUE(r.final_event) << r.reason;
   EXPECT_EQ(r.final_event->source, "hand") << r.reason;
-  bool selected = false;
-  std::size_t arrivals = 0;
+  EXPECT_EQ(r.final_event->name, "held") << r.final_event->payload;
+  EXPECT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
+  std::size_t arrivals = 0, moves = 0;
+  std::string selected;
   for (const auto& e : r.events) {
-    selected = selected || (e.source == "synthesis" && e.name == "grasp_selected");
+    if (e.source == "synthesis" && e.name == "grasp_selected") selected = e.payload;
     arrivals += e.source == "arm" && e.name == "arrived";
+    moves += e.source == "planner" && e.name == "view_chosen";
   }
-  EXPECT_TRUE(selected);
-  EXPECT_GE(arrivals, 3u);
-  EXPECT_NE(r.final_event->payload.find("\"held\""), std::string::npos) << r.final_event->payload;
+  ASSERT_FALSE(selected.empty());
+  EXPECT_GE(moves, 1u);
+  EXPECT_GT(arrivals, 3u);  // more than the three initial views
+  // The grasp names the views its model was carved from: "views":[0,1,2,...].
+  const auto list = selected.find("\"views\":[");
+  ASSERT_NE(list, std::string::npos) << selected;
+  const auto end = selected.find(']', list);
+  EXPECT_GE(std::count(selected.begin() + list, selected.begin() + end, ','), 3) << selected;  // at least 4 views
+  // The grasp drawn on the model and on the last camera image: PNGs of the camera's size (the
+  // header's IHDR chunk holds the width and height, big-endian, at bytes 16 and 20).
+  for (const char* name : {"grasp_model.png", "grasp_view.png"}) {
+    std::ifstream in(out.path() / name, std::ios::binary);
+    unsigned char header[24] = {};
+    ASSERT_TRUE(in.read(reinterpret_cast<char*>(header), sizeof header)) << name;
+    EXPECT_EQ(std::string(reinterpret_cast<char*>(header) + 1, 3), "PNG") << name;
+    auto be32 = [&](int at) { return (header[at] << 24) | (header[at + 1] << 16) | (header[at + 2] << 8) | header[at + 3]; };
+    EXPECT_EQ(be32(16), 640) << name;
+    EXPECT_EQ(be32(20), 480) << name;
+  }
 }

@@ -5,9 +5,13 @@
 // exploration planner's request for a new view), until max_views, when it gives up with the reason.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <memory>
+#include <utility>
 #include <cstdio>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -16,6 +20,12 @@
 #include <fba/types/octree.hpp>
 #include <fba/types/regions_of_interest.hpp>
 #include <fba/types/silhouette.hpp>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "fba/geometry/renderer.hpp"
+#include "fba/vision/octree_carver.hpp"
 
 #include "fba/grasp/grasp_json.hpp"
 #include "fba/grasp/model_surface.hpp"
@@ -56,6 +66,18 @@ class GraspSynthesisFilter final : public fba::Component {
   static constexpr auto kWeightCurvature = fba::Param<double>("weight_curvature", 1.0, "weight of S4 in the total").at_least(0);
   static constexpr auto kNeighbourRadius = fba::Param<double>(
       "neighbour_radius", 0.0, "metres: the surface neighbourhood for normals, curvature and regions; 0: 3 edges of the finest leaf").at_least(0);
+  static constexpr auto kRimDeg = fba::Param<double>(
+      "rim_deg", 0.0,
+      "a silhouette fixes the surface only on its rim: with rim_deg > 0, a contact counts as resolved only where the lines of "
+      "sight of two posed views graze the model within this angle (15 suits the sim: from views on one side the far side of "
+      "the model lies centimetres off the object); 0: off").range(0, 60);
+  static constexpr auto kRimSeparationDeg = fba::Param<double>(
+      "rim_separation_deg", 20.0, "the two grazing lines of sight must differ by at least this angle to pin the surface down")
+                                                .range(1, 89);
+  static inline const auto kTableZ = fba::Param<std::vector<double>>(
+      "table_z", {}, "[z]: the table the object stands on (world z, up); grasps whose hand would reach into it are left out. "
+      "Empty: no table")
+      .size({0, 1});
   static constexpr fba::EventOut kPlanningPerformed{
       "planning_performed",
       "no reliable grasp yet: regions were emitted for a new view; payload (JSON): views, samples, regions, candidates, "
@@ -67,7 +89,7 @@ class GraspSynthesisFilter final : public fba::Component {
     return fba::Spec::filter("grasp.synthesis",
                              "Selects a reliable three-finger grasp on an octree model, or asks for views where the model lacks detail.")
         .add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kTableZ, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -79,11 +101,13 @@ class GraspSynthesisFilter final : public fba::Component {
   }
 
   explicit GraspSynthesisFilter(fba::Context& ctx)
-      : ctx_(ctx), stages_(ctx), threshold_(ctx(kThreshold)), max_views_(ctx(kMaxViews)), radius_(ctx(kNeighbourRadius)) {
+      : ctx_(ctx), stages_(ctx), threshold_(ctx(kThreshold)), max_views_(ctx(kMaxViews)), radius_(ctx(kNeighbourRadius)),
+        rim_deg_(ctx(kRimDeg)), rim_separation_deg_(ctx(kRimSeparationDeg)) {
     params_.hand = {ctx(kFingerWidth), ctx(kApertureMin), ctx(kApertureMax), ctx(kSpreadMin), ctx(kSpreadMax)};
     params_.weight_symmetry = ctx(kWeightSymmetry);
     params_.weight_safety = ctx(kWeightSafety);
     params_.weight_curvature = ctx(kWeightCurvature);
+    if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
   }
 
   void process() override {
@@ -91,6 +115,8 @@ class GraspSynthesisFilter final : public fba::Component {
     if (auto s = ctx_(kSilhouette); s.has()) {
       const auto& frame = s.get().frame;
       view_index_.push_back(frame && frame->index >= 0 ? frame->index : int(view_index_.size()));
+      if (frame && frame->has_pose) eyes_.push_back(frame->camera.centre_in_world());
+      if (frame && frame->has_pose) last_frame_ = frame;
     }
     auto in = ctx_(kOctree);
     if (!in.has()) return;
@@ -108,9 +134,14 @@ class GraspSynthesisFilter final : public fba::Component {
     if (surface.samples.empty())
       return fail("the model is empty after " + std::to_string(views) +
                   " views: no occupied leaf to grasp (no target in the silhouettes, or a root box that misses the object)");
+    fba::grasp::ModelSurface observed = surface;
+    // The model's views are the first silhouettes (the carver takes them in arrival order).
+    if (rim_deg_ > 0 && !eyes_.empty())
+      fba::grasp::mark_unobserved(observed.samples, std::span(eyes_).first(std::min<std::size_t>(eyes_.size(), std::size_t(views))),
+                                  rim_deg_, rim_separation_deg_);
     fba::grasp::SynthesisParams p = params_;
     p.neighbour_radius = surface.radius;
-    const fba::grasp::SynthesisResult r = fba::grasp::synthesise(surface.samples, p);
+    const fba::grasp::SynthesisResult r = fba::grasp::synthesise(observed.samples, p);
 
     const double best_total = r.candidates.empty() ? 0.0 : r.candidates.front().grasp.scores.total;
     double best_resolved = 0;  // the best candidate whose contacts are all on resolved parts of the model
@@ -122,11 +153,17 @@ class GraspSynthesisFilter final : public fba::Component {
     if (views >= max_views_) {
       std::string reason = "no reliable grasp after " + std::to_string(views) + " views: best total " + fixed(best_resolved) +
                            " < threshold " + fixed(threshold_);
-      if (r.candidates.empty()) reason += " (no candidate the hand can reach)";
+      if (r.candidates.empty() && r.below_table > 0)
+        reason += " (no candidate the hand can reach: " + std::to_string(r.below_table) + " would put the hand into the table)";
+      else if (r.candidates.empty()) reason += " (no candidate the hand can reach)";
       else if (best_total > best_resolved)
         reason += " (a candidate of total " + fixed(best_total) + " touches a part of the model not yet resolved)";
       return fail(reason);
     }
+    // One request per view: the carver's refinement on it brings a new model of the same views,
+    // whose regions differ a little again; answering each would circle between the two for ever.
+    if (views == requested_views_) return;
+    requested_views_ = views;
 
     // Where more information would help: the unresolved regions of the best candidates, else every
     // unresolved region, else (all resolved, none reliable) the best candidates' regions, else (no
@@ -153,6 +190,7 @@ class GraspSynthesisFilter final : public fba::Component {
                      {"samples", surface.samples.size()},
                      {"regions", r.regions.size()},
                      {"candidates", r.candidates.size()},
+                     {"below_table", r.below_table},
                      {"uncertain_regions", r.uncertain_regions.size()},
                      {"regions_requested", requested},
                      {"best_total", best_total},
@@ -173,8 +211,54 @@ class GraspSynthesisFilter final : public fba::Component {
     for (int v = 0; v < views; ++v) g.views.push_back(v < int(view_index_.size()) ? view_index_[v] : v);
     g.stamp = ctx_(kOctree).packet().header().stamp_ns * 1e-9;
     ctx_.emit(kGraspSelected, fba::grasp::grasp_to_json(g).dump());
+    write_pictures(g, ctx_(kOctree).get());
     ctx_(kGrasp).emit(std::move(g));
     done_ = true;
+  }
+
+  // With an output folder: the grasp drawn over the model and over the last camera image, both
+  // seen from that camera: each contact (thumb red, fingers green and blue), its inward normal
+  // (an arrow into the object) and its finger's direction (the approach, yellow, ending on it).
+  void write_pictures(const fba::Grasp& g, const fba::Octree& model) {
+    if (ctx_.output_dir().empty() || !last_frame_) return;
+    const fba::CameraModel& camera = last_frame_->camera;
+    fba::geometry::RenderOptions look;
+    look.object_colour = {200, 200, 200};
+    look.background_top = look.background_bottom = {255, 255, 255};
+    look.ambient = 0.3;
+    look.diffuse = 0.7;
+    // The model near the grasp only: parts no view covered stay occupied and would hide it.
+    fba::TriangleMesh near = fba::vision::occupied_surface_mesh(model);
+    const Eigen::Vector3f centre = ((g.contacts[0].position + g.contacts[1].position + g.contacts[2].position) / 3).cast<float>();
+    const float reach = static_cast<float>(g.aperture);
+    std::erase_if(near.triangles, [&](const auto& t) {
+      for (int k = 0; k < 3; ++k)
+        if ((near.vertices[static_cast<std::size_t>(t[k])] - centre).norm() > reach) return true;
+      return false;
+    });
+    cv::Mat on_model = fba::geometry::render(near, camera, look).colour;
+    cv::Mat on_image = last_frame_->image.clone();
+    if (on_image.channels() == 1) cv::cvtColor(on_image, on_image, cv::COLOR_GRAY2BGR);
+    const Eigen::Matrix<double, 3, 4> P = camera.projection();
+    auto pixel = [&](const Eigen::Vector3d& x) {
+      const Eigen::Vector3d h = P * x.homogeneous();
+      return cv::Point(static_cast<int>(std::lround(h.x() / h.z())), static_cast<int>(std::lround(h.y() / h.z())));
+    };
+    const cv::Scalar colours[3] = {{40, 40, 230}, {40, 180, 40}, {230, 120, 30}};
+    for (cv::Mat* picture : {&on_model, &on_image}) {
+      for (std::size_t i = 0; i < 3; ++i) {
+        const auto& c = g.contacts[i];
+        cv::arrowedLine(*picture, pixel(c.position - g.approach.normalized() * 0.05), pixel(c.position), {0, 200, 230}, 2,
+                        cv::LINE_AA, 0, 0.2);
+        cv::arrowedLine(*picture, pixel(c.position - c.normal.normalized() * 0.03), pixel(c.position), colours[i], 2, cv::LINE_AA,
+                        0, 0.3);
+        cv::circle(*picture, pixel(c.position), 6, colours[i], -1, cv::LINE_AA);
+      }
+    }
+    for (const auto& [name, picture] : {std::pair{"grasp_model.png", &on_model}, std::pair{"grasp_view.png", &on_image}}) {
+      const auto file = ctx_.output_dir() / name;
+      if (!cv::imwrite(file.string(), *picture)) ctx_.log().error("could not write {}", file.string());
+    }
   }
 
   void fail(const std::string& reason) {
@@ -189,7 +273,12 @@ class GraspSynthesisFilter final : public fba::Component {
   const double threshold_;
   const int max_views_;
   const double radius_;
+  const double rim_deg_;
+  const double rim_separation_deg_;
+  std::vector<Eigen::Vector3d> eyes_;
+  std::shared_ptr<const fba::Frame> last_frame_;  // the last posed view: the pictures of the grasp are drawn on it  // the silhouettes' camera centres, in arrival order
   std::vector<int> view_index_;  // the silhouettes' view indices, in arrival order (their images are not kept)
+  int requested_views_ = -1;      // the model views of the last regions request
   bool done_ = false;
 };
 

@@ -158,4 +158,25 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
   return out;
 }
 
+void mark_unobserved(std::span<SurfaceSample> samples, std::span<const Eigen::Vector3d> eyes, double rim_deg, double separation_deg) {
+  if (!(rim_deg > 0 && rim_deg < 90) || !(separation_deg > 0 && separation_deg < 90))
+    throw std::invalid_argument("model surface: rim_deg and separation_deg must be in (0, 90) degrees, found " +
+                                std::to_string(rim_deg) + " and " + std::to_string(separation_deg));
+  const double kDeg = 3.14159265358979323846 / 180;
+  const double sin_rim = std::sin(rim_deg * kDeg), cos_separation = std::cos(separation_deg * kDeg);
+  std::vector<Eigen::Vector3d> grazing;
+  for (auto& s : samples) {
+    grazing.clear();
+    const Eigen::Vector3d n = s.normal.normalized();
+    for (const auto& eye : eyes) {
+      const Eigen::Vector3d d = (s.position - eye).normalized();
+      if (std::abs(d.dot(n)) <= sin_rim) grazing.push_back(d);
+    }
+    bool pinned = false;
+    for (std::size_t i = 0; i < grazing.size() && !pinned; ++i)
+      for (std::size_t j = i + 1; j < grazing.size() && !pinned; ++j) pinned = std::abs(grazing[i].dot(grazing[j])) <= cos_separation;
+    if (!pinned) s.uncertain = true;
+  }
+}
+
 }  // namespace fba::grasp

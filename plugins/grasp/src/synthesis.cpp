@@ -84,6 +84,10 @@ void check_params(const SynthesisParams& p) {
           "criterion weights must be >= 0 and not all 0");
   require(!p.object_centre || p.object_centre->allFinite(), "object_centre is not finite");
   require(p.preferred_approach.allFinite() && p.preferred_approach.norm() > 0, "preferred_approach must be non-zero");
+  require(!p.table_z || std::isfinite(*p.table_z), "table_z is not finite");
+  require(p.table_clearance >= 0 && p.pregrasp_distance >= 0, "table_clearance and pregrasp_distance must be >= 0");
+  require(h.tip_length >= 0 && h.palm_distance >= 0 && h.palm_half_width >= 0 && h.palm_half_depth >= 0 && h.palm_thickness >= 0,
+          "the hand's tip_length and palm dimensions must be >= 0");
   require(p.max_thumbs > 0 && p.max_fingers > 1 && p.max_candidates > 0, "search bounds must be positive");
 }
 
@@ -105,6 +109,29 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 }  // namespace
+
+double hand_lowest_z(const Grasp& g, const HandGeometry& hand, double back) {
+  const Eigen::Vector3d a = g.approach.normalized();
+  const Eigen::Vector3d thumb = g.contacts[0].position;
+  const Eigen::Vector3d mid = (g.contacts[1].position + g.contacts[2].position) / 2;
+  Eigen::Vector3d u = (mid - thumb) - a * a.dot(mid - thumb);
+  u = u.norm() > 1e-12 ? u.normalized() : a.unitOrthogonal();
+  const Eigen::Vector3d y = a.cross(u);
+  const double radius = hand.finger_width / 2;
+  const double across = std::sqrt(std::max(0.0, 1 - a.z() * a.z()));  // a finger's radius seen from below
+  double lowest = INFINITY;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const auto& c : g.contacts) {
+    centre += c.position / 3;
+    // The finger from its contact to its tip; the other way it rises to the palm, checked below.
+    const Eigen::Vector3d at = c.position - a * back;
+    lowest = std::min({lowest, at.z() - radius * across, at.z() + a.z() * hand.tip_length - radius * across});
+  }
+  const Eigen::Vector3d palm = centre - a * (back + hand.palm_distance + hand.palm_thickness / 2);
+  lowest = std::min(lowest, palm.z() - std::abs(u.z()) * hand.palm_half_width - std::abs(y.z()) * hand.palm_half_depth -
+                                std::abs(a.z()) * hand.palm_thickness / 2);
+  return lowest;
+}
 
 void estimate_curvature(std::span<SurfaceSample> samples, double radius) {
   require(radius > 0, "curvature radius must be > 0, found " + num(radius));
@@ -310,6 +337,15 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
         Grasp& g = cand.grasp;
         g.contacts = {GraspContact{tp, tn}, GraspContact{p1, -s[f1].normal}, GraspContact{p2, -s[f2].normal}};
         g.approach = normal.dot(preferred) >= 0 ? normal : Eigen::Vector3d(-normal);
+        if (p.table_z) {
+          // From above or level only: from below, the hand would come through the table.
+          if (g.approach.z() > 1e-9) g.approach = -g.approach;
+          const double floor = *p.table_z + p.table_clearance;
+          if (hand_lowest_z(g, hand) < floor || hand_lowest_z(g, hand, p.pregrasp_distance) < floor) {
+            ++result.below_table;
+            continue;
+          }
+        }
         g.spread = spread;
         g.aperture = std::min(aperture + hand.finger_width, hand.aperture_max + hand.finger_width);
         g.scores = {symmetry, safety, curvature,

@@ -118,6 +118,34 @@ TEST(ModelSurface, LeavesCoarserThanTheMaxDepthAreUncertain) {
   EXPECT_GT(lower, 100);
 }
 
+// A silhouette pins the surface only where its line of sight grazes it: a sample counts as
+// observed when two views graze it along different lines, and stays uncertain when one view, or
+// none, does (the far side of an object seen from one side).
+TEST(ModelSurface, OnlySamplesTwoViewsGrazeAreObserved) {
+  // A sample on the +x side of an object, outward normal +x.
+  const SurfaceSample side{{0.05, 0, 0}, {1, 0, 0}};
+  auto observed = [&](std::vector<Eigen::Vector3d> eyes) {
+    std::vector<SurfaceSample> s{side};
+    mark_unobserved(s, eyes);
+    return !s[0].uncertain;
+  };
+  // Two cameras in the tangent plane x = 0.05, lines of sight 90 degrees apart: pinned.
+  EXPECT_TRUE(observed({{0.05, 0.3, 0}, {0.05, 0, 0.3}}));
+  // One grazing camera only, or two along the same line: a tangent line, not a point.
+  EXPECT_FALSE(observed({{0.05, 0.3, 0}}));
+  EXPECT_FALSE(observed({{0.05, 0.3, 0}, {0.05, -0.3, 0}}));
+  // Cameras facing the sample (or behind it) see its face, not its rim.
+  EXPECT_FALSE(observed({{0.4, 0, 0}, {0.3, 0.2, 0.1}, {-0.3, 0, 0}}));
+  // Within rim_deg (15 by default) of the tangent plane still grazes.
+  EXPECT_TRUE(observed({{0.05 + 0.3 * std::tan(10 * kPi / 180), 0.3, 0}, {0.05, 0, 0.3}}));
+  // Already uncertain stays uncertain.
+  std::vector<SurfaceSample> s{side};
+  s[0].uncertain = true;
+  mark_unobserved(s, std::vector<Eigen::Vector3d>{{0.05, 0.3, 0}, {0.05, 0, 0.3}});
+  EXPECT_TRUE(s[0].uncertain);
+  EXPECT_THROW(mark_unobserved(s, std::vector<Eigen::Vector3d>{}, 0.0), std::invalid_argument);
+}
+
 TEST(ModelSurface, AnEmptyModelHasNoSurface) {
   Octree empty;
   empty.bounds = kCube;

@@ -123,6 +123,51 @@ TEST(GraspSynthesis, BoxBestGraspOpposesAThumbOnOneFaceToTwoFingersOnTheOpposite
   EXPECT_NEAR(g.scores.curvature, 0.5, 0.05);  // flat
 }
 
+// A low object on a table: with the table known, no candidate puts the fingertips or the palm
+// into it; contacts on a cylinder lying on the table sit high enough for the fingertips to clear.
+TEST(GraspSynthesis, WithATableNoCandidateReachesIntoIt) {
+  const double h = 0.004;
+  // A cylinder 3.7 cm across lying along x on the table (z = 0), as a banana lies.
+  std::vector<SurfaceSample> samples;
+  for (auto s : cylinder(0.0185, 0.12, h)) {
+    s.position = Eigen::Vector3d(s.position.z() - 0.06, s.position.y(), s.position.x() + 0.0185);
+    s.normal = Eigen::Vector3d(s.normal.z(), s.normal.y(), s.normal.x());
+    samples.push_back(s);
+  }
+  estimate_curvature(samples, 2.2 * h);
+  SynthesisParams p = params_for(h);
+  const SynthesisResult free = synthesise(samples, p);
+  p.table_z = 0.0;
+  const SynthesisResult tabled = synthesise(samples, p);
+  EXPECT_GT(tabled.below_table, 0u);
+  const auto lowest_without = std::min_element(free.candidates.begin(), free.candidates.end(), [&](const auto& a, const auto& b) {
+    return hand_lowest_z(a.grasp, p.hand) < hand_lowest_z(b.grasp, p.hand);
+  });
+  ASSERT_NE(lowest_without, free.candidates.end());
+  EXPECT_LT(hand_lowest_z(lowest_without->grasp, p.hand), 0.0) << "without the table some candidate reaches below it";
+  for (const auto& c : tabled.candidates) {
+    EXPECT_LE(c.grasp.approach.z(), 0.0);
+    EXPECT_GE(hand_lowest_z(c.grasp, p.hand), p.table_clearance);
+    EXPECT_GE(hand_lowest_z(c.grasp, p.hand, p.pregrasp_distance), p.table_clearance);
+  }
+}
+
+TEST(GraspSynthesis, TheHandsLowestPointFollowsItsGeometry) {
+  Grasp g;
+  g.contacts = {GraspContact{{-0.03, 0, 0.05}, {1, 0, 0}}, GraspContact{{0.03, 0.02, 0.05}, {-1, 0, 0}},
+                GraspContact{{0.03, -0.02, 0.05}, {-1, 0, 0}}};
+  g.approach = {0, 0, -1};
+  HandGeometry hand;
+  // From above: the fingertips, tip_length below the contacts.
+  EXPECT_NEAR(hand_lowest_z(g, hand), 0.05 - hand.tip_length, 1e-12);
+  // Moved back along the approach, they rise with the hand.
+  EXPECT_NEAR(hand_lowest_z(g, hand, 0.05), 0.1 - hand.tip_length, 1e-12);
+  // From the side (along -x would be the thumb's way: along y here): the palm spans its width
+  // (thumb to fingers, along x: level) and its depth (across, along z) about the contacts' height.
+  g.approach = {0, 1, 0};
+  EXPECT_NEAR(hand_lowest_z(g, hand), 0.05 - hand.palm_half_depth, 1e-12);
+}
+
 TEST(GraspSynthesis, CurvatureScoreOrdersConcaveAboveFlatAboveSphere) {
   const double h = 0.005;
   auto flat = box({0.06, 0.10, 0.15}, h);

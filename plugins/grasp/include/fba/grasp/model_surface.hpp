@@ -4,7 +4,10 @@
 // resolved the boundary to its finest depth.
 #pragma once
 
+#include <span>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "fba/grasp/synthesis.hpp"
 #include "fba/types/octree.hpp"
@@ -35,5 +38,16 @@ struct ModelSurface {
 // resolved this part of the surface yet. A full leaf next to an empty one is certain at any
 // depth: every view has it inside, and the face between them is where a view cut the object.
 ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params = {});
+
+// Flags as uncertain the samples that no pair of views pins down. A silhouette fixes the surface
+// only on its rim, where the line of sight grazes the object; elsewhere a carved model is the
+// intersection of the views' cones and may lie centimetres off the object: from three views on one
+// side of a can, the model's far side is a wedge whose faces touch the can on one line each. A
+// sample counts as observed when the lines of sight from at least two camera centres (`eyes`)
+// graze it (within rim_deg of its tangent plane) along directions at least separation_deg apart:
+// two tangents cross at the sample only where the surface is there. Throws std::invalid_argument
+// for angles out of (0, 90).
+void mark_unobserved(std::span<SurfaceSample> samples, std::span<const Eigen::Vector3d> eyes, double rim_deg = 15,
+                     double separation_deg = 20);
 
 }  // namespace fba::grasp

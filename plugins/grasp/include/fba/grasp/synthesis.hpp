@@ -33,6 +33,16 @@ struct HandGeometry {
   // Distance between the two fingers' contacts, metres (at least finger_width).
   double spread_min = 0.02;
   double spread_max = 0.10;
+  // For reaching above a table (SynthesisParams::table_z), metres: the fingers run along the
+  // approach and reach at least tip_length beyond their contacts (a finger touches no nearer its
+  // end than its radius); the palm is a box palm_half_width (thumb to fingers, knuckles included) x
+  // palm_half_depth (across) x palm_thickness whose face is palm_distance behind the contacts.
+  // The defaults are the hand of hardware/robots/three_finger_hand.xml.
+  double tip_length = 0.013;
+  double palm_distance = 0.155;
+  double palm_half_width = 0.13;
+  double palm_half_depth = 0.065;
+  double palm_thickness = 0.04;
 };
 
 struct SynthesisParams {
@@ -67,6 +77,12 @@ struct SynthesisParams {
   // Of the two approach directions perpendicular to the contacts' plane, the one closer to this
   // (default from above: the object stands on a table).
   Eigen::Vector3d preferred_approach{0, 0, -1};
+  // The table the object stands on, world z (z up), when known: a candidate is reachable only if
+  // the hand comes from above (or level) and, at the grasp and at its pregrasp, its fingertips and
+  // palm stay table_clearance above the table.
+  std::optional<double> table_z;
+  double table_clearance = 0.003;
+  double pregrasp_distance = 0.05;  // metres back along the approach where the hand starts
   // Bounds on the search: thumbs tried, finger positions per thumb, candidates returned.
   std::size_t max_thumbs = 80;
   std::size_t max_fingers = 300;
@@ -96,7 +112,12 @@ struct SynthesisResult {
   // Regions where more views would help (any uncertain sample), most uncertain area first.
   std::vector<std::size_t> uncertain_regions;
   std::vector<double> boundary_distance;   // per input sample: distance to its region's boundary (m), 0 if none
+  std::size_t below_table = 0;  // candidates left out because the hand would reach into the table
 };
+
+// The lowest point of the hand (world z) taking `grasp` (contacts, approach) as HandGeometry
+// models it, with the hand moved back along the approach by `back` metres (0: at the grasp).
+double hand_lowest_z(const Grasp& grasp, const HandGeometry& hand, double back = 0);
 
 // Throws std::invalid_argument for empty or non-finite samples, a zero normal, or parameters out of
 // range, naming the value found.
