@@ -161,6 +161,7 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
   char quote = 0;
   char prev = '\n';  // the previous character that is not a space
   bool plain = false;  // inside a plain scalar of the flow root
+  int root_indent = 0;  // the column (from 0) where a block root starts
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     const bool line_start = i == 0 || text[i - 1] == '\n';
@@ -175,7 +176,17 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
       at = At::Start, depth = 0, i += 2, col += 2;
       continue;
     }
-    if (at == At::Rest) continue;
+    if (at == At::Rest) {
+      // A line less indented than a block root ends that root: yaml-cpp reads on as if at a new root.
+      if (quote == 0 && line_start && root_indent > 0) {
+        const auto first = text.find_first_not_of(" \t\r", i);
+        if (first != std::string::npos && text[first] != '\n' && text[first] != '#' &&
+            static_cast<int>(first - i) < root_indent) {
+          at = At::Start, depth = 0, col = static_cast<int>(first - i), i = first - 1;
+        }
+      }
+      continue;
+    }
     if (quote) {  // inside a quoted scalar
       if (quote == '"' && c == '\\') ++i, ++col;
       else if (c == quote && quote == '\'' && i + 1 < text.size() && text[i + 1] == '\'') ++i, ++col;
@@ -204,8 +215,11 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
         return false;
       }
       if (at == At::Start && (c == '[' || c == '{')) at = At::Root, depth = 1;
-      else if (at == At::Start && (c == '"' || c == '\'')) at = At::Root, quote = c;
-      else at = At::Rest;  // a block node, a plain scalar, or a key after a flow root: yaml-cpp copes
+      else if (c == '"' || c == '\'') at = At::Root, quote = c;  // after a root too: yaml-cpp reads on
+      else {
+        if (at == At::Start) root_indent = col - 1;
+        at = At::Rest;  // a block node, a plain scalar, or a key after a flow root: yaml-cpp copes
+      }
       prev = c;
       continue;
     }
