@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 #include <tuple>
+#include <utility>
 
 #include "fba/task_config.hpp"
 
@@ -242,11 +243,13 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
 }
 
 // yaml-cpp 0.7 also loops for ever on a ',' that starts a line after a node property (a tag '!x'
-// or an anchor '&x') that ended the line before ("!t\n, x", "- a\n- !t\n, y"; found by the fuzzer).
+// or an anchor '&x') that ended the line before ("!t\n, x", "- a\n- !t\n, y"), or at the first
+// column after comment lines ("a\n# c\n, x"; found by the fuzzer).
 // No task file has that: it is said as the ',' error above.
 bool check_property_comma(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
   auto is_property = [](std::string_view token) { return !token.empty() && (token[0] == '!' || token[0] == '&'); };
   bool after_property = false;  // the last line with content ended with a node property
+  bool after_comment = false;   // comment lines came after it
   std::size_t start = 0;
   for (int line = 1; start <= text.size(); ++line) {
     std::size_t end = text.find('\n', start);
@@ -254,8 +257,13 @@ bool check_property_comma(const std::string& text, const std::string& shown, std
     std::string_view l(text.data() + start, end - start);
     start = end + 1;
     const auto first = l.find_first_not_of(" \t\r");
-    if (first == std::string_view::npos || l[first] == '#') continue;  // blank or a comment: no content
-    if (after_property && l[first] == ',') {
+    if (first == std::string_view::npos) continue;  // blank: no content
+    if (l[first] == '#') {  // a comment ends a plain scalar: a ',' at the next line's start begins a token
+      after_comment = true;
+      continue;
+    }
+    const bool comment_before = std::exchange(after_comment, false);
+    if ((after_property || (comment_before && first == 0)) && l[first] == ',') {
       d.push_back(Diagnostic{Location{shown, line, static_cast<int>(first) + 1},
                              "YAML syntax: ',' separates the entries of a flow list or mapping ([a, b] or {a: 1, b: 2}); "
                              "here it stands outside one"});
