@@ -163,6 +163,7 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
   char prev = '\n';  // the previous character that is not a space
   bool plain = false;  // inside a plain scalar of the flow root
   int root_indent = 0;  // the column (from 0) where a block root starts
+  bool comment_before = false;  // in a block root: comment lines since its last content line
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     const bool line_start = i == 0 || text[i - 1] == '\n';
@@ -178,12 +179,17 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
       continue;
     }
     if (at == At::Rest) {
-      // A line less indented than a block root ends that root: yaml-cpp reads on as if at a new root.
-      if (quote == 0 && line_start && root_indent > 0) {
+      // A line less indented than a block root ends that root, and so does a comment before a
+      // line at the first column (it ends a plain scalar root): yaml-cpp reads on as if at a new root.
+      if (line_start) {
         const auto first = text.find_first_not_of(" \t\r", i);
-        if (first != std::string::npos && text[first] != '\n' && text[first] != '#' &&
-            static_cast<int>(first - i) < root_indent) {
-          at = At::Start, depth = 0, col = static_cast<int>(first - i), i = first - 1;
+        if (first != std::string::npos && text[first] == '#') {
+          comment_before = true;
+        } else if (first != std::string::npos && text[first] != '\n') {
+          const int indent = static_cast<int>(first - i);
+          if (indent < root_indent || (comment_before && indent == 0))
+            at = At::Start, depth = 0, col = indent, i = first - 1;
+          comment_before = false;
         }
       }
       continue;
