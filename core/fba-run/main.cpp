@@ -354,7 +354,9 @@ int run(int argc, char** argv) {
     return 0;
   }
   if (!vm.count("task")) return usage_error("no task file given");
-  if (timeout < 0) return usage_error("--timeout must be >= 0 seconds");
+  // NaN compares false with everything: said, not taken as "no limit". Infinity and values beyond
+  // the clock's range mean no limit (docs/task-files.md, limits).
+  if (!(timeout >= 0)) return usage_error("--timeout must be a number of seconds >= 0 (0: none); found " + std::to_string(timeout));
   if (!(stop_grace >= 0 && std::isfinite(stop_grace)))
     return usage_error("--stop-grace must be a finite number of seconds >= 0");
   if (!(dot_every >= 0 && dot_every <= 1e6)) return usage_error("--dot-every must be between 0 and 1e6 seconds");

@@ -939,21 +939,36 @@ std::vector<StuckCall> Graph::stop() {
       interrupts.start([n = n.get()] { n->interrupt(); });
     }
   const auto deadline = Clock::now() + grace;
-  const bool joined = executor_->join(options.stop_grace_s);
-  interrupts.wait_until(deadline);
 
-  // Every actuator goes to its safe state, whether or not the other threads returned: in
-  // parallel, each under its own watchdog. After the threads, so that an actuator's safe_state()
-  // does not overlap its own process() unless that one is stuck.
+  // Every actuator goes to its safe state as soon as its own call returned (so that safe_state()
+  // does not overlap its process()), without waiting for the other components' threads: one of
+  // them may be stuck, and a second Ctrl-C meanwhile would leave the actuators unsafe. In
+  // parallel, each under its own watchdog; one still in its own call at the deadline gets it then.
   Watchdog safe;
   std::vector<Node*> actuators;
   std::vector<std::shared_ptr<SafeStateResult>> results;
-  for (auto& n : nodes) {
-    if (n->spec.kind() != Kind::Actuator) continue;
-    actuators.push_back(n.get());
-    results.push_back(std::make_shared<SafeStateResult>());
-    safe.start([n = n.get(), r = results.back()] { *r = n->safe_state(); });
-  }
+  std::vector<std::size_t> watch;  // the watchdog's index of each actuator's call, once started
+  for (auto& n : nodes)
+    if (n->spec.kind() == Kind::Actuator) {
+      actuators.push_back(n.get());
+      results.push_back(std::make_shared<SafeStateResult>());
+      watch.push_back(SIZE_MAX);
+    }
+  std::size_t started_safe = 0;
+  auto start_safe_states = [&](bool even_running) {
+    for (std::size_t i = 0; i < actuators.size(); ++i) {
+      // Not Running: no strand holds it, and a strand that starts now sees the stop first.
+      if (watch[i] != SIZE_MAX || (!even_running && actuators[i]->state.load(std::memory_order_seq_cst) == Node::Running))
+        continue;
+      watch[i] = started_safe++;
+      safe.start([n = actuators[i], r = results[i]] { *r = n->safe_state(); });
+    }
+  };
+  for (start_safe_states(false); started_safe < actuators.size() && Clock::now() < deadline; start_safe_states(false))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const bool joined = executor_->join(std::max(0.0, std::chrono::duration<double>(deadline - Clock::now()).count()));
+  interrupts.wait_until(deadline);
+  start_safe_states(true);
   safe.wait_until(Clock::now() + grace);
 
   std::vector<StuckCall> stuck;
@@ -964,7 +979,7 @@ std::vector<StuckCall> Graph::stop() {
       stuck.push_back({interrupted[i]->config.name, interrupted[i]->spec.type_name(), "interrupt()"});
   std::vector<SafeStateResult> safe_states;
   for (std::size_t i = 0; i < actuators.size(); ++i) {
-    if (safe.returned(i)) {
+    if (safe.returned(watch[i])) {
       safe_states.push_back(*results[i]);
       continue;
     }

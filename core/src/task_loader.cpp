@@ -233,6 +233,8 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
   char quote = 0;
   char prev = '\n';  // the previous character that is not a space
   bool plain = false;  // inside a plain scalar of the flow root
+  int root_indent = 0;  // the column (from 0) where a block root starts
+  bool comment_before = false;  // in a block root: comment lines since its last content line
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     const bool line_start = i == 0 || text[i - 1] == '\n';
@@ -247,7 +249,22 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
       at = At::Start, depth = 0, i += 2, col += 2;
       continue;
     }
-    if (at == At::Rest) continue;
+    if (at == At::Rest) {
+      // A line less indented than a block root ends that root, and so does a comment before a
+      // line at the first column (it ends a plain scalar root): yaml-cpp reads on as if at a new root.
+      if (line_start) {
+        const auto first = text.find_first_not_of(" \t\r", i);
+        if (first != std::string::npos && text[first] == '#') {
+          comment_before = true;
+        } else if (first != std::string::npos && text[first] != '\n') {
+          const int indent = static_cast<int>(first - i);
+          if (indent < root_indent || (comment_before && indent == 0))
+            at = At::Start, depth = 0, col = indent, i = first - 1;
+          comment_before = false;
+        }
+      }
+      continue;
+    }
     if (quote) {  // inside a quoted scalar
       if (quote == '"' && c == '\\') ++i, ++col;
       else if (c == quote && quote == '\'' && i + 1 < text.size() && text[i + 1] == '\'') ++i, ++col;
@@ -276,8 +293,11 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
         return false;
       }
       if (at == At::Start && (c == '[' || c == '{')) at = At::Root, depth = 1;
-      else if (at == At::Start && (c == '"' || c == '\'')) at = At::Root, quote = c;
-      else at = At::Rest;  // a block node, a plain scalar, or a key after a flow root: yaml-cpp copes
+      else if (c == '"' || c == '\'') at = At::Root, quote = c;  // after a root too: yaml-cpp reads on
+      else {
+        if (at == At::Start) root_indent = col - 1;
+        at = At::Rest;  // a block node, a plain scalar, or a key after a flow root: yaml-cpp copes
+      }
       prev = c;
       continue;
     }
@@ -300,11 +320,13 @@ bool check_root_comma(const std::string& text, const std::string& shown, std::ve
 }
 
 // yaml-cpp 0.7 also loops for ever on a ',' that starts a line after a node property (a tag '!x'
-// or an anchor '&x') that ended the line before ("!t\n, x", "- a\n- !t\n, y"; found by the fuzzer).
+// or an anchor '&x') that ended the line before ("!t\n, x", "- a\n- !t\n, y"), or at the first
+// column after comment lines ("a\n# c\n, x"; found by the fuzzer).
 // No task file has that: it is said as the ',' error above.
 bool check_property_comma(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
   auto is_property = [](std::string_view token) { return !token.empty() && (token[0] == '!' || token[0] == '&'); };
   bool after_property = false;  // the last line with content ended with a node property
+  bool after_comment = false;   // comment lines came after it
   std::size_t start = 0;
   for (int line = 1; start <= text.size(); ++line) {
     std::size_t end = text.find('\n', start);
@@ -312,8 +334,13 @@ bool check_property_comma(const std::string& text, const std::string& shown, std
     std::string_view l(text.data() + start, end - start);
     start = end + 1;
     const auto first = l.find_first_not_of(" \t\r");
-    if (first == std::string_view::npos || l[first] == '#') continue;  // blank or a comment: no content
-    if (after_property && l[first] == ',') {
+    if (first == std::string_view::npos) continue;  // blank: no content
+    if (l[first] == '#') {  // a comment ends a plain scalar: a ',' at the next line's start begins a token
+      after_comment = true;
+      continue;
+    }
+    const bool comment_before = std::exchange(after_comment, false);
+    if ((after_property || (comment_before && first == 0)) && l[first] == ',') {
       d.push_back(Diagnostic{Location{shown, line, static_cast<int>(first) + 1},
                              "YAML syntax: ',' separates the entries of a flow list or mapping ([a, b] or {a: 1, b: 2}); "
                              "here it stands outside one"});

@@ -68,6 +68,24 @@ class CountedActuator final : public fba::Component {
   void safe_state() override { g_safe_states.fetch_add(1); }
 };
 
+// Blocks in process(), whatever it is told, until an actuator reached its safe state: stuck for
+// good if the safe states wait for it.
+class StuckUntilSafe final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::filter("test.stuck_until_safe", "Returns from process() only once a safe state was reached.").add(kIn, kOut);
+  }
+  static constexpr fba::In<std::int64_t> kIn{"in", "anything"};
+  static constexpr fba::Out<std::int64_t> kOut{"out", "nothing"};
+  explicit StuckUntilSafe(fba::Context&) {}
+  void process() override {
+    const int seen = g_safe_states.load();
+    g_stuck_entered.fetch_add(1);
+    while (g_safe_states.load() == seen) pause_briefly();
+  }
+  static void pause_briefly() { std::this_thread::sleep_for(std::chrono::milliseconds(1)); }
+};
+
 // Throws an int (not a std::exception) from the call its parameter names.
 class IntThrower final : public fba::Component {
  public:
@@ -151,6 +169,7 @@ class Idle final : public fba::Component {
 }  // namespace
 
 FBA_COMPONENT(Stuck);
+FBA_COMPONENT(StuckUntilSafe);
 FBA_COMPONENT(HangingSafeState);
 FBA_COMPONENT(CountedActuator);
 FBA_COMPONENT(IntThrower);
@@ -217,6 +236,26 @@ connections: [ src.out -> stuck.in, src.out -> sink.in ]
   const std::string summary = fba::summary_json(r, fba::TaskConfig{});
   EXPECT_NE(summary.find("\"call\": \"process()\""), std::string::npos) << summary;
 }  // the task's destructor leaves the stuck component alone
+
+TEST_P(Shutdown, ActuatorsGoSafeWithoutWaitingForAStuckComponentToReturn) {
+  // The stuck filter returns only after an actuator's safe state: were the safe states to wait for
+  // every thread, it would still be stuck when the grace ends, and be reported so.
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 1000000000 } }
+  stuck: { type: test.stuck_until_safe }
+  act: { type: test.counted_actuator }
+connections: [ src.out -> stuck.in, src.out -> act.in ]
+)"),
+                 options(GetParam(), 30));
+  auto stopper = stop_when(task, g_stuck_entered, g_stuck_entered.load());
+  const auto r = task.run();
+  stopper.join();
+  EXPECT_TRUE(r.stuck.empty()) << r.reason;
+  EXPECT_EQ(r.outcome, Outcome::Interrupted) << r.reason;
+  ASSERT_NE(safe_state_of(r, "act"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "act")->status, "reached");
+}
 
 TEST_P(Shutdown, ASafeStateThatNeverReturnsIsNamedAndTheOthersStillRun) {
   fba::Task task(load(R"(

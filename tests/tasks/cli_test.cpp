@@ -96,6 +96,13 @@ TEST(Cli, TimeoutExitsThree) {
 
 // At once, while fba-run is still starting: the signal waits for the watcher, which stops the
 // run in order whatever the phase (the summary says which).
+TEST(Cli, ATimeoutThatIsNotANumberIsRefused) {
+  // NaN compares false with every bound: it was taken as "no limit".
+  const auto r = fba_run({task("chain.yaml"), "--timeout", "nan"});
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--timeout must be a number of seconds >= 0"), std::string::npos) << r.output;
+}
+
 TEST(Cli, SigintAndSigtermStopInOrderWith130And143) {
   for (int sig : {SIGINT, SIGTERM}) {
     const fs::path out = temp_dir("sig");
