@@ -61,9 +61,13 @@ TEST(GraspQuality, ThreeContactsAt120DegreesAroundACylinderAreForceClosure) {
 //  - 4 edges: t runs over the 4 axes orthogonal to e; the 24 wrenches are (-e + mu t, mu e x t).
 //    The weakest direction is a pure torque about the diagonal, u = (0, (1, 1, 1) / sqrt 3): every
 //    e x t is a signed axis, so the wrenches reach at most mu / sqrt 3 along u, and twelve of them
-//    reach it (those with e x t = +x, +y or +z), spanning the facet there. Force directions are
+//    reach it (those with e x t = +x, +y or +z), spanning the facet there. Along any pure torque b
+//    the hull reaches at least mu |b|_inf >= mu / sqrt 3: the 4 edges with e x t = c average to the
+//    pure torque (0, mu c), so the diagonal is the weakest torque. Force directions are
 //    stronger: the 4 edges of contact -e average to the unit force (e, 0), so the hull reaches at
-//    least |a|_inf >= 1/sqrt 3 > mu/sqrt 3 along any pure force a. Epsilon = mu / sqrt 3.
+//    least |a|_inf >= 1/sqrt 3 > mu/sqrt 3 along any pure force a. Epsilon = mu / sqrt 3 (by hand:
+//    the bound along u and along the pure forces and torques; that no mixed direction is weaker is
+//    what this test checks of the hull).
 //  - 8 edges: the diagonal tangents t = (p - q) / sqrt 2 (p, q the other two axes) add
 //    e x t = (e x p - e x q) / sqrt 2, whose component along the diagonal reaches 2 / sqrt 6:
 //    epsilon = mu sqrt(2/3) about the same diagonal.
