@@ -30,15 +30,20 @@ class Camera final : public fba::Component {
   static constexpr auto kMaxFrames = fba::Param<std::int64_t>("max_frames", 0, "stop after this many frames; 0 for no limit").at_least(0);
   static constexpr auto kReadTimeout =
       fba::Param<double>("read_timeout", 0.5, "FFmpeg sources (files, URLs): seconds a read may wait, so that a stop is seen that soon").range(0.01, 60);
+  static constexpr auto kCapture = fba::Param<std::string>(
+      "capture", "stream",
+      "stream: every frame the source delivers; per_pose: one frame per pose received (a wrist camera in a view "
+      "loop, as sim.camera renders one per pose), the frames in between are read and dropped")
+      .choices({"stream", "per_pose"});
   static constexpr fba::EventOut kLost{"lost", "the source stopped delivering frames (end of file, unplugged device); payload: the source"};
 
   static fba::Spec spec() {
     return fba::Spec::sensor("vision.camera", "Captures frames with OpenCV VideoCapture: a device index, a video file, a URL or a GStreamer pipeline.")
-        .add(kPose, kFrame, kSource, kBackend, kCalibration, kMaxFrames, kReadTimeout, kLost)
+        .add(kPose, kFrame, kSource, kBackend, kCalibration, kMaxFrames, kReadTimeout, kCapture, kLost)
         .blocking();  // a read waits for the device, at most read_timeout
   }
 
-  explicit Camera(fba::Context& ctx) : ctx_(ctx), source_(ctx(kSource)), max_frames_(ctx(kMaxFrames)) {
+  explicit Camera(fba::Context& ctx) : ctx_(ctx), source_(ctx(kSource)), max_frames_(ctx(kMaxFrames)), per_pose_(ctx(kCapture) == "per_pose") {
     static const std::map<std::string, int> backends{{"any", cv::CAP_ANY}, {"v4l2", cv::CAP_V4L2}, {"gstreamer", cv::CAP_GSTREAMER},
                                                      {"ffmpeg", cv::CAP_FFMPEG}, {"images", cv::CAP_IMAGES}};
     const int api = backends.at(ctx(kBackend));
@@ -57,6 +62,9 @@ class Camera final : public fba::Component {
     if (api == cv::CAP_FFMPEG) props = {cv::CAP_PROP_READ_TIMEOUT_MSEC, static_cast<int>(ctx(kReadTimeout) * 1000)};
     const bool opened = is_device ? capture_.open(device, api, props) : capture_.open(what, api, props);
     if (!opened || !capture_.isOpened()) throw std::runtime_error("cannot open video source '" + what + "'");
+    // One frame per pose must show the camera where the pose says: a queue of older frames in the
+    // driver would hand out one taken before the arm arrived.
+    if (per_pose_) capture_.set(cv::CAP_PROP_BUFFERSIZE, 1);
     if (const auto calibration = ctx(kCalibration); !calibration.empty()) {
       std::filesystem::path p(calibration);
       if (p.is_relative()) p = ctx.task_dir() / p;
@@ -74,6 +82,7 @@ class Camera final : public fba::Component {
       ctx_.finish();
       return;
     }
+    if (per_pose_ && !ctx_(kPose).has()) return;  // read to keep the source current; no pose, no frame
     auto frame = std::make_shared<fba::Frame>();
     frame->image = image;
     frame->camera = camera_;
@@ -102,6 +111,7 @@ class Camera final : public fba::Component {
   fba::Context& ctx_;
   const std::string source_;
   const std::int64_t max_frames_;
+  const bool per_pose_;
   cv::VideoCapture capture_;
   fba::CameraModel camera_;
   std::atomic<bool> interrupted_{false};

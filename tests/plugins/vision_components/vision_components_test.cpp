@@ -112,6 +112,34 @@ TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
   EXPECT_TRUE(has_event(h.events(), "lost"));
 }
 
+// A wrist camera in the view loop: a frame only for a pose received, as sim.camera renders one
+// per pose; the frames read in between are dropped, so the next one shows the camera where the
+// new pose says.
+TEST(Camera, PerPoseCaptureGivesOneFramePerPoseReceived) {
+  const fba::test::TempDir temp;
+  const std::string video = (temp.path() / "grey.avi").string();
+  {
+    cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 5, cv::Size(64, 48));
+    ASSERT_TRUE(writer.isOpened());
+    for (int i = 0; i < 6; ++i) writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(40 * i)));
+  }
+  ComponentHarness h(registry(), "vision.camera", {{"source", video}, {"backend", "ffmpeg"}, {"capture", "per_pose"}},
+                     {"pose"});
+  EXPECT_TRUE(h.step());  // a frame read, no pose yet: nothing sent
+  EXPECT_TRUE(h.packets("frame").empty());
+  fba::Pose pose;
+  pose.world_from_frame.translation() << 0.1, 0.2, 0.3;
+  h.push<fba::Pose>("pose", pose);
+  EXPECT_TRUE(h.step());
+  ASSERT_EQ(h.packets("frame").size(), 1u);
+  const auto& f = h.packets("frame")[0].get<fba::Frame>();
+  EXPECT_TRUE(f.has_pose);
+  EXPECT_NEAR(f.camera.centre_in_world().z(), 0.3, 1e-12);
+  EXPECT_NEAR(cv::mean(f.image)[0], 40, 8);  // the second frame of the file: the first was read before the pose
+  EXPECT_TRUE(h.step());  // no new pose: the frame is read and dropped
+  EXPECT_EQ(h.packets("frame").size(), 1u);
+}
+
 TEST(Camera, AnUnopenableSourceIsAConfigurationError) {
   EXPECT_THROW(ComponentHarness(registry(), "vision.camera", {{"source", "/nonexistent/video.avi"}, {"backend", "ffmpeg"}}),
                fba::ConfigError);
