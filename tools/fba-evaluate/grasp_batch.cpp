@@ -19,6 +19,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <regex>
 #include <set>
@@ -33,6 +34,7 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/grasp/object_surface.hpp"
+#include "object_placement.hpp"
 #include "grasp_evaluation.hpp"
 
 extern char** environ;
@@ -63,9 +65,10 @@ LIST (paths relative to it):
   timeout_s: 600                       optional: a run still going after this is stopped (SIGTERM,
                                        SIGKILL 20 s later) and is a row "timed out"
   pose_set:                            how a run's object and pose reach the task, as --set
-    - scene.mesh={posed_mesh}          overrides; {mesh}: the mesh's absolute path, {x} {y}
-    - hand.mesh={mesh}                 (metres) {yaw} (degrees): the run's pose, {posed_mesh}: a
-    - hand.object_yaw={yaw}            PLY of the mesh turned by yaw about z, then moved by (x, y)
+    - scene.mesh={mesh}                overrides; {mesh}: the mesh's absolute path, {x} {y}
+    - hand.mesh={mesh}                 (metres) {yaw} (degrees): the run's pose
+    - scene.object_yaw={yaw}
+    - hand.object_yaw={yaw}
   set: [synthesis.max_views=10]        optional: overrides for every run
   variants:                            optional (default: one, "task"): each run once per variant
     - { name: loop }
@@ -73,8 +76,9 @@ LIST (paths relative to it):
   runs:
     - { mesh: ../data/ycb/YcbBanana/model.obj, pose: [0.01, 0, 30], set: [...] }
 
-The pose [x, y, yaw] says where the grasps' frame has the object: the mesh turned by yaw degrees
-about z, then moved by (x, y) metres (sim.hand's object_x, object_y, object_yaw with frame: mesh).
+The pose [x, y, yaw] says where the object stands on the table, in the grasps' frame: the mesh
+turned by yaw degrees about z, moved by (x, y) metres and stood on the table at z = 0 (sim.camera's
+and sim.hand's object_x, object_y, object_yaw with frame: table).
 Each grasp is evaluated on the mesh placed so. Views: the grasp's views when one was selected, else
 the views in the carver's model (vision.octree_carver's `updated` events); nodes: the carver's
 nodes visited summed over its updates. Components are found by type, not by name.
@@ -89,6 +93,16 @@ struct RunSpec {
   double x = 0, y = 0, yaw = 0;
   std::vector<std::string> set;
 };
+
+// The mesh where the run had it: stood on the table (z = 0) at (x, y), turned by yaw, exactly as
+// sim.camera and sim.hand place it with frame: table (the grasps' frame).
+TriangleMesh placed_on_table(const RunSpec& r) {
+  sim_hand::ObjectPlacement p;
+  p.x = r.x;
+  p.y = r.y;
+  p.yaw = r.yaw * std::numbers::pi / 180;
+  return sim_hand::place_on_table(geometry::load_mesh(r.mesh), p);
+}
 
 struct Variant {
   std::string name;
@@ -169,10 +183,10 @@ class ListReader {
 // The placeholders pose_set may use; any other {word} is a mistake in the list.
 void check_placeholders(const ListReader& r, const YAML::Node& at, const std::string& s) {
   static const std::regex word(R"(\{([A-Za-z_]+)\})");
-  static const std::set<std::string> known = {"mesh", "posed_mesh", "x", "y", "yaw"};
+  static const std::set<std::string> known = {"mesh", "x", "y", "yaw"};
   for (auto it = std::sregex_iterator(s.begin(), s.end(), word); it != std::sregex_iterator(); ++it)
     if (!known.count((*it)[1].str()))
-      r.fail(at, "pose_set: unknown placeholder " + (*it)[0].str() + " in '" + s + "'; expected {mesh}, {posed_mesh}, {x}, {y} or {yaw}");
+      r.fail(at, "pose_set: unknown placeholder " + (*it)[0].str() + " in '" + s + "'; expected {mesh}, {x}, {y} or {yaw}");
 }
 
 BatchList read_list(const std::string& file) {
@@ -261,26 +275,17 @@ struct Job {
   double elapsed_s = 0, cpu_s = 0;
 };
 
-// Builds the job's command line; writes the posed mesh when the list asks for it.
+// Builds the job's command line.
 void prepare(Job& job, const BatchList& l, const std::string& fba_run) {
   const RunSpec& r = *job.run;
   fs::create_directories(job.dir);
-  const fs::path posed = job.dir / "object.ply";
   std::vector<std::string> sets = l.set;
   for (const auto& t : l.pose_set) {
     std::string s = replace_all(t, "{mesh}", r.mesh);
-    s = replace_all(s, "{posed_mesh}", posed.string());
     s = replace_all(s, "{x}", shortest(r.x));
     s = replace_all(s, "{y}", shortest(r.y));
     s = replace_all(s, "{yaw}", shortest(r.yaw));
-    if (t.find("{posed_mesh}") != std::string::npos && !fs::exists(posed)) {
-      try {
-        geometry::write_ply(load_posed(r.mesh, table_pose(r.x, r.y, r.yaw)), posed);
-      } catch (const std::exception& e) {
-        job.setup_error = std::string("the mesh does not load: ") + e.what();
-        return;
-      }
-    }
+
     sets.push_back(std::move(s));
   }
   sets.insert(sets.end(), job.variant->set.begin(), job.variant->set.end());
@@ -463,7 +468,7 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
       row.selected = true;
       row.score = g->scores.total;
       if (!g->views.empty()) row.views = static_cast<int>(g->views.size());
-      const grasp::ObjectSurface surface(load_posed(j.run->mesh, table_pose(j.run->x, j.run->y, j.run->yaw)));
+      const grasp::ObjectSurface surface(placed_on_table(*j.run));
       std::array<GraspContact, 3> placed;
       for (int k = 0; k < 3; ++k) placed[k] = surface.place(g->contacts[k]).contact;
       const auto q = surface.evaluate(placed, quality);
