@@ -23,39 +23,6 @@ fba::LoadOptions profile(const std::string& name, std::vector<std::string> sets 
 
 }  // namespace
 
-// As GraspSimTask's test of grasp_sim.yaml: the run ends on the hand's verdict, after the arm took
-// the camera to the initial views and synthesis selected a grasp.
-TEST(GraspTask, TheSimProfileRunsTheLoopToTheHandsVerdict) {
-  fba::RunOptions options;
-  options.executor = fba::ExecutorKind::Deterministic;
-  options.timeout_s = 600;  // a hang detector only: the run takes about a second
-  fba::Task task(fba::load_task(kGrasp, registry(), profile("sim")), options);
-  const auto r = task.run();
-  ASSERT_TRUE(r.final_event) << r.reason;
-  EXPECT_EQ(r.final_event->source, "hand") << r.reason;
-  bool selected = false;
-  std::size_t arrivals = 0;
-  for (const auto& e : r.events) {
-    selected = selected || (e.source == "synthesis" && e.name == "grasp_selected");
-    arrivals += e.source == "arm" && e.name == "arrived";
-  }
-  EXPECT_TRUE(selected);
-  EXPECT_GE(arrivals, 3u);
-  EXPECT_NE(r.final_event->payload.find("\"held\""), std::string::npos) << r.final_event->payload;
-}
-
-// The slots of grasp.yaml, bound by the sim profile, offer what grasp_sim.yaml's components offer:
-// the same loop.
-TEST(GraspTask, TheSimProfileBindsTheComponentsOfGraspSim) {
-  const auto grasp = fba::load_task(kGrasp, registry());  // the task's default profile: sim
-  EXPECT_EQ(grasp.profile, "sim");
-  const auto sim = fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_sim.yaml", registry());
-  for (const auto& [slot, component] : {std::pair{"arm", "arm"}, {"camera", "scene"}, {"hand", "hand"}}) {
-    const auto diff = fba::interface_differences(fba::slot_interface(grasp, slot), fba::interface_of(sim.find(component)->type->spec));
-    EXPECT_TRUE(diff.empty()) << slot << ": " << diff.front();
-  }
-}
-
 // The object is one parameter: the camera's mesh and the hand's cannot be set apart.
 TEST(GraspTask, TheObjectIsOneParameterOfCameraAndHand) {
   try {

@@ -138,7 +138,7 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   options.timeout_s = 600;  // a hang detector only: the run takes a few seconds
   const fba::test::TempDir out;
   options.output_dir = out.path();
-  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_sim.yaml", registry()), options);
+  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_sim.yaml", registry()), options);  // the link to grasp.yaml
   const auto r = task.run();
   ASSERT_TRUE(r.final_event) << r.reason;
   EXPECT_EQ(r.final_event->source, "hand") << r.reason;

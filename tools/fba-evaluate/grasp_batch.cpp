@@ -60,15 +60,13 @@ median epsilon against the random sets' 99th percentile, % held in the lift test
 until a grasp was selected, wall and CPU seconds per run, and octree nodes processed.
 
 LIST (paths relative to it):
-  task: grasp_sim.yaml                 the task file
+  task: grasp.yaml                     the task file
   fba_run_args: [-e, deterministic]    optional: more fba-run arguments, verbatim
   timeout_s: 600                       optional: a run still going after this is stopped (SIGTERM,
                                        SIGKILL 20 s later) and is a row "timed out"
   pose_set:                            how a run's object and pose reach the task, as --set
-    - scene.mesh={mesh}                overrides; {mesh}: the mesh's absolute path, {x} {y}
-    - hand.mesh={mesh}                 (metres) {yaw} (degrees): the run's pose
-    - scene.object_yaw={yaw}
-    - hand.object_yaw={yaw}
+    - mesh={mesh}                      overrides; {mesh}: the mesh's absolute path, {x} {y}
+    - object_yaw={yaw}                 (metres) {yaw} (degrees): the run's pose
   set: [synthesis.max_views=10]        optional: overrides for every run
   variants:                            optional (default: one, "task"): each run once per variant
     - { name: loop }

@@ -1,4 +1,4 @@
-// fba-evaluate grasp --batch from the shell: tasks/grasp_sim.yaml run by fba-run on a small list,
+// fba-evaluate grasp --batch from the shell: tasks/grasp.yaml run by fba-run on a small list,
 // the table with the issue's columns, and a run that cannot start its task as a row with the reason.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -59,9 +59,9 @@ std::string mustard() { return std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMusta
 TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailedRunAsARowWithItsReason) {
   const fs::path l = dir_ / "list.yaml";
   // Depth 4 and at most 3 views: quick; whether a grasp is found there does not matter here.
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp_sim.yaml\n"
+  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
                    << "fba_run_args: [-e, deterministic]\n"
-                   << "pose_set:\n  - scene.mesh={mesh}\n  - hand.mesh={mesh}\n  - scene.object_yaw={yaw}\n  - hand.object_yaw={yaw}\n"
+                   << "pose_set:\n  - mesh={mesh}\n  - object_yaw={yaw}\n"
                    << "set: [carver.max_depth=4, synthesis.max_views=3]\n"
                    << "variants:\n  - { name: loop }\n  - { name: uniform, set: [carver.occupancy_threshold=0] }\n"
                    << "runs:\n"
@@ -105,7 +105,7 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
 TEST_F(EvaluateGraspBatch, AMeshTheTaskCannotLoadIsARowWithFbaRunsReason) {
   // Given to fba-run as it is: the child refuses the task, and its own message is the reason.
   const fs::path l = dir_ / "list.yaml";
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp_sim.yaml\n"
+  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
                    << "pose_set:\n  - scene.mesh={mesh}\n  - hand.mesh={mesh}\n"
                    << "runs:\n  - { mesh: " << (dir_ / "missing.obj").string() << " }\n";
   const Result r = run("--batch " + l.string() + " --random 0 -o " + (dir_ / "out").string());
@@ -123,7 +123,7 @@ TEST_F(EvaluateGraspBatch, AHungOrCrashedRunIsARowAndTheBatchGoesOn) {
   std::ofstream(crash) << "#!/bin/sh\nkill -SEGV $$\n";
   for (const auto& f : {hang, crash}) fs::permissions(f, fs::perms::owner_all);
   const fs::path l = dir_ / "list.yaml";
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp_sim.yaml\n"
+  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
                    << "timeout_s: 0.5\n"
                    << "runs:\n  - { mesh: " << mustard() << " }\n";
   Result r = run("--batch " + l.string() + " --random 0 --fba-run " + hang.string() + " -o " + (dir_ / "hang").string());
@@ -140,7 +140,7 @@ TEST_F(EvaluateGraspBatch, AHungOrCrashedRunIsARowAndTheBatchGoesOn) {
 
 TEST_F(EvaluateGraspBatch, ABadListIsAClearErrorWithItsPlace) {
   const fs::path l = dir_ / "list.yaml";
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp_sim.yaml\n"
+  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
                    << "pose_set:\n  - scene.mesh={mesh}\n  - hand.object_yaw={angle}\n"
                    << "runs:\n  - { mesh: m.obj }\n";
   Result r = run("--batch " + l.string());
@@ -148,7 +148,7 @@ TEST_F(EvaluateGraspBatch, ABadListIsAClearErrorWithItsPlace) {
   EXPECT_NE(r.output.find("list.yaml:4:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("unknown placeholder {angle}"), std::string::npos) << r.output;
 
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp_sim.yaml\n"
+  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
                    << "runs:\n  - { mesh: m.obj, pose: [0, 0] }\n";
   r = run("--batch " + l.string());
   EXPECT_EQ(r.status, 2) << r.output;
