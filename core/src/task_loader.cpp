@@ -1,6 +1,7 @@
 // Task files: YAML in, a flat checked TaskConfig out. Every problem becomes a Diagnostic with
 // file, line and column, and all of them are reported together.
 #include <yaml-cpp/depthguard.h>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -404,14 +405,43 @@ std::optional<Diagnostic> long_key(const std::string& text, const std::string& s
                     "a key of " + std::to_string(colon - start) + " characters; YAML allows keys (names) of at most 1024 characters"};
 }
 
+// Where a document's first node is, and nothing else: for counting documents without building them.
+struct DocumentProbe : YAML::EventHandler {
+  YAML::Mark node = YAML::Mark::null_mark();
+  bool seen = false;
+  void at(const YAML::Mark& m) {
+    if (!seen) node = m;
+    seen = true;
+  }
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& m, YAML::anchor_t) override { at(m); }
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { at(m); }
+  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t, const std::string&) override { at(m); }
+  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override { at(m); }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override { at(m); }
+  void OnMapEnd() override {}
+};
+
 // One YAML document, or nothing with the reasons added to `d`. A second document would be
 // ignored by a plain load, and its content silently lost.
 std::optional<YAML::Node> parse_yaml(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
   if (!check_nesting(text, shown, d) || !check_root_comma(text, shown, d) || !check_property_comma(text, shown, d))
     return std::nullopt;
-  std::vector<YAML::Node> docs;
+  // Documents are counted with a parser that stops after the second: yaml-cpp 0.7's LoadAll never
+  // returns when a stray ',' makes its parser report a document without consuming anything (the
+  // guards above catch the known shapes; this bound catches the rest), and one document more than
+  // the first is all it takes to refuse the file.
+  YAML::Node root;
+  DocumentProbe first, second;
+  bool more = false;
   try {
-    docs = YAML::LoadAll(text);
+    std::istringstream in(text);
+    YAML::Parser parser(in);
+    if (!parser.HandleNextDocument(first)) return YAML::Node();
+    more = parser.HandleNextDocument(second);
+    if (!more) root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
     if (auto k = long_key(text, shown, e.mark)) d.push_back(*k);
     else d.push_back(Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e)});
@@ -420,23 +450,37 @@ std::optional<YAML::Node> parse_yaml(const std::string& text, const std::string&
     d.push_back(Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, "YAML: " + e.msg});
     return std::nullopt;
   }
-  if (docs.empty()) return YAML::Node();
-  if (docs.size() > 1) {
-    // The second document starts at its '---' line, at or before its first node.
+  if (more) {
     const auto lines = lines_of(text);
-    int line = docs[1].Mark().line >= 0 ? docs[1].Mark().line : static_cast<int>(lines.size()) - 1;
+    const YAML::Mark m = second.node;
+    if (m.line >= 0 && static_cast<std::size_t>(m.line) < lines.size() && m.column >= 0 &&
+        static_cast<std::size_t>(m.column) < lines[static_cast<std::size_t>(m.line)].size() &&
+        lines[static_cast<std::size_t>(m.line)][static_cast<std::size_t>(m.column)] == ',') {
+      d.push_back(Diagnostic{Location{shown, m.line + 1, m.column + 1},
+                             "a ',' where a node should start; outside [...] and {...} a comma separates nothing"});
+      return std::nullopt;
+    }
+    // The second document starts at its '---' line, at or before its first node.
+    int line = m.line >= 0 ? m.line : static_cast<int>(lines.size()) - 1;
+    bool marker = false;
     for (int i = std::min(line, static_cast<int>(lines.size()) - 1); i >= 0; --i) {
       const std::string& l = lines[static_cast<std::size_t>(i)];
       if (l.rfind("---", 0) == 0 && (l.size() == 3 || l[3] == ' ' || l[3] == '\t' || l[3] == '\r')) {
         line = i;
+        marker = true;
         break;
       }
     }
-    d.push_back(Diagnostic{Location{shown, std::max(line, 0) + 1, 1},
-                           "a second YAML document ('---') in one file; a task or composite file is one document"});
+    if (marker)
+      d.push_back(Diagnostic{Location{shown, std::max(line, 0) + 1, 1},
+                             "a second YAML document ('---') in one file; a task or composite file is one document"});
+    else
+      d.push_back(Diagnostic{Location{shown, std::max(m.line, 0) + 1, std::max(m.column, 0) + 1},
+                             "YAML syntax: the document ends before this point and nothing here continues it (a quote "
+                             "or ',' out of place before it?)"});
     return std::nullopt;
   }
-  return docs[0];
+  return root;
 }
 
 // yaml-cpp keeps every duplicate key of a mapping (a lookup finds the first) and reads the merge
