@@ -1,10 +1,6 @@
 // The programs, as a person runs them: fba-canopen-arm-emulator on a new pseudo-terminal, and the
 // master (in this process, or as fba-canopen) opening that terminal as it would /dev/ttyUSB0.
-#include <poll.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <memory>
@@ -18,77 +14,13 @@
 #include "fba/can/open_bus.hpp"
 #include "fba/canopen/cia402.hpp"
 #include "fba/canopen/master.hpp"
-
-extern char** environ;
+#include "support/child_process.hpp"
 
 using namespace std::chrono_literals;
 
+using fba::test::Child;
+
 namespace {
-
-// A child process with its stdout and stderr on a pipe; killed and reaped when it goes out of scope.
-class Child {
- public:
-  explicit Child(std::vector<std::string> args) {
-    int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
-    posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
-    posix_spawn_file_actions_addclose(&actions, fds[0]);
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    ::close(fds[1]);
-    out_ = fds[0];
-    if (rc != 0) throw std::runtime_error("cannot start " + args[0]);
-  }
-  ~Child() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-    ::close(out_);
-  }
-  // Output until `needle` appears or the timeout passes (then whatever came).
-  std::string read_until(const std::string& needle, std::chrono::milliseconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (output_.find(needle) == std::string::npos) {
-      const auto left =
-          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-      if (left.count() <= 0) break;
-      pollfd p{out_, POLLIN, 0};
-      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) break;
-      char buffer[512];
-      const ssize_t n = ::read(out_, buffer, sizeof buffer);
-      if (n <= 0) break;
-      output_.append(buffer, static_cast<std::size_t>(n));
-    }
-    return output_;
-  }
-  // The exit status after `signal` (0: none sent) once it ends; -1 if it did not end in time.
-  int wait(int signal, std::chrono::milliseconds timeout) {
-    if (signal) ::kill(pid_, signal);
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    for (;;) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        read_until("\x01", 100ms);  // what is left in the pipe
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      if (std::chrono::steady_clock::now() >= deadline) return -1;
-      std::this_thread::sleep_for(5ms);
-    }
-  }
-
- private:
-  pid_t pid_ = -1;
-  int out_ = -1;
-  std::string output_;
-};
 
 // Starts the emulator with `extra` options and returns it with the terminal's path.
 std::pair<std::unique_ptr<Child>, std::string> start_emulator(std::vector<std::string> extra = {}) {

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 extern char** environ;
@@ -60,14 +61,21 @@ class Child {
     }
     return output_;
   }
-  // The exit status after `signal` (0: none sent).
-  int wait(int signal) {
+  // The exit status after `signal` (0: none sent) once it ends; -1 if it did not end within `limit`
+  // (a hang detector, not a speed check).
+  int wait(int signal, std::chrono::milliseconds limit = std::chrono::seconds(60)) {
     if (signal) ::kill(pid_, signal);
-    int status = 0;
-    ::waitpid(pid_, &status, 0);
-    pid_ = -1;
-    read_until("\x01", std::chrono::seconds(1));  // what is left in the pipe
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    for (;;) {
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        read_until("\x01", std::chrono::milliseconds(100));  // what is left in the pipe
+        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      }
+      if (std::chrono::steady_clock::now() >= deadline) return -1;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
   }
 
  private:
