@@ -3,23 +3,20 @@
 // whose path it prints (give that path to the driver as it would /dev/ttyUSB0); with --socketcan it
 // sits on a kernel CAN interface (vcan0) instead. Faults can be scheduled to try the driver's
 // reactions. Ends on SIGINT or SIGTERM.
-#include <signal.h>
 #include <unistd.h>
 
-#include <atomic>
-#include <chrono>
 #include <cstdio>
-#include <filesystem>
+#include <functional>
+#include <memory>
 #include <iostream>
-#include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "fba/can/pty.hpp"
 #include "fba/can/slcan_adapter.hpp"
 #include "fba/can/socketcan.hpp"
 #include "fba/emulators/canopen_arm.hpp"
+#include "fba/emulators/program.hpp"
 
 namespace {
 
@@ -36,54 +33,16 @@ constexpr const char* kUsage = R"(usage: fba-canopen-arm-emulator [options]
   --disconnect-after S    close the line after S seconds (a pulled cable)
 )";
 
-std::atomic<bool> g_stop{false};
-void on_signal(int) { g_stop = true; }
+const fba::emulators::ProgramOptions kCli{"fba-canopen-arm-emulator", kUsage};
 
-[[noreturn]] void usage_error(const std::string& message) {
-  std::cerr << "fba-canopen-arm-emulator: " << message << "\n" << kUsage;
-  std::exit(2);
-}
-
-double seconds(const std::string& text, const std::string& option) {
-  try {
-    std::size_t used = 0;
-    const double s = std::stod(text, &used);
-    if (used == text.size() && s >= 0 && s < 1e6) return s;
-  } catch (const std::exception&) {
-  }
-  usage_error(option + ": '" + text + "' is not a number of seconds (0 to 1e6)");
-}
-
-int integer(const std::string& text, const std::string& option, int lo, int hi, int base = 10) {
-  try {
-    std::size_t used = 0;
-    const long v = std::stol(text, &used, base);
-    if (used == text.size() && v >= lo && v <= hi) return static_cast<int>(v);
-  } catch (const std::exception&) {
-  }
-  usage_error(option + ": '" + text + "' is not an integer in " + std::to_string(lo) + ".." + std::to_string(hi));
-}
-
-std::vector<std::string> split(const std::string& text, char separator) {
-  std::vector<std::string> parts;
-  std::stringstream in(text);
-  for (std::string part; std::getline(in, part, separator);) parts.push_back(part);
-  return parts;
-}
-
-struct Scheduled {
-  double at;
-  std::function<void()> action;
-  bool repeat_every = false;
-  double period = 0;
-};
+double seconds(const std::string& text, const std::string& option) { return kCli.number(text, option, 0, 1e6); }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   fba::emulators::CanopenArmOptions options;
   std::string link, socketcan;
-  std::vector<Scheduled> schedule;
+  std::vector<fba::emulators::ScheduledFault> schedule;
   fba::emulators::CanopenArmEmulator* emulator = nullptr;  // the actions below run once it exists
   std::vector<std::string> args(argv + 1, argv + argc);
   for (std::size_t i = 0; i < args.size(); ++i) {
@@ -92,50 +51,44 @@ int main(int argc, char** argv) {
       std::cout << kUsage;
       return 0;
     }
-    if (i + 1 >= args.size()) usage_error(a == "" ? "an empty argument" : "'" + a + "' needs a value or is unknown");
+    if (i + 1 >= args.size()) kCli.fail(a == "" ? "an empty argument" : "'" + a + "' needs a value or is unknown");
     const std::string v = args[++i];
     if (a == "--nodes") {
       options.nodes.clear();
-      for (const auto& id : split(v, ',')) options.nodes.push_back(integer(id, a, 1, 127));
+      for (const auto& id : kCli.split(v, ',')) options.nodes.push_back(kCli.integer(id, a, 1, 127));
     } else if (a == "--link") {
       link = v;
     } else if (a == "--socketcan") {
       socketcan = v;
     } else if (a == "--heartbeat-ms") {
-      options.heartbeat_ms = static_cast<std::uint16_t>(integer(v, a, 0, 65535));
+      options.heartbeat_ms = static_cast<std::uint16_t>(kCli.integer(v, a, 0, 65535));
     } else if (a == "--velocity") {
-      options.profile_velocity = static_cast<std::uint32_t>(integer(v, a, 1, 2'000'000'000));
+      options.profile_velocity = static_cast<std::uint32_t>(kCli.integer(v, a, 1, 2'000'000'000));
     } else if (a == "--silence-after") {
-      const auto p = split(v, ':');
-      if (p.size() != 2) usage_error(a + " takes S:NODE, not '" + v + "'");
-      const int node = integer(p[1], a, 1, 127);
+      const auto p = kCli.fields(v, a, 2, "S:NODE");
+      const int node = kCli.integer(p[1], a, 1, 127);
       schedule.push_back({seconds(p[0], a), [&emulator, node] { emulator->silence(node); }});
     } else if (a == "--fault-after") {
-      const auto p = split(v, ':');
-      if (p.size() != 3) usage_error(a + " takes S:NODE:CODE, not '" + v + "'");
-      const int node = integer(p[1], a, 1, 127);
-      const auto code = static_cast<std::uint16_t>(integer(p[2], a, 0, 0xFFFF, 16));
+      const auto p = kCli.fields(v, a, 3, "S:NODE:CODE");
+      const int node = kCli.integer(p[1], a, 1, 127);
+      const auto code = static_cast<std::uint16_t>(kCli.integer(p[2], a, 0, 0xFFFF, 16));
       schedule.push_back({seconds(p[0], a), [&emulator, node, code] { emulator->inject_fault(node, code); }});
     } else if (a == "--reboot-after") {
-      const auto p = split(v, ':');
-      if (p.size() != 2) usage_error(a + " takes S:NODE, not '" + v + "'");
-      const int node = integer(p[1], a, 1, 127);
+      const auto p = kCli.fields(v, a, 2, "S:NODE");
+      const int node = kCli.integer(p[1], a, 1, 127);
       schedule.push_back({seconds(p[0], a), [&emulator, node] { emulator->reboot(node); }});
     } else if (a == "--garbage-every") {
       const double s = seconds(v, a);
-      if (s <= 0) usage_error(a + " must be more than 0 seconds");
-      schedule.push_back({s, [&emulator] { emulator->inject_garbage(); }, true, s});
+      if (s <= 0) kCli.fail(a + " must be more than 0 seconds");
+      schedule.push_back({s, [&emulator] { emulator->inject_garbage(); }, s});
     } else if (a == "--disconnect-after") {
       schedule.push_back({seconds(v, a), [&emulator] { emulator->disconnect(); }});
     } else {
-      usage_error("unknown option '" + a + "'");
+      kCli.fail("unknown option '" + a + "'");
     }
   }
 
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  fba::emulators::catch_stop_signals();
 
   try {
     std::unique_ptr<fba::can::CanBus> bus;
@@ -152,37 +105,14 @@ int main(int argc, char** argv) {
           std::make_unique<fba::can::slcan::SlcanAdapter>(std::move(pty.master), "emulator:" + pty.slave_path);
       noise = fba::emulators::noise_for(*adapter);
       bus = std::move(adapter);
-      if (!link.empty()) {
-        std::error_code ec;
-        if (std::filesystem::is_symlink(link, ec)) std::filesystem::remove(link, ec);
-        std::filesystem::create_symlink(pty.slave_path, link);
-      }
+      fba::emulators::link_terminal(pty.slave_path, link);
       std::cout << "CANopen arm emulator: SLCAN adapter on " << pty.slave_path
                 << (link.empty() ? "" : " (link " + link + ")") << std::endl;
     }
     fba::emulators::CanopenArmEmulator emu(*bus, options, noise);
     emulator = &emu;
-    std::string reason;
-    std::atomic<bool> ended{false};
-    std::thread runner([&] {
-      reason = emu.run();
-      ended = true;
-    });
-    const auto start = std::chrono::steady_clock::now();
-    while (!g_stop) {
-      const double now = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      for (auto& s : schedule)
-        if (s.at >= 0 && now >= s.at) {
-          s.action();
-          s.at = s.repeat_every ? s.at + s.period : -1;
-        }
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-      if (ended) break;
-    }
-    emu.stop();
-    runner.join();
-    if (!link.empty()) std::filesystem::remove(link);
-    std::cout << "CANopen arm emulator: " << (g_stop ? "stopped" : reason) << std::endl;
+    const std::string end = fba::emulators::run_device([&] { return emu.run(); }, [&] { emu.stop(); }, schedule, link);
+    std::cout << "CANopen arm emulator: " << end << std::endl;
   } catch (const std::exception& e) {
     std::cerr << "fba-canopen-arm-emulator: " << e.what() << std::endl;
     return 1;

@@ -1,0 +1,119 @@
+// What every emulator program does around its device: read options with clear errors, link the
+// pseudo-terminal where asked, run the device until SIGINT/SIGTERM or until it ends by itself,
+// and fire the scheduled faults on time meanwhile. Header only: each program is one file.
+#pragma once
+
+#include <signal.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace fba::emulators {
+
+// Option parsing for one program: every mistake ends the program with exit 2, the reason and the usage.
+struct ProgramOptions {
+  const char* name;   // "fba-robotiq-3f-emulator"
+  const char* usage;  // the whole usage text
+
+  [[noreturn]] void fail(const std::string& message) const {
+    std::cerr << name << ": " << message << "\n" << usage;
+    std::exit(2);
+  }
+  double number(const std::string& text, const std::string& option, double lo, double hi) const {
+    try {
+      std::size_t used = 0;
+      const double v = std::stod(text, &used);
+      if (used == text.size() && v >= lo && v <= hi) return v;
+    } catch (const std::exception&) {
+    }
+    fail(option + ": '" + text + "' is not a number in " + std::to_string(lo) + ".." + std::to_string(hi));
+  }
+  int integer(const std::string& text, const std::string& option, int lo, int hi, int base = 10) const {
+    try {
+      std::size_t used = 0;
+      const long v = std::stol(text, &used, base);
+      if (used == text.size() && v >= lo && v <= hi) return static_cast<int>(v);
+    } catch (const std::exception&) {
+    }
+    fail(option + ": '" + text + "' is not an integer in " + std::to_string(lo) + ".." + std::to_string(hi));
+  }
+  static std::vector<std::string> split(const std::string& text, char separator) {
+    std::vector<std::string> out;
+    std::size_t from = 0;
+    for (std::size_t at; (at = text.find(separator, from)) != std::string::npos; from = at + 1)
+      out.push_back(text.substr(from, at - from));
+    out.push_back(text.substr(from));
+    return out;
+  }
+  // "S:NODE" and the like: exactly `parts` pieces between ':'.
+  std::vector<std::string> fields(const std::string& text, const std::string& option, std::size_t parts, const char* form) const {
+    auto out = split(text, ':');
+    if (out.size() != parts) fail(option + " takes " + form + ", not '" + text + "'");
+    return out;
+  }
+};
+
+// A fault to inject `at` seconds after the start; again every `period` seconds when that is > 0.
+struct ScheduledFault {
+  double at;
+  std::function<void()> action;
+  double period = 0;
+};
+
+// Makes `link` (if given) a symbolic link to the pseudo-terminal, replacing an older link.
+inline void link_terminal(const std::string& slave_path, const std::string& link) {
+  if (link.empty()) return;
+  std::error_code ec;
+  if (std::filesystem::is_symlink(link, ec)) std::filesystem::remove(link, ec);
+  std::filesystem::create_symlink(slave_path, link);
+}
+
+namespace detail {
+inline std::atomic<bool> stop_signal{false};
+inline void on_stop_signal(int) { stop_signal = true; }
+}  // namespace detail
+
+// SIGINT and SIGTERM end run_device's loop instead of the process: before the terminal is opened,
+// so that a stop never leaves a link behind.
+inline void catch_stop_signals() {
+  struct sigaction sa {};
+  sa.sa_handler = detail::on_stop_signal;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+// Runs `run` (the device; returns why it ended) on its own thread until it ends or a stop signal
+// comes, firing `faults` on time; then `stop` and the join. Returns "stopped" or the device's reason,
+// and removes `link`.
+inline std::string run_device(const std::function<std::string()>& run, const std::function<void()>& stop,
+                              std::vector<ScheduledFault> faults, const std::string& link) {
+  std::string reason;
+  std::atomic<bool> ended{false};
+  std::thread runner([&] {
+    reason = run();
+    ended = true;
+  });
+  const auto start = std::chrono::steady_clock::now();
+  while (!detail::stop_signal && !ended) {
+    const double now = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    for (auto& f : faults)
+      if (f.at >= 0 && now >= f.at) {
+        f.action();
+        f.at = f.period > 0 ? f.at + f.period : -1;
+      }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  stop();
+  runner.join();
+  if (!link.empty()) std::filesystem::remove(link);
+  return detail::stop_signal ? "stopped" : reason;
+}
+
+}  // namespace fba::emulators
