@@ -954,11 +954,19 @@ std::vector<StuckCall> Graph::stop() {
       results.push_back(std::make_shared<SafeStateResult>());
       watch.push_back(SIZE_MAX);
     }
+  // An actuator that is being interrupted goes safe once its interrupt() returned: a driver's
+  // interrupt() cuts its waits on the device, and arriving during safe_state() it would cut those.
+  std::vector<std::size_t> interrupt_of(actuators.size(), SIZE_MAX);
+  for (std::size_t i = 0; i < actuators.size(); ++i)
+    for (std::size_t k = 0; k < interrupted.size(); ++k)
+      if (interrupted[k] == actuators[i]) interrupt_of[i] = k;
   std::size_t started_safe = 0;
   auto start_safe_states = [&](bool even_running) {
     for (std::size_t i = 0; i < actuators.size(); ++i) {
+      if (watch[i] != SIZE_MAX) continue;
       // Not Running: no strand holds it, and a strand that starts now sees the stop first.
-      if (watch[i] != SIZE_MAX || (!even_running && actuators[i]->state.load(std::memory_order_seq_cst) == Node::Running))
+      if (!even_running && (actuators[i]->state.load(std::memory_order_seq_cst) == Node::Running ||
+                            (interrupt_of[i] != SIZE_MAX && !interrupts.returned(interrupt_of[i]))))
         continue;
       watch[i] = started_safe++;
       safe.start([n = actuators[i], r = results[i]] { *r = n->safe_state(); });

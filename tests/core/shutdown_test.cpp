@@ -155,6 +155,32 @@ class AlwaysFails final : public fba::Component {
   void interrupt() override {}  // process() never waits
 };
 
+// A driver-like actuator: its interrupt() cuts waits on the device and takes a while, and a
+// safe_state() that starts before interrupt() returned would have its own waits cut (it says so).
+std::atomic<int> g_interrupt_then_safe_calls{0};
+
+class InterruptThenSafe final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::actuator("test.interrupt_then_safe", "safe_state() fails unless its interrupt() returned first.")
+        .add(kIn)
+        .blocking();
+  }
+  static constexpr fba::OptionalIn<std::int64_t> kIn{"in", "anything"};
+  explicit InterruptThenSafe(fba::Context&) {}
+  void process() override { g_interrupt_then_safe_calls.fetch_add(1); }
+  void interrupt() override {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // widens the window; no bound is checked
+    interrupted_ = true;
+  }
+  void safe_state() override {
+    if (!interrupted_) throw std::runtime_error("safe_state() began before interrupt() returned");
+  }
+
+ private:
+  std::atomic<bool> interrupted_{false};
+};
+
 // Free-running, produces nothing, never finishes.
 class Idle final : public fba::Component {
  public:
@@ -176,6 +202,7 @@ FBA_COMPONENT(IntThrower);
 FBA_COMPONENT(ThrowingInterrupt);
 FBA_COMPONENT(AlwaysFails);
 FBA_COMPONENT(Idle);
+FBA_COMPONENT(InterruptThenSafe);
 
 namespace {
 
@@ -255,6 +282,23 @@ connections: [ src.out -> stuck.in, src.out -> act.in ]
   EXPECT_EQ(r.outcome, Outcome::Interrupted) << r.reason;
   ASSERT_NE(safe_state_of(r, "act"), nullptr);
   EXPECT_EQ(safe_state_of(r, "act")->status, "reached");
+}
+
+// A blocking actuator is interrupted at the stop; its safe state waits for that call to return,
+// so the interrupt cannot cut the safe state's own waits on the device.
+TEST_P(Shutdown, AnActuatorGoesSafeOnlyAfterItsInterruptReturned) {
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 1000000000 } }
+  act: { type: test.interrupt_then_safe }
+connections: [ src.out -> act.in ]
+)"),
+                 options(GetParam(), 30));
+  auto stopper = stop_when(task, g_interrupt_then_safe_calls, g_interrupt_then_safe_calls.load());
+  const auto r = task.run();
+  stopper.join();
+  ASSERT_NE(safe_state_of(r, "act"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "act")->status, "reached") << safe_state_of(r, "act")->message;
 }
 
 TEST_P(Shutdown, ASafeStateThatNeverReturnsIsNamedAndTheOthersStillRun) {

@@ -13,26 +13,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "support/run_command.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
+using Result = fba::test::CommandResult;
 
-Result run(const std::string& args) {
-  Result r;
-  FILE* p = popen((std::string("'") + FBA_EVALUATE + "' grasp " + args + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-  const int status = pclose(p);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+Result run(const std::string& args) { return fba::test::run_command(std::string("'") + FBA_EVALUATE + "' grasp " + args); }
 
 // The line of `text` that starts with `start`, or "".
 std::string line_starting(const std::string& text, const std::string& start) {
