@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The two things a developer does, from a fresh Debian 12 machine:
-#   tools/dev.sh run    install what is missing, build, run the main task
+#   tools/dev.sh run    install what is missing, build, run the main task (tasks/grasp.yaml: the grasp loop in simulation)
 #   tools/dev.sh test   install what is missing, build and run every test: plain, under
 #                       AddressSanitizer + UndefinedBehaviorSanitizer, the runtime's
 #                       concurrency tests under ThreadSanitizer, and the task-loader fuzzer
@@ -80,8 +80,7 @@ case "$cmd" in
     install_packages
     configure release -DCMAKE_BUILD_TYPE=RelWithDebInfo  # the same build as 'test' uses
     build release --target fba_programs
-    task=${2:-tasks/carve_dino.yaml}
-    [ -f "$task" ] || task=tasks/examples/chain.yaml
+    task=${2:-tasks/grasp.yaml}
     echo "== build/release/bin/fba-run $task --output-dir out/$(basename "$task" .yaml)"
     build/release/bin/fba-run "$task" --output-dir "out/$(basename "$task" .yaml)"
     ;;
