@@ -80,7 +80,9 @@ turned by yaw degrees about z, moved by (x, y) metres and stood on the table at 
 and sim.hand's object_x, object_y, object_yaw with frame: table).
 Each grasp is evaluated on the mesh placed so. Views: the grasp's views when one was selected, else
 the views in the carver's model (vision.octree_carver's `updated` events); nodes: the carver's
-nodes visited summed over its updates. Components are found by type, not by name.
+nodes visited summed over its updates. Components are found by type, not by name. runs.json also
+has each run's last carver `detail` (with carver.compare_uniform=true: model_nodes against the
+uniform carve's uniform_nodes, and saved_share), however the run ended.
 
 Exit status: 0 when the batch was run and evaluated (whatever the runs' outcomes), 2 for a bad
 list or command line.
@@ -380,6 +382,7 @@ struct Row {
   int views = -1;
   double wall_s = -1, cpu_s = -1;
   long long nodes = -1;
+  nlohmann::json detail;  // the carver's last `detail` payload (with compare_uniform: against uniform detail), or null
 };
 
 std::string last_line(const fs::path& file) {
@@ -453,6 +456,8 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
         model_views = p.value("views", model_views);
         row.nodes = std::max<long long>(row.nodes, 0) + p.value("nodes_visited", 0LL);
       }
+    } else if (type == "vision.octree_carver" && name == "detail") {
+      if (const auto p = payload_json(e); p.is_object()) row.detail = p;
     } else if (type == "sim.hand" && (name == "held" || name == "dropped")) {
       row.held = name == "held";
       const auto p = payload_json(e);
@@ -644,6 +649,7 @@ nlohmann::json rows_json(const std::vector<Row>& rows) {
     if (r.selected) j["score"] = r.score;
     if (r.force_closure) j["force_closure"] = *r.force_closure, j["epsilon"] = r.epsilon;
     if (r.held) j["held"] = *r.held;
+    if (!r.detail.is_null()) j["detail"] = r.detail;
     a.push_back(j);
   }
   return a;
