@@ -79,14 +79,17 @@ inline void check_finite_numbers(const std::string& name, const std::vector<doub
       throw ArgumentError("--" + name + " needs finite numbers (" + what + "); number " + std::to_string(i + 1) + " is " + number(v[i]));
 }
 
-// Parses `args` with boost's GNU-style rules, except that "-0.08" is a (negative) value, not an
-// option: boost's single-dash options are turned off, a declared short option (-h, -j 4, -j4) is
+// Parses `args` with boost's GNU-style rules, except that "-0.08" (or "-inf") is a (negative)
+// value, not an option: boost's single-dash options are turned off, a declared short option (-h, -j 4, -j4) is
 // read as its long name, and any other word after a single dash is refused here (else a
 // multi-token option such as --mesh would take it).
 inline po::variables_map parse(std::vector<std::string> args, const po::options_description& opts) {
   std::vector<std::string> out;
   for (const auto& a : args) {
-    const bool dash_word = a.size() > 1 && a[0] == '-' && a[1] != '-' && !std::isdigit(static_cast<unsigned char>(a[1])) && a[1] != '.';
+    char* end = nullptr;
+    std::strtod(a.c_str(), &end);
+    const bool a_number = !a.empty() && end == a.c_str() + a.size();  // also "-inf" and "-nan", which a range refuses by name
+    const bool dash_word = !a_number && a.size() > 1 && a[0] == '-' && a[1] != '-';
     if (!dash_word) {
       out.push_back(a);
       continue;

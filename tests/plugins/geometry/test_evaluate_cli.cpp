@@ -133,6 +133,7 @@ INSTANTIATE_TEST_SUITE_P(Synthetic, EvaluateCliRefuses, ::testing::Values(
     BadArgument{"DepthZero", synthetic({"--depth", "0"}), "--depth must be in [1, 10]; found 0"},
     BadArgument{"MarginNegative", synthetic({"--margin", "-0.1"}), "--margin must be in [0, 10]; found -0.1"},
     BadArgument{"MarginInfinite", synthetic({"--margin", "inf"}), "--margin must be in [0, 10]; found inf"},
+    BadArgument{"MinElevationMinusInfinity", synthetic({"--min-elevation", "-inf"}), "--min-elevation must be in [-90, 90]; found -inf"},
     BadArgument{"ToleranceInfinite", synthetic({"--tolerance", "inf"}), "--tolerance must be in [0, 1000]; found inf"},
     BadArgument{"UnknownShortOption", synthetic({"-x"}), "unrecognised option '-x'"},
     BadArgument{"NoMesh", {"synthetic", "--views", "8"}, "the option '--mesh' is required"}), test_name);
