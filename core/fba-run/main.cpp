@@ -16,7 +16,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <future>
 #include <iostream>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -65,20 +67,21 @@ State& state() {
   return *s;
 }
 
-// Writes summary.json; returns the error, or empty.
-std::string write_summary(const fba::RunResult& result) {
+// Writes summary.json (or `to`); returns the error, or empty.
+std::string write_summary(const fba::RunResult& result, fs::path to = {}) {
   auto& st = state();
   if (st.summary.empty()) return {};
+  if (to.empty()) to = st.summary;
   const std::string text = fba::summary_json(result, st.config);
-  std::FILE* f = std::fopen(st.summary.c_str(), "w");
-  if (!f) return st.summary.string() + ": " + std::strerror(errno);
+  std::FILE* f = std::fopen(to.c_str(), "w");
+  if (!f) return to.string() + ": " + std::strerror(errno);
   const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size();
   const int write_errno = errno;
   const bool flushed = std::fflush(f) == 0;
   const int flush_errno = errno;
   const bool closed = std::fclose(f) == 0;
   if (wrote && flushed && closed) return {};
-  return st.summary.string() + ": " + std::strerror(!wrote ? write_errno : !flushed ? flush_errno : errno);
+  return to.string() + ": " + std::strerror(!wrote ? write_errno : !flushed ? flush_errno : errno);
 }
 
 // The run ends before or without Task::run(): a summary with the outcome and where it ended.
@@ -122,11 +125,11 @@ bool interrupted_early(int& status) {
 // after the run (the final state).
 void dump_live_graph(std::optional<fba::RunResult>& previous) {
   auto& st = state();
+  std::lock_guard lock(st.mutex);  // the task is not destroyed, nor the folder set, while they are read
   if (st.live_dot.empty()) {
     std::fprintf(stderr, "fba-run: SIGUSR1: no --output-dir to write graph-live.dot into\n");
     return;
   }
-  std::lock_guard lock(st.mutex);  // the task is not destroyed while it is read
   fba::Task* task = st.task.load();
   if (!task) return;  // nothing runs yet, or any more
   fba::RunResult now = task->snapshot();
@@ -138,6 +141,54 @@ void dump_live_graph(std::optional<fba::RunResult>& previous) {
   if (f) ok = std::fclose(f) == 0 && ok;
   if (!ok || std::rename(partial.c_str(), st.live_dot.c_str()) != 0)
     std::fprintf(stderr, "fba-run: could not write %s: %s\n", st.live_dot.c_str(), std::strerror(errno));
+}
+
+// How long a forced exit waits for its summary to be written.
+constexpr std::chrono::seconds kForcedSummaryWait{3};
+
+// An exit forced by a second signal: names the safe states so far and writes the summary of the run
+// as it stands (what was still running, the safe states), beside summary.json then renamed over it,
+// so that main, if it is writing its own at that moment, cannot mix the two. On a thread of its own,
+// waited for a bounded time: a task lock held by a stuck thread, or a writer stuck on a full or hung
+// file system, must not hold the exit back. Returns when written, or when the wait is over.
+void report_forced_exit(int sig) {
+  auto done = std::make_shared<std::promise<void>>();
+  std::thread([sig, done] {
+    auto& st = state();
+    // The task is not destroyed, nor the configuration replaced, while they are read.
+    std::lock_guard lock(st.mutex);
+    fba::RunResult r;
+    std::string safe_states = "no component was constructed";
+    if (fba::Task* task = st.task.load()) {
+      r = task->snapshot();
+      safe_states = task->safe_states_so_far();
+    }
+    std::fprintf(stderr, "fba-run: second %s while stopping: exiting now without waiting; safe states: %s\n",
+                 signal_name(sig), safe_states.c_str());
+    r.outcome = fba::Outcome::Interrupted;
+    const char* first_phase = st.signal_phase.load();
+    r.phase = first_phase ? first_phase : st.phase.load();
+    r.signal = sig;
+    r.forced = true;
+    r.reason = std::string("interrupted by ") + signal_name(st.signal.load()) + " while " + r.phase + "; a second " +
+               signal_name(sig) + " forced the exit before the stop was over";
+    if (!st.summary.empty()) {
+      std::string error;
+      try {
+        const fs::path partial = st.summary.string() + ".forced";
+        error = write_summary(r, partial);
+        if (error.empty() && std::rename(partial.c_str(), st.summary.c_str()) != 0)
+          error = st.summary.string() + ": " + std::strerror(errno);
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      if (!error.empty()) std::fprintf(stderr, "fba-run: could not write the summary %s\n", error.c_str());
+    }
+    done->set_value();
+  }).detach();
+  if (done->get_future().wait_for(kForcedSummaryWait) != std::future_status::ready)
+    std::fprintf(stderr, "fba-run: second %s: the summary was not written within %lld s; exiting without it\n",
+                 signal_name(sig), static_cast<long long>(kForcedSummaryWait.count()));
 }
 
 // Sent by main to its own watcher when the run is over, so that the watcher need not wait out its
@@ -179,10 +230,7 @@ void watch_signals(sigset_t signals) {
     }
     if (st.signals.fetch_add(1) > 0) {
       // A second signal forces the exit at once, with whatever safe states were attempted.
-      fba::Task* task = st.task.load();
-      const std::string done = task ? task->safe_states_so_far() : "no component was constructed";
-      std::fprintf(stderr, "fba-run: second %s while stopping: exiting now without waiting; safe states: %s\n",
-                   signal_name(sig), done.c_str());
+      report_forced_exit(sig);
       leave(128 + sig);
     }
     std::lock_guard lock(st.mutex);
@@ -379,6 +427,7 @@ int run(int argc, char** argv) {
     fs::create_directories(output_dir, ec);
     if (ec) return usage_error("cannot create --output-dir '" + output_dir + "': " + ec.message());
     options.output_dir = fs::absolute(output_dir);
+    std::lock_guard lock(st.mutex);  // a second signal's summary may be written at any moment
     st.summary = options.output_dir / "summary.json";
     st.live_dot = options.output_dir / "graph-live.dot";
   }

@@ -922,6 +922,16 @@ RunResult Graph::snapshot() {
   RunResult r;
   r.wall_s = running_since_set_.load(std::memory_order_acquire) ? std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() : 0.0;
   collect_stats(r);
+  // The calls running now and each actuator's safe state so far: what an exit that does not wait
+  // (a second Ctrl-C) leaves behind, for its summary.
+  static constexpr const char* kProgress[] = {"not attempted", "did not return", "reached", "failed"};
+  for (auto& n : nodes) {
+    const bool actuator = n->spec.kind() == Kind::Actuator;
+    const int progress = actuator ? std::clamp(n->safe_state_progress.load(), 0, 3) : 0;
+    if (const char* call = n->call.load()) r.stuck.push_back({n->config.name, n->spec.type_name(), call});
+    else if (progress == 1) r.stuck.push_back({n->config.name, n->spec.type_name(), "safe_state()"});
+    if (actuator) r.safe_states.push_back({n->config.name, kProgress[progress], ""});
+  }
   return r;
 }
 

@@ -49,6 +49,7 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
   j["reason"] = r.reason;
   if (!r.phase.empty()) j["phase"] = r.phase;
   if (r.signal > 0) j["signal"] = r.signal;
+  if (r.forced) j["forced"] = true;
   j["wall_time_s"] = r.wall_s;
   // The process's peak resident memory so far (the whole fba-run process when it writes this).
   if (rusage u{}; getrusage(RUSAGE_SELF, &u) == 0) j["peak_resident_mib"] = static_cast<double>(u.ru_maxrss) / 1024.0;

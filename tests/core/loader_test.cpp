@@ -85,6 +85,31 @@ TEST(Loader, AValidChainLoadsWithDefaultsFilledIn) {
   EXPECT_EQ(task.connections[1].type->name, "fba.Int");  // resolved through the passthrough
 }
 
+// The document is built by the loader's own parse (one pass for the first document and the look
+// for a second): an alias is its anchor's node, tags and both styles are read, and a value's error
+// names the line and column it was written at, also through an alias.
+TEST(Loader, AnchorsTagsAndPlacesSurviveTheSingleParse) {
+  const auto task = load(R"(
+components:
+  a: { type: examples.counter, params: &five { count: !!int 5 } }
+  b:
+    type: examples.counter
+    params: *five
+  sink: { type: examples.sink }
+connections: [ a.out -> sink.in ]
+)");
+  EXPECT_EQ(std::get<std::int64_t>(task.find("b")->params.at("count")), 5);
+  const auto e = errors_of(R"(
+components:
+  a: { type: examples.counter, params: &bad { count: -1 } }
+  b:
+    type: examples.counter
+    params: *bad
+)");
+  EXPECT_NE(e.find("test.yaml:3:54: error: parameter 'count' must be in"), std::string::npos) << e;
+  EXPECT_EQ(e.find("test.yaml:6:"), std::string::npos) << e;
+}
+
 TEST(Loader, UnknownTypeSuggestsTheClosestName) {
   const auto e = errors_of("components:\n  a: { type: examples.countr }\n");
   EXPECT_NE(e.find("test.yaml:2:"), std::string::npos) << e;

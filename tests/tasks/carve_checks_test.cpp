@@ -29,10 +29,12 @@ fba::RunResult run(const std::string& task, std::vector<std::string> overrides, 
   return t.run();
 }
 
+// The last event of that name (the carver's `detail` with compare_uniform comes after every update).
 const fba::Event* find_event(const fba::RunResult& r, const std::string& name) {
+  const fba::Event* found = nullptr;
   for (const auto& e : r.events)
-    if (e.name == name) return &e;
-  return nullptr;
+    if (e.name == name) found = &e;
+  return found;
 }
 
 // carve_dino at depth 6 (the checks do not depend on depth) with overrides: the run fails,

@@ -276,6 +276,44 @@ TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) 
   const auto r = p.wait();
   EXPECT_EQ(r.status, 130) << r.output;
   EXPECT_NE(r.output.find("second SIGINT while stopping: exiting now"), std::string::npos) << r.output;
+  // The forced exit still leaves its summary, naming the call it did not wait for.
+  const auto summary = nlohmann::json::parse(read_file(out / "summary.json"), nullptr, false);
+  ASSERT_TRUE(summary.is_object()) << r.output;
+  EXPECT_EQ(summary["outcome"], "interrupted");
+  EXPECT_EQ(summary["exit_code"], 130);
+  EXPECT_EQ(summary["forced"], true);
+  EXPECT_EQ(summary["phase"], "running");
+  EXPECT_EQ(summary["stuck"], nlohmann::json::parse(R"j([{"component": "bad", "type": "test.misbehaving", "call": "process()"}])j"));
+}
+
+// An actuator whose safe_state() never returns holds the stop back until a second SIGINT, which
+// exits at once with 130 and a summary.json naming that call, written by the signal thread.
+TEST(CliMisbehaving, ASecondSigintWhileASafeStateBlocksExitsWithTheSummary) {
+  const fs::path out = temp_dir("second-sigint-safe-state");
+  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+             out.string(), "--set", "act.mode=block_safe_state", "--stop-grace", "600"});
+  ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
+  p.signal(SIGINT);
+  ASSERT_TRUE(p.wait_for_file(out / "safe_state.act")) << p.output();
+  // Over a second later: the same signal from the same process sooner is taken as one request.
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  p.signal(SIGINT);
+  const auto r = p.wait();
+  EXPECT_EQ(r.status, 130) << r.output;
+  EXPECT_NE(r.output.find("safe states: act (attempted, did not return)"), std::string::npos) << r.output;
+  const auto summary = nlohmann::json::parse(read_file(out / "summary.json"), nullptr, false);
+  ASSERT_TRUE(summary.is_object()) << r.output;
+  EXPECT_EQ(summary["outcome"], "interrupted");
+  EXPECT_EQ(summary["exit_code"], 130);
+  EXPECT_EQ(summary["signal"], SIGINT);
+  EXPECT_EQ(summary["forced"], true);
+  EXPECT_EQ(summary["phase"], "running");
+  EXPECT_NE(summary.value("reason", "").find("a second SIGINT forced the exit"), std::string::npos) << summary.dump(2);
+  EXPECT_EQ(summary["stuck"],
+            nlohmann::json::parse(R"j([{"component": "act", "type": "test.misbehaving_actuator", "call": "safe_state()"}])j"));
+  EXPECT_EQ(summary["safe_states"]["act"]["status"], "did not return");
+  EXPECT_TRUE(summary["components"].contains("src")) << summary.dump(2);
+  EXPECT_FALSE(fs::exists(out / "summary.json.forced"));
 }
 
 // timeout(1) sends its signal to fba-run and again to the process group: one request, which

@@ -5,6 +5,7 @@
 #include <numbers>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -13,14 +14,13 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "grasp_evaluation.hpp"
+#include "options.hpp"
 #include "fba/grasp/grasp_json.hpp"
 #include "fba/grasp/object_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
 
 namespace fba::evaluate {
 namespace {
-
-namespace po = boost::program_options;
 
 const char* kHelp = R"(fba-evaluate grasp: grasp quality on the true object surface.
 
@@ -73,9 +73,7 @@ struct Options {
 
 Eigen::Isometry3d parse_pose(const std::vector<double>& v) {
   if (v.empty()) return Eigen::Isometry3d::Identity();
-  if (v.size() != 6)
-    throw std::invalid_argument("--mesh-pose: expected 6 numbers (x y z roll pitch yaw, metres and radians), found " +
-                                std::to_string(v.size()));
+  check_finite_numbers("mesh-pose", v, 6, "x y z roll pitch yaw, metres and radians");
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() << v[0], v[1], v[2];
   t.linear() = (Eigen::AngleAxisd(v[5], Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(v[4], Eigen::Vector3d::UnitY()) *
@@ -207,21 +205,23 @@ int run_grasp(const std::vector<std::string>& args) {
   opts.add_options()("help,h", "this help")
       ("mesh", po::value(&o.meshes)->multitoken()->required(), "the true object mesh(es), closed (OBJ, PLY, STL, ...)")
       ("summary", po::value(&o.summary), "a run's summary.json holding a \"grasp\" object (one mesh only)")
-      ("random", po::value(&o.random)->default_value(o.random), "random three-contact sets (0: none)")
-      ("seed", po::value(&o.seed)->default_value(o.seed), "seed of the random sets and of the surface samples")
+      ("random", ranged("random", &o.random, std::size_t{0}, kMaxRandomSets), "random three-contact sets (0: none)")
+      ("seed", ranged("seed", &o.seed, std::uint64_t{0}, std::numeric_limits<std::uint64_t>::max()),
+       "seed of the random sets and of the surface samples")
       ("synthesise", po::bool_switch(&o.synthesise), "synthesise on samples of each mesh and evaluate the candidates")
-      ("samples", po::value(&o.samples)->default_value(o.samples), "surface samples for --synthesise")
+      ("samples", ranged("samples", &o.samples, std::size_t{3}, kMaxSamples), "surface samples for --synthesise")
       ("mesh-pose", po::value(&o.mesh_pose)->multitoken(),
        "where the mesh stands in the world: x y z roll pitch yaw (metres, radians); default identity")
-      ("friction", po::value(&o.quality.friction)->default_value(o.quality.friction), "Coulomb friction coefficient")
-      ("cone-edges", po::value(&o.quality.cone_edges)->default_value(o.quality.cone_edges), "edges per friction cone");
-  po::variables_map vm;
-  po::store(po::command_line_parser(args).options(opts).run(), vm);
+      ("friction", ranged("friction", &o.quality.friction, 0.0, kMaxFriction), "Coulomb friction coefficient")
+      ("cone-edges", ranged("cone-edges", &o.quality.cone_edges, 3, kMaxConeEdges), "edges per friction cone");
+  po::variables_map vm = parse(args, opts);
   if (vm.count("help")) {
     std::cout << opts << "\n";
     return 0;
   }
   po::notify(vm);
+  if (vm.count("samples") && !vm["samples"].defaulted() && !o.synthesise)
+    throw ArgumentError("--samples applies to --synthesise: give --synthesise as well");
   if (!o.summary.empty() && o.meshes.size() != 1)
     throw std::invalid_argument("--summary evaluates one grasp: expected one --mesh, found " + std::to_string(o.meshes.size()));
   if (o.summary.empty() && !o.synthesise && o.random == 0)

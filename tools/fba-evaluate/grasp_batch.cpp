@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -36,6 +37,7 @@
 #include "fba/grasp/object_surface.hpp"
 #include "object_placement.hpp"
 #include "grasp_evaluation.hpp"
+#include "options.hpp"
 
 extern char** environ;
 
@@ -43,7 +45,6 @@ namespace fba::evaluate {
 namespace {
 
 namespace fs = std::filesystem;
-namespace po = boost::program_options;
 using Clock = std::chrono::steady_clock;
 
 const char* kHelp = R"(fba-evaluate grasp --batch: the grasp loop over objects and poses, and its targets' table.
@@ -79,7 +80,9 @@ turned by yaw degrees about z, moved by (x, y) metres and stood on the table at 
 and sim.hand's object_x, object_y, object_yaw with frame: table).
 Each grasp is evaluated on the mesh placed so. Views: the grasp's views when one was selected, else
 the views in the carver's model (vision.octree_carver's `updated` events); nodes: the carver's
-nodes visited summed over its updates. Components are found by type, not by name.
+nodes visited summed over its updates. Components are found by type, not by name. runs.json also
+has each run's last carver `detail` (with carver.compare_uniform=true: model_nodes against the
+uniform carve's uniform_nodes, and saved_share), however the run ended.
 
 Exit status: 0 when the batch was run and evaluated (whatever the runs' outcomes), 2 for a bad
 list or command line.
@@ -379,6 +382,7 @@ struct Row {
   int views = -1;
   double wall_s = -1, cpu_s = -1;
   long long nodes = -1;
+  nlohmann::json detail;  // the carver's last `detail` payload (with compare_uniform: against uniform detail), or null
 };
 
 std::string last_line(const fs::path& file) {
@@ -452,6 +456,8 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
         model_views = p.value("views", model_views);
         row.nodes = std::max<long long>(row.nodes, 0) + p.value("nodes_visited", 0LL);
       }
+    } else if (type == "vision.octree_carver" && name == "detail") {
+      if (const auto p = payload_json(e); p.is_object()) row.detail = p;
     } else if (type == "sim.hand" && (name == "held" || name == "dropped")) {
       row.held = name == "held";
       const auto p = payload_json(e);
@@ -643,6 +649,7 @@ nlohmann::json rows_json(const std::vector<Row>& rows) {
     if (r.selected) j["score"] = r.score;
     if (r.force_closure) j["force_closure"] = *r.force_closure, j["epsilon"] = r.epsilon;
     if (r.held) j["held"] = *r.held;
+    if (!r.detail.is_null()) j["detail"] = r.detail;
     a.push_back(j);
   }
   return a;
@@ -654,6 +661,18 @@ std::string default_fba_run() {
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
   if (!ec && fs::exists(self.parent_path() / "fba-run")) return (self.parent_path() / "fba-run").string();
   return "fba-run";
+}
+
+// Whether `name` (without a '/') is an executable file in a folder of PATH, as posix_spawnp finds it.
+bool on_path(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::stringstream folders(path ? path : "");
+  for (std::string folder; std::getline(folders, folder, ':');) {
+    const fs::path p = fs::path(folder.empty() ? "." : folder) / name;
+    std::error_code ec;
+    if (access(p.c_str(), X_OK) == 0 && !fs::is_directory(p, ec)) return true;
+  }
+  return false;
 }
 
 std::string folder_name(std::size_t index, const std::string& object) {
@@ -672,19 +691,23 @@ int run_grasp_batch(const std::vector<std::string>& args) {
   grasp::QualityParams quality;
   po::options_description opts(kHelp);
   opts.add_options()("help,h", "this help")("batch", po::value(&list_file)->required(), "the list of runs (YAML)")(
-      "jobs,j", po::value(&jobs)->default_value(jobs), "runs at a time")(
+      "jobs,j", ranged("jobs", &jobs, 1, 64), "runs at a time")(
       "output,o", po::value(&out_dir), "folder of the runs and the table; default: a new folder under the temporary folder")(
       "fba-run", po::value(&fba_run)->default_value(fba_run), "the fba-run program")(
-      "random", po::value(&random_sets)->default_value(random_sets), "random contact sets per mesh (0: none)")(
-      "seed", po::value(&seed)->default_value(seed), "seed of the random sets");
-  po::variables_map vm;
-  po::store(po::command_line_parser(args).options(opts).run(), vm);
+      "random", ranged("random", &random_sets, std::size_t{0}, kMaxRandomSets), "random contact sets per mesh (0: none)")(
+      "seed", ranged("seed", &seed, std::uint64_t{0}, std::numeric_limits<std::uint64_t>::max()), "seed of the random sets");
+  po::variables_map vm = parse(args, opts);
   if (vm.count("help")) {
     std::cout << opts << "\n";
     return 0;
   }
   po::notify(vm);
-  if (jobs < 1 || jobs > 64) throw std::invalid_argument("--jobs: expected 1..64 runs at a time, found " + std::to_string(jobs));
+  // Checked before any run, so that a typo does not turn every run into a failed row.
+  if (fba_run.find('/') != std::string::npos ? access(fba_run.c_str(), X_OK) != 0 || fs::is_directory(fba_run)
+                                             : !on_path(fba_run))
+    throw ArgumentError("--fba-run: expected an executable program; found '" + fba_run + "', which is not one");
+  if (!out_dir.empty() && fs::exists(out_dir) && !fs::is_directory(out_dir))
+    throw ArgumentError("--output: expected a folder; found '" + out_dir + "', which is not one");
   const BatchList list = read_list(list_file);
   if (out_dir.empty()) {
     std::string t = (fs::temp_directory_path() / "fba-grasp-batch-XXXXXX").string();

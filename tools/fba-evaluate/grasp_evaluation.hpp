@@ -2,6 +2,7 @@
 // an object's name, and the true mesh placed where the run stood it.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -14,6 +15,13 @@
 #include "fba/types/mesh.hpp"
 
 namespace fba::evaluate {
+
+// The grasp subcommand's option limits, for both modes: beyond them a run takes hours or the
+// measure means nothing (friction above 10 makes almost every contact set force closure).
+constexpr std::size_t kMaxRandomSets = 1'000'000;
+constexpr std::size_t kMaxSamples = 1'000'000;
+constexpr double kMaxFriction = 10.0;
+constexpr int kMaxConeEdges = 64;
 
 // The grasp in a parsed summary.json: its "grasp" object, else the payload of the last
 // grasp_selected event (fba-run's summary). nullopt when it has neither; throws

@@ -16,8 +16,6 @@
 //   fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR]
 //       The grasp loop over objects and poses, run by fba-run, and the targets' table (grasp_batch.cpp).
 
-#include <cctype>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -28,6 +26,7 @@
 #include <boost/program_options.hpp>
 
 #include "evaluate.hpp"
+#include "options.hpp"
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/log.hpp"
 #include "fba/registry.hpp"
@@ -38,48 +37,16 @@
 
 namespace po = boost::program_options;
 using namespace fba;
+using fba::evaluate::ArgumentError;
+using fba::evaluate::check_range;
+using fba::evaluate::number;
+using fba::evaluate::parse;
+using fba::evaluate::ranged;
 
 namespace {
 
-// A command line that asks for nothing sensible: reported as boost's own parse errors are, with
-// exit status 2, like a bad task file.
-struct ArgumentError : po::error {
-  using po::error::error;
-};
-
-// The shortest text that reads back as v: a range message must not round 1000001 to 1e+06.
-std::string number(double v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
-// --name must be a number in [lo, hi] (which also refuses NaN).
-void check_range(const std::string& name, double v, double lo, double hi) {
-  if (!(v >= lo && v <= hi))
-    throw ArgumentError("--" + name + " must be in [" + number(lo) + ", " + number(hi) + "]; found " + number(v));
-}
-
 // The finest level a dense voxel grid can take: 2^(3*10) voxels is already 1 GiB.
 constexpr int kMaxDepth = 10;
-
-// Parses `args` with boost's GNU-style rules, except that "-0.08" is a (negative) value, not an
-// option: boost's single-dash options are turned off, -h is read as --help, and any other word
-// after a single dash is refused here (else a multi-token option such as --mesh would take it).
-po::variables_map parse(std::vector<std::string> args, const po::options_description& opts) {
-  for (auto& a : args) {
-    if (a == "-h") a = "--help";
-    else if (a.size() > 1 && a[0] == '-' && a[1] != '-' && !std::isdigit(static_cast<unsigned char>(a[1])) && a[1] != '.')
-      throw ArgumentError("unrecognised option '" + a + "'");
-  }
-  po::variables_map vm;
-  po::store(po::command_line_parser(args)
-                .options(opts)
-                .style(po::command_line_style::unix_style ^ po::command_line_style::allow_short)
-                .run(),
-            vm);
-  return vm;
-}
 
 // An option of the mesh comparison (a) given without --mesh would be silently ignored.
 void check_needs_mesh(const po::variables_map& vm, const std::string& mesh, std::initializer_list<const char*> names) {
@@ -196,15 +163,14 @@ int run_synthetic(const std::vector<std::string>& args) {
   std::string save_dir;
   opts.add_options()("help,h", "this help")
       ("mesh", po::value(&meshes)->multitoken()->required(), "mesh file(s) (OBJ, PLY, STL, ...)")
-      ("views", po::value(&p.views)->default_value(p.views), "number of views")
-      ("depth", po::value(&p.depth)->default_value(p.depth), "octree max depth (2^depth voxels per axis)")
-      ("min-elevation", po::value(&p.min_elevation_deg)->default_value(p.min_elevation_deg), "lowest view elevation, degrees")
-      ("max-elevation", po::value(&p.max_elevation_deg)->default_value(p.max_elevation_deg), "highest view elevation, degrees")
-      ("margin", po::value(&p.margin)->default_value(p.margin), "root cube margin, fraction of the largest side")
+      ("views", ranged("views", &p.views, 1, 1000), "number of views")
+      ("depth", ranged("depth", &p.depth, 1, kMaxDepth), "octree max depth (2^depth voxels per axis)")
+      ("min-elevation", ranged("min-elevation", &p.min_elevation_deg, -90.0, 90.0), "lowest view elevation, degrees")
+      ("max-elevation", ranged("max-elevation", &p.max_elevation_deg, -90.0, 90.0), "highest view elevation, degrees")
+      ("margin", ranged("margin", &p.margin, 0.0, 10.0), "root cube margin, fraction of the largest side")
       ("no-table-clip", "do not drop voxels below the mesh's lowest point")
-      ("threads", po::value(&p.threads)->default_value(p.threads), "carver threads (0 = all cores)")
-      ("tolerance", po::value(&p.silhouette_tolerance)->default_value(p.silhouette_tolerance),
-       "carver silhouette tolerance, pixels")
+      ("threads", ranged("threads", &p.threads, 0, 256), "carver threads (0 = all cores)")
+      ("tolerance", ranged("tolerance", &p.silhouette_tolerance, 0.0, 1000.0), "carver silhouette tolerance, pixels")
       ("save", po::value(&save_dir), "write renders, masks, carved and true models (PLY) here");
   po::variables_map vm = parse(args, opts);
   if (vm.count("help")) {
@@ -212,13 +178,7 @@ int run_synthetic(const std::vector<std::string>& args) {
     return 0;
   }
   po::notify(vm);
-  check_range("views", p.views, 1, 1000);
-  check_range("depth", p.depth, 1, kMaxDepth);
-  check_range("min-elevation", p.min_elevation_deg, -90, 90);
-  check_range("max-elevation", p.max_elevation_deg, p.min_elevation_deg, 90);
-  check_range("margin", p.margin, 0, 10);
-  check_range("threads", p.threads, 0, 256);
-  check_range("tolerance", p.silhouette_tolerance, 0, 1000);
+  check_range("max-elevation", p.max_elevation_deg, p.min_elevation_deg, 90.0);
   p.table_clip = !vm.count("no-table-clip");
   p.save_dir = save_dir;
 
@@ -251,12 +211,12 @@ int run_model(const std::vector<std::string>& args) {
   double margin = 0.05;
   opts.add_options()("help,h", "this help")
       ("model", po::value(&model_path)->required(), "the model as a mesh (carved octree PLY)")
-      ("depth", po::value(&depth)->default_value(depth), "resolution 2^depth of the model's octree")
+      ("depth", ranged("depth", &depth, 1, kMaxDepth), "resolution 2^depth of the model's octree")
       ("mesh", po::value(&mesh_path), "(a) the true object mesh")
       ("bounds", po::value(&bounds)->multitoken(),
        "the carver's root box: xmin ymin zmin xmax ymax zmax (made a cube); default: the mesh's "
        "bounding box made a cube with --margin")
-      ("margin", po::value(&margin)->default_value(margin), "see --bounds")
+      ("margin", ranged("margin", &margin, 0.0, 10.0), "see --bounds")
       ("no-table-clip", "do not drop voxels below the mesh's lowest point")
       ("images", po::value(&images), "(b) an image set (Middlebury *_par.txt or fba YAML)")
       ("task", po::value(&task_file),
@@ -269,16 +229,13 @@ int run_model(const std::vector<std::string>& args) {
     return 0;
   }
   po::notify(vm);
-  check_range("depth", depth, 1, kMaxDepth);
-  check_range("margin", margin, 0, 10);
   if (!bounds.empty()) {
-    if (bounds.size() != 6)
-      throw ArgumentError("--bounds needs 6 numbers (xmin ymin zmin xmax ymax zmax); found " + std::to_string(bounds.size()));
+    evaluate::check_finite_numbers("bounds", bounds, 6, "xmin ymin zmin xmax ymax zmax");
     for (int i = 0; i < 3; ++i) {
       const char axis = static_cast<char>('x' + i);
-      if (!std::isfinite(bounds[i]) || !std::isfinite(bounds[i + 3]) || !(bounds[i] < bounds[i + 3]))
-        throw ArgumentError(std::string("--bounds: ") + axis + "min must be below " + axis + "max, both finite; found " +
-                            number(bounds[i]) + " and " + number(bounds[i + 3]));
+      if (!(bounds[i] < bounds[i + 3]))
+        throw ArgumentError(std::string("--bounds: ") + axis + "min must be below " + axis + "max; found " + number(bounds[i]) +
+                            " and " + number(bounds[i + 3]));
     }
   }
   check_needs_mesh(vm, mesh_path, {"depth", "bounds", "margin", "no-table-clip"});

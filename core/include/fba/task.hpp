@@ -54,7 +54,7 @@ struct StuckCall {
 // What an actuator's safe_state() did at the end of the run.
 struct SafeStateResult {
   std::string component;
-  std::string status;  // "reached", "failed", "did not return", "not constructed"
+  std::string status;  // "reached", "failed", "did not return", "not constructed" ("not attempted": a forced exit)
   std::string message;
 };
 
@@ -82,6 +82,7 @@ struct RunResult {
   std::uint64_t lost_to_restarts = 0;  // the components' total
   std::string phase;                   // where fba-run was when it ended: loading, constructing, running
   int signal = 0;                      // the signal that interrupted the run, if any: its exit status is 128 + signal
+  bool forced = false;                 // a second signal ended the run without waiting for the stop
   int exit_code() const {
     return outcome == Outcome::Interrupted && signal > 0 ? 128 + signal : fba::exit_code(outcome);
   }
@@ -129,7 +130,8 @@ class Task {
   // The actuators' safe states so far, for a forced exit's message: "name (status)", ...
   std::string safe_states_so_far() const;
   // The counts, states and queue fills as they stand, from any thread while run() runs (for
-  // live graph dumps); `left` is what is queued now. The run's own result is run()'s.
+  // live graph dumps and a forced exit's summary); `left` is what is queued now, `stuck` the
+  // component calls running now, `safe_states` the actuators' so far. The run's own result is run()'s.
   RunResult snapshot() const;
 
  private:

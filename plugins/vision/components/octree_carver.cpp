@@ -50,8 +50,8 @@ class OctreeCarverFilter final : public fba::Component {
                                                    .range(0, 64);
   static constexpr fba::Param<bool> kCompareUniform{
       "compare_uniform", false,
-      "at the end, also carve the same views one by one with uniform detail to the same depth (occupancy_threshold 0, no "
-      "grasp criteria) and report both node counts in the `detail` event"};
+      "also carve the same views one by one with uniform detail to the same depth (occupancy_threshold 0, no grasp "
+      "criteria) and report both node counts in the `detail` event, after every update and at the end"};
   static inline const auto kBounds =
       fba::Param<std::vector<double>>("bounds", {}, "root box [xmin, ymin, zmin, xmax, ymax, zmax] in metres; empty: estimated from the first silhouettes")
           .size({0, 6});
@@ -77,8 +77,9 @@ class OctreeCarverFilter final : public fba::Component {
       "model_warning", "the model may not be the object (it is pressed against the root box's faces); payload: why"};
   static constexpr fba::EventOut kDetail{
       "detail",
-      "at the end, where detail went; payload (JSON): model_nodes, nodes_visited, and with compare_uniform the uniform "
-      "carve's uniform_nodes, uniform_nodes_visited and saved_share (1 - model_nodes / uniform_nodes)"};
+      "where detail went, at the end and, with compare_uniform, after every update too (a run stopped by an event rule "
+      "never reaches the end); payload (JSON): model_nodes, nodes_visited, and with compare_uniform the uniform carve's "
+      "uniform_nodes, uniform_nodes_visited and saved_share (1 - model_nodes / uniform_nodes)"};
   static constexpr fba::EventOut kUpdated{
       "updated",
       "a view was integrated; payload (JSON): views, carve_s, snapshot_s (of the previous update's snapshot), nodes_visited, "
@@ -105,8 +106,17 @@ class OctreeCarverFilter final : public fba::Component {
         bounds_views_(static_cast<std::size_t>(ctx(kBoundsViews))),
         margin_(ctx(kBoundsMargin)),
         compare_uniform_(ctx(kCompareUniform)) {
+    if (compare_uniform_) {
+      // Uniform detail to the same depth: every node on the outline split, no grasp criteria.
+      fba::vision::CarverParams p = carver_->params();
+      p.occupancy_threshold = 0;
+      p.curvature_threshold = -std::numeric_limits<double>::infinity();
+      uniform_.emplace(p);
+    }
     if (const auto b = ctx(kBounds); !b.empty()) {
-      carver_->set_bounds(Eigen::AlignedBox3d(Eigen::Vector3d(b[0], b[1], b[2]), Eigen::Vector3d(b[3], b[4], b[5])));
+      const Eigen::AlignedBox3d box(Eigen::Vector3d(b[0], b[1], b[2]), Eigen::Vector3d(b[3], b[4], b[5]));
+      carver_->set_bounds(box);
+      if (uniform_) uniform_->set_bounds(box);
       has_bounds_ = true;
     }
   }
@@ -143,9 +153,14 @@ class OctreeCarverFilter final : public fba::Component {
         has_bounds_ = true;
         ctx_.emit(kBoundsEstimated, fmt(box));
         carver_->add_views(pending_);
+        if (uniform_) {
+          uniform_->set_bounds(box);
+          for (const auto& v : views_) uniform_->add_view(v);
+        }
         pending_.clear();
       } else {
         carver_->add_view(s);
+        if (uniform_) uniform_->add_view(views_.back());
       }
     } else if (!has_bounds_ || !new_regions) {
       return;
@@ -167,6 +182,7 @@ class OctreeCarverFilter final : public fba::Component {
     // go first, and the tree once its surface is built: carve_dino's peak fell from 242 to 215 MiB
     // (about 60 of them are OpenCV's libraries).
     carver_.reset();
+    uniform_.reset();
     views_ = {};
     const fba::TriangleMesh surface = fba::vision::occupied_surface_mesh(*model);
     const Eigen::AlignedBox3d bounds = model->bounds;
@@ -312,30 +328,32 @@ class OctreeCarverFilter final : public fba::Component {
 
   // Where detail went, against uniform refinement of the same views to the same depth.
   void report_detail(const fba::Octree& model) {
-    const auto st = carver_->stats();
-    char payload[320];
-    if (!compare_uniform_) {
-      std::snprintf(payload, sizeof payload, "{\"model_nodes\": %zu, \"nodes_visited\": %zu}", model.node_count,
-                    st.nodes_visited);
-    } else {
-      fba::vision::CarverParams p = carver_->params();
-      p.occupancy_threshold = 0;
-      p.curvature_threshold = -std::numeric_limits<double>::infinity();
-      // The views one by one, as this carver had them, so that the nodes visited compare too.
-      fba::vision::OctreeCarver uniform(p);
-      uniform.set_bounds(model.bounds);
-      for (const auto& v : views_) uniform.add_view(v);
-      const auto u = uniform.snapshot();
-      const auto ust = uniform.stats();
-      std::snprintf(payload, sizeof payload,
-                    "{\"model_nodes\": %zu, \"nodes_visited\": %zu, \"uniform_nodes\": %zu, \"uniform_nodes_visited\": %zu, "
-                    "\"saved_share\": %.4f}",
-                    model.node_count, st.nodes_visited, u->node_count, ust.nodes_visited,
-                    1.0 - double(model.node_count) / double(u->node_count));
-      ctx_.log().info("detail: {} nodes against {} for uniform detail to depth {} ({:.1f}% fewer)", model.node_count,
-                      u->node_count, p.max_depth, 100.0 * (1.0 - double(model.node_count) / double(u->node_count)));
+    const std::string payload = detail_json(model);
+    if (uniform_) {
+      const std::size_t u = uniform_->snapshot()->node_count;
+      ctx_.log().info("detail: {} nodes against {} for uniform detail to depth {} ({:.1f}% fewer)", model.node_count, u,
+                      uniform_->params().max_depth, 100.0 * (1.0 - double(model.node_count) / double(u)));
     }
     ctx_.emit(kDetail, payload);
+  }
+
+  // The `detail` figures as JSON: the model's nodes and the nodes visited, and with compare_uniform
+  // the uniform carve's (carved view by view alongside, as this carver had the views, so that the
+  // nodes visited compare too, and so that the figures are there after every update: a run stopped
+  // by an event rule never reaches end_of_stream).
+  std::string detail_json(const fba::Octree& model) {
+    const auto st = carver_->stats();
+    char payload[320];
+    if (!uniform_) {
+      std::snprintf(payload, sizeof payload, "\"model_nodes\": %zu, \"nodes_visited\": %zu", model.node_count, st.nodes_visited);
+      return std::string("{") + payload + "}";
+    }
+    const std::size_t u = uniform_->snapshot()->node_count;
+    std::snprintf(payload, sizeof payload,
+                  "\"model_nodes\": %zu, \"nodes_visited\": %zu, \"uniform_nodes\": %zu, \"uniform_nodes_visited\": %zu, "
+                  "\"saved_share\": %.4f",
+                  model.node_count, st.nodes_visited, u, uniform_->stats().nodes_visited, 1.0 - double(model.node_count) / double(u));
+    return std::string("{") + payload + "}";
   }
 
   // The progress line and the `updated` event (kept in summary.json) give the update's figures.
@@ -357,11 +375,13 @@ class OctreeCarverFilter final : public fba::Component {
                     u.storage_bytes);
       ctx_.emit(kUpdated, payload);
     }
+    if (uniform_) ctx_.emit(kDetail, detail_json(*model));
     ctx_(kOctree).emit(model);
   }
 
   fba::Context& ctx_;
   std::optional<fba::vision::OctreeCarver> carver_;  // released before the outputs are written
+  std::optional<fba::vision::OctreeCarver> uniform_;  // with compare_uniform: the same views, uniform detail
   const std::size_t bounds_views_;
   const double margin_;
   const bool compare_uniform_;

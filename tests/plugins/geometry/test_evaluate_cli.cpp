@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 
 #include <cstring>
+#include <ostream>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -73,6 +74,16 @@ void expect_refused(const std::vector<std::string>& args, const std::string& say
   EXPECT_NE(r.output.find(says), std::string::npos) << "expected \"" << says << "\" in:\n" << r.output;
 }
 
+// One bad argument of a subcommand: the words after the subcommand's valid start, and what the
+// refusal must say.
+struct BadArgument {
+  std::string name;  // the test's name
+  std::vector<std::string> args;
+  std::string says;
+};
+
+void PrintTo(const BadArgument& b, std::ostream* os) { *os << b.name; }
+
 std::vector<std::string> synthetic(std::initializer_list<std::string> extra) {
   std::vector<std::string> a{"synthetic", "--mesh", kBanana};
   a.insert(a.end(), extra);
@@ -85,49 +96,94 @@ std::vector<std::string> model(std::initializer_list<std::string> extra) {
   return a;
 }
 
-TEST(EvaluateCli, SyntheticRefusesViewsOutOfRange) {
-  expect_refused(synthetic({"--views", "0"}), "--views must be in [1, 1000]; found 0");
-  expect_refused(synthetic({"--views", "-3"}), "--views must be in [1, 1000]; found -3");
+std::vector<std::string> grasp(std::initializer_list<std::string> extra) {
+  std::vector<std::string> a{"grasp", "--mesh", kBanana};
+  a.insert(a.end(), extra);
+  return a;
 }
 
-TEST(EvaluateCli, SyntheticRefusesNaNElevations) {
-  expect_refused(synthetic({"--min-elevation", "nan"}), "--min-elevation must be in [-90, 90]; found nan");
-  expect_refused(synthetic({"--max-elevation", "nan"}), "--max-elevation must be in");
-  expect_refused(synthetic({"--min-elevation", "60", "--max-elevation", "30"}), "--max-elevation must be in [60, 90]; found 30");
+// The list need not exist: the command line is checked before the list is read.
+std::vector<std::string> grasp_batch(std::initializer_list<std::string> extra) {
+  std::vector<std::string> a{"grasp", "--batch", "no-such-list.yaml"};
+  a.insert(a.end(), extra);
+  return a;
 }
 
-TEST(EvaluateCli, SyntheticRefusesNegativeThreadsAndDepthsADenseGridCannotHold) {
-  expect_refused(synthetic({"--threads", "-1"}), "--threads must be in [0, 256]; found -1");
-  expect_refused(synthetic({"--depth", "19"}), "--depth must be in [1, 10]; found 19");
-  expect_refused(synthetic({"--depth", "0"}), "--depth must be in [1, 10]; found 0");
-  expect_refused(synthetic({"--tolerance", "inf"}), "--tolerance must be in [0, 1000]; found inf");
-}
+class EvaluateCliRefuses : public ::testing::TestWithParam<BadArgument> {};
 
-TEST(EvaluateCli, ModelRefusesDepthOutOfRange) {
-  expect_refused(model({"--mesh", kBanana, "--depth", "0"}), "--depth must be in [1, 10]; found 0");
-  expect_refused(model({"--images", kDinoSet, "--depth", "30"}), "--depth must be in [1, 10]; found 30");
-}
+// Every bad value is refused before any work, with exit status 2 and a message naming the option,
+// what it expects and what was found.
+TEST_P(EvaluateCliRefuses, TheBadArgumentWithStatusTwoAndItsName) { expect_refused(GetParam().args, GetParam().says); }
 
-TEST(EvaluateCli, ModelRefusesInvertedNaNOrIncompleteBounds) {
-  expect_refused(model({"--mesh", kBanana, "--bounds", "0.1", "-0.1", "-0.1", "-0.1", "0.1", "0.1"}),
-                 "--bounds: xmin must be below xmax, both finite; found 0.1 and -0.1");
-  expect_refused(model({"--mesh", kBanana, "--bounds", "-0.1", "-0.1", "nan", "0.1", "0.1", "0.1"}),
-                 "--bounds: zmin must be below zmax, both finite; found nan and 0.1");
-  expect_refused(model({"--mesh", kBanana, "--bounds", "-0.1", "-0.1", "-0.1"}), "--bounds needs 6 numbers");
-  expect_refused(model({"--images", kDinoSet, "--bounds", "0.1", "0.1", "0.1", "-0.1", "-0.1", "-0.1"}),
-                 "--bounds: xmin must be below xmax");
-}
+std::string test_name(const ::testing::TestParamInfo<BadArgument>& info) { return info.param.name; }
 
-TEST(EvaluateCli, ModelRefusesMeshOptionsWithoutAMesh) {
-  expect_refused(model({"--images", kDinoSet, "--bounds", "-0.1", "-0.1", "-0.1", "0.1", "0.1", "0.1"}),
-                 "--bounds applies to the comparison with a mesh");
-  expect_refused(model({"--images", kDinoSet, "--depth", "7"}), "--depth applies to the comparison with a mesh");
-}
+INSTANTIATE_TEST_SUITE_P(Synthetic, EvaluateCliRefuses, ::testing::Values(
+    BadArgument{"ViewsZero", synthetic({"--views", "0"}), "--views must be in [1, 1000]; found 0"},
+    BadArgument{"ViewsNegative", synthetic({"--views", "-3"}), "--views must be in [1, 1000]; found -3"},
+    BadArgument{"ViewsNotAnInteger", synthetic({"--views", "2.5"}), "--views must be an integer in [1, 1000]; found '2.5'"},
+    BadArgument{"ViewsText", synthetic({"--views", "many"}), "--views must be an integer in [1, 1000]; found 'many'"},
+    BadArgument{"ViewsHuge", synthetic({"--views", "99999999999999999999"}), "--views must be an integer in [1, 1000]; found '99999999999999999999'"},
+    BadArgument{"MinElevationNaN", synthetic({"--min-elevation", "nan"}), "--min-elevation must be in [-90, 90]; found nan"},
+    BadArgument{"MaxElevationNaN", synthetic({"--max-elevation", "nan"}), "--max-elevation must be in [-90, 90]; found nan"},
+    BadArgument{"ElevationsInverted", synthetic({"--min-elevation", "60", "--max-elevation", "30"}), "--max-elevation must be in [60, 90]; found 30"},
+    BadArgument{"ElevationText", synthetic({"--min-elevation", "low"}), "--min-elevation must be a number in [-90, 90]; found 'low'"},
+    BadArgument{"ThreadsNegative", synthetic({"--threads", "-1"}), "--threads must be in [0, 256]; found -1"},
+    BadArgument{"ThreadsTooMany", synthetic({"--threads", "257"}), "--threads must be in [0, 256]; found 257"},
+    BadArgument{"DepthTooDeep", synthetic({"--depth", "19"}), "--depth must be in [1, 10]; found 19"},
+    BadArgument{"DepthZero", synthetic({"--depth", "0"}), "--depth must be in [1, 10]; found 0"},
+    BadArgument{"MarginNegative", synthetic({"--margin", "-0.1"}), "--margin must be in [0, 10]; found -0.1"},
+    BadArgument{"MarginInfinite", synthetic({"--margin", "inf"}), "--margin must be in [0, 10]; found inf"},
+    BadArgument{"MinElevationMinusInfinity", synthetic({"--min-elevation", "-inf"}), "--min-elevation must be in [-90, 90]; found -inf"},
+    BadArgument{"ToleranceInfinite", synthetic({"--tolerance", "inf"}), "--tolerance must be in [0, 1000]; found inf"},
+    BadArgument{"UnknownShortOption", synthetic({"-x"}), "unrecognised option '-x'"},
+    BadArgument{"NoMesh", {"synthetic", "--views", "8"}, "the option '--mesh' is required"}), test_name);
 
-TEST(EvaluateCli, UnknownOptionsAreRefused) {
-  expect_refused(model({"--mesh", kBanana, "--bogus", "1"}), "unrecognised option '--bogus'");
-  expect_refused(synthetic({"-x"}), "unrecognised option '-x'");
-}
+INSTANTIATE_TEST_SUITE_P(Model, EvaluateCliRefuses, ::testing::Values(
+    BadArgument{"DepthZero", model({"--mesh", kBanana, "--depth", "0"}), "--depth must be in [1, 10]; found 0"},
+    BadArgument{"DepthTooDeepWithImages", model({"--images", kDinoSet, "--depth", "30"}), "--depth must be in [1, 10]; found 30"},
+    BadArgument{"DepthText", model({"--mesh", kBanana, "--depth", "six"}), "--depth must be an integer in [1, 10]; found 'six'"},
+    BadArgument{"MarginNaN", model({"--mesh", kBanana, "--margin", "nan"}), "--margin must be in [0, 10]; found nan"},
+    BadArgument{"BoundsInverted", model({"--mesh", kBanana, "--bounds", "0.1", "-0.1", "-0.1", "-0.1", "0.1", "0.1"}),
+                "--bounds: xmin must be below xmax; found 0.1 and -0.1"},
+    BadArgument{"BoundsNaN", model({"--mesh", kBanana, "--bounds", "-0.1", "-0.1", "nan", "0.1", "0.1", "0.1"}),
+                "--bounds needs finite numbers (xmin ymin zmin xmax ymax zmax); number 3 is nan"},
+    BadArgument{"BoundsIncomplete", model({"--mesh", kBanana, "--bounds", "-0.1", "-0.1", "-0.1"}),
+                "--bounds needs 6 numbers (xmin ymin zmin xmax ymax zmax); found 3"},
+    BadArgument{"BoundsInvertedWithImages", model({"--images", kDinoSet, "--bounds", "0.1", "0.1", "0.1", "-0.1", "-0.1", "-0.1"}),
+                "--bounds: xmin must be below xmax"},
+    BadArgument{"BoundsWithoutAMesh", model({"--images", kDinoSet, "--bounds", "-0.1", "-0.1", "-0.1", "0.1", "0.1", "0.1"}),
+                "--bounds applies to the comparison with a mesh"},
+    BadArgument{"DepthWithoutAMesh", model({"--images", kDinoSet, "--depth", "7"}), "--depth applies to the comparison with a mesh"},
+    BadArgument{"SetWithoutATask", model({"--images", kDinoSet, "--set", "contours.threshold=0.3"}), "--set applies to the task given with --task"},
+    BadArgument{"UnknownOption", model({"--mesh", kBanana, "--bogus", "1"}), "unrecognised option '--bogus'"}), test_name);
+
+INSTANTIATE_TEST_SUITE_P(Grasp, EvaluateCliRefuses, ::testing::Values(
+    BadArgument{"RandomNegative", grasp({"--random", "-1"}), "--random must be an integer in [0, 1000000]; found '-1'"},
+    BadArgument{"RandomTooMany", grasp({"--random", "1000001"}), "--random must be in [0, 1000000]; found 1000001"},
+    BadArgument{"SeedNegative", grasp({"--seed", "-5"}), "--seed must be an integer in [0, 18446744073709551615]; found '-5'"},
+    BadArgument{"SamplesTooFew", grasp({"--synthesise", "--samples", "2"}), "--samples must be in [3, 1000000]; found 2"},
+    BadArgument{"SamplesWithoutSynthesis", grasp({"--random", "10", "--samples", "50"}), "--samples applies to --synthesise"},
+    BadArgument{"FrictionNaN", grasp({"--random", "10", "--friction", "nan"}), "--friction must be in [0, 10]; found nan"},
+    BadArgument{"FrictionNegative", grasp({"--random", "10", "--friction", "-0.5"}), "--friction must be in [0, 10]; found -0.5"},
+    BadArgument{"ConeEdgesTooFew", grasp({"--random", "10", "--cone-edges", "2"}), "--cone-edges must be in [3, 64]; found 2"},
+    BadArgument{"MeshPoseIncomplete", grasp({"--random", "10", "--mesh-pose", "1", "2"}),
+                "--mesh-pose needs 6 numbers (x y z roll pitch yaw, metres and radians); found 2"},
+    BadArgument{"MeshPoseNaN", grasp({"--random", "10", "--mesh-pose", "0", "0", "0", "-1.5", "nan", "0"}),
+                "--mesh-pose needs finite numbers (x y z roll pitch yaw, metres and radians); number 5 is nan"},
+    BadArgument{"NothingToEvaluate", grasp({"--random", "0"}), "nothing to evaluate"}), test_name);
+
+INSTANTIATE_TEST_SUITE_P(GraspBatch, EvaluateCliRefuses, ::testing::Values(
+    BadArgument{"JobsZero", grasp_batch({"--jobs", "0"}), "--jobs must be in [1, 64]; found 0"},
+    BadArgument{"JobsShortOptionTooMany", grasp_batch({"-j", "65"}), "--jobs must be in [1, 64]; found 65"},
+    BadArgument{"JobsAttachedText", grasp_batch({"-jx"}), "--jobs must be an integer in [1, 64]; found 'x'"},
+    BadArgument{"RandomNegative", grasp_batch({"--random", "-1"}), "--random must be an integer in [0, 1000000]; found '-1'"},
+    BadArgument{"SeedText", grasp_batch({"--seed", "one"}), "--seed must be an integer in [0, 18446744073709551615]; found 'one'"},
+    BadArgument{"FbaRunMissing", grasp_batch({"--fba-run", "/no/such/fba-run"}),
+                "--fba-run: expected an executable program; found '/no/such/fba-run'"},
+    BadArgument{"FbaRunNotOnPath", grasp_batch({"--fba-run", "no-such-fba-run-program"}),
+                "--fba-run: expected an executable program; found 'no-such-fba-run-program'"},
+    BadArgument{"OutputAFile", grasp_batch({"-o", kBanana}), "--output: expected a folder; found '" + kBanana + "'"},
+    BadArgument{"UnknownShortOption", grasp_batch({"-q"}), "unrecognised option '-q'"}), test_name);
 
 // The banana compared with itself inside a box given with negative corners: a negative number is a
 // value of --bounds, and the run succeeds.

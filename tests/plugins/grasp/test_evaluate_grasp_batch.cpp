@@ -52,7 +52,8 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
                    << "fba_run_args: [-e, deterministic]\n"
                    << "pose_set:\n  - mesh={mesh}\n  - object_yaw={yaw}\n"
                    << "set: [carver.max_depth=4, synthesis.max_views=3]\n"
-                   << "variants:\n  - { name: loop }\n  - { name: uniform, set: [carver.occupancy_threshold=0] }\n"
+                   << "variants:\n  - { name: loop, set: [carver.compare_uniform=true] }\n"
+                   << "  - { name: uniform, set: [carver.occupancy_threshold=0] }\n"
                    << "runs:\n"
                    << "  - { mesh: " << mustard() << ", pose: [0, 0, 30] }\n"
                    << "  - { mesh: " << (dir_ / "no-such-mesh.obj").string() << " }\n";
@@ -83,6 +84,11 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   ASSERT_TRUE(runs.is_array()) << "runs.json";
   ASSERT_EQ(runs.size(), 4u);  // loop: mustard, missing; uniform: mustard, missing
   EXPECT_GT(runs[0]["nodes"].get<long long>(), 0);
+  // The carver's comparison with uniform detail, though the run was stopped by an event rule (held,
+  // or synthesis giving up) and never reached the end of its stream.
+  ASSERT_TRUE(runs[0].contains("detail")) << runs[0].dump(2);
+  EXPECT_GT(runs[0]["detail"].value("uniform_nodes", 0), 0) << runs[0].dump(2);
+  EXPECT_TRUE(runs[0]["detail"].contains("saved_share")) << runs[0].dump(2);
   EXPECT_EQ(runs[1]["outcome"], "no summary");
   EXPECT_EQ(runs[2]["variant"], "uniform");
   // The variants side by side, per object and overall.

@@ -122,7 +122,7 @@ TEST_F(EvaluateGraspCli, BadInputIsAClearErrorWithStatusTwo) {
 
   r = run("--mesh " + mesh() + " --random 10 --mesh-pose 1 2");
   EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("--mesh-pose: expected 6 numbers"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--mesh-pose needs 6 numbers"), std::string::npos) << r.output;
 }
 
 TEST_F(EvaluateGraspCli, HelpDocumentsTheSummaryShape) {

@@ -141,3 +141,68 @@ TEST(OctreeCarverGraspCriterion, RegionsOfInterestGetTheDetailAndNothingElseDoes
   EXPECT_GT(deep_inside, 0);
   EXPECT_EQ(deep_outside, 0);
 }
+
+namespace {
+
+// The last event called `name`'s payload, or "".
+std::string last_payload(const ComponentHarness& h, const std::string& name) {
+  std::string p;
+  for (const auto& e : h.events())
+    if (e.name == name) p = e.payload;
+  return p;
+}
+
+}  // namespace
+
+// With compare_uniform, the comparison with uniform detail is in a `detail` event after every
+// update, so that a run stopped by an event rule (hand.held), which never reaches the end of the
+// stream, has it; the end's own equals the last update's. Detail goes into a region of interest
+// only (as in the test above), so the model has fewer nodes than uniform detail.
+TEST(OctreeCarverDetail, CompareUniformIsReportedAfterEveryUpdateNotOnlyAtTheEnd) {
+  ComponentHarness h(registry(), "vision.octree_carver",
+                     {{"bounds", kDinoBox}, {"max_depth", 5}, {"occupancy_threshold", 1}, {"detail_after_views", 0},
+                      {"compare_uniform", true}},
+                     {"regions"});
+  fba::RegionsOfInterest roi;
+  roi.boxes.emplace_back(Eigen::Vector3d(-0.06, -0.02, -0.06), Eigen::Vector3d(-0.025, 0.07, 0.016));
+  h.push<fba::RegionsOfInterest>("regions", roi);
+  const auto frames = dino_frames(4);
+  for (const auto& f : frames) {
+    cv::Mat m = cv::Mat::zeros(f->image.rows, f->image.cols, CV_8UC1);
+    cv::circle(m, {320, 240}, 120, cv::Scalar(255), cv::FILLED);
+    h.push<fba::Silhouette>("silhouette", silhouette(f, m));
+  }
+  h.run();  // the inputs are still open: no end of stream
+  ASSERT_EQ(h.failure(), "");
+  std::size_t details = 0;
+  for (const auto& e : h.events()) details += e.name == "detail";
+  EXPECT_EQ(details, frames.size());
+  const std::string running = last_payload(h, "detail");
+  EXPECT_NE(running.find("\"uniform_nodes\": "), std::string::npos) << running;
+  EXPECT_NE(running.find("\"saved_share\": 0."), std::string::npos) << running;
+  EXPECT_EQ(running.find("\"saved_share\": 0.0000"), std::string::npos) << running;
+
+  h.close("silhouette");
+  h.close("regions");
+  h.run();
+  ASSERT_EQ(h.failure(), "");
+  EXPECT_EQ(last_payload(h, "detail"), running);
+}
+
+// Without compare_uniform, `detail` stays an end-of-stream report.
+TEST(OctreeCarverDetail, WithoutCompareUniformDetailComesOnceAtTheEnd) {
+  ComponentHarness h(registry(), "vision.octree_carver",
+                     {{"bounds", kDinoBox}, {"max_depth", 4}, {"occupancy_threshold", 0}, {"detail_after_views", 0}});
+  for (const auto& f : dino_frames(4)) {
+    cv::Mat m = cv::Mat::zeros(f->image.rows, f->image.cols, CV_8UC1);
+    cv::circle(m, {320, 240}, 120, cv::Scalar(255), cv::FILLED);
+    h.push<fba::Silhouette>("silhouette", silhouette(f, m));
+  }
+  h.run();
+  EXPECT_EQ(last_payload(h, "detail"), "");
+  h.close("silhouette");
+  h.run();
+  ASSERT_EQ(h.failure(), "");
+  EXPECT_NE(last_payload(h, "detail").find("\"model_nodes\": "), std::string::npos);
+  EXPECT_EQ(last_payload(h, "detail").find("uniform_nodes"), std::string::npos);
+}
