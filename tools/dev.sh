@@ -101,13 +101,14 @@ case "$cmd" in
       LSAN_OPTIONS=suppressions=$top/tests/lsan.supp \
       run_tests asan -LE "install|benchmark"
 
-    stage "ThreadSanitizer: the runtime's concurrency tests"
+    stage "ThreadSanitizer: the runtime's concurrency tests and the hardware drivers' threads"
     configure tsan "${sanitized[@]}" -DFBA_SANITIZE=thread -DFBA_BUILD_VISION=OFF -DFBA_BUILD_BENCHMARKS=OFF
-    build tsan --target fba_core_tests fba_task_tests
+    build tsan --target fba_core_tests fba_task_tests fba_can_tests fba_canopen_tests fba_canopen_program_tests \
+      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests
     # In-process tests only: the command-line tests (Cli*, and the random signals) run fba-run as a
     # process and check its crash and signal handling, which by design calls what TSan calls
     # signal-unsafe (the best-effort crash report); they run in the plain and ASan stages.
-    TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 run_tests tsan -L "core|tasks" -LE signals -E "^Cli"
+    TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 run_tests tsan -L "core|tasks|hardware" -LE signals -E "^Cli"
 
     stage "fuzzing the task loader: every corpus input once, then a bounded exploration"
     CC=clang CXX=clang++ configure fuzz "${sanitized[@]}" -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_VISION=OFF \

@@ -6,14 +6,13 @@
 // Any fault (a drive's EMCY or fault state, a silent drive, the line gone, persistent noise)
 // quick-stops every joint and ends process() with an error naming the bus, the joint, its node and
 // the reason, so the task's on_error policy applies.
-#include <dlfcn.h>
-
 #include <chrono>
 #include <cmath>
 #include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <thread>
 #include <variant>
 
 #include <fmt/format.h>
@@ -24,36 +23,18 @@
 #include <fba/can/slcan.hpp>
 #include <fba/canopen/arm.hpp>
 #include <fba/component.hpp>
-#include <fba/types/joint_state.hpp>
-#include <fba/types/pose.hpp>
 
-#include "arm_model.hpp"
-#include "arm_ports.hpp"
+#include "arm_component.hpp"
 
 namespace {
 
-using fba::arm::ArmModel;
 using Clock = std::chrono::steady_clock;
 namespace canopen = fba::canopen;
-
-// The project's arm, installed beside the plugins (FBA_ROBOTS_FROM_PLUGIN is relative to them).
-std::filesystem::path default_urdf() {
-  Dl_info info{};
-  if (!dladdr(reinterpret_cast<void*>(&default_urdf), &info) || !info.dli_fname) return "wrist_camera_arm.urdf";
-  return (std::filesystem::path(info.dli_fname).parent_path() / FBA_ROBOTS_FROM_PLUGIN / "wrist_camera_arm.urdf")
-      .lexically_normal();
-}
-
-nlohmann::json pose_json(const Eigen::Isometry3d& t) {
-  const Eigen::Quaterniond q(t.linear());
-  const Eigen::Vector3d p = t.translation();
-  return {{"position", {p.x(), p.y(), p.z()}}, {"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
-}
 
 std::string check_bus(const fba::ParamValues& p);
 std::string check_rate(const fba::ParamValues& p);
 
-class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPorts {
+class CanopenArmComponent final : public fba::arm::ArmComponent {
  public:
   static constexpr fba::Param<std::string> kDevice{
       "device", fba::required,
@@ -73,30 +54,9 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
   static inline const auto kZeroCounts =
       fba::Param<std::vector<double>>("zero_counts", std::vector<double>{},
                                       "each joint's drive position at joint position 0; empty: 0 for every joint");
-  static constexpr fba::Param<std::filesystem::path> kUrdf{
-      "urdf", "", "the arm's URDF (kinematics and joint limits); empty: the project's wrist_camera_arm.urdf"};
-  static constexpr fba::Param<std::string> kBaseLink{"base_link", "world", "the frame target poses are given in"};
-  static constexpr fba::Param<std::string> kCameraLink{"camera_link", "camera",
-                                                       "the camera's optical frame (z forward, x right, y down)"};
-  static constexpr auto kSpeed =
-      fba::Param<double>("speed_scale", 0.5, "share of each joint's URDF velocity limit used by motions")
-          .range(0.01, 1.0);
-  static constexpr auto kAcceleration =
-      fba::Param<double>("acceleration", 3.0, "joint acceleration limit, rad/s^2 (m/s^2), every joint")
-          .range(0.01, 100.0);
   static constexpr auto kRate =
       fba::Param<double>("rate", 50.0, "joint states per second while moving (the drives are sampled with a SYNC each)")
           .range(0.1, 1000.0);
-  static constexpr auto kPositionTolerance =
-      fba::Param<double>("position_tolerance", 1e-4, "how close IK must bring the camera to a target, m")
-          .range(1e-9, 0.1);
-  static constexpr auto kOrientationTolerance =
-      fba::Param<double>("orientation_tolerance", 1e-3, "how close IK must turn the camera to a target, rad")
-          .range(1e-9, 0.5);
-  static constexpr auto kAttempts =
-      fba::Param<int>("ik_attempts", 32, "IK starts: the current joints, then random seeds").range(1, 10000);
-  static constexpr auto kPublishInitial = fba::Param<bool>(
-      "publish_initial", true, "publish the joint state and camera pose where the arm starts, at the first tick");
   static constexpr auto kHeartbeatPeriod =
       fba::Param<int>("heartbeat_period_ms", 50, "the heartbeat period each drive is given (object 0x1017)")
           .range(1, 10000);
@@ -131,11 +91,9 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
   }
 
   explicit CanopenArmComponent(fba::Context& ctx)
-      : ctx_(ctx),
-        model_(ctx(kUrdf).empty() ? default_urdf() : ctx(kUrdf), ctx(kBaseLink), ctx(kCameraLink)),
+      : ArmComponent(ctx),
         sdo_timeout_(ctx(kSdoTimeout)),
-        noise_limit_(static_cast<std::uint64_t>(ctx(kNoiseLimit))),
-        publish_initial_(ctx(kPublishInitial)) {
+        noise_limit_(static_cast<std::uint64_t>(ctx(kNoiseLimit))) {
     const std::size_t n = model_.size();
     const std::vector<double> nodes = ctx(kNodeIds), counts = ctx(kCountsPerRad), zeros = ctx(kZeroCounts);
     auto per_joint = [&](const char* param, std::size_t size, bool may_be_empty) {
@@ -170,9 +128,6 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
                                          .max_velocity = limits.velocity * ctx(kSpeed),
                                          .max_acceleration = ctx(kAcceleration)});
     }
-    ik_.position_tolerance = ctx(kPositionTolerance);
-    ik_.orientation_tolerance = ctx(kOrientationTolerance);
-    ik_.attempts = ctx(kAttempts);
     // A wrong device is a configuration error, reported before the task runs.
     bus_ = fba::can::open_bus(ctx(kDevice), ctx(kBitrate));
     master_ = std::make_unique<canopen::Master>(*bus_, canopen::MasterOptions{.sdo_timeout = sdo_timeout_});
@@ -208,11 +163,15 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
   void safe_state() override {
     std::unique_lock lock(mutex_, std::defer_lock);
     // process() ends within a few milliseconds of interrupt(); a wait this long means it is stuck.
-    if (!lock.try_lock_for(std::chrono::seconds(3)))
-      throw std::runtime_error(
-          fmt::format("{}: the driver's thread did not let go of the bus within 3 s; no quick stop "
-                      "was sent",
-                      bus_->name()));
+    // (Not timed_mutex::try_lock_for: ThreadSanitizer does not see its pthread_mutex_clocklock and
+    // then reports the unlock as one of an unlocked mutex.)
+    const auto give_up = Clock::now() + std::chrono::seconds(3);
+    while (!lock.try_lock()) {
+      if (Clock::now() >= give_up)
+        throw std::runtime_error(fmt::format(
+            "{}: the driver's thread did not let go of the bus within 3 s; no quick stop was sent", bus_->name()));
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
     if (!started_) return;  // the drives were never enabled by this run
     master_->resume();
     moving_ = false;
@@ -231,8 +190,6 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
   }
 
  private:
-  using Request = std::variant<fba::Pose, fba::JointState>;
-
   // Runs `f`; a fault (the arm already quick-stopped by CanopenArm) ends the call with an error
   // naming the bus. An interrupt is not a fault: the task is stopping, safe_state() follows.
   template <class F>
@@ -256,18 +213,12 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
     check_noise();
     const canopen::ArmSample s = arm_->sample(sdo_timeout_);
     joints_ = Eigen::Map<const Eigen::VectorXd>(s.positions.data(), static_cast<Eigen::Index>(s.positions.size()));
-    if (publish_initial_) {
-      publish_initial_ = false;
-      publish_state(s, now);
-      ctx_(kCameraPose).emit(pose_at(joints_, now), now);
-    }
+    publish_initial(joints_, s.velocities, now);
     if (moving_) {
-      publish_state(s, now);
+      publish_state(s.positions, s.velocities, now);
       if (s.reached) {
         moving_ = false;
-        const fba::Pose pose = pose_at(joints_, now);
-        ctx_(kCameraPose).emit(pose, now);
-        ctx_.emit(kArrived, nlohmann::json{{"pose", pose_json(pose.world_from_frame)}, {"joints", s.positions}}.dump());
+        arrive(joints_, now);
       } else if (Clock::now() > deadline_) {
         const auto failures = arm_->quick_stop_all();
         throw std::runtime_error(fmt::format(
@@ -287,23 +238,11 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
   // 'unreachable' (nothing is sent then).
   void start(const Request& r) {
     nlohmann::json target;
-    std::string why;
     Eigen::VectorXd goal;
-    if (const auto* pose = std::get_if<fba::Pose>(&r)) {
-      target = {{"pose", pose_json(pose->world_from_frame)}};
-      const auto ik = model_.inverse(pose->world_from_frame, joints_, ik_);
-      if (ik.ok)
-        goal = ik.joints;
-      else
-        why = ik.why;
-    } else {
-      const auto& js = std::get<fba::JointState>(r);
-      target = {{"names", js.names}, {"positions", js.positions}};
-      why = joint_goal(js, goal);
-    }
+    std::string why = goal_of(r, joints_, goal, target);
     if (why.empty()) {
       try {
-        planned_s_ = arm_->move_to(std::vector<double>(goal.data(), goal.data() + goal.size()));
+        planned_s_ = arm_->move_to(fba::arm::values(goal));
         moving_ = true;
         move_start_ = Clock::now();
         deadline_ = move_start_ +
@@ -314,29 +253,7 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
         why = e.what();
       }
     }
-    ctx_.log().warn("unreachable target {}: {}", target.dump(), why);
-    ctx_.emit(kUnreachable, nlohmann::json{{"target", target}, {"reason", why}}.dump());
-  }
-
-  // The joint vector a JointState asks for (by name, or in order), or why it cannot be had.
-  std::string joint_goal(const fba::JointState& js, Eigen::VectorXd& goal) const {
-    const auto& names = model_.joint_names();
-    goal = joints_;
-    if (js.names.empty()) {
-      if (js.positions.size() != names.size())
-        return fmt::format("{} positions without names; the arm has {} joints ({})", js.positions.size(), names.size(),
-                           this->names());
-      goal = Eigen::Map<const Eigen::VectorXd>(js.positions.data(), static_cast<Eigen::Index>(js.positions.size()));
-    } else {
-      if (js.names.size() != js.positions.size())
-        return fmt::format("{} names but {} positions", js.names.size(), js.positions.size());
-      for (std::size_t i = 0; i < js.names.size(); ++i) {
-        const auto it = std::find(names.begin(), names.end(), js.names[i]);
-        if (it == names.end()) return fmt::format("no joint '{}'; the arm's joints are {}", js.names[i], this->names());
-        goal(it - names.begin()) = js.positions[i];
-      }
-    }
-    return model_.limit_violation(goal);
+    refuse(target, why);
   }
 
   // Line noise is skipped by the bus and counted; a burst is tolerated, a line that keeps
@@ -363,37 +280,15 @@ class CanopenArmComponent final : public fba::Component, public fba::arm::ArmPor
                     failures.empty() ? "every joint was sent quick stop" : "quick stop failed: " + failures.front()));
   }
 
-  void publish_state(const canopen::ArmSample& s, std::int64_t stamp_ns) {
-    fba::JointState js;
-    js.names = model_.joint_names();
-    js.positions = s.positions;
-    js.velocities = s.velocities;
-    js.stamp = static_cast<double>(stamp_ns) * 1e-9;
-    ctx_(kJointState).emit(std::move(js), stamp_ns);
-  }
-
-  fba::Pose pose_at(const Eigen::VectorXd& q, std::int64_t stamp_ns) const {
-    fba::Pose p;
-    p.world_from_frame = model_.forward(q);
-    p.stamp = static_cast<double>(stamp_ns) * 1e-9;
-    return p;
-  }
-
-  std::string names() const { return fmt::format("{}", fmt::join(model_.joint_names(), ", ")); }
-
-  fba::Context& ctx_;
-  const ArmModel model_;
-  fba::arm::IkOptions ik_;
   const std::chrono::milliseconds sdo_timeout_;
   const std::uint64_t noise_limit_;
   std::unique_ptr<fba::can::CanBus> bus_;
   std::unique_ptr<canopen::Master> master_;
   std::unique_ptr<canopen::CanopenArm> arm_;
   // process(), end_of_stream() and safe_state() take turns on the bus (the master is single-threaded).
-  std::timed_mutex mutex_;
+  std::mutex mutex_;
   std::atomic<bool> interrupted_{false};
   bool started_ = false;
-  bool publish_initial_;
   Eigen::VectorXd joints_;  // where the drives last said they are
   bool moving_ = false;
   double planned_s_ = 0;

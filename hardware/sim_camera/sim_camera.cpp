@@ -31,7 +31,7 @@ class SimCamera final : public fba::Component {
       "object_rest", "upright", "how the object lies on the table: as the mesh stands, or on its side (turned 90 deg about the mesh's x)")
       .choices({"upright", "side"});
   static constexpr auto kWorld =
-      fba::Param<std::string>("frame", "mesh",
+      fba::Param<std::string>("world", "mesh",
                               "the world the object is rendered in: 'mesh', the mesh file's own coordinates (turned and moved by "
                               "object_rest, object_yaw, object_x, object_y, not raised), or 'table', where it rests on z = 0 (as sim.hand)")
           .choices({"mesh", "table"});
@@ -51,12 +51,15 @@ class SimCamera final : public fba::Component {
   static constexpr auto kBackgroundGrey = fba::Param<int>("background_grey", 25, "background brightness").range(0, 255);
   static constexpr auto kNoise = fba::Param<double>("noise", 0.0, "sensor noise, standard deviation in grey levels").range(0, 100);
   static constexpr fba::Param<std::int64_t> kSeed{"seed", 1, "noise seed"};
+  // As vision.camera's, so that the twins offer one interface (a task may wire it either way).
+  static constexpr fba::EventOut kLost{
+      "lost", "the source stopped delivering frames (the last viewpoint, without a pose input); payload: the source"};
 
   static fba::Spec spec() {
     return fba::Spec::sensor("sim.camera", "Renders an object mesh as a calibrated camera would see it (the twin of vision.camera).")
         .add(kPose, kFrame, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kWorld, kWidth, kHeight, kFx, kFy, kViewpoints, kViews,
              kMinElevation, kMaxElevation, kDistance,
-             kObjectGrey, kBackgroundGrey, kNoise, kSeed)
+             kObjectGrey, kBackgroundGrey, kNoise, kSeed, kLost)
         .add(kMinElevation <= kMaxElevation);
   }
 
@@ -95,7 +98,6 @@ class SimCamera final : public fba::Component {
       camera.camera_from_world = pose.get().world_from_frame.inverse();
     } else {
       camera.camera_from_world = views_[next_++];
-      if (next_ == views_.size()) ctx_.finish();
     }
     look_.seed += 1;  // each frame its own noise, the same sequence on every run
     auto frame = std::make_shared<fba::Frame>();
@@ -107,6 +109,10 @@ class SimCamera final : public fba::Component {
     auto out = ctx_(kFrame);
     frame->index = static_cast<int>(out.count());
     out.emit(std::shared_ptr<const fba::Frame>(std::move(frame)));
+    if (!ctx_(kPose).connected() && next_ == views_.size()) {  // as a video file's end: lost, then done
+      ctx_.emit(kLost, "sim_" + mesh_name_);
+      ctx_.finish();
+    }
   }
 
  private:

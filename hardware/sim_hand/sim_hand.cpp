@@ -31,7 +31,7 @@ nlohmann::json to_json(const fba::GraspExecution& e) {
 
 class SimHand final : public fba::Component {
  public:
-  static constexpr auto kGrasp = fba::hand::kGrasp;  // grasps in the frame the 'frame' parameter names
+  static constexpr auto kGrasp = fba::hand::kGrasp;  // grasps in the frame the 'world' parameter names
   static constexpr auto kResult = fba::hand::kResult;
   static constexpr auto kHeld = fba::hand::kHeld;
   static constexpr auto kDropped = fba::hand::kDropped;
@@ -47,8 +47,8 @@ class SimHand final : public fba::Component {
   static constexpr auto kFriction = fba::Param<double>("friction", 0.5, "sliding friction of object, table and fingers").range(0.01, 2);
   static constexpr auto kLiftHeight = fba::Param<double>("lift_height", 0.1, "how far the hand lifts the object, metres").range(0.001, 1);
   static constexpr auto kHoldTime = fba::Param<double>("hold_time", 2.0, "simulated seconds the object is held after lifting").range(0, 60);
-  static constexpr auto kFrame =
-      fba::Param<std::string>("frame", "table",
+  static constexpr auto kWorld =
+      fba::Param<std::string>("world", "table",
                               "the frame of grasps and reported contacts: 'table', where the object rests on z = 0, or 'mesh', "
                               "the mesh file's own coordinates (turned and moved by object_rest, object_yaw, object_x, object_y, not "
                               "raised); sim.camera has the same parameters, so that both see the same object")
@@ -62,11 +62,11 @@ class SimHand final : public fba::Component {
                              "holds it, and reports the real contacts, whether it held and how far it slipped "
                              "(the twin of hw.robotiq_3f).")
         .add(kGrasp, kResult, kHeld, kDropped, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kMass, kFriction, kLiftHeight, kHoldTime,
-             kFingerForce, kFrame);
+             kFingerForce, kWorld);
   }
 
   explicit SimHand(fba::Context& ctx) : ctx_(ctx), test_(make_test(ctx, table_shift_)) {
-    if (ctx(kFrame) == "table") table_shift_ = 0;
+    if (ctx(kWorld) == "table") table_shift_ = 0;
     ctx.log().info("{}: {} triangles on the table at ({:.3f}, {:.3f}), yaw {:.1f} deg, {}", ctx(kMesh).stem().string(),
                    test_.object().triangles.size(), ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw), ctx(kObjectRest));
   }

@@ -350,9 +350,10 @@ TEST(SocketCan, AMissingInterfaceIsAClearError) {
 
 TEST(SocketpairBus, AFloodOfMalformedRecordsStillEndsAtTheTimeout) {
   auto [a, b] = fba::can::socketpair_bus();
+  const std::uint8_t junk[3] = {1, 2, 3};
+  a->write_raw(junk);  // some junk is waiting before the wait starts, however late the flood's thread runs
   std::atomic<bool> stop{false};
   std::thread flood([&, &a = a] {
-    const std::uint8_t junk[3] = {1, 2, 3};
     try {
       while (!stop) a->write_raw(junk);
     } catch (const BusError&) {  // the reader closed: the flood is over
@@ -371,9 +372,11 @@ TEST(SlcanPty, AFloodOfNoiseStillEndsAtTheTimeout) {
   AdapterThread adapter(pty);
   slcan::SlcanBus host(path);
   adapter.stop();  // from here on, this test's flood is the only writer
+  const std::string noise = "tXYZ8\r";
+  // Some noise is on the line before the wait starts, however late the flood's thread runs.
+  adapter.adapter().write_raw({reinterpret_cast<const std::uint8_t*>(noise.data()), noise.size()});
   std::atomic<bool> stop{false};
   std::thread flood([&] {
-    const std::string noise = "tXYZ8\r";
     try {
       while (!stop) adapter.adapter().write_raw({reinterpret_cast<const std::uint8_t*>(noise.data()), noise.size()});
     } catch (const BusError&) {

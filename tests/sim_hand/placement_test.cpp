@@ -29,7 +29,7 @@ struct Boxes {
 
 Boxes boxes(double x, double y, double yaw_deg, const std::string& rest, double hand_yaw_deg) {
   ComponentHarness h(fba::test::built_plugins(), "sim.camera",
-                     {{"mesh", kCan}, {"frame", "table"}, {"object_x", x}, {"object_y", y}, {"object_yaw", yaw_deg},
+                     {{"mesh", kCan}, {"world", "table"}, {"object_x", x}, {"object_y", y}, {"object_yaw", yaw_deg},
                       {"object_rest", rest}},
                      {"pose"});
   fba::Pose above;

@@ -58,7 +58,7 @@ TEST(SimHand, InTheMeshFrameGraspsAndContactsAreInTheMeshFilesCoordinates) {
   const auto mesh = fba::geometry::load_mesh(kCan);
   const auto bounds = fba::geometry::mesh_bounds(mesh);
   ASSERT_LT(bounds.min().z(), -0.05);
-  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}, {"frame", "mesh"}});
+  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}, {"world", "mesh"}});
   h.push<fba::Grasp>("grasp", fba::sim_hand::ring_grasp(mesh, bounds.center().z(), M_PI));
   h.run();
   const auto results = h.values<fba::GraspExecution>("result");

@@ -213,11 +213,20 @@ SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("s
     throw BusError(name_ + ": cannot set the line raw: " + std::strerror(errno));
   ::tcflush(fd_.get(), TCIOFLUSH);
 
-  // A half-typed command from an earlier session ends with these CRs; their answers, and anything
-  // else still on the line, are drained before the real commands.
+  // A half-typed command from an earlier session ends with the first of these CRs. Each CR is
+  // answered (CR, BEL, or the half-typed command's reply), and all three answers are awaited before
+  // the real commands: a late one would otherwise be taken for the answer to 'C' and shift every
+  // answer after it by one, so that 'S' got 'C''s BEL (an adapter slower than a pause in the line,
+  // as on a loaded machine). Frames of a channel left open are not answers. An adapter that does
+  // not answer empty commands costs reply_timeout here, no more.
   write_all(fd_.get(), "\r\r\r", 3, kWriteTimeout, name_);
   const auto drain_until = Clock::now() + options.reply_timeout;
-  while (Clock::now() < drain_until && read_some(std::chrono::milliseconds(30))) {
+  for (int answers = 0; answers < 3 && Clock::now() < drain_until;) {
+    read_some(left_until(drain_until));
+    while (auto token = reader_.next())
+      if (token->kind == LineReader::Token::bell ||
+          (token->kind == LineReader::Token::line && !decode(token->text, nullptr)))
+        ++answers;
   }
   reader_ = LineReader{};
   command("C", options.reply_timeout);  // closing a closed channel is an error on some adapters: either answer will do

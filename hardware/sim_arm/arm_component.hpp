@@ -1,0 +1,83 @@
+// What the task's two arms do alike, written once: sim.arm (simulated) and hw.canopen_arm (the real
+// arm over CANopen) derive from ArmComponent. It holds the arm's model from the URDF parameters,
+// turns a target into joint goals, and publishes the joint states, the camera pose and the
+// 'arrived' and 'unreachable' events; each twin adds how its joints move.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include <fba/component.hpp>
+
+#include "arm_model.hpp"
+#include "arm_ports.hpp"
+
+namespace fba::arm {
+
+class ArmComponent : public fba::Component, public ArmPorts {
+ public:
+  static constexpr fba::Param<std::filesystem::path> kUrdf{
+      "urdf", "",
+      "the arm's URDF (kinematics and joint limits); empty: the project's wrist_camera_arm.urdf (a UR5-like 6R arm, "
+      "camera on the wrist)"};
+  static constexpr fba::Param<std::string> kBaseLink{"base_link", "world", "the frame target poses are given in"};
+  static constexpr fba::Param<std::string> kCameraLink{"camera_link", "camera",
+                                                       "the camera's optical frame (z forward, x right, y down)"};
+  static constexpr auto kSpeed =
+      fba::Param<double>("speed_scale", 0.5, "share of each joint's URDF velocity limit used by motions")
+          .range(0.01, 1.0);
+  static constexpr auto kAcceleration =
+      fba::Param<double>("acceleration", 3.0, "joint acceleration limit, rad/s^2 (m/s^2), every joint")
+          .range(0.01, 100.0);
+  static constexpr auto kPositionTolerance =
+      fba::Param<double>("position_tolerance", 1e-4, "how close IK must bring the camera to a target, m")
+          .range(1e-9, 0.1);
+  static constexpr auto kOrientationTolerance =
+      fba::Param<double>("orientation_tolerance", 1e-3, "how close IK must turn the camera to a target, rad")
+          .range(1e-9, 0.5);
+  static constexpr auto kAttempts =
+      fba::Param<int>("ik_attempts", 32, "IK starts: the current joints, then random seeds").range(1, 10000);
+  static constexpr auto kPublishInitial = fba::Param<bool>(
+      "publish_initial", true, "publish the joint state and camera pose where the arm starts, at the first tick");
+
+ protected:
+  using Request = std::variant<fba::Pose, fba::JointState>;
+
+  explicit ArmComponent(fba::Context& ctx);
+
+  // The joint goal a request asks for from `from` (IK for a pose), and the request as JSON for the
+  // events; returns why it cannot be had, or "" when `goal` is set.
+  std::string goal_of(const Request& r, const Eigen::VectorXd& from, Eigen::VectorXd& goal,
+                      nlohmann::json& target) const;
+  // A refused target: logged, and the 'unreachable' event with the target and the reason.
+  void refuse(const nlohmann::json& target, const std::string& why);
+
+  void publish_state(std::vector<double> positions, std::vector<double> velocities, std::int64_t stamp_ns);
+  // Once, at the first tick (unless publish_initial is off): the joints and the camera pose.
+  void publish_initial(const Eigen::VectorXd& q, std::vector<double> velocities, std::int64_t stamp_ns);
+  // Where a motion ended: the camera pose, and 'arrived' with it and the joints.
+  void arrive(const Eigen::VectorXd& q, std::int64_t stamp_ns);
+
+  // "shoulder_pan_joint, shoulder_lift_joint, ...": for messages.
+  std::string names() const;
+
+  fba::Context& ctx_;
+  const ArmModel model_;
+  IkOptions ik_;
+
+ private:
+  fba::Pose pose_at(const Eigen::VectorXd& q, std::int64_t stamp_ns) const;
+  std::string joint_goal(const fba::JointState& js, const Eigen::VectorXd& from, Eigen::VectorXd& goal) const;
+
+  bool publish_initial_;
+};
+
+// The vector's values as a std::vector, for JointState and JSON.
+std::vector<double> values(const Eigen::VectorXd& v);
+
+}  // namespace fba::arm
