@@ -67,11 +67,11 @@ class ExplorationPlanner final : public fba::Component {
   static constexpr auto kInitialViews = fba::Param<int>(
       "initial_views", 3, "on start: candidate 0 and its nearest candidates, for the initial analysis").range(1, 10000);
   static constexpr auto kMovementWeight = fba::Param<double>(
-      "movement_weight", 0.1, "score = share of the uncertain nodes seen - movement_weight * (angle moved / 180 deg)").at_least(0);
+      "movement_weight", 0.1, "score = gain (the grazing gain of the request's points, else the share of its uncertain nodes seen) - movement_weight * (angle moved / 180 deg)").at_least(0);
   static constexpr auto kHalfFov =
       fba::Param<double>("half_fov_deg", 30, "a node is in view within this angle of the optical axis").range(0.1, 179);
   static constexpr auto kMinGain =
-      fba::Param<double>("min_gain", 0.01, "no_view when the best view sees less than this share of the uncertain nodes").range(0, 1);
+      fba::Param<double>("min_gain", 0.01, "no_view when no view reaches this gain (points grazed, else share of the uncertain nodes seen)").range(0, 1);
   static constexpr auto kMaxRays =
       fba::Param<int>("max_rays", 4096, "at most this many uncertain nodes get a ray per candidate (an even stride)").range(1, 100000000);
   static constexpr fba::Param<bool> kExcludeVisited{"exclude_visited", true, "a candidate already requested is not chosen again"};

@@ -181,12 +181,6 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
     s.index = v;
     s.excluded = !excluded.empty() && excluded[v];
     const Eigen::Vector3d eye = candidates[v].translation();
-    for (const OctreeCell* t : rays) {
-      if (!in_view(candidates[v], t->centre, cos_half_fov)) ++s.outside;
-      else if (occluded(model, eye, *t)) ++s.hidden;
-      else ++s.seen;
-    }
-    s.node_gain = rays.empty() ? 0 : double(s.seen) / double(rays.size());
     std::map<int, double> group_gain;  // per group: what this view pins of its points
     for (const PointNeed& p : needs) {
       if (!in_view(candidates[v], p.position, cos_half_fov)) continue;
@@ -207,8 +201,19 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
     s.cost = params.movement_weight * s.move_angle / std::numbers::pi;
     choice.scores.push_back(s);
   }
-  // By the points when some unvisited view grazes them usefully; else by the uncertain nodes.
+  // By the points when some unvisited view grazes them usefully; else by the uncertain nodes (the
+  // costly part, rays through the tree: only then).
   for (const auto& s : choice.scores) choice.by_points |= !s.excluded && s.point_gain >= params.min_gain && s.point_gain > 0;
+  if (!choice.by_points)
+    for (auto& s : choice.scores) {
+      const Eigen::Vector3d eye = candidates[s.index].translation();
+      for (const OctreeCell* t : rays) {
+        if (!in_view(candidates[s.index], t->centre, cos_half_fov)) ++s.outside;
+        else if (occluded(model, eye, *t)) ++s.hidden;
+        else ++s.seen;
+      }
+      s.node_gain = rays.empty() ? 0 : double(s.seen) / double(rays.size());
+    }
   for (auto& s : choice.scores) {
     s.gain = choice.by_points ? s.point_gain : s.node_gain;
     s.score = s.gain - s.cost;

@@ -49,7 +49,7 @@ struct ViewScore {
   // 0.9 x the largest share of one group's points still to pin that it pins (first ones count
   // half) + 0.1 x that share over all points: completing one grasp candidate comes first.
   double point_gain = 0;
-  double node_gain = 0;     // seen / rays
+  double node_gain = 0;     // seen / rays (seen, hidden, outside and node_gain: only when the choice is by the nodes)
   double gain = 0;          // point_gain when the choice is by points, else node_gain
   double move_angle = 0;    // radians from the current camera, around the targets' centre
   double cost = 0;          // movement_weight * move_angle / pi
