@@ -1,7 +1,9 @@
 // grasp.exploration_planner: the exploration movement's planning. Each regions sample from grasp
-// synthesis is a request for a new view; the planner scores its candidate views by the uncertain
-// model nodes inside the regions each one sees, less the cost of moving there, and emits the best
-// as the camera's target pose, or no_view with the reason when none is worth the move. With an
+// synthesis is a request for a new view; the planner scores its candidate views by the request's
+// surface points each one grazes in a new direction (the lines of sight that pin a contact down),
+// or when none does by the uncertain model nodes inside the regions each one sees, less the cost
+// of moving there, and emits the best as the camera's target pose, or no_view with the reason when
+// none is worth the move. With an
 // output folder, the model each plan was made on is written as exploration/model_<views>views.ply.
 #include <algorithm>
 #include <cmath>
@@ -65,21 +67,23 @@ class ExplorationPlanner final : public fba::Component {
   static constexpr auto kInitialViews = fba::Param<int>(
       "initial_views", 3, "on start: candidate 0 and its nearest candidates, for the initial analysis").range(1, 10000);
   static constexpr auto kMovementWeight = fba::Param<double>(
-      "movement_weight", 0.1, "score = share of the uncertain nodes seen - movement_weight * (angle moved / 180 deg)").at_least(0);
+      "movement_weight", 0.1, "score = gain (the grazing gain of the request's points, else the share of its uncertain nodes seen) - movement_weight * (angle moved / 180 deg)").at_least(0);
   static constexpr auto kHalfFov =
       fba::Param<double>("half_fov_deg", 30, "a node is in view within this angle of the optical axis").range(0.1, 179);
   static constexpr auto kMinGain =
-      fba::Param<double>("min_gain", 0.01, "no_view when the best view sees less than this share of the uncertain nodes").range(0, 1);
+      fba::Param<double>("min_gain", 0.01, "no_view when no view reaches this gain (points grazed, else share of the uncertain nodes seen)").range(0, 1);
   static constexpr auto kMaxRays =
       fba::Param<int>("max_rays", 4096, "at most this many uncertain nodes get a ray per candidate (an even stride)").range(1, 100000000);
   static constexpr fba::Param<bool> kExcludeVisited{"exclude_visited", true, "a candidate already requested is not chosen again"};
   static constexpr fba::EventOut kViewChosen{
-      "view_chosen", "a target was emitted; payload (JSON): view, pose, score, gain, seen, targets, reason"};
+      "view_chosen", "a target was emitted; payload (JSON): view, pose, score, gain, seen, targets, by_points (chosen by grazing the "
+      "request's surface points), points (still to pin), pins, first, reason"};
   static constexpr fba::EventOut kNoView{"no_view", "no candidate is worth the move; payload (JSON): reason, views requested"};
 
   static fba::Spec spec() {
     return fba::Spec::filter("grasp.exploration_planner",
-                             "Chooses the next view: the candidate that sees most uncertain model nodes in the grasp's regions, "
+                             "Chooses the next view: the candidate whose lines of sight graze most of the grasp's unresolved "
+                             "contacts in a new direction, else the one that sees most uncertain model nodes in its regions; "
                              "visibility-aware, less the cost of moving.")
         .add(kOctree, kRegions, kCurrent, kStart, kTarget, kViews, kCount, kDistance, kMinElevation, kMaxElevation, kCentre,
              kPosesFrom, kGoodOnly, kInitialViews, kMovementWeight, kHalfFov, kMinGain, kMaxRays, kExcludeVisited, kViewChosen,
@@ -159,6 +163,7 @@ class ExplorationPlanner final : public fba::Component {
   void request(std::size_t view) {
     if (visited_.size() < candidates_.size()) visited_.resize(candidates_.size(), false);
     visited_[view] = true;
+    taken_.push_back(candidates_[view].translation());
     ++requested_;
     last_target_ = candidates_[view];
     fba::Pose target;
@@ -172,7 +177,7 @@ class ExplorationPlanner final : public fba::Component {
     visited_.resize(candidates_.size(), false);
     const std::optional<Eigen::Isometry3d> current = current_ ? current_ : last_target_;
     const auto choice = fba::grasp::choose_view(model, regions, candidates_, current,
-                                                exclude_visited_ ? visited_ : std::vector<bool>{}, params_);
+                                                exclude_visited_ ? visited_ : std::vector<bool>{}, params_, taken_);
     if (!ctx_.output_dir().empty()) {
       const auto dir = ctx_.output_dir() / "exploration";
       std::filesystem::create_directories(dir);
@@ -193,6 +198,10 @@ class ExplorationPlanner final : public fba::Component {
                                           {"gain", s.gain},
                                           {"seen", s.seen},
                                           {"targets", choice.targets},
+                                          {"by_points", choice.by_points},
+                                          {"points", choice.points},
+                                          {"pins", s.pins},
+                                          {"first", s.first},
                                           {"reason", choice.reason}}
                                .dump());
     request(s.index);
@@ -204,6 +213,7 @@ class ExplorationPlanner final : public fba::Component {
   const bool exclude_visited_;
   std::vector<Eigen::Isometry3d> candidates_;  // world_from_camera
   std::vector<bool> visited_;                  // per candidate: already requested
+  std::vector<Eigen::Vector3d> taken_;         // the requested views' camera centres, in order
   std::shared_ptr<const fba::Octree> model_;
   std::shared_ptr<const fba::RegionsOfInterest> pending_;
   std::optional<Eigen::Isometry3d> current_, last_target_;

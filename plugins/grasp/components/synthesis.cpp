@@ -81,7 +81,7 @@ class GraspSynthesisFilter final : public fba::Component {
   static constexpr fba::EventOut kPlanningPerformed{
       "planning_performed",
       "no reliable grasp yet: regions were emitted for a new view; payload (JSON): views, samples, regions, candidates, "
-      "uncertain_regions, regions_requested, best_total, seconds (wall time of the analysis), best (the best candidate's S1, S3, S4 and whether it is uncertain)"};
+      "uncertain_regions, regions_requested, points_requested (contacts to graze), best_total, seconds (wall time of the analysis), best (the best candidate's S1, S3, S4 and whether it is uncertain)"};
   static constexpr fba::EventOut kGraspSelected{"grasp_selected", "a reliable grasp was selected; payload: the grasp as JSON"};
   static constexpr fba::EventOut kFailed{"grasp_synthesis_failed", "the search gave up; payload: the reason"};
 
@@ -183,7 +183,33 @@ class GraspSynthesisFilter final : public fba::Component {
       for (const auto& x : surface.samples) all.extend(x.position);
       roi.boxes.emplace_back(all.min() - margin, all.max() + margin);
     }
+    // What keeps the best candidates from selection for want of two grazing views: the unpinned
+    // surface under their fingers (each contact and its neighbourhood, as synthesis judges it), one
+    // group per candidate. The next view should graze it. The candidates above the threshold, else
+    // the best few.
+    if (rim_deg_ > 0 && !eyes_.empty()) {
+      std::vector<fba::grasp::SurfaceSample> rim = surface.samples;
+      for (auto& x : rim) x.uncertain = false;
+      fba::grasp::mark_unobserved(rim, std::span(eyes_).first(std::min<std::size_t>(eyes_.size(), std::size_t(views))), rim_deg_,
+                                  rim_separation_deg_);
+      constexpr std::size_t kMostCandidates = 5, kFewCandidates = 3;
+      const bool any_reliable = !r.candidates.empty() && r.candidates.front().grasp.scores.total >= threshold_;
+      const double r2 = surface.radius * surface.radius;
+      for (std::size_t i = 0; i < r.candidates.size() && i < (any_reliable ? kMostCandidates : kFewCandidates); ++i) {
+        const auto& c = r.candidates[i];
+        if (any_reliable && c.grasp.scores.total < threshold_) break;
+        for (std::size_t k = 0; k < rim.size(); ++k) {
+          if (!rim[k].uncertain) continue;
+          bool near = false;
+          for (std::size_t contact : c.samples) near |= (rim[k].position - rim[contact].position).squaredNorm() <= r2;
+          if (near) roi.points.push_back({rim[k].position, rim[k].normal.normalized(), int(i)});
+        }
+      }
+      roi.rim_deg = rim_deg_;
+      roi.rim_separation_deg = rim_separation_deg_;
+    }
     const std::size_t requested = roi.boxes.size();
+    const std::size_t points = roi.points.size();
     roi.model_views = views;
     ctx_(kRegions).emit(std::move(roi));
     nlohmann::json j{{"views", views},
@@ -193,6 +219,7 @@ class GraspSynthesisFilter final : public fba::Component {
                      {"below_table", r.below_table},
                      {"uncertain_regions", r.uncertain_regions.size()},
                      {"regions_requested", requested},
+                     {"points_requested", points},
                      {"best_total", best_total},
                      {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
     if (!r.candidates.empty()) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <stdexcept>
 
@@ -62,6 +63,34 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::acos(std::clamp(a.dot(b) / n, -1.0, 1.0));
 }
 
+// A surface point of the request and the grazing lines of sight the views taken already give it.
+struct PointNeed {
+  Eigen::Vector3d position, normal;
+  int group = 0;
+  std::vector<Eigen::Vector3d> grazing;  // unit, eye to point
+};
+
+// The request's points that the views taken do not pin down yet (no two grazing lines of sight at
+// least the separation apart), with their grazing lines of sight so far.
+std::vector<PointNeed> points_to_pin(const RegionsOfInterest& regions, std::span<const Eigen::Vector3d> taken) {
+  const double sin_rim = std::sin(regions.rim_deg * std::numbers::pi / 180);
+  const double cos_separation = std::cos(regions.rim_separation_deg * std::numbers::pi / 180);
+  std::vector<PointNeed> out;
+  for (const auto& sp : regions.points) {
+    PointNeed need{sp.position, sp.normal.normalized(), sp.group, {}};
+    for (const auto& eye : taken) {
+      const Eigen::Vector3d d = (sp.position - eye).normalized();
+      if (std::abs(d.dot(need.normal)) <= sin_rim) need.grazing.push_back(d);
+    }
+    bool pinned = false;
+    for (std::size_t i = 0; i < need.grazing.size() && !pinned; ++i)
+      for (std::size_t j = i + 1; j < need.grazing.size() && !pinned; ++j)
+        pinned = std::abs(need.grazing[i].dot(need.grazing[j])) <= cos_separation;
+    if (!pinned) out.push_back(std::move(need));
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<OctreeCell> uncertain_targets(const Octree& model, const RegionsOfInterest& regions) {
@@ -78,6 +107,15 @@ std::vector<OctreeCell> uncertain_targets(const Octree& model, const RegionsOfIn
   return out;
 }
 
+bool occluded(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
+  if (model.node_count == 0) return false;
+  const double edge = model.bounds.sizes().x() / double(1 << std::clamp(model.max_depth, 0, 30));
+  const Eigen::Vector3d probe = point + normal.normalized() * edge;
+  Ray ray{model, eye, probe - eye, (probe - eye).norm(), 1, nullptr};
+  if (ray.length <= 0) return false;
+  return ray.blocked(model.cell(0, 0, 0, 0, model.root));
+}
+
 bool occluded(const Octree& model, const Eigen::Vector3d& eye, const OctreeCell& target) {
   if (model.node_count == 0) return false;
   Ray ray{model, eye, target.centre - eye, (target.centre - eye).norm(), 0, target.node};
@@ -89,7 +127,8 @@ bool occluded(const Octree& model, const Eigen::Vector3d& eye, const OctreeCell&
 
 ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
                        std::span<const Eigen::Isometry3d> candidates, const std::optional<Eigen::Isometry3d>& current,
-                       const std::vector<bool>& excluded, const ExplorationParams& params) {
+                       const std::vector<bool>& excluded, const ExplorationParams& params,
+                       std::span<const Eigen::Vector3d> taken) {
   if (!(params.movement_weight >= 0) || !(params.half_fov_deg > 0 && params.half_fov_deg < 180) ||
       !(params.min_gain >= 0 && params.min_gain <= 1) || params.max_rays == 0)
     throw std::invalid_argument(fmt::format(
@@ -100,7 +139,25 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
     throw std::invalid_argument(fmt::format("exploration: {} excluded flags for {} candidate views; expected one each",
                                             excluded.size(), candidates.size()));
 
+  if (!regions.points.empty() && (!(regions.rim_deg > 0 && regions.rim_deg < 90) ||
+                                  !(regions.rim_separation_deg > 0 && regions.rim_separation_deg < 90)))
+    throw std::invalid_argument(fmt::format(
+        "exploration: a request with surface points needs rim_deg and rim_separation_deg in (0, 90) degrees; found {} and {}",
+        regions.rim_deg, regions.rim_separation_deg));
+  for (const auto& p : regions.points)
+    if (!p.position.allFinite() || !p.normal.allFinite() || p.normal.norm() < 1e-9)
+      throw std::invalid_argument(fmt::format(
+          "exploration: a requested surface point needs a finite position and a non-zero normal; found ({}, {}, {}) with "
+          "normal ({}, {}, {})",
+          p.position.x(), p.position.y(), p.position.z(), p.normal.x(), p.normal.y(), p.normal.z()));
+
   ViewChoice choice;
+  const std::vector<PointNeed> needs = points_to_pin(regions, taken);
+  choice.points = needs.size();
+  std::map<int, std::size_t> group_size;
+  for (const auto& p : needs) ++group_size[p.group];
+  const double sin_rim = std::sin(regions.rim_deg * std::numbers::pi / 180);
+  const double cos_separation = std::cos(regions.rim_separation_deg * std::numbers::pi / 180);
   const std::vector<OctreeCell> targets = uncertain_targets(model, regions);
   choice.targets = targets.size();
   choice.rays = std::min(targets.size(), params.max_rays);
@@ -112,6 +169,10 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
     centre.setZero();
     for (const auto& t : targets) centre += t.centre;
     centre /= double(targets.size());
+  } else if (!needs.empty()) {
+    centre.setZero();
+    for (const auto& p : needs) centre += p.position;
+    centre /= double(needs.size());
   }
   const double cos_half_fov = std::cos(params.half_fov_deg * std::numbers::pi / 180);
 
@@ -120,42 +181,81 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
     s.index = v;
     s.excluded = !excluded.empty() && excluded[v];
     const Eigen::Vector3d eye = candidates[v].translation();
-    for (const OctreeCell* t : rays) {
-      if (!in_view(candidates[v], t->centre, cos_half_fov)) ++s.outside;
-      else if (occluded(model, eye, *t)) ++s.hidden;
-      else ++s.seen;
+    std::map<int, double> group_gain;  // per group: what this view pins of its points
+    for (const PointNeed& p : needs) {
+      if (!in_view(candidates[v], p.position, cos_half_fov)) continue;
+      const Eigen::Vector3d d = (p.position - eye).normalized();
+      if (std::abs(d.dot(p.normal)) > sin_rim) continue;  // not on the rim from here
+      bool pins = false;
+      for (const auto& g : p.grazing) pins |= std::abs(d.dot(g)) <= cos_separation;
+      if (!pins && !p.grazing.empty()) continue;  // a line of sight the views taken already give
+      if (occluded(model, eye, p.position, p.normal)) continue;
+      ++(pins ? s.pins : s.first);
+      group_gain[p.group] += pins ? 1 : 0.5;
     }
-    s.gain = rays.empty() ? 0 : double(s.seen) / double(rays.size());
+    // Mostly the group this view brings nearest to complete, a little all the points it pins.
+    double most = 0;
+    for (const auto& [g, pinned] : group_gain) most = std::max(most, pinned / double(group_size.at(g)));
+    s.point_gain = needs.empty() ? 0 : 0.9 * most + 0.1 * (double(s.pins) + 0.5 * double(s.first)) / double(needs.size());
     if (current) s.move_angle = angle_between(eye - centre, current->translation() - centre);
     s.cost = params.movement_weight * s.move_angle / std::numbers::pi;
-    s.score = s.gain - s.cost;
     choice.scores.push_back(s);
+  }
+  // By the points when some unvisited view grazes them usefully; else by the uncertain nodes (the
+  // costly part, rays through the tree: only then).
+  for (const auto& s : choice.scores) choice.by_points |= !s.excluded && s.point_gain >= params.min_gain && s.point_gain > 0;
+  if (!choice.by_points)
+    for (auto& s : choice.scores) {
+      const Eigen::Vector3d eye = candidates[s.index].translation();
+      for (const OctreeCell* t : rays) {
+        if (!in_view(candidates[s.index], t->centre, cos_half_fov)) ++s.outside;
+        else if (occluded(model, eye, *t)) ++s.hidden;
+        else ++s.seen;
+      }
+      s.node_gain = rays.empty() ? 0 : double(s.seen) / double(rays.size());
+    }
+  for (auto& s : choice.scores) {
+    s.gain = choice.by_points ? s.point_gain : s.node_gain;
+    s.score = s.gain - s.cost;
   }
 
   const std::string where = fmt::format("{} region{}", regions.boxes.size(), regions.boxes.size() == 1 ? "" : "s");
-  if (targets.empty()) {
+  if (targets.empty() && !choice.by_points) {
     choice.reason = fmt::format("no uncertain node of the model is left inside the {}", where);
+    if (!needs.empty()) choice.reason += fmt::format(", and no unvisited view grazes any of the {} surface points to pin", needs.size());
     return choice;
   }
+  // The best score among the views worth the move: the cost ranks them, it does not disqualify the
+  // only views that see enough (a far view that sees much must not lose to a near one that sees nothing).
   const ViewScore* best = nullptr;
-  for (const auto& s : choice.scores)
-    if (!s.excluded && (!best || s.score > best->score)) best = &s;
-  if (!best) {
+  const ViewScore* most = nullptr;  // the unvisited view that sees most
+  for (const auto& s : choice.scores) {
+    if (s.excluded) continue;
+    if (!most || s.gain > most->gain) most = &s;
+    if (s.gain >= params.min_gain && (!best || s.score > best->score)) best = &s;
+  }
+  if (!most) {
     choice.reason = fmt::format("all {} candidate views have been visited; {} uncertain nodes remain in the {}",
                                 candidates.size(), targets.size(), where);
     return choice;
   }
-  if (best->gain < params.min_gain) {
-    const ViewScore* most = best;
-    for (const auto& s : choice.scores)
-      if (!s.excluded && s.gain > most->gain) most = &s;
+  if (!best) {
     choice.reason = fmt::format(
         "no unvisited view is worth the move: the best, view {}, sees {} of the {} uncertain nodes in the {} ({:.1f}%), "
         "below min_gain {:.1f}%",
         most->index, most->seen, rays.size(), where, 100 * most->gain, 100 * params.min_gain);
+    if (!needs.empty()) choice.reason += fmt::format("; none grazes any of the {} surface points to pin in a new direction", needs.size());
     return choice;
   }
   choice.best = best->index;
+  if (choice.by_points) {
+    choice.reason = fmt::format(
+        "view {} grazes {} of the {} surface points still to pin in a new direction ({} completing a pair, {} for the first "
+        "time; gain {:.3f}); moving {:.0f} deg costs {:.3f}: score {:.3f}",
+        best->index, best->pins + best->first, needs.size(), best->pins, best->first, best->gain,
+        best->move_angle * 180 / std::numbers::pi, best->cost, best->score);
+    return choice;
+  }
   choice.reason = fmt::format(
       "view {} sees {} of the {} uncertain nodes in the {} ({:.1f}%; {} hidden behind the model, {} out of view); "
       "moving {:.0f} deg costs {:.3f}: score {:.3f}",

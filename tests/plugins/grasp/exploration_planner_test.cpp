@@ -112,6 +112,50 @@ TEST(ExplorationPlanner, ARequestWaitsUntilEveryRequestedViewIsInTheModel) {
   EXPECT_TRUE(az == 90 || az == 270) << az;
 }
 
+TEST(ExplorationPlanner, ARequestWithAContactGetsAViewThatGrazesItNotTheOneFacingIt) {
+  ComponentHarness h(registry(), "grasp.exploration_planner", ring8());
+  auto request = plus_x_face();
+  request.points.push_back({Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::UnitX(), 0});
+  h.push<fba::Octree>("octree", box_model(1));
+  h.push<fba::RegionsOfInterest>("regions", request);
+  h.run();
+  const auto targets = h.values<fba::Pose>("target");
+  ASSERT_EQ(targets.size(), 1u);
+  // From 0 deg the camera faces the contact and sees the whole face; from 90 or 270 deg its line of
+  // sight grazes the contact, the only place a silhouette fixes the surface.
+  const int az = azimuth_deg(targets[0]);
+  EXPECT_TRUE(az == 90 || az == 270) << az;
+  const auto chosen = find_event(h.events(), "view_chosen");
+  ASSERT_TRUE(chosen.has_value());
+  const auto j = nlohmann::json::parse(chosen->payload);
+  EXPECT_TRUE(j.at("by_points").get<bool>()) << chosen->payload;
+  EXPECT_EQ(j.at("first"), 1);
+  EXPECT_EQ(j.at("points"), 1);
+}
+
+TEST(ExplorationPlanner, TheViewsAlreadyTakenCountAsGrazingLinesOfSight) {
+  ComponentHarness h(registry(), "grasp.exploration_planner", ring8(), {"start"});
+  h.push<std::int64_t>("start", 0);
+  h.push<fba::Octree>("octree", box_model(3));
+  h.run();
+  ASSERT_EQ(h.values<fba::Pose>("target").size(), 3u);  // azimuths 0, 45 and 315
+  // A contact on the +y face: the initial view from 0 deg grazes it already, and the only other
+  // grazing view of the ring, from 180 deg, is the same line of sight: no view of the ring pins it,
+  // so the planner falls back to the uncertain nodes of the region.
+  auto request = plus_x_face();
+  request.points.push_back({Eigen::Vector3d(0, 0.5, 0), Eigen::Vector3d::UnitY(), 0});
+  request.model_views = 3;
+  h.push<fba::RegionsOfInterest>("regions", request);
+  h.run();
+  ASSERT_EQ(h.values<fba::Pose>("target").size(), 4u);
+  const auto chosen = find_event(h.events(), "view_chosen");
+  ASSERT_TRUE(chosen.has_value());
+  const auto j = nlohmann::json::parse(chosen->payload);
+  EXPECT_FALSE(j.at("by_points").get<bool>()) << chosen->payload;
+  EXPECT_EQ(j.at("points"), 1);
+  EXPECT_NE(azimuth_deg(h.values<fba::Pose>("target")[3]), 180);
+}
+
 TEST(ExplorationPlanner, NothingUncertainLeftGivesNoViewWithTheReason) {
   ComponentHarness h(registry(), "grasp.exploration_planner", ring8());
   h.push<fba::Octree>("octree", box_model(1));

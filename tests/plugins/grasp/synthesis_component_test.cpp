@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <set>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -11,6 +13,7 @@
 #include <fba/types/grasp.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/regions_of_interest.hpp>
+#include <fba/types/silhouette.hpp>
 
 #include "fba/grasp/grasp_json.hpp"
 #include "support/built_plugins.hpp"
@@ -173,6 +176,42 @@ TEST(GraspSynthesisComponent, NoCandidateTheHandCanReachAsksForTheWholeModelThen
   const auto failed = named(h.events(), "grasp_synthesis_failed");
   ASSERT_EQ(failed.size(), 1u);
   EXPECT_NE(failed[0].payload.find("(no candidate the hand can reach)"), std::string::npos) << failed[0].payload;
+}
+
+// With rim_deg, one view pins nothing down (a silhouette fixes the surface only where two grazing
+// lines of sight cross): no grasp yet, and the request names the surface under the best candidates'
+// fingers, one group per candidate, for the planner to graze.
+TEST(GraspSynthesisComponent, WithOneViewTheRequestNamesTheUnpinnedSurfaceUnderTheBestCandidates) {
+  ComponentHarness h(registry(), "grasp.synthesis", {{"rim_deg", 15.0}}, {"silhouette"});
+  auto frame = std::make_shared<fba::Frame>();
+  frame->has_pose = true;
+  frame->camera.camera_from_world = Eigen::Translation3d(-0.5, 0, 0);  // the camera centre at (0.5, 0, 0)
+  fba::Silhouette silhouette;
+  silhouette.frame = frame;
+  h.push<fba::Silhouette>("silhouette", silhouette);
+  h.push<fba::Octree>("octree", cylinder(1));
+  h.run();
+  EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
+  const auto regions = h.values<fba::RegionsOfInterest>("regions");
+  ASSERT_EQ(regions.size(), 1u);
+  const auto& roi = regions[0];
+  ASSERT_FALSE(roi.points.empty());
+  EXPECT_EQ(roi.rim_deg, 15.0);
+  EXPECT_EQ(roi.rim_separation_deg, 20.0);
+  const double edge = 0.16 / 64;
+  std::set<int> groups;
+  for (const auto& p : roi.points) {
+    groups.insert(p.group);
+    EXPECT_NEAR(p.normal.norm(), 1.0, 1e-9);
+    // On the cylinder's side, facing out.
+    EXPECT_NEAR(std::hypot(p.position.x(), p.position.y()), kRadius, 2 * edge) << p.position.transpose();
+    EXPECT_GT(p.normal.dot(Eigen::Vector3d(p.position.x(), p.position.y(), 0).normalized()), 0.8);
+  }
+  EXPECT_GE(*groups.begin(), 0);
+  EXPECT_LT(*groups.rbegin(), 5);  // at most the five best candidates
+  const auto j = nlohmann::json::parse(named(h.events(), "planning_performed").at(0).payload);
+  EXPECT_EQ(j.at("points_requested").get<std::size_t>(), roi.points.size());
+  EXPECT_TRUE(j.at("best").at("uncertain").get<bool>());
 }
 
 TEST(GraspSynthesisComponent, AnInconsistentHandIsRefusedWhenLoaded) {

@@ -161,3 +161,111 @@ TEST(Exploration, BadParametersAreRefusedNamingTheValues) {
   }
   EXPECT_THROW(choose_view(m, plus_x_face(), views, std::nullopt, {true, false}), std::invalid_argument);
 }
+
+namespace {
+
+// The +x face's region, asking also for its centre (0.5, 0, 0), normal +x, to be pinned down.
+fba::RegionsOfInterest plus_x_contact() {
+  fba::RegionsOfInterest r = plus_x_face();
+  r.points.push_back({Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::UnitX()});
+  r.rim_deg = 15;
+  r.rim_separation_deg = 20;
+  return r;
+}
+
+}  // namespace
+
+TEST(ExplorationGrazing, AContactIsPinnedByTheViewThatGrazesItInANewDirectionNotByTheOneFacingIt) {
+  const Octree m = uniform_model(box_state);
+  // Facing the contact (sees every uncertain node of the face), grazing it from +y at the height of
+  // the contact (the view taken already), grazing it from above +y at 45 deg, and behind the box.
+  const std::vector<Eigen::Isometry3d> views{camera_at({4, 0, 0}), camera_at({0, 4, 0}),
+                                             camera_at({0, 4 / std::sqrt(2.0), 4 / std::sqrt(2.0)}), camera_at({-4, 0, 0})};
+  const std::vector<Eigen::Vector3d> taken{{0, 4, 0}};
+  const auto choice = choose_view(m, plus_x_contact(), views, std::nullopt, {false, true, false, false}, {}, taken);
+  ASSERT_TRUE(choice.best.has_value()) << choice.reason;
+  EXPECT_TRUE(choice.by_points);
+  EXPECT_EQ(choice.points, 1u);
+  EXPECT_EQ(*choice.best, 2u) << choice.reason;
+  EXPECT_EQ(choice.scores[2].pins, 1u);                                   // 45 deg from the taken line of sight
+  EXPECT_EQ(choice.scores[0].pins + choice.scores[0].first, 0u);         // facing it: not on its rim
+  EXPECT_EQ(choice.scores[3].pins + choice.scores[3].first, 0u);         // behind the box
+  // The node count alone chooses the facing view, which sees the whole face.
+  const auto by_nodes = choose_view(m, plus_x_face(), views, std::nullopt, {false, true, false, false}, {}, taken);
+  ASSERT_TRUE(by_nodes.best.has_value()) << by_nodes.reason;
+  EXPECT_EQ(*by_nodes.best, 0u) << by_nodes.reason;
+  EXPECT_EQ(by_nodes.scores[0].seen, 16u);
+  EXPECT_NE(choice.reason.find("view 2 grazes 1 of the 1 surface points"), std::string::npos) << choice.reason;
+}
+
+TEST(ExplorationGrazing, TheOppositeSideRepeatsTheTakenLineOfSightAndDoesNotCount) {
+  const Octree m = uniform_model(box_state);
+  // From -y the line of sight to the contact is the one from +y reversed: the same tangent line.
+  const std::vector<Eigen::Isometry3d> views{camera_at({4, 0, 0}), camera_at({0, -4, 0})};
+  const std::vector<Eigen::Vector3d> taken{{0, 4, 0}};
+  const auto choice = choose_view(m, plus_x_contact(), views, std::nullopt, {}, {}, taken);
+  EXPECT_EQ(choice.scores[1].pins + choice.scores[1].first, 0u);
+  // No view grazes usefully: the choice falls back to the uncertain nodes, the facing view.
+  EXPECT_FALSE(choice.by_points);
+  ASSERT_TRUE(choice.best.has_value()) << choice.reason;
+  EXPECT_EQ(*choice.best, 0u) << choice.reason;
+}
+
+TEST(ExplorationGrazing, WithNoGrazingViewTakenAFirstOneCountsHalf) {
+  const Octree m = uniform_model(box_state);
+  const std::vector<Eigen::Isometry3d> views{camera_at({4, 0, 0}), camera_at({0, 4, 0})};
+  const auto choice = choose_view(m, plus_x_contact(), views);
+  ASSERT_TRUE(choice.best.has_value()) << choice.reason;
+  EXPECT_EQ(*choice.best, 1u) << choice.reason;
+  EXPECT_EQ(choice.scores[1].first, 1u);
+  EXPECT_DOUBLE_EQ(choice.scores[1].gain, 0.5);
+}
+
+TEST(ExplorationGrazing, AContactAlreadyPinnedAsksForNothing) {
+  const Octree m = uniform_model(box_state);
+  const std::vector<Eigen::Isometry3d> views{camera_at({4, 0, 0})};
+  const std::vector<Eigen::Vector3d> taken{{0, 4, 0}, {0, 4 / std::sqrt(2.0), 4 / std::sqrt(2.0)}};
+  const auto choice = choose_view(m, plus_x_contact(), views, std::nullopt, {}, {}, taken);
+  EXPECT_EQ(choice.points, 0u);
+  EXPECT_FALSE(choice.by_points);
+}
+
+TEST(ExplorationGrazing, AGrazingLineOfSightBehindAnOccluderDoesNotCount) {
+  // A pillar beside the +x face, between the contact and the camera at +y.
+  const Octree pillar = uniform_model([](int x, int y, int z) {
+    if (x == 6 && y == 7 && (z == 3 || z == 4)) return NodeState::Full;
+    return box_state(x, y, z);
+  });
+  const std::vector<Eigen::Isometry3d> views{camera_at({0, 4, 0})};
+  EXPECT_EQ(choose_view(pillar, plus_x_contact(), views).scores[0].first, 0u);
+  EXPECT_EQ(choose_view(uniform_model(box_state), plus_x_contact(), views).scores[0].first, 1u);
+}
+
+TEST(ExplorationGrazing, ABadSurfacePointIsRefusedNamingIt) {
+  const Octree m = uniform_model(box_state);
+  const std::vector<Eigen::Isometry3d> views{camera_at({4, 0, 0})};
+  auto r = plus_x_contact();
+  r.points[0].normal = Eigen::Vector3d::Zero();
+  try {
+    choose_view(m, r, views);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("non-zero normal"), std::string::npos) << e.what();
+  }
+  r = plus_x_contact();
+  r.rim_deg = 0;
+  EXPECT_THROW(choose_view(m, r, views), std::invalid_argument);
+}
+
+TEST(Exploration, AViewThatSeesTheRegionIsChosenHoweverFarWhenTheNearOnesSeeNothing) {
+  // The camera is behind the box; moving to the front costs more than the whole gain, but staying
+  // behind sees nothing: the cost ranks the views worth the move, it does not end the exploration.
+  const Octree m = uniform_model(box_state);
+  const std::vector<Eigen::Isometry3d> views{camera_at({-4, 0, 0.1}), camera_at({4, 0, 0})};
+  ExplorationParams p;
+  p.movement_weight = 2;
+  const auto choice = choose_view(m, plus_x_face(), views, camera_at({-4, 0, 0}), {}, p);
+  ASSERT_GT(choice.scores[0].score, choice.scores[1].score);
+  ASSERT_TRUE(choice.best.has_value()) << choice.reason;
+  EXPECT_EQ(*choice.best, 1u) << choice.reason;
+}

@@ -1,7 +1,10 @@
-// Next best view for grasp-driven exploration: among candidate camera poses, the one that sees
-// most of the model's still-uncertain nodes inside the regions grasping cares about, less the cost
-// of moving there. Visibility-aware: a node counts for a view only if the ray from the camera
-// centre to it crosses no occupied node of the model.
+// Next best view for grasp-driven exploration. When the request names surface points (the grasp
+// candidates' unresolved contacts), the view whose lines of sight graze most of them in a new
+// direction: a silhouette fixes the surface only on its rim, and two grazing lines of sight apart
+// pin a point down. Otherwise (or when no view grazes any), the view that sees most of the model's
+// still-uncertain nodes inside the regions. Either way less the cost of moving there, and
+// visibility-aware: a point or node counts for a view only if the ray from the camera centre to it
+// crosses no occupied node of the model.
 #pragma once
 
 #include <cstddef>
@@ -39,7 +42,15 @@ struct ViewScore {
   std::size_t seen = 0;     // target rays that reach their node unobstructed, inside the field of view
   std::size_t hidden = 0;   // in the field of view but behind an occupied node
   std::size_t outside = 0;  // behind the camera or outside its field of view
-  double gain = 0;          // seen / rays
+  // Surface points (RegionsOfInterest::points) this view grazes in a useful direction: `pins`
+  // complete a pair with a grazing view already taken, `first` are the first grazing view of theirs.
+  std::size_t pins = 0;
+  std::size_t first = 0;
+  // 0.9 x the largest share of one group's points still to pin that it pins (first ones count
+  // half) + 0.1 x that share over all points: completing one grasp candidate comes first.
+  double point_gain = 0;
+  double node_gain = 0;     // seen / rays (seen, hidden, outside and node_gain: only when the choice is by the nodes)
+  double gain = 0;          // point_gain when the choice is by points, else node_gain
   double move_angle = 0;    // radians from the current camera, around the targets' centre
   double cost = 0;          // movement_weight * move_angle / pi
   double score = 0;         // gain - cost
@@ -51,6 +62,8 @@ struct ViewChoice {
   std::vector<ViewScore> scores;    // one per candidate, in their order
   std::size_t targets = 0;          // uncertain nodes inside the regions
   std::size_t rays = 0;             // targets given a ray (at most max_rays)
+  std::size_t points = 0;           // surface points of the request not yet pinned by two views taken
+  bool by_points = false;           // chosen by grazing the points (else by the uncertain nodes)
   std::string reason;               // human-readable: what was chosen and why, or why nothing
 };
 
@@ -59,13 +72,19 @@ struct ViewChoice {
 // half-size) do not block, so that a surface node is not hidden by its neighbours on the surface.
 bool occluded(const Octree& model, const Eigen::Vector3d& eye, const OctreeCell& target);
 
+// Whether the segment from eye to the surface point (moved one finest leaf edge out along its
+// normal, so that the surface it lies on does not hide it) crosses an occupied node of the model.
+bool occluded(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vector3d& point, const Eigen::Vector3d& normal);
+
 // Scores every candidate (world_from_camera poses, camera z forward) and picks the best one that
 // is not excluded. current: where the camera is now (no movement cost without it). excluded: one
-// flag per candidate (may be empty). Throws std::invalid_argument on parameters out of range or an
+// flag per candidate (may be empty). taken: the camera centres of the views the model already has
+// (what the request's points were judged against). Throws std::invalid_argument on parameters out of range or an
 // excluded list of the wrong length, naming the values.
 ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
                        std::span<const Eigen::Isometry3d> candidates,
                        const std::optional<Eigen::Isometry3d>& current = std::nullopt,
-                       const std::vector<bool>& excluded = {}, const ExplorationParams& params = {});
+                       const std::vector<bool>& excluded = {}, const ExplorationParams& params = {},
+                       std::span<const Eigen::Vector3d> taken = {});
 
 }  // namespace fba::grasp
