@@ -108,6 +108,7 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.weight_safety = ctx(kWeightSafety);
     params_.weight_curvature = ctx(kWeightCurvature);
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
+    params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first
   }
 
   void process() override {
@@ -143,7 +144,8 @@ class GraspSynthesisFilter final : public fba::Component {
     p.neighbour_radius = surface.radius;
     const fba::grasp::SynthesisResult r = fba::grasp::synthesise(observed.samples, p);
 
-    const double best_total = r.candidates.empty() ? 0.0 : r.candidates.front().grasp.scores.total;
+    double best_total = 0;  // the candidates come reliable first, most stable first: not by total
+    for (const auto& c : r.candidates) best_total = std::max(best_total, c.grasp.scores.total);
     double best_resolved = 0;  // the best candidate whose contacts are all on resolved parts of the model
     for (const auto& c : r.candidates) {  // best first
       if (c.uncertain) continue;
@@ -155,6 +157,9 @@ class GraspSynthesisFilter final : public fba::Component {
                            " < threshold " + fixed(threshold_);
       if (r.candidates.empty() && r.below_table > 0)
         reason += " (no candidate the hand can reach: " + std::to_string(r.below_table) + " would put the hand into the table)";
+      else if (r.candidates.empty() && (r.hand_blocked > 0 || r.not_force_closure > 0))
+        reason += " (no candidate the hand can take: " + std::to_string(r.hand_blocked) + " blocked by the model in the hand's way, " +
+                  std::to_string(r.not_force_closure) + " not force closure on the model)";
       else if (r.candidates.empty()) reason += " (no candidate the hand can reach)";
       else if (best_total > best_resolved)
         reason += " (a candidate of total " + fixed(best_total) + " touches a part of the model not yet resolved)";
@@ -191,6 +196,8 @@ class GraspSynthesisFilter final : public fba::Component {
                      {"regions", r.regions.size()},
                      {"candidates", r.candidates.size()},
                      {"below_table", r.below_table},
+                     {"hand_blocked", r.hand_blocked},
+                     {"not_force_closure", r.not_force_closure},
                      {"uncertain_regions", r.uncertain_regions.size()},
                      {"regions_requested", requested},
                      {"best_total", best_total},
