@@ -327,6 +327,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   } else {
     for (const auto& x : s) centre += x.position / static_cast<double>(n);
   }
+  result.centre = centre;
   const double cos_thumb = std::cos(p.thumb_alignment_deg * kDeg);
   const double cos_finger = std::cos(p.finger_alignment_deg * kDeg);
   const double balance = p.balance_deg * kDeg;
@@ -429,7 +430,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
     return near(0, 0) && ((near(1, 1) && near(2, 2)) || (near(1, 2) && near(2, 1)));
   };
   // Force closure on the model: the contacts where the model puts them, pushing along its normals,
-  // about the model's centre; torques over the samples' farthest distance from it, as the true
+  // about the object's centre; torques over the samples' farthest distance from it, as the true
   // measure scales them by r_max.
   double r_max = 0;
   for (const auto& x : s) r_max = std::max(r_max, (x.position - centre).norm());

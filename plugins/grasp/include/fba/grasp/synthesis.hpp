@@ -72,7 +72,7 @@ struct SynthesisParams {
   double weight_symmetry = 1;
   double weight_safety = 1;
   double weight_curvature = 1;
-  // The object's centre for S1; default the mean of the samples.
+  // The object's centre for S1 and force closure; default the mean of the samples.
   std::optional<Eigen::Vector3d> object_centre;
   // Of the two approach directions perpendicular to the contacts' plane, the one closer to this
   // (default from above: the object stands on a table).
@@ -133,6 +133,7 @@ struct SynthesisResult {
   // Regions where more views would help (any uncertain sample), most uncertain area first.
   std::vector<std::size_t> uncertain_regions;
   std::vector<double> boundary_distance;   // per input sample: distance to its region's boundary (m), 0 if none
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // the object's centre used (S1, force closure)
   std::size_t below_table = 0;  // candidates left out because the hand would reach into the table
   std::size_t hand_blocked = 0;  // candidates left out because the model is in the hand's way
   std::size_t not_force_closure = 0;  // candidates left out as not force closure (or too little epsilon) on the model
