@@ -74,6 +74,11 @@ class GraspSynthesisFilter final : public fba::Component {
   static constexpr auto kRimSeparationDeg = fba::Param<double>(
       "rim_separation_deg", 20.0, "the two grazing lines of sight must differ by at least this angle to pin the surface down")
                                                 .range(1, 89);
+  static constexpr auto kPathTolerance = fba::Param<double>(
+      "path_tolerance", 0.02,
+      "metres: a candidate is left out when the model stands more than this nearer an open finger than its contact (it would be "
+      "touched first) or reaches behind the palm; the hand of the sim's lift test. 0: off (a grasp that is never executed)")
+                                             .range(0, 1);
   static inline const auto kTableZ = fba::Param<std::vector<double>>(
       "table_z", {}, "[z]: the table the object stands on (world z, up); grasps whose hand would reach into it are left out. "
       "Empty: no table")
@@ -89,7 +94,7 @@ class GraspSynthesisFilter final : public fba::Component {
     return fba::Spec::filter("grasp.synthesis",
                              "Selects a reliable three-finger grasp on an octree model, or asks for views where the model lacks detail.")
         .add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kTableZ, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kTableZ, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -108,6 +113,8 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.weight_safety = ctx(kWeightSafety);
     params_.weight_curvature = ctx(kWeightCurvature);
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
+    params_.path_tolerance = ctx(kPathTolerance);
+    params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first
   }
 
   void process() override {
@@ -143,11 +150,18 @@ class GraspSynthesisFilter final : public fba::Component {
     p.neighbour_radius = surface.radius;
     const fba::grasp::SynthesisResult r = fba::grasp::synthesise(observed.samples, p);
 
-    const double best_total = r.candidates.empty() ? 0.0 : r.candidates.front().grasp.scores.total;
+    double best_total = 0;  // the candidates come reliable first, most stable first: not by total
+    for (const auto& c : r.candidates) best_total = std::max(best_total, c.grasp.scores.total);
     double best_resolved = 0;  // the best candidate whose contacts are all on resolved parts of the model
     for (const auto& c : r.candidates) {  // best first
       if (c.uncertain) continue;
-      if (c.grasp.scores.total >= threshold_) return select(c.grasp, views);
+      if (c.grasp.scores.total >= threshold_) {
+        ctx_.log().info("selected: total {:.3f} (S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model about its centre "
+                        "({:.3f}, {:.3f}, {:.3f})",
+                        c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
+                        c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
+        return select(c.grasp, views);
+      }
       best_resolved = std::max(best_resolved, c.grasp.scores.total);
     }
     if (views >= max_views_) {
@@ -155,6 +169,9 @@ class GraspSynthesisFilter final : public fba::Component {
                            " < threshold " + fixed(threshold_);
       if (r.candidates.empty() && r.below_table > 0)
         reason += " (no candidate the hand can reach: " + std::to_string(r.below_table) + " would put the hand into the table)";
+      else if (r.candidates.empty() && (r.hand_blocked > 0 || r.not_force_closure > 0))
+        reason += " (no candidate the hand can take: " + std::to_string(r.hand_blocked) + " blocked by the model in the hand's way, " +
+                  std::to_string(r.not_force_closure) + " not force closure on the model)";
       else if (r.candidates.empty()) reason += " (no candidate the hand can reach)";
       else if (best_total > best_resolved)
         reason += " (a candidate of total " + fixed(best_total) + " touches a part of the model not yet resolved)";
@@ -217,6 +234,8 @@ class GraspSynthesisFilter final : public fba::Component {
                      {"regions", r.regions.size()},
                      {"candidates", r.candidates.size()},
                      {"below_table", r.below_table},
+                     {"hand_blocked", r.hand_blocked},
+                     {"not_force_closure", r.not_force_closure},
                      {"uncertain_regions", r.uncertain_regions.size()},
                      {"regions_requested", requested},
                      {"points_requested", points},

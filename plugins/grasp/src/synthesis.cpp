@@ -1,5 +1,7 @@
 #include "fba/grasp/synthesis.hpp"
 
+#include "fba/grasp/grasp_quality.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -88,7 +90,13 @@ void check_params(const SynthesisParams& p) {
   require(p.table_clearance >= 0 && p.pregrasp_distance >= 0, "table_clearance and pregrasp_distance must be >= 0");
   require(h.tip_length >= 0 && h.palm_distance >= 0 && h.palm_half_width >= 0 && h.palm_half_depth >= 0 && h.palm_thickness >= 0,
           "the hand's tip_length and palm dimensions must be >= 0");
-  require(p.max_thumbs > 0 && p.max_fingers > 1 && p.max_candidates > 0, "search bounds must be positive");
+  require(p.max_thumbs > 0 && p.max_fingers > 1 && p.max_candidates > 0 && p.max_checks > 0,
+          "search bounds must be positive");
+  require(p.friction >= 0 && std::isfinite(p.friction), "friction must be finite and >= 0, found " + num(p.friction));
+  require(p.min_model_epsilon >= 0 && std::isfinite(p.min_model_epsilon),
+          "min_model_epsilon must be finite and >= 0, found " + num(p.min_model_epsilon));
+  require(!p.rank_total || std::isfinite(*p.rank_total), "rank_total is not finite");
+  require(p.path_tolerance >= 0 && std::isfinite(p.path_tolerance), "path_tolerance must be finite and >= 0, found " + num(p.path_tolerance));
 }
 
 std::vector<SurfaceSample> normalised_input(std::span<const SurfaceSample> in) {
@@ -110,27 +118,77 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 }  // namespace
 
-double hand_lowest_z(const Grasp& g, const HandGeometry& hand, double back) {
-  const Eigen::Vector3d a = g.approach.normalized();
+namespace {
+
+// The hand as lift_test.cpp poses it for a grasp: palm frame a (approach), u (thumb to fingers,
+// across the approach), y = a x u; the palm centred between thumb and fingers; each finger's axis
+// a pad radius plus its share of the opening beyond its contact.
+struct HandPose {
+  Eigen::Vector3d a, u, y;
+  Eigen::Vector3d palm_centre;             // on the contacts' level along a
+  std::array<Eigen::Vector3d, 3> outward;  // each finger's opening direction (thumb -u, fingers +u)
+  double open = 0;                         // how far each pad stands off its contact, open
+};
+
+HandPose hand_pose(const Grasp& g) {
+  HandPose h;
+  h.a = g.approach.normalized();
   const Eigen::Vector3d thumb = g.contacts[0].position;
   const Eigen::Vector3d mid = (g.contacts[1].position + g.contacts[2].position) / 2;
-  Eigen::Vector3d u = (mid - thumb) - a * a.dot(mid - thumb);
-  u = u.norm() > 1e-12 ? u.normalized() : a.unitOrthogonal();
-  const Eigen::Vector3d y = a.cross(u);
+  Eigen::Vector3d u = (mid - thumb) - h.a * h.a.dot(mid - thumb);
+  const double width = u.norm();
+  h.u = width > 1e-12 ? Eigen::Vector3d(u / width) : h.a.unitOrthogonal();
+  h.y = h.a.cross(h.u);
+  double along = 0;
+  for (const auto& c : g.contacts) along += c.position.dot(h.a) / 3;
+  h.palm_centre = h.u * (thumb.dot(h.u) + mid.dot(h.u)) / 2 + h.y * mid.dot(h.y) + h.a * along;
+  h.outward = {-h.u, h.u, h.u};
+  h.open = std::max(0.0, (g.aperture - width) / 2);
+  return h;
+}
+
+}  // namespace
+
+double hand_lowest_z(const Grasp& g, const HandGeometry& hand, double back) {
+  const HandPose h = hand_pose(g);
   const double radius = hand.finger_width / 2;
-  const double across = std::sqrt(std::max(0.0, 1 - a.z() * a.z()));  // a finger's radius seen from below
+  const double across = std::sqrt(std::max(0.0, 1 - h.a.z() * h.a.z()));  // a finger's radius seen from below
   double lowest = INFINITY;
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  for (const auto& c : g.contacts) {
-    centre += c.position / 3;
+  for (std::size_t k = 0; k < 3; ++k) {
     // The finger from its contact to its tip; the other way it rises to the palm, checked below.
-    const Eigen::Vector3d at = c.position - a * back;
-    lowest = std::min({lowest, at.z() - radius * across, at.z() + a.z() * hand.tip_length - radius * across});
+    const Eigen::Vector3d at = g.contacts[k].position + h.outward[k] * (h.open + radius) - h.a * back;
+    lowest = std::min({lowest, at.z() - radius * across, at.z() + h.a.z() * hand.tip_length - radius * across});
   }
-  const Eigen::Vector3d palm = centre - a * (back + hand.palm_distance + hand.palm_thickness / 2);
-  lowest = std::min(lowest, palm.z() - std::abs(u.z()) * hand.palm_half_width - std::abs(y.z()) * hand.palm_half_depth -
-                                std::abs(a.z()) * hand.palm_thickness / 2);
+  const Eigen::Vector3d palm = h.palm_centre - h.a * (back + hand.palm_distance + hand.palm_thickness / 2);
+  lowest = std::min(lowest, palm.z() - std::abs(h.u.z()) * hand.palm_half_width - std::abs(h.y.z()) * hand.palm_half_depth -
+                                std::abs(h.a.z()) * hand.palm_thickness / 2);
   return lowest;
+}
+
+std::optional<std::size_t> hand_path_blocked(const Grasp& g, const HandGeometry& hand, std::span<const SurfaceSample> samples,
+                                             double tolerance) {
+  const HandPose h = hand_pose(g);
+  const double radius = hand.finger_width / 2;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Eigen::Vector3d& q = samples[i].position;
+    // The palm: the object may not reach behind its face within its footprint.
+    const Eigen::Vector3d rel = q - h.palm_centre;
+    if (rel.dot(h.a) < -hand.palm_distance && std::abs(rel.dot(h.u)) < hand.palm_half_width &&
+        std::abs(rel.dot(h.y)) < hand.palm_half_depth)
+      return i;
+    // Each finger, from its tip back to the palm, within its width: nothing between the open pad
+    // and the contact (it would be touched first), nor where the open finger comes in.
+    for (std::size_t k = 0; k < 3; ++k) {
+      const Eigen::Vector3d d = q - g.contacts[k].position;
+      const double along = d.dot(h.a);
+      const double side = std::abs(d.dot(h.y));
+      if (along > hand.tip_length || along < -hand.palm_distance || side >= radius) continue;
+      // The round finger reaches a sample off its centre line that much later.
+      const double out = d.dot(h.outward[k]) - (radius - std::sqrt(radius * radius - side * side));
+      if (out > tolerance && out < h.open + 2 * radius) return i;
+    }
+  }
+  return std::nullopt;
 }
 
 void estimate_curvature(std::span<SurfaceSample> samples, double radius) {
@@ -269,6 +327,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   } else {
     for (const auto& x : s) centre += x.position / static_cast<double>(n);
   }
+  result.centre = centre;
   const double cos_thumb = std::cos(p.thumb_alignment_deg * kDeg);
   const double cos_finger = std::cos(p.finger_alignment_deg * kDeg);
   const double balance = p.balance_deg * kDeg;
@@ -337,6 +396,8 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
         Grasp& g = cand.grasp;
         g.contacts = {GraspContact{tp, tn}, GraspContact{p1, -s[f1].normal}, GraspContact{p2, -s[f2].normal}};
         g.approach = normal.dot(preferred) >= 0 ? normal : Eigen::Vector3d(-normal);
+        g.spread = spread;
+        g.aperture = std::min(aperture + hand.finger_width, hand.aperture_max + hand.finger_width);
         if (p.table_z) {
           // From above or level only: from below, the hand would come through the table.
           if (g.approach.z() > 1e-9) g.approach = -g.approach;
@@ -346,8 +407,6 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
             continue;
           }
         }
-        g.spread = spread;
-        g.aperture = std::min(aperture + hand.finger_width, hand.aperture_max + hand.finger_width);
         g.scores = {symmetry, safety, curvature,
                     (p.weight_symmetry * symmetry + p.weight_safety * safety + p.weight_curvature * curvature) / weights};
         cand.samples = {t, f1, f2};
@@ -370,10 +429,45 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
     };
     return near(0, 0) && ((near(1, 1) && near(2, 2)) || (near(1, 2) && near(2, 1)));
   };
+  // Force closure on the model: the contacts where the model puts them, pushing along its normals,
+  // about the object's centre; torques over the samples' farthest distance from it, as the true
+  // measure scales them by r_max.
+  double r_max = 0;
+  for (const auto& x : s) r_max = std::max(r_max, (x.position - centre).norm());
+  QualityParams quality;
+  quality.friction = p.friction;
+  std::size_t checks = 0;
   for (auto& c : all) {
     if (result.candidates.size() >= p.max_candidates) break;
-    if (std::none_of(result.candidates.begin(), result.candidates.end(), [&](const auto& k) { return same(c, k); }))
-      result.candidates.push_back(std::move(c));
+    if (std::any_of(result.candidates.begin(), result.candidates.end(), [&](const auto& k) { return same(c, k); })) continue;
+    if (checks++ >= p.max_checks) break;
+    if (p.path_tolerance > 0 && hand_path_blocked(c.grasp, hand, s, p.path_tolerance)) {
+      ++result.hand_blocked;
+      continue;
+    }
+    if (p.require_force_closure && r_max > 0) {
+      GraspQuality q;
+      try {
+        q = evaluate_grasp(c.grasp.contacts, centre, r_max, quality);
+      } catch (const GraspQualityError&) {
+        q = {};  // degenerate contacts (two coincide): no grasp at all
+      }
+      if (!q.force_closure || q.epsilon < p.min_model_epsilon) {
+        ++result.not_force_closure;
+        continue;
+      }
+      c.model_epsilon = q.epsilon;
+    }
+    result.candidates.push_back(std::move(c));
+  }
+  if (p.rank_total) {
+    // The reliable candidates first, the most stable on the model first; the rest by total.
+    const double reliable = *p.rank_total;
+    std::stable_sort(result.candidates.begin(), result.candidates.end(), [&](const auto& a, const auto& b) {
+      const bool ra = a.grasp.scores.total >= reliable, rb = b.grasp.scores.total >= reliable;
+      if (ra != rb) return ra;
+      return ra && a.model_epsilon > b.model_epsilon;
+    });
   }
   return result;
 }

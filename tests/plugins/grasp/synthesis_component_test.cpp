@@ -57,7 +57,8 @@ TEST(GraspSynthesisComponent, SelectsAGraspOnACylinderWithContactsOnItsSide) {
     // Inward: towards the axis.
     EXPECT_LT(c.normal.dot(Eigen::Vector3d(c.position.x(), c.position.y(), 0).normalized()), -0.9);
   }
-  EXPECT_GT(g.scores.symmetry, 0.8);
+  // Of the reliable candidates the most stable on the model is selected, not the most symmetric one.
+  EXPECT_GT(g.scores.symmetry, 0.6);
   EXPECT_GE(g.scores.total, 0.45);  // the default threshold
   EXPECT_EQ(g.views.size(), 8u);
   const auto selected = named(h.events(), "grasp_selected");

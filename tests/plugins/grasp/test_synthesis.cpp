@@ -8,6 +8,7 @@
 #include <random>
 
 #include "fba/geometry/mesh_io.hpp"
+#include "fba/grasp/grasp_quality.hpp"
 #include "fba/grasp/object_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
 
@@ -217,6 +218,160 @@ TEST(GraspSynthesis, AnObjectTooBigForTheHandGivesNoCandidate) {
   const SynthesisResult r = synthesise(samples, params_for(h));
   EXPECT_TRUE(r.candidates.empty());
   EXPECT_EQ(r.regions.size(), 6u);
+}
+
+// The model's own force closure: every candidate kept is force closure on the samples it was
+// found on (contacts, the samples' inward normals, torques about their mean over their largest
+// distance from it), with the epsilon it reports.
+TEST(GraspSynthesis, EveryCandidateIsForceClosureOnTheModel) {
+  const double h = 0.005;
+  for (auto samples : {cylinder(0.035, 0.12, h), box({0.06, 0.10, 0.15}, h), sphere(0.04, 1500)}) {
+    estimate_curvature(samples, 2.2 * h);
+    const SynthesisResult r = synthesise(samples, params_for(h));
+    ASSERT_FALSE(r.candidates.empty());
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& x : samples) centre += x.position / static_cast<double>(samples.size());
+    double r_max = 0;
+    for (const auto& x : samples) r_max = std::max(r_max, (x.position - centre).norm());
+    for (const auto& c : r.candidates) {
+      const GraspQuality q = evaluate_grasp(c.grasp.contacts, centre, r_max);
+      EXPECT_TRUE(q.force_closure);
+      EXPECT_NEAR(c.model_epsilon, q.epsilon, 1e-12);
+      EXPECT_GT(c.model_epsilon, 0.0);
+    }
+  }
+}
+
+// Without friction three point contacts never hold an object (form closure needs seven): the
+// check leaves every candidate out and says so.
+TEST(GraspSynthesis, FrictionlessThreeContactsAreNeverKept) {
+  const double h = 0.005;
+  auto samples = cylinder(0.035, 0.12, h);
+  estimate_curvature(samples, 2.2 * h);
+  SynthesisParams p = params_for(h);
+  p.friction = 0;
+  const SynthesisResult r = synthesise(samples, p);
+  EXPECT_TRUE(r.candidates.empty());
+  EXPECT_GT(r.not_force_closure, 0u);
+  p.require_force_closure = false;
+  EXPECT_FALSE(synthesise(samples, p).candidates.empty()) << "the geometric filters alone keep candidates";
+}
+
+// A higher bar on the model's epsilon keeps fewer candidates, each above it.
+TEST(GraspSynthesis, MinimumModelEpsilonLeavesOutTheLessStable) {
+  const double h = 0.005;
+  auto samples = box({0.06, 0.10, 0.15}, h);
+  estimate_curvature(samples, 2.2 * h);
+  SynthesisParams p = params_for(h);
+  p.max_candidates = 1000;
+  const SynthesisResult all = synthesise(samples, p);
+  std::vector<double> eps;
+  for (const auto& c : all.candidates) eps.push_back(c.model_epsilon);
+  ASSERT_GT(eps.size(), 4u);
+  p.min_model_epsilon = quantile(eps, 0.5);
+  const SynthesisResult stable = synthesise(samples, p);
+  EXPECT_LT(stable.candidates.size(), all.candidates.size());
+  EXPECT_FALSE(stable.candidates.empty());
+  for (const auto& c : stable.candidates) EXPECT_GE(c.model_epsilon, p.min_model_epsilon);
+}
+
+// With a reliability threshold, the candidates reaching it come first, the most stable on the
+// model first; the others follow by total.
+TEST(GraspSynthesis, ReliableCandidatesComeMostStableFirst) {
+  const double h = 0.005;
+  auto samples = cylinder(0.035, 0.12, h);
+  estimate_curvature(samples, 2.2 * h);
+  SynthesisParams p = params_for(h);
+  const SynthesisResult by_total = synthesise(samples, p);
+  ASSERT_GT(by_total.candidates.size(), 2u);
+  p.rank_total = by_total.candidates[by_total.candidates.size() / 2].grasp.scores.total;
+  const SynthesisResult ranked = synthesise(samples, p);
+  ASSERT_EQ(ranked.candidates.size(), by_total.candidates.size());
+  bool reliable = true;
+  for (std::size_t i = 0; i < ranked.candidates.size(); ++i) {
+    const auto& c = ranked.candidates[i];
+    const bool here = c.grasp.scores.total >= *p.rank_total;
+    EXPECT_FALSE(here && !reliable) << "a reliable candidate after an unreliable one at " << i;
+    reliable = here;
+    if (i == 0) continue;
+    const auto& before = ranked.candidates[i - 1];
+    if (here) EXPECT_LE(c.model_epsilon, before.model_epsilon) << i;
+    else if (before.grasp.scores.total < *p.rank_total) EXPECT_LE(c.grasp.scores.total, before.grasp.scores.total) << i;
+  }
+  double best_reliable_epsilon = 0;
+  for (const auto& c : by_total.candidates)
+    if (c.grasp.scores.total >= *p.rank_total) best_reliable_epsilon = std::max(best_reliable_epsilon, c.model_epsilon);
+  EXPECT_EQ(ranked.candidates.front().model_epsilon, best_reliable_epsilon);
+}
+
+// The thumb at x = -0.03, the fingers at x = +0.03 (y = +-0.02), 5 cm above the table, from above.
+Grasp grasp_across_x(double z) {
+  Grasp g;
+  g.contacts = {GraspContact{{-0.03, 0, z}, {1, 0, 0}}, GraspContact{{0.03, 0.02, z}, {-1, 0, 0}},
+                GraspContact{{0.03, -0.02, z}, {-1, 0, 0}}};
+  g.approach = {0, 0, -1};
+  g.aperture = 0.06 + SynthesisParams{}.hand.finger_width;
+  return g;
+}
+
+std::vector<SurfaceSample> standing_box(const Eigen::Vector3d& size, double h) {
+  auto samples = box(size, h);
+  for (auto& s : samples) s.position.z() += size.z() / 2;
+  return samples;
+}
+
+TEST(GraspSynthesis, AHandWithRoomAroundItsContactsIsNotBlocked) {
+  const HandGeometry hand;
+  const double tolerance = SynthesisParams{}.path_tolerance;
+  // A box 6 cm across and 12 cm tall, taken 5 cm up: its top is 7 cm behind the contacts, nearer
+  // than the palm's face.
+  EXPECT_FALSE(hand_path_blocked(grasp_across_x(0.05), hand, standing_box({0.06, 0.10, 0.12}, 0.004), tolerance));
+}
+
+TEST(GraspSynthesis, AnObjectReachingBehindThePalmBlocksTheHand) {
+  const HandGeometry hand;
+  const double tolerance = SynthesisParams{}.path_tolerance;
+  // 30 cm tall, taken 5 cm up from above: the palm would have to go through its upper part.
+  const auto samples = standing_box({0.06, 0.10, 0.30}, 0.004);
+  const auto blocking = hand_path_blocked(grasp_across_x(0.05), hand, samples, tolerance);
+  ASSERT_TRUE(blocking);
+  EXPECT_GT(samples[*blocking].position.z(), 0.05 + hand.palm_distance);
+}
+
+TEST(GraspSynthesis, ALedgeBetweenTheOpenThumbAndItsContactBlocksTheHand) {
+  const HandGeometry hand;
+  const double tolerance = SynthesisParams{}.path_tolerance;
+  // The box 6 cm across up to 8 cm, then a cap 12 cm across (x) and 2 cm high on top: closing
+  // on the narrow part 5 cm up, the thumb (and the fingers) would meet the cap's rim 3 cm out.
+  auto samples = standing_box({0.06, 0.10, 0.08}, 0.004);
+  for (auto s : box({0.12, 0.10, 0.02}, 0.004)) {
+    s.position.z() += 0.09;
+    samples.push_back(s);
+  }
+  const auto blocking = hand_path_blocked(grasp_across_x(0.05), hand, samples, tolerance);
+  ASSERT_TRUE(blocking);
+  EXPECT_GT(samples[*blocking].position.z(), 0.079);
+  EXPECT_GT(std::abs(samples[*blocking].position.x()), 0.03 + tolerance);
+  // Taken on the cap itself, nothing stands in the way.
+  Grasp on_cap = grasp_across_x(0.09);
+  for (int k = 0; k < 3; ++k) on_cap.contacts[k].position.x() *= 2;
+  on_cap.aperture = 0.12 + hand.finger_width;
+  EXPECT_FALSE(hand_path_blocked(on_cap, hand, samples, tolerance));
+}
+
+// An approach tilted towards the thumb: the open thumb stands beyond its contact, lower than it.
+TEST(GraspSynthesis, TheOpenThumbIsLowerThanItsContactWhenTheHandTilts) {
+  Grasp g = grasp_across_x(0.05);
+  const HandGeometry hand;
+  const double tilt = 30 * kPi / 180;
+  g.approach = {std::sin(tilt), 0, -std::cos(tilt)};  // leaning down towards +x: the thumb's side (-x) is lower
+  // The thumb's axis sits open + radius out along -u, u = (cos, 0, sin) across the approach.
+  const Eigen::Vector3d u(std::cos(tilt), 0, std::sin(tilt));
+  const double width = 0.06 * std::cos(tilt);
+  const double out = (g.aperture - width) / 2 + hand.finger_width / 2;
+  const double thumb_axis_z = 0.05 - out * u.z();
+  const double radius_below = hand.finger_width / 2 * std::sin(tilt);  // a capsule tilted by 30 degrees
+  EXPECT_NEAR(hand_lowest_z(g, hand), thumb_axis_z - hand.tip_length * std::cos(tilt) - radius_below, 1e-12);
 }
 
 TEST(GraspSynthesis, BadInputIsAClearError) {

@@ -72,7 +72,7 @@ struct SynthesisParams {
   double weight_symmetry = 1;
   double weight_safety = 1;
   double weight_curvature = 1;
-  // The object's centre for S1; default the mean of the samples.
+  // The object's centre for S1 and force closure; default the mean of the samples.
   std::optional<Eigen::Vector3d> object_centre;
   // Of the two approach directions perpendicular to the contacts' plane, the one closer to this
   // (default from above: the object stands on a table).
@@ -83,6 +83,26 @@ struct SynthesisParams {
   std::optional<double> table_z;
   double table_clearance = 0.003;
   double pregrasp_distance = 0.05;  // metres back along the approach where the hand starts
+  // The hand's way to its contacts on the model: each finger, opened to the grasp's aperture, runs
+  // along the approach and closes across it onto its contact; a model sample that stands more than
+  // path_tolerance (metres) nearer the open finger than its contact, within the finger's width and
+  // length, would be touched first; a sample inside the palm at the grasp blocks the hand. Such
+  // candidates are left out. 0 turns the check off.
+  double path_tolerance = 0.02;
+  // Stability on the model itself (the model is what the robot knows): each candidate's contacts
+  // and the model's inward normals must be force closure (grasp_quality.hpp: friction, 8-edge
+  // cones, torques over the samples' largest distance from the object's centre), with a
+  // Ferrari-Canny epsilon of at least min_model_epsilon; others are left out. Candidates whose
+  // total reaches rank_total (when set: the reliability threshold) come first, most stable first,
+  // so that of the reliable grasps the one that best resists disturbances is chosen; S1, S3, S4
+  // and the total stay the scores reported.
+  bool require_force_closure = true;
+  double friction = 0.5;
+  double min_model_epsilon = 0;
+  std::optional<double> rank_total;
+  // Candidates checked on the model (the hand's way, force closure), best total first: each check
+  // is a pass over the samples and a 6-D hull.
+  std::size_t max_checks = 400;
   // Bounds on the search: thumbs tried, finger positions per thumb, candidates returned.
   std::size_t max_thumbs = 80;
   std::size_t max_fingers = 300;
@@ -104,6 +124,7 @@ struct GraspCandidate {
   std::array<std::size_t, 3> samples{}; // the contact samples, thumb first
   std::array<std::size_t, 3> regions{}; // their regions
   bool uncertain = false;               // a contact touches an uncertain sample
+  double model_epsilon = 0;             // Ferrari-Canny epsilon on the model's contacts and normals
 };
 
 struct SynthesisResult {
@@ -112,12 +133,20 @@ struct SynthesisResult {
   // Regions where more views would help (any uncertain sample), most uncertain area first.
   std::vector<std::size_t> uncertain_regions;
   std::vector<double> boundary_distance;   // per input sample: distance to its region's boundary (m), 0 if none
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // the object's centre used (S1, force closure)
   std::size_t below_table = 0;  // candidates left out because the hand would reach into the table
+  std::size_t hand_blocked = 0;  // candidates left out because the model is in the hand's way
+  std::size_t not_force_closure = 0;  // candidates left out as not force closure (or too little epsilon) on the model
 };
 
 // The lowest point of the hand (world z) taking `grasp` (contacts, approach) as HandGeometry
 // models it, with the hand moved back along the approach by `back` metres (0: at the grasp).
 double hand_lowest_z(const Grasp& grasp, const HandGeometry& hand, double back = 0);
+
+// The first sample (index) that blocks the hand taking `grasp` (contacts, approach, aperture) as
+// SynthesisParams::path_tolerance describes, or none.
+std::optional<std::size_t> hand_path_blocked(const Grasp& grasp, const HandGeometry& hand,
+                                             std::span<const SurfaceSample> samples, double tolerance);
 
 // Throws std::invalid_argument for empty or non-finite samples, a zero normal, or parameters out of
 // range, naming the value found.
