@@ -21,7 +21,10 @@ TEST(GraspEmulated, TheRealDriversRunTheLoopAgainstTheEmulatorsToAHeldObject) {
   const std::string arm_link = (temp.path() / "arm").string(), hand_link = (temp.path() / "hand").string();
   Child arm({FBA_ARM_EMULATOR, "--link", arm_link});
   ASSERT_NE(arm.read_until("(link " + arm_link + ")").find("SLCAN adapter on"), std::string::npos) << arm.read_until("");
-  Child hand({FBA_HAND_EMULATOR, "--link", hand_link, "--activation-s", "0.05", "--object-width", "0.07"});
+  // The mustard bottle (58 x 95 x 190 mm) the camera renders: held across its depth, B and C may
+  // spread along its height.
+  Child hand({FBA_HAND_EMULATOR, "--link", hand_link, "--activation-s", "0.05", "--object-width", "0.07",
+              "--object-length", "0.19"});
   ASSERT_NE(hand.read_until("(link " + hand_link + ")").find("Modbus RTU slave 9"), std::string::npos);
 
   fba::LoadOptions load;

@@ -184,6 +184,20 @@ TEST(Robotiq3f, SpreadWiderThanTheObjectMissesWithFingersBAndC) {
   EXPECT_EQ(results[0].contacts[0].link, "finger_a");
 }
 
+TEST(Robotiq3f, AnObjectLongAlongTheSpreadMeetsFingersBAndCWhereARoundOneDoesNot) {
+  Robotiq3fOptions options = EmulatedHand::quick();
+  options.object_length = 0.19;  // a bottle held across, B and C along its height
+  EmulatedHand hand(options);
+  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  h.push("grasp", grasp(0.1, 0.1));  // the spread that passes beside the 0.06 m cylinder above
+  ASSERT_EQ(h.run(), 1);
+  ASSERT_EQ(h.failure(), "");
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_TRUE(results[0].held) << results[0].reason;
+  EXPECT_EQ(results[0].contacts.size(), 3u);
+}
+
 TEST(Robotiq3f, ObjectSlippingOutDuringTheHoldIsDropped) {
   EmulatedHand hand;
   // A long hold: the object slips out during it however slowly this machine runs.

@@ -17,7 +17,8 @@ constexpr const char* kUsage = R"(usage: fba-robotiq-3f-emulator [options]
   --slave N               Modbus slave id (default 9)
   --link PATH             also make PATH a symbolic link to the pseudo-terminal (replaced if it is a link)
   --activation-s S        how long activation takes, seconds (default 1)
-  --object-width M        the object's diameter, metres (default 0.06)
+  --object-width M        the object's extent from the thumb's side to the fingers', metres (default 0.06)
+  --object-length M       its extent along the spread, finger B to C, metres (default: the width, a cylinder)
   --object-offset M       the object's centre from the hand's, towards the thumb (finger A), metres (default 0)
   --no-object             nothing between the fingers
   --max-aperture M        thumb-to-fingers opening fully open, metres (default 0.155)
@@ -61,6 +62,8 @@ int main(int argc, char** argv) {
       options.activation_s = kCli.number(v, a, 0, 120);
     } else if (a == "--object-width") {
       options.object_width = kCli.number(v, a, 0.001, 1);
+    } else if (a == "--object-length") {
+      options.object_length = kCli.number(v, a, 0.001, 1);
     } else if (a == "--object-offset") {
       options.object_offset = kCli.number(v, a, -1, 1);
     } else if (a == "--max-aperture") {

@@ -245,6 +245,7 @@ void Robotiq3fEmulator::update(std::chrono::steady_clock::time_point now) {
   std::array<double, 4> touch{kNever, kNever, kNever, kNever};
   if (options_.object) {
     const double r = options_.object_width / 2, x = options_.object_offset;
+    const double half_length = (options_.object_length > 0 ? options_.object_length : options_.object_width) / 2;
     auto position_at = [&](double reach) { return reach <= 0 ? kNever : std::max(0.0, 255.0 * (1 - reach / half)); };
     if (s.mode == kScissorMode && !individual_scissor_) {
       touch[kS] =
@@ -252,7 +253,8 @@ void Robotiq3fEmulator::update(std::chrono::steady_clock::time_point now) {
     } else {
       touch[kA] = position_at(x + r);
       const double side = options_.max_spread * (1 - s.axes[kS].position / 255.0) / 2;  // B and C off the centre line
-      if (side < r) touch[kB] = touch[kC] = position_at(std::sqrt(r * r - side * side) - x);
+      if (side < half_length)  // where B's and C's line meets the ellipse
+        touch[kB] = touch[kC] = position_at(r * std::sqrt(1 - (side / half_length) * (side / half_length)) - x);
     }
   }
   for (int axis = 0; axis < 4; ++axis) {

@@ -5,8 +5,10 @@
 // Written from the gripper's manual, not from the driver in hardware/robotiq_3f, so the driver's tests
 // against it check both readings of the manual.
 //
-// The object is a cylinder standing between the fingers: `object_width` across, its axis
-// `object_offset` from the hand's centre towards the thumb (finger A). A finger at position p (0 open,
+// The object's section in the fingers' plane is an ellipse: `object_width` from the thumb's side to
+// the fingers', `object_length` along the spread (B to C; 0: the width, an upright cylinder), its
+// centre `object_offset` from the hand's centre towards the thumb (finger A). A bottle grasped with B
+// and C along its height is long in that direction, a can held across is round. A finger at position p (0 open,
 // 255 closed) is (max_aperture / 2) (1 - p / 255) from the centre; fingers B and C are spread sideways
 // by the scissor (max_spread (1 - s / 255) apart), so a spread wider than the object passes beside it.
 //
@@ -37,6 +39,7 @@ struct Robotiq3fOptions {
   double max_spread = 0.12;     // metres, finger B to finger C, scissor at 0
   bool object = true;
   double object_width = 0.06;  // metres
+  double object_length = 0.0;  // metres; 0: object_width
   double object_offset = 0.0;  // metres, towards the thumb
 };
 
