@@ -12,29 +12,13 @@
 #include <fstream>
 #include <functional>
 #include <map>
-#include <memory>
 #include <regex>
 #include <set>
 #include <sstream>
 #include <tuple>
 #include <utility>
-#include <vector>
 
 #include "fba/task_config.hpp"
-
-namespace fba {
-namespace {
-struct MakeYamlNode;  // a tag: the access below
-}  // namespace
-}  // namespace fba
-
-// A YAML::Node made from yaml-cpp's node tree, as YAML::Load's builder makes one. That builder
-// (the only one that keeps each node's place) is not exported by yaml-cpp 0.7, and a Node is made
-// from a tree node only by Node's friends, which include every specialisation of as_if.
-template <>
-struct YAML::as_if<fba::MakeYamlNode, void> {
-  static Node make(detail::node& root, const detail::shared_memory_holder& memory) { return Node(root, memory); }
-};
 
 namespace fba {
 
@@ -440,109 +424,24 @@ struct DocumentProbe : YAML::EventHandler {
   void OnMapEnd() override {}
 };
 
-// Builds one document's nodes with their places, as YAML::Load does (yaml-cpp's NodeBuilder), so
-// that the first document is parsed once by the parser that then looks for a second.
-class DocumentBuilder : public YAML::EventHandler {
- public:
-  YAML::Node root() const { return root_ ? YAML::as_if<MakeYamlNode, void>::make(*root_, memory_) : YAML::Node(); }
-
-  void OnDocumentStart(const YAML::Mark&) override {}
-  void OnDocumentEnd() override {}
-  void OnNull(const YAML::Mark& m, YAML::anchor_t anchor) override {
-    push(m, anchor).set_null();
-    pop();
-  }
-  void OnAlias(const YAML::Mark&, YAML::anchor_t anchor) override {
-    push(*anchors_.at(anchor));
-    pop();
-  }
-  void OnScalar(const YAML::Mark& m, const std::string& tag, YAML::anchor_t anchor, const std::string& value) override {
-    auto& n = push(m, anchor);
-    n.set_scalar(value);
-    n.set_tag(tag);
-    pop();
-  }
-  void OnSequenceStart(const YAML::Mark& m, const std::string& tag, YAML::anchor_t anchor, YAML::EmitterStyle::value style) override {
-    auto& n = push(m, anchor);
-    n.set_tag(tag);
-    n.set_type(YAML::NodeType::Sequence);
-    n.set_style(style);
-  }
-  void OnSequenceEnd() override { pop(); }
-  void OnMapStart(const YAML::Mark& m, const std::string& tag, YAML::anchor_t anchor, YAML::EmitterStyle::value style) override {
-    auto& n = push(m, anchor);
-    n.set_type(YAML::NodeType::Map);
-    n.set_tag(tag);
-    n.set_style(style);
-    ++map_depth_;
-  }
-  void OnMapEnd() override {
-    --map_depth_;
-    pop();
-  }
-
- private:
-  YAML::detail::node& push(const YAML::Mark& m, YAML::anchor_t anchor) {
-    auto& n = memory_->create_node();
-    n.set_mark(m);
-    if (anchor) {  // anchors are numbered from 1 in the order they appear
-      if (anchors_.size() <= anchor) anchors_.resize(anchor + 1, nullptr);
-      anchors_[anchor] = &n;
-    }
-    push(n);
-    return n;
-  }
-  void push(YAML::detail::node& n) {
-    const bool key = !stack_.empty() && stack_.back()->type() == YAML::NodeType::Map && keys_.size() < map_depth_;
-    stack_.push_back(&n);
-    if (key) keys_.emplace_back(&n, false);
-  }
-  // The node on top is complete: it goes into its sequence or map, or is the root.
-  void pop() {
-    YAML::detail::node& n = *stack_.back();
-    stack_.pop_back();
-    if (stack_.empty()) {
-      root_ = &n;
-      return;
-    }
-    YAML::detail::node& collection = *stack_.back();
-    if (collection.type() == YAML::NodeType::Sequence) {
-      collection.push_back(n, memory_);
-    } else if (keys_.back().second) {  // a map's value, after its key
-      collection.insert(*keys_.back().first, n, memory_);
-      keys_.pop_back();
-    } else {
-      keys_.back().second = true;
-    }
-  }
-
-  YAML::detail::shared_memory_holder memory_ = std::make_shared<YAML::detail::memory_holder>();
-  YAML::detail::node* root_ = nullptr;
-  std::vector<YAML::detail::node*> stack_;
-  std::vector<YAML::detail::node*> anchors_;
-  std::vector<std::pair<YAML::detail::node*, bool>> keys_;  // per open map: its key, and whether its value began
-  std::size_t map_depth_ = 0;
-};
-
 // One YAML document, or nothing with the reasons added to `d`. A second document would be
 // ignored by a plain load, and its content silently lost.
 std::optional<YAML::Node> parse_yaml(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
   if (!check_nesting(text, shown, d) || !check_root_comma(text, shown, d) || !check_property_comma(text, shown, d))
     return std::nullopt;
-  // One parser builds the first document and then looks for a second, and stops there: yaml-cpp
-  // 0.7's LoadAll never returns when a stray ',' makes its parser report a document without
-  // consuming anything (the guards above catch the known shapes; this bound catches the rest), and
-  // one document more than the first is all it takes to refuse the file.
+  // Documents are counted with a parser that stops after the second: yaml-cpp 0.7's LoadAll never
+  // returns when a stray ',' makes its parser report a document without consuming anything (the
+  // guards above catch the known shapes; this bound catches the rest), and one document more than
+  // the first is all it takes to refuse the file.
   YAML::Node root;
-  DocumentBuilder first;
-  DocumentProbe second;
+  DocumentProbe first, second;
   bool more = false;
   try {
     std::istringstream in(text);
     YAML::Parser parser(in);
     if (!parser.HandleNextDocument(first)) return YAML::Node();
     more = parser.HandleNextDocument(second);
-    if (!more) root = first.root();
+    if (!more) root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
     if (auto k = long_key(text, shown, e.mark)) d.push_back(*k);
     else d.push_back(Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e)});

@@ -85,10 +85,9 @@ TEST(Loader, AValidChainLoadsWithDefaultsFilledIn) {
   EXPECT_EQ(task.connections[1].type->name, "fba.Int");  // resolved through the passthrough
 }
 
-// The document is built by the loader's own parse (one pass for the first document and the look
-// for a second): an alias is its anchor's node, tags and both styles are read, and a value's error
-// names the line and column it was written at, also through an alias.
-TEST(Loader, AnchorsTagsAndPlacesSurviveTheSingleParse) {
+// An alias is its anchor's node, tags and both styles are read, and a value's error names the line
+// and column it was written at, also through an alias.
+TEST(Loader, AnchorsTagsAndPlacesAreKeptThroughAliases) {
   const auto task = load(R"(
 components:
   a: { type: examples.counter, params: &five { count: !!int 5 } }
