@@ -68,7 +68,7 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   // The mustard bottle ran to the task's own verdict, in its own folder, with figures.
   const std::string ran = line_starting(r.output, "loop     YcbMustardBottle   0 0 30");
   ASSERT_FALSE(ran.empty()) << r.output;
-  EXPECT_TRUE(ran.find("success") != std::string::npos || ran.find("failure") != std::string::npos) << ran;
+  EXPECT_TRUE(ran.find("success") != std::string::npos || ran.find("failure") != std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(out / "loop" / "01-YcbMustardBottle" / "summary.json"));
   const std::string mustard_summary = line_starting(r.output, "loop     YcbMustardBottle      1 ");
   EXPECT_FALSE(mustard_summary.empty()) << r.output;
@@ -76,8 +76,8 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   // The missing mesh is a row with fba-run's reason, not the end of the batch.
   const std::string failed = line_starting(r.output, "loop     no-such-mesh.obj");
   EXPECT_NE(failed.find("no summary"), std::string::npos) << r.output;
-  EXPECT_NE(failed.find("exit 2"), std::string::npos) << failed;
-  EXPECT_NE(failed.find("parameter 'mesh'"), std::string::npos) << failed;
+  EXPECT_NE(failed.find("exit 2"), std::string::npos) << r.output;
+  EXPECT_NE(failed.find("parameter 'mesh'"), std::string::npos) << r.output;
 
   std::ifstream in(out / "runs.json");
   const auto runs = nlohmann::json::parse(in, nullptr, false);
@@ -107,8 +107,14 @@ TEST_F(EvaluateGraspBatch, AMeshTheTaskCannotLoadIsARowWithFbaRunsReason) {
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string row = line_starting(r.output, "task     missing.obj");
   EXPECT_NE(row.find("no summary"), std::string::npos) << r.output;
-  EXPECT_NE(row.find("exit 2"), std::string::npos) << row;
-  EXPECT_NE(row.find("missing.obj"), std::string::npos) << row;
+  EXPECT_NE(row.find("exit 2"), std::string::npos) << r.output;
+  // The whole reason is in runs.json (the table clips it to a line), with fba-run's own words.
+  std::ifstream in(dir_ / "out" / "runs.json");
+  const auto runs = nlohmann::json::parse(in, nullptr, false);
+  ASSERT_TRUE(runs.is_array() && runs.size() == 1u) << r.output;
+  const std::string reason = runs[0].value("reason", "");
+  EXPECT_NE(reason.find("fba-run said: --set "), std::string::npos) << reason << "\n" << r.output;
+  EXPECT_NE(reason.find("missing.obj"), std::string::npos) << reason << "\n" << r.output;
 }
 
 // A stand-in for fba-run that hangs or crashes: the batch carries on, each run a row saying so.
