@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cerrno>
 #include <cmath>
@@ -12,7 +13,6 @@
 #include <fstream>
 #include <functional>
 #include <map>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <tuple>
@@ -514,6 +514,22 @@ void check_mappings(const YAML::Node& root, const Source& src, std::vector<Diagn
   check_mappings(root, src, d, seen);
 }
 
+// A `${name}` reference to a task or composite parameter (name: letters, digits, '_') in a value.
+struct Reference {
+  std::size_t pos, len;  // of the whole `${name}`
+  std::string name;
+};
+
+std::vector<Reference> references_in(const std::string& s) {
+  std::vector<Reference> out;
+  for (std::size_t i = s.find("${"); i != std::string::npos; i = s.find("${", i + 1)) {
+    std::size_t j = i + 2;
+    while (j < s.size() && (std::isalnum(static_cast<unsigned char>(s[j])) || s[j] == '_')) ++j;
+    if (j > i + 2 && j < s.size() && s[j] == '}') out.push_back({i, j + 1 - i, s.substr(i + 2, j - i - 2)});
+  }
+  return out;
+}
+
 std::string list_of(const std::vector<std::string>& v) {
   std::string s;
   for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + v[i];
@@ -871,7 +887,6 @@ class Loader {
   // Which component parameters of the task (and its profile) take each task parameter.
   void collect_param_users(const YAML::Node& comps, const Bindings& b) {
     if (!comps || !comps.IsMap()) return;
-    static const std::regex ref(R"(\$\{([A-Za-z0-9_]+)\})");
     for (auto it = comps.begin(); it != comps.end(); ++it) {
       if (!it->first.IsScalar() || !it->second.IsMap()) continue;
       const std::string name = it->first.Scalar();
@@ -887,9 +902,8 @@ class Loader {
       if (!params.IsMap()) continue;
       for (auto p = params.begin(); p != params.end(); ++p) {
         if (!p->first.IsScalar() || !p->second.IsScalar()) continue;
-        const std::string v = p->second.Scalar();
-        for (std::sregex_iterator i(v.begin(), v.end(), ref), e; i != e; ++i)
-          if (b.count((*i)[1])) param_users_[(*i)[1]].push_back(name + "." + p->first.Scalar());
+        for (const auto& r : references_in(p->second.Scalar()))
+          if (b.count(r.name)) param_users_[r.name].push_back(name + "." + p->first.Scalar());
       }
     }
   }
@@ -900,10 +914,9 @@ class Loader {
     if (full.find('/') != std::string::npos || !params || !params.IsMap()) return {};
     const YAML::Node v = params[param];
     if (!v || !v.IsScalar()) return {};
-    static const std::regex ref(R"(\$\{([A-Za-z0-9_]+)\})");
-    const std::string text = v.Scalar(), self = full + "." + param;
-    for (std::sregex_iterator i(text.begin(), text.end(), ref), e; i != e; ++i) {
-      const auto users = param_users_.find((*i)[1]);
+    const std::string self = full + "." + param;
+    for (const auto& r : references_in(v.Scalar())) {
+      const auto users = param_users_.find(r.name);
       if (users == param_users_.end() || users->second.size() < 2) continue;
       std::vector<std::string> others;
       for (const auto& u : users->second)
@@ -1171,12 +1184,11 @@ class Loader {
     whole = false;
     if (!n.IsScalar() || b.empty()) return n;
     const std::string s = n.Scalar();
-    static const std::regex ref(R"(\$\{([A-Za-z0-9_]+)\})");
-    std::smatch m;
-    if (std::regex_match(s, m, ref)) {
-      auto it = b.find(m[1]);
+    const std::vector<Reference> refs = references_in(s);
+    if (refs.size() == 1 && refs[0].len == s.size()) {
+      auto it = b.find(refs[0].name);
       if (it == b.end()) {
-        if (!failed_params_.count(m[1])) error(at(src, n), unknown_reference(m[1], b));
+        if (!failed_params_.count(refs[0].name)) error(at(src, n), unknown_reference(refs[0].name, b));
         return std::nullopt;
       }
       whole = true;
@@ -1184,23 +1196,22 @@ class Loader {
       return n;
     }
     std::string out;
-    auto begin = s.cbegin();
-    bool changed = false, unknown = false;
-    for (std::sregex_iterator i(s.begin(), s.end(), ref), e; i != e; ++i) {
-      out.append(begin, s.cbegin() + i->position());
-      auto it = b.find((*i)[1]);
+    std::size_t begin = 0;
+    bool unknown = false;
+    for (const auto& r : refs) {
+      out.append(s, begin, r.pos - begin);
+      auto it = b.find(r.name);
       if (it == b.end()) {
-        if (!failed_params_.count((*i)[1])) error(at(src, n), unknown_reference((*i)[1], b));
+        if (!failed_params_.count(r.name)) error(at(src, n), unknown_reference(r.name, b));
         unknown = true;
       } else {
         out += to_string(it->second);
       }
-      begin = s.cbegin() + i->position() + i->length();
-      changed = true;
+      begin = r.pos + r.len;
     }
     if (unknown) return std::nullopt;
-    if (!changed) return n;
-    out.append(begin, s.cend());
+    if (refs.empty()) return n;
+    out.append(s, begin);
     YAML::Node copy(out);
     return copy;
   }

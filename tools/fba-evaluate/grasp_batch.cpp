@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <chrono>
@@ -22,7 +23,6 @@
 #include <map>
 #include <numbers>
 #include <optional>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -183,11 +183,15 @@ class ListReader {
 
 // The placeholders pose_set may use; any other {word} is a mistake in the list.
 void check_placeholders(const ListReader& r, const YAML::Node& at, const std::string& s) {
-  static const std::regex word(R"(\{([A-Za-z_]+)\})");
   static const std::set<std::string> known = {"mesh", "x", "y", "yaw"};
-  for (auto it = std::sregex_iterator(s.begin(), s.end(), word); it != std::sregex_iterator(); ++it)
-    if (!known.count((*it)[1].str()))
-      r.fail(at, "pose_set: unknown placeholder " + (*it)[0].str() + " in '" + s + "'; expected {mesh}, {x}, {y} or {yaw}");
+  for (std::size_t i = s.find('{'); i != std::string::npos; i = s.find('{', i + 1)) {
+    std::size_t j = i + 1;
+    while (j < s.size() && (std::isalpha(static_cast<unsigned char>(s[j])) || s[j] == '_')) ++j;
+    if (j == i + 1 || j == s.size() || s[j] != '}') continue;  // not a {word}
+    const std::string word = s.substr(i + 1, j - i - 1);
+    if (!known.count(word))
+      r.fail(at, "pose_set: unknown placeholder {" + word + "} in '" + s + "'; expected {mesh}, {x}, {y} or {yaw}");
+  }
 }
 
 BatchList read_list(const std::string& file) {
@@ -636,8 +640,14 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
   for (const auto& [mesh, b] : baselines)
     if (!b.error.empty()) out << "random baseline of " << mesh << ": " << b.error << "\n";
   out << "\n";
-  static const std::regex trailing(" +\n");
-  return std::regex_replace(out.str(), trailing, "\n");
+  // Without the spaces that padding leaves at the ends of lines.
+  std::string text;
+  std::istringstream lines(out.str());
+  for (std::string line; std::getline(lines, line);) {
+    line.erase(line.find_last_not_of(' ') + 1);
+    text += line + "\n";
+  }
+  return text;
 }
 
 nlohmann::json rows_json(const std::vector<Row>& rows) {
