@@ -413,14 +413,6 @@ on:
   expect_every_sample_accounted_for(r);
 }
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define FBA_TEST_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define FBA_TEST_SANITIZED 1
-#endif
-#endif
-
 #ifndef FBA_TEST_SANITIZED
 TEST(DataPath, AThreadThatCannotStartEndsTheRunAsARuntimeErrorWithSafeStates) {
   // In a child process whose address space has room for a few thread stacks only: the workers

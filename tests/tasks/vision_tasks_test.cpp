@@ -42,9 +42,17 @@ fba::RunOptions deterministic() {
 // measured at depth 9, mean 0.9726 and min 0.9160. Otsu's threshold is higher on the dark shadowed
 // parts, so its masks are smaller and the bound lower: it catches a model that fits its own
 // silhouettes only.
+// Under the sanitizers (74 s at depth 9) the same task carves to depth 7: the bounds there check that
+// the run is whole, not the target, which the plain build checks.
+#if FBA_TEST_SANITIZED
+constexpr int kDinoDepth = 7;
+constexpr double kDinoMeanIoU = 0.90, kDinoMinIoU = 0.85;
+constexpr double kDinoOtsuMeanIoU = 0.85, kDinoOtsuMinIoU = 0.75;
+#else
 constexpr int kDinoDepth = 9;
 constexpr double kDinoMeanIoU = 0.98, kDinoMinIoU = 0.95;
 constexpr double kDinoOtsuMeanIoU = 0.95, kDinoOtsuMinIoU = 0.88;
+#endif
 
 TEST(VisionTasks, CarveDinoReprojectsOntoEverySilhouette) {
   fba::LoadOptions o;

@@ -3,6 +3,7 @@
 #include <functional>
 #include <tuple>
 #include <cmath>
+#include <cstdio>
 #include <set>
 #include <filesystem>
 #include <fstream>
@@ -286,10 +287,16 @@ TEST(RoiCriterion, RefinesOnlyNodesThatIntersectTheRegion) {
 
 // The target, with the default (conservative) leaf test. At depth 8 the model reaches
 // mean 0.978: a finest voxel projects to ~2 px, and the model's outline lies up to half a voxel
-// plus the tolerance outside the silhouette; depth 9 halves the voxel. Checked at depth 9 in every
-// build (a few seconds under the sanitizers).
+// plus the tolerance outside the silhouette; depth 9 halves the voxel. Under the sanitizers (88 s
+// at depth 9) the same code carves to depth 7, where a voxel projects to ~8 px: the bounds there
+// are a check that the carve is whole, not the target, which the plain build checks.
+#if FBA_TEST_SANITIZED
+constexpr int kDinoDepth = 7;
+constexpr double kDinoMeanIoU = 0.90, kDinoMinIoU = 0.85;
+#else
 constexpr int kDinoDepth = 9;
 constexpr double kDinoMeanIoU = 0.98, kDinoMinIoU = 0.95;
+#endif
 
 TEST(DinoReprojection, IoUTargetsMetAtTheTestDepth) {
   CarverParams p;
@@ -302,6 +309,7 @@ TEST(DinoReprojection, IoUTargetsMetAtTheTestDepth) {
   }
   RecordProperty("reprojection_iou_mean", std::to_string(sum / dino().size()));
   RecordProperty("reprojection_iou_min", std::to_string(lo));
+  std::printf("re-projection IoU, depth %d: mean %.4f min %.4f\n", kDinoDepth, sum / dino().size(), lo);
   EXPECT_GE(sum / dino().size(), kDinoMeanIoU);
   EXPECT_GE(lo, kDinoMinIoU);
 }
