@@ -35,12 +35,15 @@ install_packages() {
   fi
 }
 
-launcher=()
-if command -v ccache >/dev/null; then
+# Decided after install_packages, which installs ccache on a fresh machine: decided before, the
+# first run (CI's, on a new machine) compiled without it and left the cache empty for the next.
+use_ccache() {
+  launcher=()
+  command -v ccache >/dev/null || return 0
   launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
   # Paths relative to the checkout: another clone of the project hits the same cache entries.
   export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$top}
-fi
+}
 
 # configure <name> [cmake args...]
 configure() {
@@ -90,6 +93,7 @@ mkdir -p build
 case "$cmd" in
   run)
     install_packages
+    use_ccache
     configure release "${plain[@]}"  # the same build as 'test' uses
     build release --target fba_programs
     task=${2:-tasks/grasp.yaml}
@@ -98,6 +102,7 @@ case "$cmd" in
     ;;
   test)
     install_packages
+    use_ccache
     stage "plain build and tests"
     configure release "${plain[@]}"
     build release
