@@ -153,6 +153,7 @@ class GraspSynthesisFilter final : public fba::Component {
     double best_total = 0;  // the candidates come reliable first, most stable first: not by total
     for (const auto& c : r.candidates) best_total = std::max(best_total, c.grasp.scores.total);
     double best_resolved = 0;  // the best candidate whose contacts are all on resolved parts of the model
+    const fba::grasp::GraspCandidate* best_resolved_candidate = nullptr;
     for (const auto& c : r.candidates) {  // best first
       if (c.uncertain) continue;
       if (c.grasp.scores.total >= threshold_) {
@@ -162,11 +163,18 @@ class GraspSynthesisFilter final : public fba::Component {
                         c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
         return select(c.grasp, views);
       }
-      best_resolved = std::max(best_resolved, c.grasp.scores.total);
+      if (c.grasp.scores.total > best_resolved) {
+        best_resolved = c.grasp.scores.total;
+        best_resolved_candidate = &c;
+      }
     }
     if (views >= max_views_) {
-      std::string reason = "no reliable grasp after " + std::to_string(views) + " views: best total " + fixed(best_resolved) +
-                           " < threshold " + fixed(threshold_);
+      std::string reason = "no reliable grasp after " + std::to_string(views) + " views: best total " + fixed(best_resolved);
+      // Which criteria held it back: what a user tunes (weights, hand geometry) or learns about the object.
+      if (const auto* b = best_resolved_candidate)
+        reason += " (S1 symmetry " + fixed(b->grasp.scores.symmetry) + ", S3 safety margin " + fixed(b->grasp.scores.safety_margin) +
+                  ", S4 curvature " + fixed(b->grasp.scores.curvature) + ")";
+      reason += " < threshold " + fixed(threshold_);
       if (r.candidates.empty() && r.below_table > 0)
         reason += " (no candidate the hand can reach: " + std::to_string(r.below_table) + " would put the hand into the table)";
       else if (r.candidates.empty() && (r.hand_blocked > 0 || r.not_force_closure > 0))

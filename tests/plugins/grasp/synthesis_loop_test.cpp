@@ -80,6 +80,9 @@ TEST(GraspSynthesisLoop, AnUnreachableThresholdStopsTheTaskWithTheReason) {
   ASSERT_TRUE(r.final_event);
   EXPECT_EQ(r.final_event->name, "grasp_synthesis_failed");
   EXPECT_EQ(r.final_event->payload.rfind("no reliable grasp after 5 views: best total ", 0), 0u) << r.final_event->payload;
+  // The criteria that held the best candidate back, each by name.
+  for (const char* criterion : {"(S1 symmetry ", ", S3 safety margin ", ", S4 curvature ", ") < threshold 1.000"})
+    EXPECT_NE(r.final_event->payload.find(criterion), std::string::npos) << criterion << " in " << r.final_event->payload;
 }
 
 }  // namespace
