@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +16,7 @@
 
 #include "elf_file.hpp"
 #include "plugin_manifest.hpp"
+#include "support/temp_dir.hpp"
 #include "test_components.hpp"
 
 namespace fs = std::filesystem;
@@ -36,15 +36,8 @@ std::string refusal(const std::string& file, fba::Registry& r) {
 std::string bad(const std::string& name) { return std::string(FBA_BAD_PLUGIN_DIR) + "/" + name + ".so"; }
 std::string examples() { return std::string(FBA_TEST_PLUGIN_DIR) + "/fba-examples.so"; }
 
-// A fresh folder per test.
-fs::path temp_dir() {
-  static std::atomic<int> n{0};
-  const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-  fs::path d = fs::path(testing::TempDir()) / ("fba_plugin_" + std::to_string(getpid()) + "_" + info->name() + "_" + std::to_string(n++));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+// A fresh folder per call, removed when the test ends.
+fs::path temp_dir() { return fba::test::TempDir::until_exit(); }
 
 // Copies a plugin (and its manifest, if it has one) into `dir`; returns the copy.
 fs::path copy_plugin(const fs::path& so, const fs::path& dir) {

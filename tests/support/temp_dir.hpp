@@ -11,9 +11,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -21,10 +23,12 @@ namespace fba::test {
 
 class TempDir {
  public:
-  TempDir() {
+  // `what`, if given, ends the name: what the folder is for, when a test has several.
+  explicit TempDir(const std::string& what = {}) {
     std::string name = "fba";
     if (const auto* info = ::testing::UnitTest::GetInstance()->current_test_info())
       name += std::string("-") + info->test_suite_name() + "-" + info->name();
+    if (!what.empty()) name += "-" + what;
     for (char& c : name)  // parameterised tests have '/' in their names
       if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
     std::string pattern = (std::filesystem::path(::testing::TempDir()) / (name + "-XXXXXX")).string();
@@ -40,6 +44,13 @@ class TempDir {
   TempDir& operator=(const TempDir&) = delete;
 
   const std::filesystem::path& path() const { return path_; }
+  // A new folder that lives until the test process ends, for helpers that hand out paths rather
+  // than objects (each test runs in a process of its own under ctest, so nothing piles up).
+  static const std::filesystem::path& until_exit(const std::string& what = {}) {
+    static std::vector<std::unique_ptr<TempDir>> kept;
+    kept.push_back(std::make_unique<TempDir>(what));
+    return kept.back()->path();
+  }
   // The path of `name` inside the folder, as a string; with `text`, the file is written first.
   std::string file(const std::string& name, const std::string& text = {}) const {
     const std::string p = (path_ / name).string();

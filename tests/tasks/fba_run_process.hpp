@@ -19,6 +19,8 @@
 
 #include <gtest/gtest.h>
 
+#include "support/temp_dir.hpp"
+
 extern char** environ;
 
 namespace fba::test {
@@ -37,15 +39,8 @@ inline std::string read_file(const fs::path& p) {
   return ss.str();
 }
 
-// A folder of its own for each test (and each call within it).
-inline fs::path temp_dir(const std::string& name) {
-  static int counter = 0;
-  const fs::path p = fs::path(testing::TempDir()) /
-                     ("fba-cli-" + std::to_string(getpid()) + "-" + std::to_string(++counter) + "-" + name);
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
-}
+// A folder of its own for each test (and each call within it), removed when the test ends.
+inline fs::path temp_dir(const std::string& name) { return fba::test::TempDir::until_exit(name); }
 
 // A running fba-run, its output going to a file.
 class Process {
