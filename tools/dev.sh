@@ -41,8 +41,12 @@ use_ccache() {
   launcher=()
   command -v ccache >/dev/null || return 0
   launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-  # Paths relative to the checkout: another clone of the project hits the same cache entries.
+  # Paths relative to the checkout, and the build folder left out of the hash, which ccache puts in
+  # it whenever there is debug info (every build here has line tables): so a clone in another folder,
+  # as CI's is, hits the entries this one made. The price: an object's debug info may name the folder
+  # of the clone that compiled it first. CCACHE_NOHASHDIR=false restores the default.
   export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$top}
+  export CCACHE_NOHASHDIR=${CCACHE_NOHASHDIR:-true}
 }
 
 # configure <name> [cmake args...]
