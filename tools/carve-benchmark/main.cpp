@@ -10,6 +10,8 @@
 #include <time.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -42,6 +44,20 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// A number option's value, whole and within [lo, hi]; anything else ends the program with the
+// option, what was expected and what was found (atoi took "x" for 0 and "-1" for all cores).
+double option_value(const std::string& name, const std::string& text, double lo, double hi, bool integer) {
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || errno == ERANGE || !(v >= lo && v <= hi) || (integer && v != std::floor(v))) {
+    std::fprintf(stderr, "fba-carve-benchmark: %s must be %s in [%g, %g]; found '%s'\n", name.c_str(),
+                 integer ? "a whole number" : "a number", lo, hi, text.c_str());
+    std::exit(2);
+  }
+  return v;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -52,19 +68,30 @@ int main(int argc, char** argv) {
   int detail_after_views = CarverParams{}.detail_after_views, detail_depth = CarverParams{}.detail_depth;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--repeat" && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
-    else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
-    else if (a == "--detail" && i + 1 < argc && std::sscanf(argv[++i], "%d,%d", &detail_after_views, &detail_depth) == 2) {
-    }
-    else if (a == "--depths" && i + 1 < argc) {
-      depths.clear();
-      for (const char* p = argv[++i]; *p;) {
-        char* end = nullptr;
-        depths.push_back(static_cast<int>(std::strtol(p, &end, 10)));
-        p = *end ? end + 1 : end;
+    // Comma-separated whole numbers in [lo, hi].
+    auto list = [&](const std::string& text, double lo, double hi) {
+      std::vector<int> out;
+      std::size_t start = 0;
+      do {
+        const std::size_t comma = text.find(',', start);
+        out.push_back(int(option_value(a, text.substr(start, comma - start), lo, hi, true)));
+        start = comma == std::string::npos ? comma : comma + 1;
+      } while (start != std::string::npos);
+      return out;
+    };
+    if (a == "--repeat" && i + 1 < argc) repeat = int(option_value(a, argv[++i], 1, 1000, true));
+    else if (a == "--threads" && i + 1 < argc) threads = int(option_value(a, argv[++i], 0, 256, true));
+    else if (a == "--tolerance" && i + 1 < argc) tolerance = option_value(a, argv[++i], 0, 100, false);
+    else if (a == "--detail" && i + 1 < argc) {
+      const std::vector<int> d = list(argv[++i], 0, 1000);  // the carver checks the depth against its own limits
+      if (d.size() != 2) {
+        std::fprintf(stderr, "fba-carve-benchmark: --detail takes VIEWS,DEPTH; found '%s'\n", argv[i]);
+        return 2;
       }
+      detail_after_views = d[0];
+      detail_depth = d[1];
     }
+    else if (a == "--depths" && i + 1 < argc) depths = list(argv[++i], 1, 10);
     else if (a.rfind("-", 0) == 0) {
       const bool help = a == "--help" || a == "-h";
       std::fprintf(help ? stdout : stderr, "usage: fba-carve-benchmark [shared-data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX] [--detail VIEWS,DEPTH]\n");
