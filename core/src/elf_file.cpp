@@ -3,6 +3,7 @@
 #include <elf.h>
 
 #include <cerrno>
+#include <cstddef>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -95,9 +96,15 @@ ElfFile check_elf(const fs::path& file) {
     throw std::runtime_error("is not an ELF shared object (no ELF magic number at its start)");
   if (!whole_ident) throw std::runtime_error(truncated(r.size, "the ELF identification", EI_NIDENT));
   const Elf64_Ehdr& own = own_header();
-  if (ident[EI_CLASS] != own.e_ident[EI_CLASS])
-    throw std::runtime_error(std::string("is a ") + (ident[EI_CLASS] == ELFCLASS32 ? "32" : "non-64") +
-                             "-bit ELF file; this fba is a 64-bit program");
+  if (ident[EI_CLASS] != own.e_ident[EI_CLASS]) {
+    // e_machine is at the same place in 32- and 64-bit headers: say which architecture it is for.
+    std::string built_for;
+    unsigned char m[2];
+    if (r.size >= offsetof(Elf64_Ehdr, e_machine) + 2 && r.read(offsetof(Elf64_Ehdr, e_machine), m, 2))
+      built_for = ", built for " + machine_name(ident[EI_DATA] == ELFDATA2MSB ? (m[0] << 8 | m[1]) : (m[1] << 8 | m[0]));
+    throw std::runtime_error(std::string("is a ") + (ident[EI_CLASS] == ELFCLASS32 ? "32" : "non-64") + "-bit ELF file" +
+                             built_for + "; this fba is a 64-bit program for " + machine_name(own.e_machine));
+  }
   if (ident[EI_DATA] != own.e_ident[EI_DATA])
     throw std::runtime_error("has the other byte order (endianness) than this machine");
   if (r.size < sizeof(Elf64_Ehdr)) throw std::runtime_error(truncated(r.size, "the ELF header", sizeof(Elf64_Ehdr)));

@@ -232,6 +232,16 @@ TEST(Plugin, APluginForAnotherArchitectureSaysWhich) {
   fba::Registry r;
   const auto why = refusal((dir / "arm.so").string(), r);
   EXPECT_NE(why.find("was built for aarch64; this fba runs on x86-64"), std::string::npos) << why;
+
+  // A 32-bit plugin's header is shorter, but its machine is at the same place: named too.
+  bytes[4] = 1;  // EI_CLASS: ELFCLASS32
+  const std::uint16_t i386 = 3;  // EM_386
+  bytes[18] = static_cast<char>(i386);
+  bytes[19] = 0;
+  std::ofstream(dir / "i386.so", std::ios::binary) << bytes;
+  const auto why32 = refusal((dir / "i386.so").string(), r);
+  EXPECT_NE(why32.find("is a 32-bit ELF file, built for x86 (32-bit); this fba is a 64-bit program for x86-64"), std::string::npos)
+      << why32;
 }
 
 TEST(Plugin, LoadPathReportsEveryFailureAndKeepsTheGoodOnes) {
