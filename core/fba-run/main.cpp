@@ -25,6 +25,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "fba/escape_controls.hpp"
 #include "fba/log.hpp"
 #include "fba/registry.hpp"
 #include "fba/task.hpp"
@@ -247,8 +248,10 @@ void on_unexpected_exit() {
   auto& st = state();
   if (st.returning.load() || st.exit_taken.exchange(true)) return;
   const fba::ActiveCall call = fba::active_call();
+  const char* plugin = fba::plugin_being_loaded();
   std::string who = call.component ? std::string("component '") + call.component + "' (" + call.type +
                                          ") called exit() from " + call.call
+                    : plugin       ? std::string("the plugin ") + plugin + " called exit() while it was loaded"
                                    : std::string("a plugin called exit() while ") + st.phase.load();
   std::fprintf(stderr, "fba-run: unexpected exit: %s; the run fails\n", who.c_str());
   fba::Task* task = st.task.load();
@@ -276,6 +279,7 @@ void on_crash(int sig, siginfo_t*, void*) {
   static std::atomic<bool> once{false};
   if (once.exchange(true)) _exit(kRuntimeError);  // crashed again while reporting
   const fba::ActiveCall call = fba::active_call();
+  const char* plugin = fba::plugin_being_loaded();
   say("fba-run: fatal signal ");
   say(sig == SIGSEGV ? "SIGSEGV" : sig == SIGBUS ? "SIGBUS" : sig == SIGFPE ? "SIGFPE" : "SIGILL");
   if (call.component) {
@@ -285,6 +289,9 @@ void on_crash(int sig, siginfo_t*, void*) {
     say(call.type);
     say(") during ");
     say(call.call);
+  } else if (plugin) {
+    say(" while loading the plugin ");
+    say(plugin);
   } else {
     say(" while ");
     say(state().phase.load());
@@ -301,6 +308,8 @@ void on_crash(int sig, siginfo_t*, void*) {
   std::string reason = std::string("fatal signal ") + strsignal(sig);
   if (call.component)
     reason += std::string(" in component '") + call.component + "' (" + call.type + ") during " + call.call;
+  else if (plugin)
+    reason += std::string(" while loading the plugin ") + plugin;
   auto r = early_result(fba::Outcome::RuntimeError, reason);
   if (fba::Task* task = st.task.load()) r.reason += "; safe states: " + task->safe_states_so_far();
   write_summary(r);
@@ -523,7 +532,7 @@ int run(int argc, char** argv) {
   if (result.outcome == fba::Outcome::Interrupted) result.signal = st.signal.load();
   status = result.exit_code();
   const std::string error = write_summary(result);
-  std::cerr << "fba-run: " << fba::to_string(result.outcome) << ": " << result.reason;
+  std::cerr << "fba-run: " << fba::to_string(result.outcome) << ": " << fba::escape_controls(result.reason);
   if (result.final_event && !result.final_event->payload.empty()) std::cerr << " (" << result.final_event->payload << ")";
   if (result.lost_to_restarts > 0) {
     std::uint64_t restarts = 0;

@@ -7,6 +7,7 @@
 #include <system_error>
 #include <unordered_set>
 
+#include "fba/escape_controls.hpp"
 #include "fba/log.hpp"
 
 namespace fba::detail {
@@ -190,14 +191,16 @@ class ActiveScope {
 };
 
 // Runs f, catching everything; returns what it threw, worded for "component 'x' (type) ...".
+// The exception's text may echo a parameter from the task file: its control bytes are escaped.
 template <class F>
 std::string catch_all(const char* call, F&& f) {
   try {
     f();
     return {};
   } catch (const std::exception& e) {
-    if (std::string_view(call) == "process()") return e.what();  // the common case keeps its short form
-    return std::string(e.what()) + " (thrown from " + call + ")";
+    const std::string what = escape_controls(e.what());
+    if (std::string_view(call) == "process()") return what;  // the common case keeps its short form
+    return what + " (thrown from " + call + ")";
   } catch (...) {
     return std::string("threw a non-exception (not derived from std::exception) from ") + call;
   }

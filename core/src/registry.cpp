@@ -52,10 +52,25 @@ using detail::PluginSlot;
 // the thread that reads a composite that uses another.
 std::recursive_mutex composite_mutex;
 
+thread_local const char* t_plugin_being_loaded = nullptr;
+
+// Names the plugin whose code runs on this thread, for plugin_being_loaded().
+class LoadingScope {
+ public:
+  explicit LoadingScope(const std::string& file) : previous_(t_plugin_being_loaded) { t_plugin_being_loaded = file.c_str(); }
+  ~LoadingScope() { t_plugin_being_loaded = previous_; }
+  LoadingScope(const LoadingScope&) = delete;
+  LoadingScope& operator=(const LoadingScope&) = delete;
+
+ private:
+  const char* previous_;
+};
+
 // Runs the plugin's code for the first time: dlopen, its static initialisers, its specs. Every
 // check that can be made from the files was made before (Registry::add_plugin).
 void load_code(PluginSlot& slot, bool describe = false) {
   const std::string& f = slot.file;
+  const LoadingScope loading(f);
   // Named before dlopen, so a crash inside it (a static initialiser) is attributable.
   make_logger("plugins")->debug("loading plugin {}", f);  // a fresh logger: the level may have changed
   dlerror();
@@ -124,11 +139,14 @@ void ensure_loaded(PluginSlot& slot) {
 
 }  // namespace
 
+const char* plugin_being_loaded() noexcept { return t_plugin_being_loaded; }
+
 namespace detail {
 Manifest describe_plugin(const fs::path& file) {
   PluginSlot slot;
   slot.file = file.string();
   slot.manifest.build_id = check_elf(file).build_id;
+  const LoadingScope loading(slot.file);
   {
     // The record first, on its own: a plugin for another ABI is described, not run further.
     dlerror();

@@ -18,6 +18,7 @@
 #include <tuple>
 #include <utility>
 
+#include "fba/escape_controls.hpp"
 #include "fba/task_config.hpp"
 
 namespace fba {
@@ -36,18 +37,6 @@ std::string Location::str() const {
 }
 
 namespace {
-// Messages echo names and values from files: raw control bytes (NUL, ESC) would reach the
-// terminal, and a newline would split one diagnostic into two lines.
-std::string escape_controls(const std::string& s) {
-  static const char* hex = "0123456789abcdef";
-  std::string out;
-  for (const char ch : s) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c < 0x20 || c == 0x7f) out += std::string("\\x") + hex[c >> 4] + hex[c & 15];
-    else out += ch;
-  }
-  return out;
-}
 
 std::vector<Diagnostic> escaped(std::vector<Diagnostic> ds) {
   for (auto& d : ds) {

@@ -71,6 +71,21 @@ connections: [ src.out -> bad.in, bad.out -> sink.in ]
   EXPECT_NE(r.output.find("component 'bad' (examples.faulty) failed: injected fault"), std::string::npos) << r.output;
 }
 
+TEST(Cli, ControlBytesInARuntimeErrorReachTheTerminalEscaped) {
+  // The component's message echoes a parameter with an ESC sequence that would clear the screen.
+  const auto f = write_task("fault.yaml", "components:\n"
+                                          "  src: { type: examples.counter, params: { count: 100 } }\n"
+                                          "  bad: { type: examples.faulty, params: { fail_after: 1, message: \"bad\\e[2Jmsg\" } }\n"
+                                          "  sink: { type: examples.sink }\n"
+                                          "connections: [ src.out -> bad.in, bad.out -> sink.in ]\n");
+  const fs::path out = temp_dir("escaped");
+  const auto r = fba_run({f, "-o", out.string()});
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_EQ(r.output.find('\x1b'), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("fba-run: runtime_error: component 'bad' (examples.faulty) failed: bad\\x1b[2Jmsg"), std::string::npos)
+      << r.output;
+}
+
 TEST(Cli, ARestartThatRecoveredSucceedsAndTheLastLineCountsTheLostSamples) {
   const fs::path out = temp_dir("restart");
   const auto f = write_task("restart.yaml", R"(
@@ -229,7 +244,20 @@ TEST(CliMisbehaving, ExitZeroWhileLoadingThePluginExitsThree) {
   EXPECT_EQ(m.run.status, 3) << m.run.output;
   ASSERT_TRUE(m.summary.is_object()) << m.run.output;
   EXPECT_EQ(m.summary["phase"], "loading");
-  EXPECT_NE(reason(m).find("a plugin called exit() while loading"), std::string::npos) << reason(m);
+  // The plugin is named by its file, which is all a user has to find it.
+  EXPECT_NE(reason(m).find("the plugin " FBA_MISBEHAVING_PLUGIN_DIR), std::string::npos) << reason(m);
+  EXPECT_NE(reason(m).find(" called exit() while it was loaded"), std::string::npos) << reason(m);
+  EXPECT_FALSE(m.safe_state);  // nothing was constructed
+}
+
+TEST(CliMisbehaving, AFaultWhileLoadingThePluginExitsThreeNamingItsFile) {
+  const auto m = misbehave({}, kMisbehaving, {"FBA_TEST_SEGFAULT_IN_STATIC_INIT=1"});
+  EXPECT_EQ(m.run.status, 3) << m.run.output;
+  EXPECT_NE(m.run.output.find("fatal signal SIGSEGV while loading the plugin " FBA_MISBEHAVING_PLUGIN_DIR), std::string::npos)
+      << m.run.output;
+  ASSERT_TRUE(m.summary.is_object()) << m.run.output;
+  EXPECT_EQ(m.summary["phase"], "loading");
+  EXPECT_NE(reason(m).find("while loading the plugin " FBA_MISBEHAVING_PLUGIN_DIR), std::string::npos) << reason(m);
   EXPECT_FALSE(m.safe_state);  // nothing was constructed
 }
 

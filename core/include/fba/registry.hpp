@@ -138,6 +138,11 @@ class Registry {
   std::shared_ptr<const TypeEntry> resolve_composite(detail::CompositeSlot& slot) const;
 };
 
+// The plugin file whose code runs for the first time on the calling thread (dlopen, its static
+// initialisers, its specs), for crash and exit reports: a plugin that crashes or exits while it
+// loads is named. Null when none. Async-signal-safe: it only reads a thread-local pointer.
+const char* plugin_being_loaded() noexcept;
+
 // FBA_PLUGIN_PATH (colon-separated), then extra folders, then the plugins installed beside the
 // running executable (<prefix>/bin/../<libdir>/fba/plugins), which the build tree mirrors.
 std::vector<std::filesystem::path> plugin_search_path(const std::vector<std::filesystem::path>& extra = {});

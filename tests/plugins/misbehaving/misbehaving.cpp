@@ -5,7 +5,8 @@
 // Modes (after `after` good invocations): throw_exception, throw_int, throw_in_constructor_int,
 // segfault, block_process (ignores interrupt), block_safe_state (actuator), exit_zero,
 // never_finish (sensor: free-running, produces nothing). "none" behaves.
-// FBA_TEST_EXIT_IN_STATIC_INIT=1 in the environment makes the plugin call exit(0) while loading.
+// FBA_TEST_EXIT_IN_STATIC_INIT=1 in the environment makes the plugin call exit(0) while loading,
+// FBA_TEST_SEGFAULT_IN_STATIC_INIT=1 fault while loading (as a broken plugin's initialiser can).
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -19,8 +20,19 @@
 
 namespace {
 
-[[maybe_unused]] const bool exit_while_loading = [] {
-  if (const char* v = std::getenv("FBA_TEST_EXIT_IN_STATIC_INIT"); v && std::string(v) == "1") std::exit(0);
+// A real fault that the sanitizers do not take first (a null store is UB that UBSan stops at).
+void fault() {
+  void* page = mmap(nullptr, 4096, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  *static_cast<volatile int*>(page) = 1;
+}
+
+[[maybe_unused]] const bool misbehave_while_loading = [] {
+  auto set = [](const char* name) {
+    const char* v = std::getenv(name);
+    return v && std::string(v) == "1";
+  };
+  if (set("FBA_TEST_EXIT_IN_STATIC_INIT")) std::exit(0);
+  if (set("FBA_TEST_SEGFAULT_IN_STATIC_INIT")) fault();
   return true;
 }();
 
@@ -56,11 +68,7 @@ class Misbehaviour {
     if (count_++ < after_) return;
     if (mode_ == "throw_exception") throw std::runtime_error("misbehaving on purpose");
     if (mode_ == "throw_int") throw 42;
-    if (mode_ == "segfault") {
-      // A real fault that the sanitizers do not take first (a null store is UB that UBSan stops at).
-      void* page = mmap(nullptr, 4096, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-      *static_cast<volatile int*>(page) = 1;
-    }
+    if (mode_ == "segfault") fault();
     if (mode_ == "block_process") block_forever();
     if (mode_ == "exit_zero") std::exit(0);
   }
