@@ -504,7 +504,9 @@ int run(int argc, char** argv) {
       reason += (reason.empty() ? "" : "; ") + d.str();
     }
     if (interrupted_early(status)) return status;
-    const std::string error = write_summary(early_result(fba::Outcome::ConfigError, reason));
+    fba::RunResult r = early_result(fba::Outcome::ConfigError, reason);
+    if (const auto* c = dynamic_cast<const fba::ConstructionError*>(&e)) r.safe_states = c->safe_states();
+    const std::string error = write_summary(r);
     if (!error.empty()) std::cerr << "fba-run: could not write the summary " << error << "\n";
     return kConfigError;
   }
@@ -533,7 +535,8 @@ int run(int argc, char** argv) {
   status = result.exit_code();
   const std::string error = write_summary(result);
   std::cerr << "fba-run: " << fba::to_string(result.outcome) << ": " << fba::escape_controls(result.reason);
-  if (result.final_event && !result.final_event->payload.empty()) std::cerr << " (" << result.final_event->payload << ")";
+  if (result.final_event && !result.final_event->payload.empty())
+    std::cerr << " (" << fba::escape_controls(result.final_event->payload) << ")";
   if (result.lost_to_restarts > 0) {
     std::uint64_t restarts = 0;
     for (const auto& c : result.components) restarts += c.restarts;

@@ -579,15 +579,30 @@ void Graph::construct() {
       error = "it threw a non-exception (not derived from std::exception) from its constructor";
     }
     if (error.empty()) continue;
-    // The actuators created so far may already hold a device: they go to their safe state.
+    // The actuators created so far may already hold a device: they go to their safe state, and
+    // the results go with the error (the summary lists them as after a run).
     Watchdog safe;
-    for (auto& a : nodes)
-      if (a->spec.kind() == Kind::Actuator && a->current_component()) safe.start([a = a.get()] { a->safe_state(); });
+    std::vector<SafeStateResult> safe_states;
+    std::vector<std::pair<std::size_t, std::shared_ptr<SafeStateResult>>> started;  // index in safe_states, result
+    for (auto& a : nodes) {
+      if (a->spec.kind() != Kind::Actuator) continue;
+      safe_states.push_back({a->config.name, "not constructed", {}});
+      if (!a->current_component()) continue;
+      auto r = std::make_shared<SafeStateResult>();
+      started.emplace_back(safe_states.size() - 1, r);
+      safe.start([a = a.get(), r] { *r = a->safe_state(); });
+    }
     safe.wait_until(std::chrono::steady_clock::now() +
                     std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                         std::chrono::duration<double>(std::max(0.0, options.stop_grace_s))));
-    throw ConfigError({Diagnostic{n->config.where, "component '" + n->config.name + "' (" + n->spec.type_name() +
-                                                       ") refused its configuration: " + error}});
+    for (std::size_t k = 0; k < started.size(); ++k) {
+      auto& result = safe_states[started[k].first];
+      if (safe.returned(k)) result = *started[k].second;
+      else result = {result.component, "did not return", "safe_state() did not return within the stop grace"};
+    }
+    throw ConstructionError({Diagnostic{n->config.where, "component '" + n->config.name + "' (" + n->spec.type_name() +
+                                                             ") refused its configuration: " + error}},
+                            std::move(safe_states));
   }
 }
 

@@ -196,6 +196,10 @@ TEST(CliMisbehaving, AConstructorThrowingAnIntIsAConfigurationErrorAndEarlierAct
             std::string::npos)
       << reason(m);
   EXPECT_TRUE(m.safe_state);  // 'act' was constructed first
+  // And the summary says so, as after a run (it listed no safe state at all before).
+  const auto& safe = m.summary["safe_states"];
+  ASSERT_TRUE(safe.is_object() && safe.contains("act")) << m.summary.dump(2);
+  EXPECT_EQ(safe["act"].value("status", ""), "reached") << safe.dump(2);
 }
 
 TEST(CliMisbehaving, ASegfaultExitsThreeNamingTheComponentAfterTheSafeStates) {

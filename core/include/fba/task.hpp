@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fba/packet.hpp"
@@ -56,6 +57,19 @@ struct SafeStateResult {
   std::string component;
   std::string status;  // "reached", "failed", "did not return", "not constructed" ("not attempted": a forced exit)
   std::string message;
+};
+
+// A component refused its configuration while the task was built (Task's constructor): the
+// actuators constructed before it were sent to their safe states, with these results, one per
+// actuator of the task ("not constructed" for those that never were).
+class ConstructionError : public ConfigError {
+ public:
+  ConstructionError(std::vector<Diagnostic> diagnostics, std::vector<SafeStateResult> safe_states)
+      : ConfigError(std::move(diagnostics)), safe_states_(std::move(safe_states)) {}
+  const std::vector<SafeStateResult>& safe_states() const { return safe_states_; }
+
+ private:
+  std::vector<SafeStateResult> safe_states_;
 };
 
 struct ConnectionStats {
