@@ -25,7 +25,7 @@
 
 #include <boost/program_options.hpp>
 
-#include "fba/escape_controls.hpp"
+#include "fba/message_text.hpp"
 #include "fba/log.hpp"
 #include "fba/registry.hpp"
 #include "fba/task.hpp"
@@ -413,7 +413,7 @@ int run(int argc, char** argv) {
   if (!vm.count("task")) return usage_error("no task file given");
   // NaN compares false with everything: said, not taken as "no limit". Infinity and values beyond
   // the clock's range mean no limit (docs/task-files.md, limits).
-  if (!(timeout >= 0)) return usage_error("--timeout must be a number of seconds >= 0 (0: none); found " + std::to_string(timeout));
+  if (!(timeout >= 0)) return usage_error("--timeout must be a number of seconds >= 0 (0: none); found " + fba::number_text(timeout));
   if (!(stop_grace >= 0 && std::isfinite(stop_grace)))
     return usage_error("--stop-grace must be a finite number of seconds >= 0");
   if (!(dot_every >= 0 && dot_every <= 1e6)) return usage_error("--dot-every must be between 0 and 1e6 seconds");

@@ -6,6 +6,7 @@
 #include <queue>
 #include <thread>
 
+#include "fba/message_text.hpp"
 #include "graph.hpp"
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -140,7 +141,7 @@ class ThreadedExecutor final : public Executor {
       const auto now = Clock::now();
       if (limited && now >= deadline) {
         lock.unlock();
-        g_.request_stop(Outcome::RuntimeError, "timed out after " + std::to_string(g_.timeout_s) + " s");
+        g_.request_stop(Outcome::RuntimeError, "timed out after " + number_text(g_.timeout_s) + " s");
         lock.lock();
         continue;
       }
@@ -332,7 +333,7 @@ class DeterministicExecutor final : public Executor {
         cv_.wait(lock, woken);
       } else if (!cv_.wait_until(lock, deadline, woken)) {
         lock.unlock();
-        g_.request_stop(Outcome::RuntimeError, "timed out after " + std::to_string(g_.timeout_s) + " s");
+        g_.request_stop(Outcome::RuntimeError, "timed out after " + number_text(g_.timeout_s) + " s");
         lock.lock();
       }
     }
@@ -360,7 +361,7 @@ class DeterministicExecutor final : public Executor {
     const std::int64_t limit_ns = timeout_ns(g_);
     while (!g_.stopping()) {
       if (limit_ns != kNeverNs && (++steps & 255) == 0 && Clock::now() - wall_start > std::chrono::nanoseconds(limit_ns)) {
-        g_.request_stop(Outcome::RuntimeError, "timed out after " + std::to_string(g_.timeout_s) + " s");
+        g_.request_stop(Outcome::RuntimeError, "timed out after " + number_text(g_.timeout_s) + " s");
         break;
       }
       if (!queue_.empty()) {

@@ -7,7 +7,7 @@
 #include <system_error>
 #include <unordered_set>
 
-#include "fba/escape_controls.hpp"
+#include "fba/message_text.hpp"
 #include "fba/log.hpp"
 
 namespace fba::detail {

@@ -18,7 +18,7 @@
 #include <tuple>
 #include <utility>
 
-#include "fba/escape_controls.hpp"
+#include "fba/message_text.hpp"
 #include "fba/task_config.hpp"
 
 namespace fba {
@@ -1309,7 +1309,7 @@ class Loader {
 
   std::optional<Value> check_constraints(const ParamSpec& ps, Value v, const Location& where) {
     auto range_text = [&] {
-      return "[" + (ps.min ? fmt_num(*ps.min) : std::string("-inf")) + ", " + (ps.max ? fmt_num(*ps.max) : std::string("inf")) + "]";
+      return "[" + (ps.min ? number_text(*ps.min) : std::string("-inf")) + ", " + (ps.max ? number_text(*ps.max) : std::string("inf")) + "]";
     };
     auto in_range = [&](double x) { return (!ps.min || x >= *ps.min) && (!ps.max || x <= *ps.max); };
     if (auto* i = std::get_if<std::int64_t>(&v); i && !in_range(static_cast<double>(*i))) {
@@ -1317,13 +1317,13 @@ class Loader {
       return std::nullopt;
     }
     if (auto* d = std::get_if<double>(&v); d && !in_range(*d)) {
-      error(where, "parameter '" + ps.name + "' must be in " + range_text() + "; found " + fmt_num(*d));
+      error(where, "parameter '" + ps.name + "' must be in " + range_text() + "; found " + number_text(*d));
       return std::nullopt;
     }
     if (auto* l = std::get_if<std::vector<double>>(&v))
       for (double x : *l)
         if (!in_range(x)) {
-          error(where, "every element of parameter '" + ps.name + "' must be in " + range_text() + "; found " + fmt_num(x));
+          error(where, "every element of parameter '" + ps.name + "' must be in " + range_text() + "; found " + number_text(x));
           return std::nullopt;
         }
     if (auto* s = std::get_if<std::string>(&v); s && !ps.choices.empty() &&
@@ -1334,14 +1334,6 @@ class Loader {
     return v;
   }
 
-  // Numbers in messages are exact (the shortest text that reads back as the same double), so a
-  // value just outside a range never looks like the limit itself. Whole numbers print as such.
-  static std::string fmt_num(double d) {
-    if (std::isfinite(d) && d == std::trunc(d) && std::fabs(d) < 1e15) return std::to_string(static_cast<std::int64_t>(d));
-    char buf[32];
-    const auto r = std::to_chars(buf, buf + sizeof buf, d);
-    return std::string(buf, r.ptr);
-  }
 
   // Reads a component's params against its spec; fills defaults; applies --set overrides.
   std::map<std::string, Value> read_params(const std::string& full, const Spec& spec, const YAML::Node& params, const Source& src,
@@ -1619,13 +1611,13 @@ class Loader {
     else if (policy == "free") cc.trigger = {TriggerPolicy::Free, 0};
     else if (policy == "periodic") {
       if (!t.IsMap() || !t["period"]) {
-        error(at(src, t), "a periodic trigger needs period: SECONDS, in (0, " + fmt_num(kMaxPeriodSeconds) + "]");
+        error(at(src, t), "a periodic trigger needs period: SECONDS, in (0, " + number_text(kMaxPeriodSeconds) + "]");
         return;
       }
       const YAML::Node p = t["period"];
       const auto v = substituted(p, bindings, src);
       if (!v) return;
-      const std::string range = "(0, " + fmt_num(kMaxPeriodSeconds) + "] seconds";
+      const std::string range = "(0, " + number_text(kMaxPeriodSeconds) + "] seconds";
       const std::string text = v->IsScalar() ? v->Scalar() : node_kind(*v);
       double period = 0;
       if (!v->IsScalar() || !parse_double(text, period)) {

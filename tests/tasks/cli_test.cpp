@@ -116,6 +116,13 @@ TEST(Cli, ATimeoutThatIsNotANumberIsRefused) {
   const auto r = fba_run({task("chain.yaml"), "--timeout", "nan"});
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--timeout must be a number of seconds >= 0"), std::string::npos) << r.output;
+  // The value found is shown as given, not rounded to six decimals ("-0.250000", or "-0.000000"
+  // for a value that is not zero).
+  const auto small = fba_run({task("chain.yaml"), "--timeout", "-0.25"});
+  EXPECT_EQ(small.status, 2) << small.output;
+  EXPECT_NE(small.output.find("(0: none); found -0.25\n"), std::string::npos) << small.output;
+  const auto tiny = fba_run({task("chain.yaml"), "--timeout", "-1e-9"});
+  EXPECT_NE(tiny.output.find("found -1e-09\n"), std::string::npos) << tiny.output;
 }
 
 TEST(Cli, SigintAndSigtermStopInOrderWith130And143) {

@@ -1,4 +1,8 @@
-#include "fba/escape_controls.hpp"
+#include "fba/message_text.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
 
 namespace fba {
 
@@ -11,6 +15,13 @@ std::string escape_controls(const std::string& s) {
     else out += ch;
   }
   return out;
+}
+
+std::string number_text(double d) {
+  if (std::isfinite(d) && d == std::trunc(d) && std::fabs(d) < 1e15) return std::to_string(static_cast<std::int64_t>(d));
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, d);
+  return std::string(buf, r.ptr);
 }
 
 }  // namespace fba
