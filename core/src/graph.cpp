@@ -992,10 +992,11 @@ std::vector<StuckCall> Graph::stop() {
   auto start_safe_states = [&](bool even_running) {
     for (std::size_t i = 0; i < actuators.size(); ++i) {
       if (watch[i] != SIZE_MAX) continue;
-      // Not Running: no strand holds it, and a strand that starts now sees the stop first.
-      if (!even_running && (actuators[i]->state.load(std::memory_order_seq_cst) == Node::Running ||
-                            (interrupt_of[i] != SIZE_MAX && !interrupts.returned(interrupt_of[i]))))
-        continue;
+      // Neither Running nor RunningNotified (running, and notified during the call): no strand
+      // holds it, and a strand that starts now sees the stop first.
+      const int state = actuators[i]->state.load(std::memory_order_seq_cst);
+      const bool in_call = state == Node::Running || state == Node::RunningNotified;
+      if (!even_running && (in_call || (interrupt_of[i] != SIZE_MAX && !interrupts.returned(interrupt_of[i])))) continue;
       watch[i] = started_safe++;
       safe.start([n = actuators[i], r = results[i]] { *r = n->safe_state(); });
     }

@@ -181,6 +181,31 @@ class InterruptThenSafe final : public fba::Component {
   std::atomic<bool> interrupted_{false};
 };
 
+// An actuator whose safe_state() fails if it begins while process() runs: the stop must wait for
+// the call even when a producer notified the node during it (the node is then RunningNotified).
+std::atomic<int> g_overlap_checked_calls{0};
+
+class OverlapChecked final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::actuator("test.overlap_checked", "safe_state() fails if it begins during process().").add(kIn);
+  }
+  static constexpr fba::In<std::int64_t> kIn{"in", "anything"};
+  explicit OverlapChecked(fba::Context&) {}
+  void process() override {
+    in_process_ = true;
+    g_overlap_checked_calls.fetch_add(1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the producer notifies meanwhile; no bound is checked
+    in_process_ = false;
+  }
+  void safe_state() override {
+    if (in_process_) throw std::runtime_error("safe_state() began while process() was running");
+  }
+
+ private:
+  std::atomic<bool> in_process_{false};
+};
+
 // Free-running, produces nothing, never finishes.
 class Idle final : public fba::Component {
  public:
@@ -203,6 +228,7 @@ FBA_COMPONENT(ThrowingInterrupt);
 FBA_COMPONENT(AlwaysFails);
 FBA_COMPONENT(Idle);
 FBA_COMPONENT(InterruptThenSafe);
+FBA_COMPONENT(OverlapChecked);
 
 namespace {
 
@@ -299,6 +325,25 @@ connections: [ src.out -> act.in ]
   stopper.join();
   ASSERT_NE(safe_state_of(r, "act"), nullptr);
   EXPECT_EQ(safe_state_of(r, "act")->status, "reached") << safe_state_of(r, "act")->message;
+}
+
+// The stop found the node "not Running" while it ran a call it had been notified during, and
+// started safe_state() beside process() (a data race that ThreadSanitizer caught in CI).
+TEST_P(Shutdown, AnActuatorNotifiedDuringItsCallGoesSafeOnlyAfterTheCall) {
+  for (int run = 0; run < 3; ++run) {
+    fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 1000000000 } }
+  act: { type: test.overlap_checked }
+connections: [ src.out -> act.in ]
+)"),
+                   options(GetParam(), 30));
+    auto stopper = stop_when(task, g_overlap_checked_calls, g_overlap_checked_calls.load());
+    const auto r = task.run();
+    stopper.join();
+    ASSERT_NE(safe_state_of(r, "act"), nullptr);
+    EXPECT_EQ(safe_state_of(r, "act")->status, "reached") << safe_state_of(r, "act")->message;
+  }
 }
 
 TEST_P(Shutdown, ASafeStateThatNeverReturnsIsNamedAndTheOthersStillRun) {
