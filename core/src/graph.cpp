@@ -252,6 +252,13 @@ void Node::interrupt() {
   graph.record_event(Event{config.name, "error", error, graph.now_ns()});
 }
 
+namespace {
+// An actuator whose safe_state() was still running when the stop grace ran out.
+SafeStateResult safe_state_not_returned(const std::string& component) {
+  return {component, "did not return", "safe_state() did not return within the stop grace"};
+}
+}  // namespace
+
 SafeStateResult Node::safe_state() {
   SafeStateResult r{config.name, "not constructed", {}};
   auto c = current_component();
@@ -598,7 +605,7 @@ void Graph::construct() {
     for (std::size_t k = 0; k < started.size(); ++k) {
       auto& result = safe_states[started[k].first];
       if (safe.returned(k)) result = *started[k].second;
-      else result = {result.component, "did not return", "safe_state() did not return within the stop grace"};
+      else result = safe_state_not_returned(result.component);
     }
     throw ConstructionError({Diagnostic{n->config.where, "component '" + n->config.name + "' (" + n->spec.type_name() +
                                                              ") refused its configuration: " + error}},
@@ -1021,8 +1028,7 @@ std::vector<StuckCall> Graph::stop() {
       continue;
     }
     stuck.push_back({actuators[i]->config.name, actuators[i]->spec.type_name(), "safe_state()"});
-    safe_states.push_back(
-        {actuators[i]->config.name, "did not return", "safe_state() did not return within the stop grace"});
+    safe_states.push_back(safe_state_not_returned(actuators[i]->config.name));
   }
   if (!joined && stuck.empty()) stuck.push_back({"", "", "a runtime thread"});
   if (!stuck.empty()) abandoned.store(true);

@@ -58,6 +58,18 @@ double option_value(const std::string& name, const std::string& text, double lo,
   return v;
 }
 
+// Comma-separated whole numbers, each in [lo, hi], as option_value checks one.
+std::vector<int> option_list(const std::string& name, const std::string& text, double lo, double hi) {
+  std::vector<int> out;
+  std::size_t start = 0;
+  do {
+    const std::size_t comma = text.find(',', start);
+    out.push_back(int(option_value(name, text.substr(start, comma - start), lo, hi, true)));
+    start = comma == std::string::npos ? comma : comma + 1;
+  } while (start != std::string::npos);
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -68,22 +80,11 @@ int main(int argc, char** argv) {
   int detail_after_views = CarverParams{}.detail_after_views, detail_depth = CarverParams{}.detail_depth;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    // Comma-separated whole numbers in [lo, hi].
-    auto list = [&](const std::string& text, double lo, double hi) {
-      std::vector<int> out;
-      std::size_t start = 0;
-      do {
-        const std::size_t comma = text.find(',', start);
-        out.push_back(int(option_value(a, text.substr(start, comma - start), lo, hi, true)));
-        start = comma == std::string::npos ? comma : comma + 1;
-      } while (start != std::string::npos);
-      return out;
-    };
     if (a == "--repeat" && i + 1 < argc) repeat = int(option_value(a, argv[++i], 1, 1000, true));
     else if (a == "--threads" && i + 1 < argc) threads = int(option_value(a, argv[++i], 0, 256, true));
     else if (a == "--tolerance" && i + 1 < argc) tolerance = option_value(a, argv[++i], 0, 100, false);
     else if (a == "--detail" && i + 1 < argc) {
-      const std::vector<int> d = list(argv[++i], 0, 1000);  // the carver checks the depth against its own limits
+      const std::vector<int> d = option_list(a, argv[++i], 0, 1000);  // the carver checks the depth against its own limits
       if (d.size() != 2) {
         std::fprintf(stderr, "fba-carve-benchmark: --detail takes VIEWS,DEPTH; found '%s'\n", argv[i]);
         return 2;
@@ -91,7 +92,7 @@ int main(int argc, char** argv) {
       detail_after_views = d[0];
       detail_depth = d[1];
     }
-    else if (a == "--depths" && i + 1 < argc) depths = list(argv[++i], 1, 10);
+    else if (a == "--depths" && i + 1 < argc) depths = option_list(a, argv[++i], 1, 10);
     else if (a.rfind("-", 0) == 0) {
       const bool help = a == "--help" || a == "-h";
       std::fprintf(help ? stdout : stderr, "usage: fba-carve-benchmark [shared-data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX] [--detail VIEWS,DEPTH]\n");
