@@ -414,6 +414,9 @@ int run(int argc, char** argv) {
   // NaN compares false with everything: said, not taken as "no limit". Infinity and values beyond
   // the clock's range mean no limit (docs/task-files.md, limits).
   if (!(timeout >= 0)) return usage_error("--timeout must be a number of seconds >= 0 (0: none); found " + fba::number_text(timeout));
+  if (threads < 0 || threads > fba::kMaxThreads)
+    return usage_error("--threads must be in [0, " + std::to_string(fba::kMaxThreads) + "] (0: the task file's, else one per core); found " +
+                       std::to_string(threads));
   if (!(stop_grace >= 0 && std::isfinite(stop_grace)))
     return usage_error("--stop-grace must be a finite number of seconds >= 0");
   if (!(dot_every >= 0 && dot_every <= 1e6)) return usage_error("--dot-every must be between 0 and 1e6 seconds");
@@ -531,7 +534,7 @@ int run(int argc, char** argv) {
     dump_live_graph(none);
   }
   result.phase = st.signal_phase.load() ? st.signal_phase.load() : st.phase.load();
-  if (result.outcome == fba::Outcome::Interrupted) result.signal = st.signal.load();
+  result.signal = st.signal.load();  // also when the stop it asked for ended in another outcome
   status = result.exit_code();
   const std::string error = write_summary(result);
   std::cerr << "fba-run: " << fba::to_string(result.outcome) << ": " << fba::escape_controls(result.reason);

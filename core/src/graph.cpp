@@ -553,8 +553,8 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
   // Refused before any thread starts: past these the system runs out of threads, and a run
   // that fails half-started is worse than one that never starts.
   const Location task_location{config.file.empty() ? std::string("the task") : config.file.string()};
-  if (threads < 0 || threads > kMaxWorkers)
-    throw ConfigError({Diagnostic{task_location, "threads must be in [0, " + std::to_string(kMaxWorkers) +
+  if (threads < 0 || threads > kMaxThreads)
+    throw ConfigError({Diagnostic{task_location, "threads must be in [0, " + std::to_string(kMaxThreads) +
                                                     "] (0: one per core); found " + std::to_string(threads)}});
   if (kind == ExecutorKind::Threaded) {
     std::size_t dedicated = 0;
@@ -1054,7 +1054,9 @@ std::vector<StuckCall> Graph::stop() {
     std::snprintf(grace_text, sizeof grace_text, "%g", options.stop_grace_s);
     why += " within " + std::string(grace_text) + " s of the stop; left running";
     if (!result_.reason.empty()) why = result_.reason + "; then " + why;
-    result_.outcome = Outcome::RuntimeError;
+    // An interrupted run stays interrupted (130 or 143): a script that runs fba-run in a loop
+    // must see that its user stopped it. The reason names what was left running.
+    if (result_.outcome != Outcome::Interrupted) result_.outcome = Outcome::RuntimeError;
     result_.reason = why;
   }
   return stuck;

@@ -28,8 +28,6 @@ class Node;
 class Graph;
 
 // Limits the runtime enforces, documented in docs/task-files.md.
-constexpr int kMaxWorkers = 256;                       // worker threads of the threaded executor
-constexpr std::size_t kMaxDedicatedThreads = 1024;     // components with a thread of their own
 constexpr std::size_t kMaxEventPayload = 64 * 1024;    // bytes; longer payloads are truncated
 // Durations are int64 nanoseconds on the executor's clock; a period or a time-out longer than
 // this (about 285 years) means "never within this run". Kept below INT64_MAX so that adding it

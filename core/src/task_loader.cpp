@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "fba/message_text.hpp"
+#include "fba/task.hpp"
 #include "fba/task_config.hpp"
 
 namespace fba {
@@ -578,7 +579,7 @@ class Loader {
       else if (e == "deterministic") task.executor = ExecutorKind::Deterministic;
       else error(at(src, n), "executor '" + e + "' is not one of: threaded, deterministic");
     }
-    if (auto n = root["threads"]) task.threads = static_cast<int>(integer(n, src, "threads", 0, 256));
+    if (auto n = root["threads"]) task.threads = static_cast<int>(integer(n, src, "threads", 0, kMaxThreads));
     std::set<std::string> include_stack;
     std::error_code ec;
     if (!file.empty()) include_stack.insert(fs::weakly_canonical(file, ec).string());  // a task that includes itself
@@ -644,9 +645,6 @@ class Loader {
                                                   " (not shown; the first of them is here)"});
     return all;
   }
-
-  // Every thread of its own is a real thread: beyond this, creating them fails mid-start.
-  static constexpr std::size_t kMaxDedicatedThreads = 1024;
 
   void check_thread_limit(const TaskConfig& task) {
     std::vector<const ComponentConfig*> own;

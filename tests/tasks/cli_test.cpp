@@ -125,6 +125,20 @@ TEST(Cli, ATimeoutThatIsNotANumberIsRefused) {
   EXPECT_NE(tiny.output.find("found -1e-09\n"), std::string::npos) << tiny.output;
 }
 
+// An option is refused as the option, before anything loads: it was checked only when the task
+// started, and reported against the task file, which does not say --threads.
+TEST(Cli, ThreadsOutOfRangeIsRefusedAsTheOption) {
+  for (const char* value : {"-1", "257", "100000"}) {
+    const auto r = fba_run({task("chain.yaml"), "--threads", value});
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find(std::string("--threads must be in [0, 256] (0: the task file's, else one per core); found ") + value),
+              std::string::npos)
+        << r.output;
+  }
+  const auto ok = fba_run({task("chain.yaml"), "--threads", "256", "--check"});
+  EXPECT_EQ(ok.status, 0) << ok.output;
+}
+
 TEST(Cli, SigintAndSigtermStopInOrderWith130And143) {
   for (int sig : {SIGINT, SIGTERM}) {
     const fs::path out = temp_dir("sig");
@@ -300,6 +314,27 @@ TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
     EXPECT_EQ(summary["phase"], "running");
     EXPECT_EQ(summary["exit_code"], sig == SIGINT ? 130 : 143);
   }
+}
+
+// The user's signal decides the status even when a safe state then hangs: it exited 3, so a
+// script could not tell that its user stopped the run, and the summary had no 'signal'.
+TEST(CliMisbehaving, SigtermWhileASafeStateBlocksExits143NamingTheCall) {
+  const fs::path out = temp_dir("sigterm-safe-state");
+  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+             out.string(), "--set", "act.mode=block_safe_state", "--stop-grace", "0.2"});
+  ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
+  p.signal(SIGTERM);
+  const auto r = p.wait();
+  EXPECT_EQ(r.status, 143) << r.output;
+  const auto summary = nlohmann::json::parse(read_file(out / "summary.json"), nullptr, false);
+  ASSERT_TRUE(summary.is_object()) << r.output;
+  EXPECT_EQ(summary["outcome"], "interrupted");
+  EXPECT_EQ(summary["signal"], SIGTERM);
+  EXPECT_EQ(summary["exit_code"], 143);
+  const std::string why = summary.value("reason", "");
+  EXPECT_NE(why.find("interrupted by SIGTERM"), std::string::npos) << why;
+  EXPECT_NE(why.find("component 'act' (test.misbehaving_actuator) did not return from safe_state()"), std::string::npos) << why;
+  EXPECT_EQ(summary["safe_states"]["act"]["status"], "did not return");
 }
 
 TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) {

@@ -26,9 +26,14 @@ const char* to_string(Outcome o);
 // interrupted (143 when by SIGTERM: see RunResult::signal).
 int exit_code(Outcome o);
 
+// Thread limits, documented in docs/task-files.md: past them the system runs out of threads, and
+// a run that fails half-started is worse than one refused before it starts.
+constexpr int kMaxThreads = 256;                    // worker threads of the threaded executor
+constexpr std::size_t kMaxDedicatedThreads = 1024;  // components with a thread of their own
+
 struct RunOptions {
   std::optional<ExecutorKind> executor;  // overrides the task file
-  int threads = 0;                       // overrides the task file; 0 keeps it
+  int threads = 0;                       // overrides the task file; 0 keeps it; at most kMaxThreads
   std::filesystem::path output_dir;      // artefacts; empty for none
   double timeout_s = 0;                  // 0: no limit; beyond 9e9 s (or not finite), no limit either
   // After a stop: how long running components get to return (after interrupt()), and how long
