@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <fba/component.hpp>
+#include <fba/message_text.hpp>
 #include <fba/thread_pool.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/regions_of_interest.hpp>
@@ -29,7 +30,9 @@ class OctreeCarverFilter final : public fba::Component {
   static constexpr fba::OptionalIn<fba::RegionsOfInterest> kRegions{
       "regions", "where grasping needs detail (the grasp-specific criterion)"};
   static constexpr fba::Out<fba::Octree> kOctree{"octree", "the model after each update (immutable)"};
-  static constexpr auto kMaxDepth = fba::Param<int>("max_depth", 6, "deepest level of the octree (the root is level 0)").range(1, 12);
+  // 11 at most: depth 12's worst case (1.3 TB) is past the largest memory_budget_mib, so it could
+  // only ever be refused; 10 and 11 need the budget raised (the refusal gives the figure).
+  static constexpr auto kMaxDepth = fba::Param<int>("max_depth", 6, "deepest level of the octree (the root is level 0)").range(1, 11);
   static constexpr auto kMinNodeSize = fba::Param<double>("min_node_size", 0.0, "metres: nodes this small or smaller are not split").at_least(0);
   static constexpr auto kOccupancyThreshold = fba::Param<double>(
       "occupancy_threshold", 0.5,
@@ -96,6 +99,13 @@ class OctreeCarverFilter final : public fba::Component {
           if (!b.empty() && !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
             return std::string("bounds must be [xmin, ymin, zmin, xmax, ymax, zmax] with each min < its max");
           return std::string();
+        })
+        .check(kMaxDepth, [](const fba::ParamValues& p) {
+          // Refused at --check, with the figure, rather than when the carver is built.
+          const std::size_t need = fba::vision::worst_case_bytes(p(kMaxDepth)) >> 20;
+          if (double(need) <= p(kMemoryBudgetMiB)) return std::string();
+          return "max_depth " + std::to_string(p(kMaxDepth)) + " may need up to " + std::to_string(need) +
+                 " MiB, more than memory_budget_mib (" + fba::number_text(p(kMemoryBudgetMiB)) + "); raise it or lower max_depth";
         });
   }
 

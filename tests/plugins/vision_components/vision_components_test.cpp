@@ -277,6 +277,27 @@ TEST(OctreeCarver, BoundsOfTheWrongLengthFailTheCheckAtTheValue) {
   }
 }
 
+// A depth the memory budget cannot hold fails the check, with the figure, not when the carver is
+// built mid-run; 12 is past any budget, so the range stops at 11.
+TEST(OctreeCarver, ADepthPastTheMemoryBudgetFailsTheCheckWithTheFigure) {
+  fba::LoadOptions options;
+  options.require_inputs = false;
+  const auto check = [&](const std::string& params) {
+    try {
+      fba::load_task_text("components:\n  carve:\n    type: vision.octree_carver\n    params: " + params + "\n", "carve.yaml",
+                          fs::current_path(), registry(), options);
+      return std::string("accepted");
+    } catch (const fba::ConfigError& e) {
+      return e.diagnostics().at(0).str();
+    }
+  };
+  EXPECT_EQ(check("{ max_depth: 10 }"),
+            "carve.yaml:4:26: error: component 'carve' (vision.octree_carver): max_depth 10 may need up to 18724 MiB, more than "
+            "memory_budget_mib (4096); raise it or lower max_depth");
+  EXPECT_EQ(check("{ max_depth: 10, memory_budget_mib: 20000 }"), "accepted");
+  EXPECT_NE(check("{ max_depth: 12, memory_budget_mib: 1048576 }").find("must be in [1, 11]"), std::string::npos);
+}
+
 TEST(OctreeCarver, AnInvertedBoxFailsTheCheck) {
   EXPECT_THROW(ComponentHarness(registry(), "vision.octree_carver", {{"bounds", std::vector<double>{0, 0, 0, 1, -1, 1}}}),
                fba::ConfigError);
