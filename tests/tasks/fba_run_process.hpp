@@ -1,4 +1,4 @@
-// Runs the real fba-run binary from a test: its output to a file, signals, waits that poll
+// Runs the real fba-run binary (or another of the project's programs) from a test: its output to a file, signals, waits that poll
 // for a file or a line rather than a clock.
 #pragma once
 
@@ -49,14 +49,15 @@ class Process {
   // child. Before fba-run's first instruction the dynamic loader runs for a few milliseconds,
   // and a signal there ends any program by the default action; fba-run blocks them itself from
   // its first instruction on (.preinit_array), so this only closes the loader's window.
+  // `program`: fba-run unless another of the project's programs is tested (fba-inspect).
   explicit Process(std::vector<std::string> args, const std::vector<std::string>& env = {},
-                   bool signals_blocked = false) {
+                   bool signals_blocked = false, const char* program = FBA_RUN) {
     log_ = temp_dir("log") / "output.txt";
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 1, log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    args.insert(args.begin(), FBA_RUN);
+    args.insert(args.begin(), program);
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -75,7 +76,7 @@ class Process {
       posix_spawnattr_setsigmask(&attr, &mask);
       posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
     }
-    if (posix_spawn(&pid_, FBA_RUN, &actions, &attr, argv.data(), envp.data()) != 0) pid_ = 0;
+    if (posix_spawn(&pid_, program, &actions, &attr, argv.data(), envp.data()) != 0) pid_ = 0;
     posix_spawnattr_destroy(&attr);
     posix_spawn_file_actions_destroy(&actions);
   }

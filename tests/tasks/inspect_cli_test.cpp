@@ -1,0 +1,49 @@
+// fba-inspect's command-line contract: the same option checks as fba-run, a version, and the
+// data types' pages.
+#include <gtest/gtest.h>
+
+#include "tasks/fba_run_process.hpp"
+
+namespace {
+
+using namespace fba::test;
+
+Result inspect(std::vector<std::string> args) {
+  Process p(std::move(args), {}, false, FBA_INSPECT);
+  return p.wait();
+}
+
+TEST(InspectCli, PrintsItsVersion) {
+  const auto r = inspect({"--version"});
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.output.rfind("fba-inspect ", 0), 0u) << r.output;
+  EXPECT_EQ(r.output.back(), '\n');
+}
+
+// fba-run refused a plugin folder that does not exist while fba-inspect took it silently.
+TEST(InspectCli, APluginPathThatIsNotAFolderIsRefused) {
+  const fs::path file = temp_dir("inspect") / "plugin.txt";
+  std::ofstream(file) << "not a folder\n";
+  for (const std::string dir : {std::string("/nonexistent"), file.string()}) {
+    const auto r = inspect({"-p", dir});
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("fba-inspect: --plugin-path '" + dir + "' is not a folder"), std::string::npos) << r.output;
+  }
+}
+
+TEST(InspectCli, ShowsADataTypeWithItsLayoutAndWhereItIsDeclared) {
+  const auto r = inspect({"-p", FBA_TEST_PLUGIN_DIR, "fba.Octree"});
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.output.rfind("fba.Octree (data type)\n", 0), 0u) << r.output;
+  EXPECT_NE(r.output.find("layout: size "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("declared in: <fba/types/octree.hpp>"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("fba-vision.so"), std::string::npos) << r.output;  // a plugin that uses it
+}
+
+TEST(InspectCli, AnUnknownNameIsAnErrorThatSaysWhatWasLookedFor) {
+  const auto r = inspect({"-p", FBA_TEST_PLUGIN_DIR, "no.such"});
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("no component type or data type 'no.such'"), std::string::npos) << r.output;
+}
+
+}  // namespace
