@@ -3,8 +3,7 @@
 // surface points each one grazes in a new direction (the lines of sight that pin a contact down),
 // or when none does by the uncertain model nodes inside the regions each one sees, less the cost
 // of moving there, and emits the best as the camera's target pose, or no_view with the reason when
-// none is worth the move. With an
-// output folder, the model each plan was made on is written as exploration/model_<views>views.ply.
+// none is worth the move. (The models are written by grasp.synthesis, which analyses every one.)
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -24,7 +23,6 @@
 #include <fba/types/pose.hpp>
 #include <fba/types/regions_of_interest.hpp>
 #include <fba/vision/image_set.hpp>
-#include <fba/vision/octree_carver.hpp>
 
 #include "fba/grasp/exploration.hpp"
 
@@ -178,13 +176,6 @@ class ExplorationPlanner final : public fba::Component {
     const std::optional<Eigen::Isometry3d> current = current_ ? current_ : last_target_;
     const auto choice = fba::grasp::choose_view(model, regions, candidates_, current,
                                                 exclude_visited_ ? visited_ : std::vector<bool>{}, params_, taken_);
-    if (!ctx_.output_dir().empty()) {
-      const auto dir = ctx_.output_dir() / "exploration";
-      std::filesystem::create_directories(dir);
-      const auto ply = dir / ("model_" + std::to_string(model.views) + "views.ply");
-      fba::vision::write_ply(model, ply.string());
-      ctx_.log().info("wrote {}", ply.string());
-    }
     if (!choice.best) {
       ctx_.log().info("no view: {}", choice.reason);
       ctx_.emit(kNoView, nlohmann::json{{"reason", choice.reason}, {"views_requested", requested_}}.dump());

@@ -9,6 +9,7 @@
 #include <memory>
 #include <utility>
 #include <cstdio>
+#include <filesystem>
 #include <set>
 #include <string>
 #include <vector>
@@ -137,6 +138,7 @@ class GraspSynthesisFilter final : public fba::Component {
   void analyse(const fba::Octree& model) {
     const auto start = std::chrono::steady_clock::now();
     const int views = model.views;
+    write_model(model);
     const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_});
     if (surface.samples.empty())
       return fail("the model is empty after " + std::to_string(views) +
@@ -268,6 +270,22 @@ class GraspSynthesisFilter final : public fba::Component {
     write_pictures(g, ctx_(kOctree).get());
     ctx_(kGrasp).emit(std::move(g));
     done_ = true;
+  }
+
+  // With an output folder, every model analysed, as exploration/model_<views>views.ply: the loop's
+  // iterations, up to the model the grasp was selected on (or the search gave up on). A refined
+  // model of the same views replaces the file: the last one is what that view's decision used.
+  void write_model(const fba::Octree& model) {
+    if (ctx_.output_dir().empty()) return;
+    const auto dir = ctx_.output_dir() / "exploration";
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    const auto ply = dir / ("model_" + std::to_string(model.views) + "views.ply");
+    try {
+      fba::vision::write_ply(model, ply.string());
+    } catch (const std::exception& e) {  // an artefact lost is reported; the search goes on
+      ctx_.log().error("could not write {}: {}", ply.string(), e.what());
+    }
   }
 
   // With an output folder: the grasp drawn over the model and over the last camera image, both
