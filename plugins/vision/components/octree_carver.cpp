@@ -39,6 +39,11 @@ class OctreeCarverFilter final : public fba::Component {
       "generic criterion: split a node whose share of its projection inside the silhouette is above this in a view where "
       "it lies on the outline; 0: split every node on the outline (uniform detail), 1: never (only the grasp criteria split)")
                                                   .range(0, 1);
+  static constexpr auto kGenericDepth = fba::Param<int>(
+      "generic_depth", 19,
+      "the generic criterion splits only nodes shallower than this; deeper ones only where a grasp criterion asks (the "
+      "paper's scheme: generic for the initial analysis, grasp-specific for the detail); 19: at every depth")
+                                            .range(0, 19);
   static constexpr fba::Param<bool> kGraspContour{
       "grasp_contour", false,
       "grasp criterion without regions of interest: split a node whose projection holds a point of the outer or a hole's "
@@ -91,7 +96,7 @@ class OctreeCarverFilter final : public fba::Component {
   static fba::Spec spec() {
     return fba::Spec::filter("vision.octree_carver",
                              "Carves an octree model from silhouettes; refines where the occupancy or the grasp regions ask for it.")
-        .add(kSilhouette, kRegions, kOctree, kMaxDepth, kMinNodeSize, kOccupancyThreshold, kGraspContour, kCurvatureThreshold,
+        .add(kSilhouette, kRegions, kOctree, kMaxDepth, kMinNodeSize, kOccupancyThreshold, kGenericDepth, kGraspContour, kCurvatureThreshold,
              kSilhouetteTolerance, kCompareUniform, kBounds, kBoundsViews, kBoundsMargin, kDetailAfterViews, kDetailDepth,
              kMemoryBudgetMiB, kBoundsEstimated, kSuspectModel, kModelWarning, kDetail, kUpdated)
         .check(kBounds, [](const fba::ParamValues& p) {
@@ -120,6 +125,7 @@ class OctreeCarverFilter final : public fba::Component {
       // Uniform detail to the same depth: every node on the outline split, no grasp criteria.
       fba::vision::CarverParams p = carver_->params();
       p.occupancy_threshold = 0;
+      p.generic_depth = fba::vision::CarverParams{}.generic_depth;
       p.curvature_threshold = -std::numeric_limits<double>::infinity();
       uniform_.emplace(p);
     }
@@ -239,6 +245,7 @@ class OctreeCarverFilter final : public fba::Component {
     p.max_depth = ctx(kMaxDepth);
     p.min_node_size = ctx(kMinNodeSize);
     p.occupancy_threshold = ctx(kOccupancyThreshold);
+    p.generic_depth = ctx(kGenericDepth);
     if (ctx(kGraspContour)) p.curvature_threshold = ctx(kCurvatureThreshold);
     p.silhouette_tolerance = ctx(kSilhouetteTolerance);
     p.detail_after_views = ctx(kDetailAfterViews);

@@ -303,6 +303,8 @@ inline void check_params(const CarverParams& p) {
     throw std::invalid_argument("CarverParams.max_depth: expected 0..19, found " + std::to_string(p.max_depth));
   if (p.min_node_size < 0 || p.occupancy_threshold < 0 || p.occupancy_threshold > 1)
     throw std::invalid_argument("CarverParams: expected min_node_size >= 0 and occupancy_threshold in 0..1");
+  if (p.generic_depth < 0 || p.generic_depth >= kLatticeBits)
+    throw std::invalid_argument("CarverParams.generic_depth: expected 0..19, found " + std::to_string(p.generic_depth));
   if (p.detail_after_views < 0 || p.detail_depth < 0)
     throw std::invalid_argument("CarverParams: expected detail_after_views >= 0 and detail_depth >= 0");
   if (!(p.silhouette_tolerance >= 0 && p.silhouette_tolerance <= 64))

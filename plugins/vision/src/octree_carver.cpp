@@ -232,7 +232,7 @@ struct OctreeCarver::Impl {
     const bool full = min_occ >= 1;
     Split split = Split::No;
     if (!full && !at_resolution_limit(params, lattice, k.depth)) {
-      if (above) split = Split::Generic;
+      if (above && k.depth < params.generic_depth) split = Split::Generic;
       else if (curvature_hit || intersects_roi(roi, lattice, k)) split = Split::Grasp;
       if (nv < params.detail_after_views && k.depth >= params.detail_depth) split = Split::No;
     }

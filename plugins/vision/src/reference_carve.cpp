@@ -241,6 +241,7 @@ fba::Octree reference_carve(const std::vector<fba::Silhouette>& silhouettes, con
       }
       bool split = false, interest = false;
       if (!empty && lo < 1 && !carve.at_limit(k.depth)) {
+        generic = generic && k.depth < params.generic_depth;
         split = generic || grasp || carve.in_roi(k);
         interest = split && !generic;
         split = split && !(int(views.size()) < params.detail_after_views && k.depth >= params.detail_depth);

@@ -120,6 +120,53 @@ TEST(GenericCriterion, ThresholdOneNeverSplitsAndZeroSplitsTheOutline) {
   EXPECT_EQ(deepest, 5);
 }
 
+// The paper's scheme: the generic criterion for the coarse levels, the grasp criteria for the
+// detail. Below generic_depth only a region of interest splits, and the fast carver and the
+// reference agree on every leaf.
+TEST(GenericCriterion, BelowGenericDepthOnlyARegionOfInterestSplits) {
+  std::vector<fba::Silhouette> views;
+  for (double azimuth : {0.0, 60.0, 120.0}) {
+    fba::Silhouette s;
+    s.frame = camera_around(azimuth, 20);
+    s.mask = cv::Mat::zeros(480, 640, CV_8UC1);
+    cv::circle(s.mask, {320, 240}, 60, cv::Scalar(255), cv::FILLED);
+    views.push_back(s);
+  }
+  const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
+  CarverParams p;
+  p.max_depth = 6;
+  p.detail_after_views = 0;
+  p.occupancy_threshold = 0;
+  p.generic_depth = 3;
+  const auto deepest = [](const fba::Octree& t, const Eigen::AlignedBox3d& within) {
+    int d = 0;
+    t.for_each_leaf([&](const fba::OctreeCell& c) {
+      if (within.contains(c.centre)) d = std::max(d, c.depth);
+    });
+    return d;
+  };
+  const Eigen::AlignedBox3d everywhere(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1));
+  OctreeCarver coarse(p);
+  coarse.set_bounds(box);
+  coarse.add_views(views);
+  EXPECT_EQ(deepest(*coarse.snapshot(), everywhere), 3);
+
+  fba::RegionsOfInterest roi;
+  const Eigen::AlignedBox3d region(Eigen::Vector3d(0.0, -0.06, -0.06), Eigen::Vector3d(0.06, 0.06, 0.06));  // x > 0 only
+  roi.boxes.push_back(region);
+  OctreeCarver detailed(p);
+  detailed.set_bounds(box);
+  detailed.set_regions_of_interest(roi);
+  detailed.add_views(views);
+  const auto model = detailed.snapshot();
+  EXPECT_EQ(deepest(*model, region), 6);
+  const Eigen::AlignedBox3d outside(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(-0.016, 1, 1));  // beyond the region's reach
+  EXPECT_LE(deepest(*model, outside), 3);
+  const fba::Octree ref = reference_carve(views, box, p, roi);
+  EXPECT_EQ(count_leaf_mismatches(*model, ref), 0u);
+  EXPECT_EQ(count_leaf_mismatches(ref, *model), 0u);
+}
+
 // Between 0 and 1 the criterion uses the hull's share, and the fast carver and the reference
 // (which finds the projection by casting rays through the cube) agree on every leaf.
 TEST(GenericCriterion, FastCarverAndReferenceAgreeAtAThresholdBetween) {

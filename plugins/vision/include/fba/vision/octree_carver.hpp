@@ -76,6 +76,10 @@ struct CarverParams {
   // outside the silhouette wherever they meet its outline stay coarse, so that a grasp criterion
   // decides where detail goes; 1 switches it off.
   double occupancy_threshold = 0.0;
+  // The generic criterion splits only nodes shallower than this; deeper ones are split only where
+  // a grasp criterion asks. The paper's scheme: the generic criterion for the initial analysis,
+  // the grasp-specific one for the detail. 19 (default): the generic criterion at every depth.
+  int generic_depth = 19;
   // Grasp criterion on the contour: split where a point of the outer or a hole's contour with
   // curvature (1/px, convex > 0) below this falls in the node's rectangle. -infinity (default)
   // switches it off.
