@@ -386,7 +386,7 @@ int run(int argc, char** argv) {
       "stop-grace", po::value(&stop_grace),
       "seconds that components get to return after a stop, and each actuator's safe state (default 5)")(
       "executor,e", po::value(&executor), "threaded or deterministic (overrides the task file)")(
-      "threads", po::value(&threads), "worker threads of the threaded executor (default: one per core)")(
+      "threads", po::value(&threads), "worker threads of the threaded executor, 0 to 256 (default: the task file's, else one per core)")(
       "log-level", po::value(&log_level), "trace, debug, info, warn, error, critical, off");
   po::options_description hidden;
   hidden.add_options()("task", po::value<std::string>(), "task file");
