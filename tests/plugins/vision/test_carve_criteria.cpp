@@ -33,6 +33,19 @@ std::shared_ptr<fba::Frame> camera_around(double azimuth, double elevation) {
   return f;
 }
 
+// Three views 60 degrees apart of a disc-shaped silhouette, 120 px across.
+std::vector<fba::Silhouette> disc_views() {
+  std::vector<fba::Silhouette> views;
+  for (double azimuth : {0.0, 60.0, 120.0}) {
+    fba::Silhouette s;
+    s.frame = camera_around(azimuth, 20);
+    s.mask = cv::Mat::zeros(480, 640, CV_8UC1);
+    cv::circle(s.mask, {320, 240}, 60, cv::Scalar(255), cv::FILLED);
+    views.push_back(s);
+  }
+  return views;
+}
+
 // The root node of a 10 cm cube at the origin.
 const Lattice kCube{Eigen::Vector3d::Constant(-0.05), 0.1};
 
@@ -93,14 +106,7 @@ TEST(HullShare, OfAHalfCoveredNodeIsAboutOneHalf) {
 // Occupancy threshold 1 switches the generic criterion off: without a grasp criterion the root
 // is never split. Threshold 0 splits every node on the outline.
 TEST(GenericCriterion, ThresholdOneNeverSplitsAndZeroSplitsTheOutline) {
-  std::vector<fba::Silhouette> views;
-  for (double azimuth : {0.0, 60.0, 120.0}) {
-    fba::Silhouette s;
-    s.frame = camera_around(azimuth, 20);
-    s.mask = cv::Mat::zeros(480, 640, CV_8UC1);
-    cv::circle(s.mask, {320, 240}, 60, cv::Scalar(255), cv::FILLED);
-    views.push_back(s);
-  }
+  const std::vector<fba::Silhouette> views = disc_views();
   const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
   CarverParams p;
   p.max_depth = 5;
@@ -124,14 +130,7 @@ TEST(GenericCriterion, ThresholdOneNeverSplitsAndZeroSplitsTheOutline) {
 // detail. Below generic_depth only a region of interest splits, and the fast carver and the
 // reference agree on every leaf.
 TEST(GenericCriterion, BelowGenericDepthOnlyARegionOfInterestSplits) {
-  std::vector<fba::Silhouette> views;
-  for (double azimuth : {0.0, 60.0, 120.0}) {
-    fba::Silhouette s;
-    s.frame = camera_around(azimuth, 20);
-    s.mask = cv::Mat::zeros(480, 640, CV_8UC1);
-    cv::circle(s.mask, {320, 240}, 60, cv::Scalar(255), cv::FILLED);
-    views.push_back(s);
-  }
+  const std::vector<fba::Silhouette> views = disc_views();
   const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
   CarverParams p;
   p.max_depth = 6;
