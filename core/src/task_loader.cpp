@@ -573,12 +573,7 @@ class Loader {
     report_mappings(root, src);
     check_keys(root, src, {"task", "doc", "executor", "threads", "include", "params", "profile", "components", "connections", "on"});
     if (auto n = root["task"]) task.name = scalar(n, src, "the task's name");
-    if (auto n = root["executor"]) {
-      const std::string e = scalar(n, src, "the executor");
-      if (e == "threaded") task.executor = ExecutorKind::Threaded;
-      else if (e == "deterministic") task.executor = ExecutorKind::Deterministic;
-      else error(at(src, n), "executor '" + e + "' is not one of: threaded, deterministic");
-    }
+    if (auto n = root["executor"]) read_executor(n, src, task);
     if (auto n = root["threads"]) task.threads = static_cast<int>(integer(n, src, "threads", 0, kMaxThreads));
     std::set<std::string> include_stack;
     std::error_code ec;
@@ -752,6 +747,13 @@ class Loader {
   }
 
   // Finds and reads the profile (--profile, else the task's `profile:`); a task with slots needs one.
+  void read_executor(const YAML::Node& n, const Source& src, TaskConfig& task) {
+    const std::string e = scalar(n, src, "the executor");
+    if (e == "threaded") task.executor = ExecutorKind::Threaded;
+    else if (e == "deterministic") task.executor = ExecutorKind::Deterministic;
+    else error(at(src, n), "executor '" + e + "' is not one of: threaded, deterministic");
+  }
+
   void load_profile(const YAML::Node& root, const Source& src, TaskConfig& task) {
     std::string name = profile_option_;
     Location where{"--profile " + name, 0, 0};
@@ -789,11 +791,14 @@ class Loader {
     for (auto& x : parse_errors) error(x.where, x.message);
     if (!doc) return;
     if (!doc->IsMap()) {
-      error(Location{shown, 1, 1}, std::string("a profile is a mapping with the keys profile, doc, params, components; found ") + node_kind(*doc));
+      error(Location{shown, 1, 1}, std::string("a profile is a mapping with the keys profile, doc, executor, params, components; found ") + node_kind(*doc));
       return;
     }
     report_mappings(*doc, psrc);
-    check_keys(*doc, psrc, {"profile", "doc", "params", "components"});
+    check_keys(*doc, psrc, {"profile", "doc", "executor", "params", "components"});
+    // The devices a profile binds decide whether a virtual clock is valid (simulated ones: it is),
+    // so its executor overrides the task file's; --executor overrides both.
+    if (auto n = (*doc)["executor"]) read_executor(n, psrc, task);
     const YAML::Node comps = (*doc)["components"];
     if (comps && !comps.IsMap()) {
       error(at(psrc, comps), std::string("components of a profile: a mapping slot: {type: ..., params: ...}; found ") + node_kind(comps));

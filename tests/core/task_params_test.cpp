@@ -221,6 +221,20 @@ components:
   EXPECT_EQ(by_path.profile, "pass");
 }
 
+// Simulated devices make a virtual clock valid, real ones do not: the profile's executor
+// overrides the task file's (--executor, a RunOptions field, overrides both).
+TEST(Profiles, AProfileChoosesTheExecutorForTheDevicesItBinds) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", std::string(kSlotTask) + "executor: threaded\n");
+  dir.write("profiles/pass.yaml", kPassProfile);
+  dir.write("profiles/virtual.yaml", std::string(kPassProfile) + "executor: deterministic\n");
+  EXPECT_EQ(fba::load_task(file, fba::test::registry(), with_sets({}, "pass")).executor, fba::ExecutorKind::Threaded);
+  EXPECT_EQ(fba::load_task(file, fba::test::registry(), with_sets({}, "virtual")).executor, fba::ExecutorKind::Deterministic);
+  dir.write("profiles/bad.yaml", std::string(kPassProfile) + "executor: realtime\n");
+  const std::string e = load_errors(file, with_sets({}, "bad"));
+  EXPECT_NE(e.find("profiles/bad.yaml:6:11: error: executor 'realtime' is not one of: threaded, deterministic"), std::string::npos) << e;
+}
+
 TEST(Profiles, ATaskWithSlotsAndNoProfileNamesTheProfilesBesideIt) {
   TempDir dir;
   const auto file = dir.write("task.yaml", kSlotTask);
