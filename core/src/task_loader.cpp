@@ -746,7 +746,7 @@ class Loader {
     return slots;
   }
 
-  // Finds and reads the profile (--profile, else the task's `profile:`); a task with slots needs one.
+  // `executor:` of a task file or of a profile.
   void read_executor(const YAML::Node& n, const Source& src, TaskConfig& task) {
     const std::string e = scalar(n, src, "the executor");
     if (e == "threaded") task.executor = ExecutorKind::Threaded;
@@ -754,6 +754,7 @@ class Loader {
     else error(at(src, n), "executor '" + e + "' is not one of: threaded, deterministic");
   }
 
+  // Finds and reads the profile (--profile, else the task's `profile:`); a task with slots needs one.
   void load_profile(const YAML::Node& root, const Source& src, TaskConfig& task) {
     std::string name = profile_option_;
     Location where{"--profile " + name, 0, 0};
