@@ -15,6 +15,7 @@
 #include <fstream>
 #include <string>
 #include <vector>
+#include "support/build_paths.hpp"
 
 extern char** environ;
 
@@ -22,8 +23,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kBrokenDir = FBA_BROKEN_TASKS_DIR;
-const fs::path kExampleDir = FBA_EXAMPLE_TASKS_DIR;
+const fs::path kBrokenDir = fba::test::source_dir() + "/tests/broken_tasks";
+const fs::path kExampleDir = fba::test::tasks_dir() + "/examples";
 
 struct Outcome {
   int wait_status = 0;
@@ -40,7 +41,7 @@ Outcome check(const fs::path& file) {
   posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDERR_FILENO);
   posix_spawn_file_actions_addclose(&actions, pipe_fds[0]);
   posix_spawn_file_actions_addclose(&actions, pipe_fds[1]);
-  std::string exe = FBA_RUN, flag = "--check", task = file.string();
+  std::string exe = fba::test::program("fba-run"), flag = "--check", task = file.string();
   char* argv[] = {exe.data(), flag.data(), task.data(), nullptr};
   pid_t pid = 0;
   const int rc = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv, environ);

@@ -13,6 +13,7 @@
 
 #include "fba/registry.hpp"
 #include "fba/task_config.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -22,7 +23,7 @@ namespace fs = std::filesystem;
 const fba::Registry& registry() {
   static const fba::Registry r = [] {
     fba::Registry reg;
-    for (const auto& e : reg.load_path({FBA_TEST_PLUGIN_DIR})) ADD_FAILURE() << e.what();
+    for (const auto& e : reg.load_path({fba::test::plugin_dir()})) ADD_FAILURE() << e.what();
     return reg;
   }();
   return r;
@@ -30,7 +31,7 @@ const fba::Registry& registry() {
 
 std::vector<std::string> corpus() {
   std::vector<std::string> files;
-  for (const auto& e : fs::directory_iterator(FBA_FUZZ_CORPUS_DIR))
+  for (const auto& e : fs::directory_iterator(fba::test::source_dir() + "/tests/fuzz/corpus"))
     if (e.is_regular_file()) files.push_back(e.path().filename().string());
   std::sort(files.begin(), files.end());
   return files;
@@ -39,12 +40,12 @@ std::vector<std::string> corpus() {
 class FuzzCorpus : public testing::TestWithParam<std::string> {};
 
 TEST_P(FuzzCorpus, LoadsOrIsRefusedWithEveryErrorPlaced) {
-  std::ifstream in(fs::path(FBA_FUZZ_CORPUS_DIR) / GetParam(), std::ios::binary);
+  std::ifstream in(fs::path(fba::test::source_dir() + "/tests/fuzz/corpus") / GetParam(), std::ios::binary);
   std::stringstream text;
   text << in.rdbuf();
   try {
     // Relative to the broken-task corpus, as in the fuzz target, so that includes reach its composites.
-    fba::load_task_text(text.str(), "fuzz.yaml", FBA_BROKEN_TASKS_DIR, registry());
+    fba::load_task_text(text.str(), "fuzz.yaml", fba::test::source_dir() + "/tests/broken_tasks", registry());
   } catch (const fba::ConfigError& e) {
     for (const auto& d : e.diagnostics()) EXPECT_GT(d.where.line, 0) << d.str();
   }

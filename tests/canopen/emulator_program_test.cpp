@@ -15,6 +15,7 @@
 #include "fba/canopen/cia402.hpp"
 #include "fba/canopen/master.hpp"
 #include "support/child_process.hpp"
+#include "support/build_paths.hpp"
 
 using namespace std::chrono_literals;
 
@@ -24,7 +25,7 @@ namespace {
 
 // Starts the emulator with `extra` options and returns it with the terminal's path.
 std::pair<std::unique_ptr<Child>, std::string> start_emulator(std::vector<std::string> extra = {}) {
-  std::vector<std::string> args{FBA_CANOPEN_EMULATOR, "--nodes", "1,2", "--heartbeat-ms", "20"};
+  std::vector<std::string> args{fba::test::program("fba-canopen-arm-emulator"), "--nodes", "1,2", "--heartbeat-ms", "20"};
   args.insert(args.end(), extra.begin(), extra.end());
   auto child = std::make_unique<Child>(args);
   const std::string out = child->read_until("\n", 10s);
@@ -85,14 +86,14 @@ TEST(CanopenArmEmulatorProgram, ADisconnectMidMotionIsABusErrorAndTheEmulatorEnd
 
 TEST(FbaCanopenCommand, MovesADriveAndReportsAnAbortByName) {
   auto [emulator, path] = start_emulator();
-  Child move({FBA_CANOPEN_TOOL, "--bus", "slcan:" + path, "move", "1", "4000", "400000"});
+  Child move({fba::test::program("fba-canopen"), "--bus", "slcan:" + path, "move", "1", "4000", "400000"});
   EXPECT_EQ(move.wait(0, 30s), 0) << move.read_until("", 0ms);
   EXPECT_NE(move.read_until("", 0ms).find("node 1: at 4000"), std::string::npos) << move.read_until("", 0ms);
-  Child read({FBA_CANOPEN_TOOL, "--bus", "slcan:" + path, "read", "1", "2000"});
+  Child read({fba::test::program("fba-canopen"), "--bus", "slcan:" + path, "read", "1", "2000"});
   EXPECT_EQ(read.wait(0, 30s), 1);
   EXPECT_NE(read.read_until("", 0ms).find("0x06020000 (object does not exist"), std::string::npos)
       << read.read_until("", 0ms);
-  Child bad({FBA_CANOPEN_TOOL, "--bus", "slcan:" + path, "read", "200", "1000"});
+  Child bad({fba::test::program("fba-canopen"), "--bus", "slcan:" + path, "read", "200", "1000"});
   EXPECT_EQ(bad.wait(0, 30s), 2);
   EXPECT_NE(bad.read_until("", 0ms).find("node id '200'"), std::string::npos) << bad.read_until("", 0ms);
 }

@@ -10,6 +10,7 @@
 #include <fba/task_config.hpp>
 
 #include "test_components.hpp"
+#include "support/build_paths.hpp"
 
 using fba::test::load;
 
@@ -147,7 +148,7 @@ TEST(Loader, RequiredParametersMustBeGiven) {
 TEST(Loader, RelativePathsResolveAgainstTheTaskFile) {
   const auto task = load("components:\n  r: { type: test.reader, params: { file: loader_test.cpp } }\n");
   const std::string path = std::get<std::string>(task.find("r")->params.at("file"));
-  EXPECT_EQ(path, (std::filesystem::path(FBA_TEST_SOURCE_DIR) / "loader_test.cpp").string());
+  EXPECT_EQ(path, (std::filesystem::path(fba::test::source_dir() + "/tests/core") / "loader_test.cpp").string());
   EXPECT_NE(errors_of("components:\n  r: { type: test.reader, params: { file: nowhere.txt } }\n").find("does not exist"), std::string::npos);
 }
 

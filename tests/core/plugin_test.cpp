@@ -18,6 +18,7 @@
 #include "plugin_manifest.hpp"
 #include "support/temp_dir.hpp"
 #include "test_components.hpp"
+#include "support/build_paths.hpp"
 
 namespace fs = std::filesystem;
 
@@ -33,8 +34,8 @@ std::string refusal(const std::string& file, fba::Registry& r) {
   return "";
 }
 
-std::string bad(const std::string& name) { return std::string(FBA_BAD_PLUGIN_DIR) + "/" + name + ".so"; }
-std::string examples() { return std::string(FBA_TEST_PLUGIN_DIR) + "/fba-examples.so"; }
+std::string bad(const std::string& name) { return fba::test::binary_dir() + "/tests/core/bad_plugins/" + name + ".so"; }
+std::string examples() { return fba::test::plugin_dir() + "/fba-examples.so"; }
 
 // A fresh folder per call, removed when the test ends.
 fs::path temp_dir() { return fba::test::TempDir::until_exit(); }
@@ -246,7 +247,7 @@ TEST(Plugin, APluginForAnotherArchitectureSaysWhich) {
 
 TEST(Plugin, LoadPathReportsEveryFailureAndKeepsTheGoodOnes) {
   fba::Registry r;
-  const auto errors = r.load_path({FBA_TEST_PLUGIN_DIR, FBA_BAD_PLUGIN_DIR});
+  const auto errors = r.load_path({fba::test::plugin_dir(), fba::test::binary_dir() + "/tests/core/bad_plugins"});
   EXPECT_GE(errors.size(), 5u);
   EXPECT_NE(r.find("examples.passthrough"), nullptr);
 }
@@ -256,7 +257,7 @@ TEST(Plugin, ABrokenPluginFailsOnlyTheTasksThatNeedIt) {
   const fs::path so = copy_plugin(bad("static_marker"), dir);
   edit_manifest(so, [](auto& m) { m.abi_version = 999; });
   fba::Registry r;
-  EXPECT_EQ(r.load_path({FBA_TEST_PLUGIN_DIR, dir}).size(), 1u);
+  EXPECT_EQ(r.load_path({fba::test::plugin_dir(), dir}).size(), 1u);
   const auto ok = fba::load_task_text("components:\n  c: { type: examples.counter, params: { count: 3 } }\n", "t.yaml", ".", r);
   EXPECT_EQ(ok.components.size(), 1u);
   try {
@@ -278,7 +279,7 @@ TEST(Plugin, CheckingATaskMapsOnlyThePluginsItUses) {
   EXPECT_TRUE(r.load_path({dir}).empty());
   EXPECT_EQ(r.plugins().size(), 3u);
   EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{});
-  fba::load_task(fs::path(FBA_TASKS_DIR) / "examples/chain.yaml", r);
+  fba::load_task(fs::path(fba::test::tasks_dir()) / "examples/chain.yaml", r);
   EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{"fba-examples.so"});
 }
 
@@ -294,7 +295,7 @@ TEST(Plugin, CheckingACompositeTaskMapsOnlyThePluginsItsComponentsUse) {
   // whose inner type comes from a plugin the task does not use: that plugin's code never runs.
   const fs::path dir = temp_dir();
   copy_plugin(examples(), dir);
-  fs::copy_file(fs::path(FBA_TEST_PLUGIN_DIR) / "relay.yaml", dir / "relay.yaml");
+  fs::copy_file(fs::path(fba::test::plugin_dir()) / "relay.yaml", dir / "relay.yaml");
   copy_plugin(bad("static_marker"), dir);
   write_marker_composite(dir);
   const fs::path marker = dir / "marker";
@@ -302,7 +303,7 @@ TEST(Plugin, CheckingACompositeTaskMapsOnlyThePluginsItsComponentsUse) {
   fba::Registry r;
   EXPECT_TRUE(r.load_path({dir}).empty());
   EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{}) << "reading the path ran plugin code";
-  const auto task = fba::load_task(fs::path(FBA_TASKS_DIR) / "examples/composite.yaml", r);
+  const auto task = fba::load_task(fs::path(fba::test::tasks_dir()) / "examples/composite.yaml", r);
   EXPECT_EQ(task.components.size(), 8u);  // the relays' passthroughs, expanded
   EXPECT_EQ(mapped_plugins(dir), std::set<std::string>{"fba-examples.so"});
   EXPECT_FALSE(fs::exists(marker)) << "a plugin that only an unused composite needs was loaded";
@@ -317,10 +318,10 @@ TEST(Plugin, ACompositeOverABrokenPluginFailsOnlyTheTasksThatUseIt) {
   edit_manifest(so, [](auto& m) { m.abi_version = 999; });
   write_marker_composite(dir);
   fba::Registry r;
-  const auto errors = r.load_path({FBA_TEST_PLUGIN_DIR, dir});
+  const auto errors = r.load_path({fba::test::plugin_dir(), dir});
   ASSERT_EQ(errors.size(), 1u);  // the plugin; the composite is not read until a task uses it
   EXPECT_EQ(errors[0].file(), so.string());
-  EXPECT_EQ(fba::load_task(fs::path(FBA_TASKS_DIR) / "examples/composite.yaml", r).components.size(), 8u);
+  EXPECT_EQ(fba::load_task(fs::path(fba::test::tasks_dir()) / "examples/composite.yaml", r).components.size(), 8u);
   try {
     fba::load_task_text("components:\n  s: { type: test.marker_source }\n", "t.yaml", dir, r);
     FAIL() << "a task using a composite over the broken plugin was accepted";

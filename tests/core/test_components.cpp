@@ -5,6 +5,7 @@
 #include <mutex>
 
 #include <fba/component.hpp>
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -220,7 +221,7 @@ const Registry& registry() {
   static const Registry* r = [] {
     auto* reg = new Registry;
     reg->add_builtin(detail::plugin_entries(), "the test program");
-    const auto errors = reg->load_path({FBA_TEST_PLUGIN_DIR});
+    const auto errors = reg->load_path({fba::test::plugin_dir()});
     for (const auto& e : errors) throw e;
     return reg;
   }();
@@ -228,7 +229,7 @@ const Registry& registry() {
 }
 
 TaskConfig load(const std::string& yaml, const LoadOptions& options) {
-  return load_task_text(yaml, "test.yaml", FBA_TEST_SOURCE_DIR, registry(), options);
+  return load_task_text(yaml, "test.yaml", fba::test::source_dir() + "/tests/core", registry(), options);
 }
 
 std::vector<std::int64_t> ints(const std::vector<Packet>& packets) {

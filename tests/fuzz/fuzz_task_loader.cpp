@@ -9,6 +9,7 @@
 
 #include "fba/registry.hpp"
 #include "fba/task_config.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -18,7 +19,7 @@ const fba::Registry& registry() {
   static const fba::Registry r = [] {
     fba::Registry reg;
     reg.add_builtin(fba::detail::plugin_entries());
-    fba::register_composite_file(reg, FBA_FUZZ_RELAY_YAML);
+    fba::register_composite_file(reg, fba::test::source_dir() + "/plugins/examples/relay.yaml");
     return reg;
   }();
   return r;
@@ -31,7 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     // Relative to the broken-task corpus, so that includes reach its helper composites (every
     // kind of parameter, and broken definitions).
-    fba::load_task_text(text, "fuzz.yaml", FBA_FUZZ_TASK_DIR, registry());
+    fba::load_task_text(text, "fuzz.yaml", fba::test::source_dir() + "/tests/broken_tasks", registry());
   } catch (const fba::ConfigError& e) {
     // The loader's promise: every error says where. One without a line is a finding too.
     for (const auto& d : e.diagnostics())

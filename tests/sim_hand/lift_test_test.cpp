@@ -11,6 +11,7 @@
 #include "fba/geometry/mesh_io.hpp"
 #include "lift_test.hpp"
 #include "ring_grasp.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -19,7 +20,7 @@ using fba::sim_hand::LiftTestError;
 using fba::sim_hand::LiftTestParams;
 using fba::sim_hand::ObjectPlacement;
 
-const std::string kCan = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMasterChefCan/model.obj";
+const std::string kCan = fba::test::shared_data_dir() + "/ycb/YcbMasterChefCan/model.obj";
 constexpr double kDegree = M_PI / 180;
 
 const fba::TriangleMesh& can() {
@@ -201,7 +202,7 @@ TEST(LiftTest, HandModelWithoutTheHandsPartsSaysWhichIsMissing) {
 }
 
 TEST(LiftTest, BuiltInHandModelIsTheModelFile) {
-  std::ifstream in(std::string(FBA_SOURCE_DIR) + "/hardware/robots/three_finger_hand.xml");
+  std::ifstream in(fba::test::source_dir() + "/hardware/robots/three_finger_hand.xml");
   ASSERT_TRUE(in);
   std::stringstream text;
   text << in.rdbuf();

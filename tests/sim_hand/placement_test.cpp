@@ -14,12 +14,13 @@
 #include "fba/geometry/viewpoints.hpp"
 #include "object_placement.hpp"
 #include "support/built_plugins.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
 using fba::testing::ComponentHarness;
 
-const std::string kCan = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMasterChefCan/model.obj";
+const std::string kCan = fba::test::shared_data_dir() + "/ycb/YcbMasterChefCan/model.obj";
 
 // The object's box in the image sim.camera renders from above the table, and the box of the
 // placed mesh's vertices projected with the same camera.

@@ -17,12 +17,13 @@
 #include "ring_grasp.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
 using fba::testing::ComponentHarness;
 
-const std::string kCan = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMasterChefCan/model.obj";
+const std::string kCan = fba::test::shared_data_dir() + "/ycb/YcbMasterChefCan/model.obj";
 
 // The ring grasp on the can as sim.hand places it (at x, y, yaw degrees).
 fba::Grasp can_grasp(double x, double y, double yaw_deg, double thumb_deg) {

@@ -15,6 +15,7 @@
 #include "fba/vision/octree_carver.hpp"
 
 #include "support/built_plugins.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -25,7 +26,7 @@ fba::RunResult run(const std::string& task, std::vector<std::string> overrides, 
   for (auto& s : overrides) lo.overrides.push_back({s});
   o.executor = fba::ExecutorKind::Deterministic;
   o.timeout_s = 300;
-  fba::Task t(fba::load_task(std::string(FBA_TASKS_DIR) + "/" + task, registry(), lo), o);
+  fba::Task t(fba::load_task(fba::test::tasks_dir() + "/" + task, registry(), lo), o);
   return t.run();
 }
 
@@ -96,7 +97,7 @@ TEST(CarveOutputs, ModelPlyIsTheLastModelsSurfaceAndThePictureShowsIt) {
   o.executor = fba::ExecutorKind::Deterministic;
   o.timeout_s = 300;
   o.output_dir = dir;
-  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/carve_dino.yaml", registry(), lo), o);
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_dino.yaml", registry(), lo), o);
   const auto& models = task.tap("carver.octree", 1);
   const auto r = task.run();
   ASSERT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
@@ -127,7 +128,7 @@ TEST(CarveGraspRegions, KeepsFewerNodesThanUniformDetailToTheSameDepth) {
   fba::RunOptions o;
   o.executor = fba::ExecutorKind::Deterministic;
   o.timeout_s = 300;
-  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/carve_grasp_regions.yaml", registry(), lo), o);
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_grasp_regions.yaml", registry(), lo), o);
   const auto& models = task.tap("carver.octree", 1);
   const auto r = task.run();
   ASSERT_EQ(r.outcome, fba::Outcome::Success) << r.reason;

@@ -8,12 +8,13 @@
 #include <nlohmann/json.hpp>
 
 #include "fba_run_process.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
 using namespace fba::test;
 
-std::string task(const std::string& name) { return std::string(FBA_TASKS_DIR) + "/examples/" + name; }
+std::string task(const std::string& name) { return fba::test::tasks_dir() + "/examples/" + name; }
 
 std::string write_task(const std::string& name, const std::string& text) {
   const fs::path p = temp_dir("task") / name;
@@ -95,7 +96,7 @@ components:
   act: { type: test.misbehaving_actuator }
 connections: [ src.out -> bad.in, bad.out -> act.in ]
 )");
-  const auto r = fba_run({f, "--output-dir", out.string(), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR});
+  const auto r = fba_run({f, "--output-dir", out.string(), "--plugin-path", misbehaving_plugins()});
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("; 2 sample(s) lost to 2 restart(s)"), std::string::npos) << r.output;
   const auto summary = nlohmann::json::parse(read_file(out / "summary.json"));
@@ -178,7 +179,7 @@ Misbehaved misbehave(std::vector<std::string> args, const std::string& task = kM
                      const std::vector<std::string>& env = {}) {
   Misbehaved m;
   m.out = temp_dir("misbehaving");
-  args.insert(args.begin(), {write_task("misbehaving.yaml", task), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR,
+  args.insert(args.begin(), {write_task("misbehaving.yaml", task), "--plugin-path", misbehaving_plugins(),
                              "--output-dir", m.out.string(), "--stop-grace", "0.2"});
   m.run = fba_run(args, env);
   m.summary = nlohmann::json::parse(read_file(m.out / "summary.json"), nullptr, false);
@@ -270,7 +271,7 @@ TEST(CliMisbehaving, ExitZeroWhileLoadingThePluginExitsThree) {
   ASSERT_TRUE(m.summary.is_object()) << m.run.output;
   EXPECT_EQ(m.summary["phase"], "loading");
   // The plugin is named by its file, which is all a user has to find it.
-  EXPECT_NE(reason(m).find("the plugin " FBA_MISBEHAVING_PLUGIN_DIR), std::string::npos) << reason(m);
+  EXPECT_NE(reason(m).find("the plugin " + misbehaving_plugins()), std::string::npos) << reason(m);
   EXPECT_NE(reason(m).find(" called exit() while it was loaded"), std::string::npos) << reason(m);
   EXPECT_FALSE(m.safe_state);  // nothing was constructed
 }
@@ -278,11 +279,11 @@ TEST(CliMisbehaving, ExitZeroWhileLoadingThePluginExitsThree) {
 TEST(CliMisbehaving, AFaultWhileLoadingThePluginExitsThreeNamingItsFile) {
   const auto m = misbehave({}, kMisbehaving, {"FBA_TEST_SEGFAULT_IN_STATIC_INIT=1"});
   EXPECT_EQ(m.run.status, 3) << m.run.output;
-  EXPECT_NE(m.run.output.find("fatal signal SIGSEGV while loading the plugin " FBA_MISBEHAVING_PLUGIN_DIR), std::string::npos)
+  EXPECT_NE(m.run.output.find("fatal signal SIGSEGV while loading the plugin " + misbehaving_plugins()), std::string::npos)
       << m.run.output;
   ASSERT_TRUE(m.summary.is_object()) << m.run.output;
   EXPECT_EQ(m.summary["phase"], "loading");
-  EXPECT_NE(reason(m).find("while loading the plugin " FBA_MISBEHAVING_PLUGIN_DIR), std::string::npos) << reason(m);
+  EXPECT_NE(reason(m).find("while loading the plugin " + misbehaving_plugins()), std::string::npos) << reason(m);
   EXPECT_FALSE(m.safe_state);  // nothing was constructed
 }
 
@@ -303,7 +304,7 @@ connections: [ src.out -> act.in ]
 TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
   for (int sig : {SIGINT, SIGTERM}) {
     const fs::path out = temp_dir("sig-running");
-    Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+    Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
                out.string()});
     ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
     p.signal(sig);
@@ -320,7 +321,7 @@ TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
 // script could not tell that its user stopped the run, and the summary had no 'signal'.
 TEST(CliMisbehaving, SigtermWhileASafeStateBlocksExits143NamingTheCall) {
   const fs::path out = temp_dir("sigterm-safe-state");
-  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
              out.string(), "--set", "act.mode=block_safe_state", "--stop-grace", "0.2"});
   ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
   p.signal(SIGTERM);
@@ -339,7 +340,7 @@ TEST(CliMisbehaving, SigtermWhileASafeStateBlocksExits143NamingTheCall) {
 
 TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) {
   const fs::path out = temp_dir("second-sigint");
-  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
              out.string(), "--set", "bad.mode=block_process", "--stop-grace", "600"});
   ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
   p.signal(SIGINT);
@@ -364,7 +365,7 @@ TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) 
 // exits at once with 130 and a summary.json naming that call, written by the signal thread.
 TEST(CliMisbehaving, ASecondSigintWhileASafeStateBlocksExitsWithTheSummary) {
   const fs::path out = temp_dir("second-sigint-safe-state");
-  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir",
+  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
              out.string(), "--set", "act.mode=block_safe_state", "--stop-grace", "600"});
   ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
   p.signal(SIGINT);
@@ -415,12 +416,12 @@ TEST(Cli, AStderrReaderThatWentAwayDoesNotStopTheRun) {
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
   posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
-  std::vector<std::string> args{FBA_RUN, task("chain.yaml"), "--output-dir", out.string(), "--log-level", "debug"};
+  std::vector<std::string> args{fba::test::program("fba-run"), task("chain.yaml"), "--output-dir", out.string(), "--log-level", "debug"};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, FBA_RUN, &actions, nullptr, argv.data(), environ), 0);
+  ASSERT_EQ(posix_spawn(&pid, args[0].c_str(), &actions, nullptr, argv.data(), environ), 0);
   posix_spawn_file_actions_destroy(&actions);
   close(fds[1]);
   int status = 0;

@@ -5,13 +5,14 @@
 
 #include "support/built_plugins.hpp"
 #include <fba/task.hpp>
+#include "support/build_paths.hpp"
 
 namespace {
 
 const fba::Registry& registry() { return fba::test::built_plugins(); }
 
 fba::TaskConfig example(const std::string& name, const fba::LoadOptions& o = {}) {
-  return fba::load_task(std::string(FBA_TASKS_DIR) + "/examples/" + name, registry(), o);
+  return fba::load_task(fba::test::tasks_dir() + "/examples/" + name, registry(), o);
 }
 
 class ExampleTasks : public ::testing::TestWithParam<fba::ExecutorKind> {

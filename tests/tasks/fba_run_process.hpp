@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 extern char** environ;
 
@@ -42,6 +43,9 @@ inline std::string read_file(const fs::path& p) {
 // A folder of its own for each test (and each call within it), removed when the test ends.
 inline fs::path temp_dir(const std::string& name) { return fba::test::TempDir::until_exit(name); }
 
+// The test plugin that misbehaves on request (plugins/misbehaving), never installed.
+inline std::string misbehaving_plugins() { return fba::test::binary_dir() + "/tests/plugins/misbehaving/plugins"; }
+
 // A running fba-run, its output going to a file.
 class Process {
  public:
@@ -51,7 +55,7 @@ class Process {
   // its first instruction on (.preinit_array), so this only closes the loader's window.
   // `program`: fba-run unless another of the project's programs is tested (fba-inspect).
   explicit Process(std::vector<std::string> args, const std::vector<std::string>& env = {},
-                   bool signals_blocked = false, const char* program = FBA_RUN) {
+                   bool signals_blocked = false, const std::string& program = fba::test::program("fba-run")) {
     log_ = temp_dir("log") / "output.txt";
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
@@ -76,7 +80,7 @@ class Process {
       posix_spawnattr_setsigmask(&attr, &mask);
       posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
     }
-    if (posix_spawn(&pid_, program, &actions, &attr, argv.data(), envp.data()) != 0) pid_ = 0;
+    if (posix_spawn(&pid_, program.c_str(), &actions, &attr, argv.data(), envp.data()) != 0) pid_ = 0;
     posix_spawnattr_destroy(&attr);
     posix_spawn_file_actions_destroy(&actions);
   }

@@ -7,12 +7,13 @@
 
 #include "support/built_plugins.hpp"
 #include "tasks/fba_run_process.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
 const fba::Registry& registry() { return fba::test::built_plugins(); }
 
-const std::string kGrasp = std::string(FBA_TASKS_DIR) + "/grasp.yaml";
+const std::string kGrasp = fba::test::tasks_dir() + "/grasp.yaml";
 
 fba::LoadOptions profile(const std::string& name, std::vector<std::string> sets = {}) {
   fba::LoadOptions o;
@@ -26,14 +27,14 @@ fba::LoadOptions profile(const std::string& name, std::vector<std::string> sets 
 // The object is one parameter: the camera's mesh and the hand's cannot be set apart.
 TEST(GraspTask, TheObjectIsOneParameterOfCameraAndHand) {
   try {
-    fba::load_task(kGrasp, registry(), profile("sim", {"camera.mesh=" + std::string(FBA_TASKS_DIR) + "/grasp.yaml"}));
+    fba::load_task(kGrasp, registry(), profile("sim", {"camera.mesh=" + fba::test::tasks_dir() + "/grasp.yaml"}));
     FAIL() << "loaded";
   } catch (const fba::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("camera.mesh comes from the task parameter 'mesh' (also hand.mesh); set it with --set mesh=..."),
               std::string::npos)
         << e.what();
   }
-  const std::string mesh = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMustardBottle/model.obj";
+  const std::string mesh = fba::test::shared_data_dir() + "/ycb/YcbMustardBottle/model.obj";
   const auto task = fba::load_task(kGrasp, registry(), profile("sim", {"mesh=" + mesh}));
   EXPECT_EQ(std::get<std::string>(task.find("camera")->params.at("mesh")), mesh);
   EXPECT_EQ(std::get<std::string>(task.find("hand")->params.at("mesh")), mesh);

@@ -3,13 +3,14 @@
 #include <gtest/gtest.h>
 
 #include "tasks/fba_run_process.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
 using namespace fba::test;
 
 Result inspect(std::vector<std::string> args) {
-  Process p(std::move(args), {}, false, FBA_INSPECT);
+  Process p(std::move(args), {}, false, fba::test::program("fba-inspect"));
   return p.wait();
 }
 
@@ -33,7 +34,7 @@ TEST(InspectCli, APluginPathThatIsNotAFolderIsRefused) {
 
 // A core type, so that it runs in every build (the ThreadSanitizer one has no vision plugin).
 TEST(InspectCli, ShowsADataTypeWithItsLayoutAndWhereItIsDeclared) {
-  const auto r = inspect({"-p", FBA_TEST_PLUGIN_DIR, "fba.Int"});
+  const auto r = inspect({"-p", fba::test::plugin_dir(), "fba.Int"});
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(r.output.rfind("fba.Int (data type)\n  A 64-bit signed integer.\n  layout: size 8, alignment 8, version ", 0), 0u)
       << r.output;
@@ -42,7 +43,7 @@ TEST(InspectCli, ShowsADataTypeWithItsLayoutAndWhereItIsDeclared) {
 }
 
 TEST(InspectCli, AnUnknownNameIsAnErrorThatSaysWhatWasLookedFor) {
-  const auto r = inspect({"-p", FBA_TEST_PLUGIN_DIR, "no.such"});
+  const auto r = inspect({"-p", fba::test::plugin_dir(), "no.such"});
   EXPECT_NE(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("no component type or data type 'no.such'"), std::string::npos) << r.output;
 }

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fba_run_process.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -35,7 +36,7 @@ TEST(RandomSignal, HundredRunsSignalledAtRandomMomentsAllEndInOrder) {
     const int sig = random() % 2 ? SIGINT : SIGTERM;
     const auto delay = std::chrono::microseconds(delay_us(random));
     const fs::path out = dir / std::to_string(i);
-    Process p({task.string(), "--plugin-path", FBA_MISBEHAVING_PLUGIN_DIR, "--output-dir", out.string()}, {}, true);
+    Process p({task.string(), "--plugin-path", misbehaving_plugins(), "--output-dir", out.string()}, {}, true);
     std::this_thread::sleep_for(delay);
     p.signal(sig);
     const auto r = p.wait();

@@ -19,6 +19,7 @@
 #include "fba/geometry/voxelize.hpp"
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/octree_carver.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -57,7 +58,7 @@ constexpr double kDinoOtsuMeanIoU = 0.95, kDinoOtsuMinIoU = 0.88;
 TEST(VisionTasks, CarveDinoReprojectsOntoEverySilhouette) {
   fba::LoadOptions o;
   o.overrides = {{"carver.max_depth=" + std::to_string(kDinoDepth)}};
-  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/carve_dino.yaml", registry(), o), deterministic());
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_dino.yaml", registry(), o), deterministic());
   const auto& silhouettes = task.tap("contours.silhouette");
   const auto& models = task.tap("carver.octree", 1);  // a deep snapshot is large: keep the last
   const auto r = task.run();
@@ -107,10 +108,10 @@ INSTANTIATE_TEST_SUITE_P(Ycb, CarveSim, ::testing::Values("YcbMustardBottle", "Y
 // scored 0.895 here (0.904 with perfect masks and its own box); see tasks/carve_sim.yaml. Measured
 // at 20 views: mustard 0.944, can 0.941, banana 0.948, cracker box 0.938.
 TEST_P(CarveSim, ModelMatchesTheMesh) {
-  const std::string mesh = std::string(FBA_SHARED_DATA_DIR) + "/ycb/" + GetParam() + "/model.obj";
+  const std::string mesh = fba::test::shared_data_dir() + "/ycb/" + GetParam() + "/model.obj";
   fba::LoadOptions o;
   o.overrides = {{"camera.mesh=" + mesh}, {"accuracy.mesh=" + mesh}};
-  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/carve_sim.yaml", registry(), o), deterministic());
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_sim.yaml", registry(), o), deterministic());
   const auto& models = task.tap("carver.octree", 1);
   const auto r = task.run();
   ASSERT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
@@ -146,7 +147,7 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   options.timeout_s = 600;  // a hang detector only: the run takes a few seconds
   const fba::test::TempDir out;
   options.output_dir = out.path();
-  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_sim.yaml", registry()), options);  // the link to grasp.yaml
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/grasp_sim.yaml", registry()), options);  // the link to grasp.yaml
   const auto r = task.run();
   ASSERT_TRUE(r.final_event) << r.reason;
   EXPECT_EQ(r.final_event->source, "hand") << r.reason;

@@ -24,6 +24,7 @@
 #include "fba/vision/image_set.hpp"
 #include "fba/vision/octree_carver.hpp"
 #include "fba/vision/reference_carve.hpp"
+#include "support/build_paths.hpp"
 
 using namespace fba::vision;
 
@@ -73,7 +74,7 @@ std::vector<int> option_list(const std::string& name, const std::string& text, d
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string data = FBA_SHARED_DATA_DIR;
+  std::string data = fba::test::shared_data_dir();
   int repeat = 5, threads = 0;
   std::vector<int> depths{6, 7, 8};
   double tolerance = CarverParams{}.silhouette_tolerance;

@@ -23,6 +23,7 @@
 #include <fba/log.hpp>
 #include <fba/registry.hpp>
 #include <fba/task.hpp>
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -53,7 +54,7 @@ fba::Registry& registry() {
   static fba::Registry r = [] {
     fba::Registry reg;
     reg.add_builtin(fba::detail::plugin_entries(), "fba-runtime-benchmark");
-    reg.load_plugin(std::string(FBA_BENCH_PLUGIN_DIR) + "/fba-examples.so");
+    reg.load_plugin(fba::test::plugin_dir() + "/fba-examples.so");
     return reg;
   }();
   return r;

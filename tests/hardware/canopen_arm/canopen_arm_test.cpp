@@ -25,6 +25,7 @@
 #include "arm_model.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 using fba::testing::ComponentHarness;
 using namespace std::chrono_literals;
@@ -36,7 +37,7 @@ constexpr double kCounts = 100'000;  // drive units per radian
 const fba::Registry& registry() { return fba::test::built_plugins(); }
 
 const fba::arm::ArmModel& arm() {
-  static const fba::arm::ArmModel model(std::string(FBA_ROBOTS_DIR) + "/wrist_camera_arm.urdf", "world", "camera");
+  static const fba::arm::ArmModel model(fba::test::source_dir() + "/hardware/robots/wrist_camera_arm.urdf", "world", "camera");
   return model;
 }
 

@@ -11,6 +11,7 @@
 #include "support/built_plugins.hpp"
 #include "support/child_process.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -19,11 +20,11 @@ using fba::test::Child;
 TEST(GraspEmulated, TheRealDriversRunTheLoopAgainstTheEmulatorsToAHeldObject) {
   const fba::test::TempDir temp;
   const std::string arm_link = (temp.path() / "arm").string(), hand_link = (temp.path() / "hand").string();
-  Child arm({FBA_ARM_EMULATOR, "--link", arm_link});
+  Child arm({fba::test::program("fba-canopen-arm-emulator"), "--link", arm_link});
   ASSERT_NE(arm.read_until("(link " + arm_link + ")").find("SLCAN adapter on"), std::string::npos) << arm.read_until("");
   // The mustard bottle (58 x 95 x 190 mm) the camera renders: held across its depth, B and C may
   // spread along its height.
-  Child hand({FBA_HAND_EMULATOR, "--link", hand_link, "--activation-s", "0.05", "--object-width", "0.07",
+  Child hand({fba::test::program("fba-robotiq-3f-emulator"), "--link", hand_link, "--activation-s", "0.05", "--object-width", "0.07",
               "--object-length", "0.19"});
   ASSERT_NE(hand.read_until("(link " + hand_link + ")").find("Modbus RTU slave 9"), std::string::npos);
 
@@ -33,7 +34,7 @@ TEST(GraspEmulated, TheRealDriversRunTheLoopAgainstTheEmulatorsToAHeldObject) {
   load.overrides.push_back({"hand_device=" + hand_link});
   fba::RunOptions options;
   options.timeout_s = 600;  // a hang detector only: the run takes seconds of emulated motion
-  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp.yaml", fba::test::built_plugins(), load), options);
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/grasp.yaml", fba::test::built_plugins(), load), options);
   const auto r = task.run();
   ASSERT_TRUE(r.final_event) << r.reason;
   EXPECT_EQ(r.final_event->source, "hand") << r.reason;

@@ -20,6 +20,7 @@
 #include "support/built_plugins.hpp"
 #include "support/child_process.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 extern char** environ;
 
@@ -45,7 +46,7 @@ fba::testing::Params params(const std::string& device) {
 TEST(Robotiq3fEmulatorProgram, DriverOnItsLinkHoldsTheObjectAndTheProgramEndsOnSigterm) {
   fba::test::TempDir dir;
   const std::string link = dir.file("hand");
-  Child emulator({FBA_ROBOTIQ_EMULATOR, "--link", link, "--activation-s", "0.05", "--object-width", "0.05"});
+  Child emulator({fba::test::program("fba-robotiq-3f-emulator"), "--link", link, "--activation-s", "0.05", "--object-width", "0.05"});
   ASSERT_NE(emulator.read_until("(link " + link + ")").find("Modbus RTU slave 9 on /dev/pts/"), std::string::npos);
   {
     ComponentHarness h(fba::test::built_plugins(), "hw.robotiq_3f", params(link));
@@ -64,7 +65,7 @@ TEST(Robotiq3fEmulatorProgram, DriverOnItsLinkHoldsTheObjectAndTheProgramEndsOnS
 TEST(Robotiq3fEmulatorProgram, ScheduledDisconnectReachesTheDriverAsALineThatIsGone) {
   fba::test::TempDir dir;
   const std::string link = dir.file("hand");
-  Child emulator({FBA_ROBOTIQ_EMULATOR, "--link", link, "--activation-s", "0.05", "--disconnect-after", "1"});
+  Child emulator({fba::test::program("fba-robotiq-3f-emulator"), "--link", link, "--activation-s", "0.05", "--disconnect-after", "1"});
   emulator.read_until("(link " + link + ")");
   // Grasps until the line goes (during activation, if this machine is slow enough: the same report).
   std::string report;
@@ -85,7 +86,7 @@ TEST(Robotiq3fEmulatorProgram, ScheduledDisconnectReachesTheDriverAsALineThatIsG
 }
 
 TEST(Robotiq3fEmulatorProgram, BadOptionIsRefusedWithTheUsage) {
-  Child emulator({FBA_ROBOTIQ_EMULATOR, "--fault-after", "1:ZZ"});
+  Child emulator({fba::test::program("fba-robotiq-3f-emulator"), "--fault-after", "1:ZZ"});
   EXPECT_EQ(emulator.wait(0), 2);
   const std::string out = emulator.read_until("usage:");
   EXPECT_NE(out.find("--fault-after: 'ZZ' is not an integer"), std::string::npos) << out;

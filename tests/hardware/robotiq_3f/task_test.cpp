@@ -16,6 +16,7 @@
 #include "fba/can/pty.hpp"
 #include "fba/emulators/robotiq_3f.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -45,7 +46,7 @@ FBA_COMPONENT(GraspSource);
 const fba::Registry& registry() {
   static const fba::Registry r = [] {
     fba::Registry reg;
-    for (const auto& e : reg.load_path({FBA_TEST_PLUGIN_DIR})) ADD_FAILURE() << e.what();
+    for (const auto& e : reg.load_path({fba::test::plugin_dir()})) ADD_FAILURE() << e.what();
     reg.add_builtin(fba::detail::plugin_entries(), "task_test");
     return reg;
   }();

@@ -8,6 +8,7 @@
 
 #include "arm_model.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 using fba::arm::ArmModel;
 using fba::arm::ArmModelError;
@@ -15,7 +16,7 @@ using fba::arm::JointTrajectory;
 
 namespace {
 
-const std::string kUrdf = std::string(FBA_ROBOTS_DIR) + "/wrist_camera_arm.urdf";
+const std::string kUrdf = fba::test::source_dir() + "/hardware/robots/wrist_camera_arm.urdf";
 
 const ArmModel& arm() {
   static const ArmModel model(kUrdf, "world", "camera");

@@ -17,6 +17,7 @@
 #include "arm_model.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 using fba::testing::ComponentHarness;
 
@@ -24,11 +25,11 @@ namespace {
 
 const fba::Registry& registry() { return fba::test::built_plugins(); }
 
-const std::string kMesh = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMustardBottle/model.obj";
+const std::string kMesh = fba::test::shared_data_dir() + "/ycb/YcbMustardBottle/model.obj";
 constexpr std::int64_t kPeriodNs = 20'000'000;  // the default rate, 50 Hz
 
 const fba::arm::ArmModel& arm() {
-  static const fba::arm::ArmModel model(std::string(FBA_ROBOTS_DIR) + "/wrist_camera_arm.urdf", "world", "camera");
+  static const fba::arm::ArmModel model(fba::test::source_dir() + "/hardware/robots/wrist_camera_arm.urdf", "world", "camera");
   return model;
 }
 

@@ -9,12 +9,13 @@
 #include <fba/testing.hpp>
 
 #include "support/built_plugins.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
 using fba::testing::ComponentHarness;
 
-const std::string kCan = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMasterChefCan/model.obj";
+const std::string kCan = fba::test::shared_data_dir() + "/ycb/YcbMasterChefCan/model.obj";
 
 std::vector<std::tuple<std::string, std::string, bool>> ports(const std::vector<fba::PortSpec>& list) {
   std::vector<std::tuple<std::string, std::string, bool>> out;

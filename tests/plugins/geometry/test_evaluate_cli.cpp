@@ -19,6 +19,7 @@
 #include "fba/geometry/renderer.hpp"
 #include "fba/geometry/viewpoints.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 extern char** environ;
 
@@ -36,16 +37,16 @@ Result fba_evaluate(std::vector<std::string> args) {
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  args.insert(args.begin(), FBA_EVALUATE);
+  args.insert(args.begin(), fba::test::program("fba-evaluate"));
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid = 0;
   Result r;
-  const int spawned = posix_spawn(&pid, FBA_EVALUATE, &actions, nullptr, argv.data(), environ);
+  const int spawned = posix_spawn(&pid, args[0].c_str(), &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   if (spawned != 0) {
-    ADD_FAILURE() << "cannot start " << FBA_EVALUATE;
+    ADD_FAILURE() << "cannot start " << fba::test::program("fba-evaluate");
     return r;
   }
   int status = 0;
@@ -57,9 +58,9 @@ Result fba_evaluate(std::vector<std::string> args) {
   return r;
 }
 
-const std::string kBanana = std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbBanana/model.obj";
-const std::string kDinoSet = std::string(FBA_SHARED_DATA_DIR) + "/middlebury-dino/dinoSR_par.txt";
-const std::string kDinoTask = std::string(FBA_SOURCE_DIR) + "/tasks/carve_dino.yaml";
+const std::string kBanana = fba::test::shared_data_dir() + "/ycb/YcbBanana/model.obj";
+const std::string kDinoSet = fba::test::shared_data_dir() + "/middlebury-dino/dinoSR_par.txt";
+const std::string kDinoTask = fba::test::source_dir() + "/tasks/carve_dino.yaml";
 
 std::size_t count(const std::string& text, const std::string& what) {
   std::size_t n = 0;
@@ -215,7 +216,7 @@ TEST(EvaluateCli, ModelWithTaskMakesSilhouettesWithTheTasksContourSettings) {
 }
 
 TEST(EvaluateCli, ModelRefusesATaskWithoutContourExtractionOrASetWithoutATask) {
-  expect_refused(model({"--task", std::string(FBA_SOURCE_DIR) + "/tasks/examples/chain.yaml"}),
+  expect_refused(model({"--task", fba::test::source_dir() + "/tasks/examples/chain.yaml"}),
                  "has no vision.contour_extraction component");
   expect_refused(model({"--images", kDinoSet, "--set", "contours.threshold=0.3"}), "--set applies to the task given with --task");
   expect_refused(model({"--task", kDinoTask, "--set", "contours.threshold=7"}), "the task file does not load");

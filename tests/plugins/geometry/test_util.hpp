@@ -5,10 +5,11 @@
 #include <string>
 
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 namespace fba::geometry::test {
 
-inline std::filesystem::path shared_data() { return FBA_SHARED_DATA_DIR; }
+inline std::filesystem::path shared_data() { return fba::test::shared_data_dir(); }
 
 inline std::filesystem::path ycb_mesh(const std::string& name) {
   return shared_data() / "ycb" / name / "model.obj";

@@ -19,6 +19,7 @@
 
 #include "support/built_plugins.hpp"
 #include "voxel_shapes.hpp"
+#include "support/build_paths.hpp"
 
 using fba::testing::ComponentHarness;
 
@@ -181,7 +182,7 @@ TEST(ExplorationPlanner, WithoutACentreTheRingIsAroundTheModel) {
 }
 
 TEST(ExplorationPlanner, RecordedCandidatesAreTheImageSetsCameraPoses) {
-  const std::string par = std::string(FBA_SHARED_DATA_DIR) + "/middlebury-dino/dinoSR_par.txt";
+  const std::string par = fba::test::shared_data_dir() + "/middlebury-dino/dinoSR_par.txt";
   ComponentHarness h(registry(), "grasp.exploration_planner",
                      {{"views", std::string("recorded")}, {"poses_from", par}, {"initial_views", 1}}, {"start"});
   h.push<std::int64_t>("start", 0);

@@ -16,6 +16,7 @@
 #include "fba/geometry/viewpoints.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -32,7 +33,7 @@ TEST(GraspDinoTask, SelectsAGraspOnTheDinoWithFewerViewsThanTheRing) {
   o.timeout_s = 300;
   const fba::test::TempDir out;
   o.output_dir = out.path();
-  fba::Task task(fba::load_task(std::string(FBA_TASKS_DIR) + "/grasp_dino.yaml", registry()), o);
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/grasp_dino.yaml", registry()), o);
   const auto& frames = task.tap("views.frame");
   const auto& silhouettes = task.tap("contours.silhouette");
   const auto& targets = task.tap("planner.target");

@@ -19,11 +19,12 @@
 #include "fba/vision/image_set.hpp"
 #include "fba/vision/octree_carver.hpp"
 #include "support/built_plugins.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
 using fba::testing::ComponentHarness;
-const std::string kData = FBA_SHARED_DATA_DIR;
+const std::string kData = fba::test::shared_data_dir();
 
 const fba::Registry& registry() { return fba::test::built_plugins(); }
 

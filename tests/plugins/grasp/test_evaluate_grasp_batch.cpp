@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "support/run_command.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -21,7 +22,7 @@ namespace fs = std::filesystem;
 
 using Result = fba::test::CommandResult;
 
-Result run(const std::string& args) { return fba::test::run_command(std::string("'") + FBA_EVALUATE + "' grasp " + args); }
+Result run(const std::string& args) { return fba::test::run_command(std::string("'") + fba::test::program("fba-evaluate") + "' grasp " + args); }
 
 // The line of `text` that starts with `start`, or "".
 std::string line_starting(const std::string& text, const std::string& start) {
@@ -43,12 +44,12 @@ class EvaluateGraspBatch : public testing::Test {
   fs::path dir_;
 };
 
-std::string mustard() { return std::string(FBA_SHARED_DATA_DIR) + "/ycb/YcbMustardBottle/model.obj"; }
+std::string mustard() { return fba::test::shared_data_dir() + "/ycb/YcbMustardBottle/model.obj"; }
 
 TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailedRunAsARowWithItsReason) {
   const fs::path l = dir_ / "list.yaml";
   // Depth 4 and at most 3 views: quick; whether a grasp is found there does not matter here.
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
+  std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "fba_run_args: [-e, deterministic]\n"
                    << "pose_set:\n  - mesh={mesh}\n  - object_yaw={yaw}\n"
                    << "set: [carver.max_depth=4, synthesis.max_views=3]\n"
@@ -100,7 +101,7 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
 TEST_F(EvaluateGraspBatch, AMeshTheTaskCannotLoadIsARowWithFbaRunsReason) {
   // Given to fba-run as it is: the child refuses the task, and its own message is the reason.
   const fs::path l = dir_ / "list.yaml";
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
+  std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "pose_set:\n  - scene.mesh={mesh}\n  - hand.mesh={mesh}\n"
                    << "runs:\n  - { mesh: " << (dir_ / "missing.obj").string() << " }\n";
   const Result r = run("--batch " + l.string() + " --random 0 -o " + (dir_ / "out").string());
@@ -124,7 +125,7 @@ TEST_F(EvaluateGraspBatch, AHungOrCrashedRunIsARowAndTheBatchGoesOn) {
   std::ofstream(crash) << "#!/bin/sh\nkill -SEGV $$\n";
   for (const auto& f : {hang, crash}) fs::permissions(f, fs::perms::owner_all);
   const fs::path l = dir_ / "list.yaml";
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
+  std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "timeout_s: 0.5\n"
                    << "runs:\n  - { mesh: " << mustard() << " }\n";
   Result r = run("--batch " + l.string() + " --random 0 --fba-run " + hang.string() + " -o " + (dir_ / "hang").string());
@@ -141,7 +142,7 @@ TEST_F(EvaluateGraspBatch, AHungOrCrashedRunIsARowAndTheBatchGoesOn) {
 
 TEST_F(EvaluateGraspBatch, ABadListIsAClearErrorWithItsPlace) {
   const fs::path l = dir_ / "list.yaml";
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
+  std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "pose_set:\n  - scene.mesh={mesh}\n  - hand.object_yaw={angle}\n"
                    << "runs:\n  - { mesh: m.obj }\n";
   Result r = run("--batch " + l.string());
@@ -149,7 +150,7 @@ TEST_F(EvaluateGraspBatch, ABadListIsAClearErrorWithItsPlace) {
   EXPECT_NE(r.output.find("list.yaml:4:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("unknown placeholder {angle}"), std::string::npos) << r.output;
 
-  std::ofstream(l) << "task: " << FBA_TASKS_DIR << "/grasp.yaml\n"
+  std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "runs:\n  - { mesh: m.obj, pose: [0, 0] }\n";
   r = run("--batch " + l.string());
   EXPECT_EQ(r.status, 2) << r.output;

@@ -12,6 +12,7 @@
 #include "fba/geometry/mesh_io.hpp"
 
 #include "support/run_command.hpp"
+#include "support/build_paths.hpp"
 
 namespace {
 
@@ -19,7 +20,7 @@ namespace fs = std::filesystem;
 
 using Result = fba::test::CommandResult;
 
-Result run(const std::string& args) { return fba::test::run_command(std::string("'") + FBA_EVALUATE + "' grasp " + args); }
+Result run(const std::string& args) { return fba::test::run_command(std::string("'") + fba::test::program("fba-evaluate") + "' grasp " + args); }
 
 class EvaluateGraspCli : public testing::Test {
  protected:

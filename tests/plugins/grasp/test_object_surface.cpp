@@ -10,12 +10,13 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/grasp/object_surface.hpp"
+#include "support/build_paths.hpp"
 
 namespace fba::grasp {
 namespace {
 
 std::filesystem::path ycb_mesh(const std::string& name) {
-  return std::filesystem::path(FBA_SHARED_DATA_DIR) / "ycb" / name / "model.obj";
+  return std::filesystem::path(fba::test::shared_data_dir()) / "ycb" / name / "model.obj";
 }
 
 TEST(ObjectSurface, CentreOfMassAndRMaxOfABoxAndASphere) {

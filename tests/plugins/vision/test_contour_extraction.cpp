@@ -8,12 +8,13 @@
 
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/image_set.hpp"
+#include "support/build_paths.hpp"
 
 using namespace fba::vision;
 
 namespace {
 
-const std::string kDino = std::string(FBA_SHARED_DATA_DIR) + "/middlebury-dino";
+const std::string kDino = fba::test::shared_data_dir() + "/middlebury-dino";
 
 std::shared_ptr<const fba::Frame> frame_of(const cv::Mat& image) {
   auto f = std::make_shared<fba::Frame>();

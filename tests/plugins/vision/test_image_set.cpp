@@ -8,13 +8,14 @@
 
 #include "fba/vision/image_set.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 namespace fs = std::filesystem;
 using namespace fba::vision;
 
 namespace {
 
-const std::string kDino = std::string(FBA_SHARED_DATA_DIR) + "/middlebury-dino";
+const std::string kDino = fba::test::shared_data_dir() + "/middlebury-dino";
 
 using fba::test::TempDir;
 

@@ -13,6 +13,7 @@
 #include <fba/types/silhouette.hpp>
 
 #include "support/built_plugins.hpp"
+#include "support/build_paths.hpp"
 
 using fba::testing::ComponentHarness;
 
@@ -20,7 +21,7 @@ namespace {
 
 const fba::Registry& registry() { return fba::test::built_plugins(); }
 
-const std::string kDinoPar = std::string(FBA_SHARED_DATA_DIR) + "/middlebury-dino/dinoSR_par.txt";
+const std::string kDinoPar = fba::test::shared_data_dir() + "/middlebury-dino/dinoSR_par.txt";
 // The providers' tight box of the dino, in metres.
 const std::vector<double> kDinoBox{-0.061897, -0.018874, -0.057845, 0.010897, 0.068227, 0.015495};
 

@@ -16,6 +16,7 @@
 
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
+#include "support/build_paths.hpp"
 
 namespace fs = std::filesystem;
 using fba::testing::ComponentHarness;
@@ -24,7 +25,7 @@ namespace {
 
 const fba::Registry& registry() { return fba::test::built_plugins(); }
 
-const std::string kData = FBA_SHARED_DATA_DIR;
+const std::string kData = fba::test::shared_data_dir();
 const std::string kDinoPar = kData + "/middlebury-dino/dinoSR_par.txt";
 
 bool has_event(const std::vector<fba::Event>& events, const std::string& name) {
