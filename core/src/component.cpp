@@ -1,6 +1,7 @@
 #include "fba/component.hpp"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 
@@ -116,9 +117,14 @@ void Context::set_trigger(Trigger t) {
   node_.trigger = t;
 }
 
-void Context::set_stage(const std::string& stage) {
+void Context::set_stage(const std::string& stage) { node_.enter_stage(stage); }
+
+void Context::report(std::string_view name, std::string json) {
+  if (name.empty()) plugin_bug("reported a result with no name");
+  if (!nlohmann::json::accept(json))
+    plugin_bug(fmt::format("reported result '{}' is not one JSON value; it begins: {}", name, json.substr(0, 120)));
   std::lock_guard lock(node_.stage_mutex);
-  node_.stage = stage;
+  node_.results[std::string(name)] = std::move(json);
 }
 
 Stages::Stages(Context& ctx) : ctx_(ctx) {

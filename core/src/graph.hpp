@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -197,8 +198,14 @@ class Node {
 
   Counter invocations, errors, restarts, lost_to_restarts;
   std::atomic<std::int64_t> last_tick_ns{-1};  // for the stall warning: when the next tick is due
-  PiMutex stage_mutex;  // components set their stage from process()
+  PiMutex stage_mutex;  // components set their stage and report results from process()
   std::string stage;
+  // Under stage_mutex: the time per stage (StageTime), and process()'s share of it so far.
+  std::map<std::string, StageTime, std::less<>> stage_times;
+  std::int64_t stage_clock_since_ns = 0;  // when the current stage began, on the task's clock
+  std::optional<std::chrono::steady_clock::time_point> busy_since;  // inside process(): since the last change
+  std::map<std::string, std::string> results;  // Context::report
+  void enter_stage(const std::string& next);  // takes stage_mutex
 
  private:
   bool outputs_have_room() const;

@@ -76,6 +76,17 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
             {"restarts", c.restarts},
             {"lost_to_restarts", c.lost_to_restarts}};
     if (!c.stage.empty()) cj["stage"] = c.stage;
+    if (!c.stages.empty()) {
+      json stages = json::object();
+      for (const auto& [name, t] : c.stages)
+        stages[name] = {{"entered", t.entered}, {"busy_s", t.busy_s}, {"clock_s", t.clock_s}};
+      cj["stages"] = stages;
+    }
+    if (!c.results.empty()) {
+      json results = json::object();
+      for (const auto& [name, text] : c.results) results[name] = json::parse(text);  // checked by Context::report
+      cj["results"] = results;
+    }
     comps[c.name] = cj;
   }
   j["components"] = comps;

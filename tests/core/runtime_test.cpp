@@ -6,6 +6,7 @@
 #include <thread>
 
 #include <fba/task.hpp>
+#include <nlohmann/json.hpp>
 
 #include "test_components.hpp"
 
@@ -427,6 +428,59 @@ connections:
     if (e.name == "stage") stages.push_back(e.payload);
   EXPECT_EQ(stages, (std::vector<std::string>{"working", "done"}));
   EXPECT_EQ(r.components[1].stage, "done");
+}
+
+// The time per stage and the reported results, in the summary: where a component's work went, and
+// what it found, without replaying its events.
+TEST_P(RuntimeBoth, TheSummaryGivesEachStagesTimeAndTheReportedResults) {
+  const auto cfg = load(R"(
+components:
+  src: { type: examples.counter, params: { count: 2, start: 1 } }
+  st: { type: test.staged }
+  sink: { type: examples.sink }
+connections:
+  - src.out -> st.in
+  - st.out -> sink.in
+)");
+  fba::Task task(cfg, with(GetParam()));
+  const auto r = task.run();
+  ASSERT_EQ(r.outcome, Outcome::Success) << r.reason;
+  const auto& st = r.components[1];
+  ASSERT_EQ(st.name, "st");
+  ASSERT_EQ(st.stages.size(), 3u);  // every declared stage, in the spec's order
+  EXPECT_EQ(st.stages[0].first, "idle");
+  EXPECT_EQ(st.stages[1].first, "working");
+  EXPECT_EQ(st.stages[2].first, "done");
+  for (const auto& [name, t] : st.stages) {
+    EXPECT_EQ(t.entered, 1u) << name;
+    EXPECT_GE(t.busy_s, 0.0) << name;
+    EXPECT_GE(t.clock_s, 0.0) << name;
+  }
+  EXPECT_EQ(st.results, (std::map<std::string, std::string>{{"last", "2"}}));  // the later report replaced the first
+
+  const auto j = nlohmann::json::parse(fba::summary_json(r, cfg));
+  EXPECT_EQ(j["components"]["st"]["results"]["last"], 2);
+  EXPECT_EQ(j["components"]["st"]["stages"]["working"]["entered"], 1);
+  EXPECT_TRUE(j["components"]["st"]["stages"]["idle"]["busy_s"].is_number());
+  EXPECT_FALSE(j["components"]["src"].contains("stages"));  // a component without stages has none
+}
+
+TEST(Runtime, AResultThatIsNotJsonIsAPluginBugNamingTheResult) {
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 1, start: 4 } }
+  st: { type: test.staged }
+  sink: { type: examples.sink }
+connections:
+  - src.out -> st.in
+  - st.out -> sink.in
+)"),
+                 with(ExecutorKind::Deterministic));
+  const auto r = task.run();
+  EXPECT_EQ(r.outcome, Outcome::RuntimeError);
+  EXPECT_NE(r.reason.find("plugin bug"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("reported result 'last' is not one JSON value; it begins: {four"), std::string::npos) << r.reason;
+  EXPECT_TRUE(r.components[1].results.empty());
 }
 
 TEST_P(RuntimeBoth, AFeedbackLoopRunsAndEndsWhenIdle) {

@@ -96,10 +96,11 @@ class EventLog final : public fba::Component {
   fba::Context& ctx_;
 };
 
-// Stages: idle -> working -> done, driven by the value it receives.
+// Stages: idle -> working -> done, driven by the value it receives; reports the last value as the
+// result "last" (4: a result that is not JSON, a plugin bug).
 class Staged final : public fba::Component {
  public:
-  static constexpr fba::In<std::int64_t> kIn{"in", "1: start work, 2: finish, 3: an illegal jump back to idle"};
+  static constexpr fba::In<std::int64_t> kIn{"in", "1: start work, 2: finish, 3: an illegal jump back to idle, 4: a bad result"};
   static constexpr fba::Out<std::int64_t> kOut{"out", "the sample"};
   static fba::Spec spec() {
     return fba::Spec::filter("test.staged", "Moves through its stages as samples arrive.")
@@ -109,6 +110,8 @@ class Staged final : public fba::Component {
   explicit Staged(fba::Context& ctx) : ctx_(ctx), stages_(ctx) {}
   void process() override {
     const auto v = ctx_(kIn).get();
+    if (v == 4) ctx_.report("last", "{four");
+    ctx_.report("last", std::to_string(v));
     stages_.go(v == 1 ? "working" : v == 2 ? "done" : "idle");
     ctx_(kOut).emit(v);
   }

@@ -174,6 +174,11 @@ class Context {
 
   // Emits a declared event; the task's rules decide what it does.
   void emit(const EventOut& e, std::string payload = {});
+  // Records one of the run's results under `name`, replacing an earlier one: the summary lists it
+  // whole, as JSON, under the component's "results" (a grasp, the views used, a lift test), where a
+  // person or a script finds it without replaying the events. `json` must be one JSON value;
+  // anything else throws PluginBug.
+  void report(std::string_view name, std::string json);
   // A sensor has produced its last sample.
   void finish();
   // Current time on the executor's clock (virtual under the deterministic executor).

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -43,12 +44,21 @@ struct RunOptions {
   double stall_warning_s = 10;
 };
 
+// The time a component spent in one of its stages (Stages).
+struct StageTime {
+  std::uint64_t entered = 0;  // times it moved into the stage; the first stage counts its start
+  double busy_s = 0;          // wall time inside process() while in the stage: where its work went
+  double clock_s = 0;         // time on the task's clock in the stage, waits included (virtual under deterministic)
+};
+
 struct ComponentStats {
   std::string name, type;
   Kind kind = Kind::Filter;
   std::uint64_t invocations = 0, samples_in = 0, samples_out = 0, errors = 0, restarts = 0;
   std::uint64_t lost_to_restarts = 0;  // input samples taken by invocations that failed and restarted
   std::string stage;
+  std::vector<std::pair<std::string, StageTime>> stages;  // in the spec's order; empty without stages
+  std::map<std::string, std::string> results;             // Context::report: name -> JSON text
   std::string state;  // idle, queued, running or finished (as it stood when the counts were read)
 };
 
