@@ -82,7 +82,9 @@ class SimHand final : public fba::Component {
     result.stamp = static_cast<double>(ctx_.now_ns()) * 1e-9;
     ctx_.log().info("lift test: {} after {:.2f} simulated s ({} steps){}", result.held ? "held" : "failed", test_.simulated_s(),
                     test_.steps(), result.reason.empty() ? "" : ": " + result.reason);
-    ctx_.emit(result.held ? kHeld : kDropped, to_json(result).dump());
+    const std::string json = to_json(result).dump();
+    ctx_.report("lift", json);  // the field's ground truth for "the grasp works"
+    ctx_.emit(result.held ? kHeld : kDropped, json);
     ctx_(kResult).emit(std::move(result));
   }
 

@@ -168,6 +168,25 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   ASSERT_NE(list, std::string::npos) << selected;
   const auto end = selected.find(']', list);
   EXPECT_GE(std::count(selected.begin() + list, selected.begin() + end, ','), 3) << selected;  // at least 4 views
+  // The run's results, as the summary lists them: the grasp, the views analysed, the carving's
+  // totals and the lift test, each reported once by the component that knows it.
+  auto component = [&](const std::string& name) {
+    const auto it = std::find_if(r.components.begin(), r.components.end(), [&](const auto& c) { return c.name == name; });
+    return it == r.components.end() ? fba::ComponentStats{} : *it;
+  };
+  const auto synthesis = component("synthesis");
+  ASSERT_EQ(synthesis.results.count("grasp"), 1u);
+  EXPECT_EQ(synthesis.results.at("grasp"), selected);
+  EXPECT_EQ(synthesis.results.at("views"), std::to_string(std::count(selected.begin() + list, selected.begin() + end, ',') + 1));
+  ASSERT_EQ(component("carver").results.count("carving"), 1u);
+  EXPECT_NE(component("carver").results.at("carving").find("\"nodes_visited\": "), std::string::npos);
+  ASSERT_EQ(component("hand").results.count("lift"), 1u);
+  EXPECT_EQ(component("hand").results.at("lift"), r.final_event->payload);
+  // Its stages' times: it waited for the arm in exploration_movement, and worked in grasp_synthesis.
+  ASSERT_EQ(synthesis.stages.size(), 3u);
+  EXPECT_EQ(synthesis.stages[2].first, "exploration_movement");
+  EXPECT_GE(synthesis.stages[2].second.entered, moves);
+  EXPECT_GT(synthesis.stages[2].second.clock_s, 0.0);  // the arm's moves, on the virtual clock
   // The grasp drawn on the model and on the last camera image: PNGs of the camera's size (the
   // header's IHDR chunk holds the width and height, big-endian, at bytes 16 and 20).
   for (const char* name : {"grasp_model.png", "grasp_view.png"}) {

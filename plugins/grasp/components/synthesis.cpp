@@ -138,6 +138,7 @@ class GraspSynthesisFilter final : public fba::Component {
   void analyse(const fba::Octree& model) {
     const auto start = std::chrono::steady_clock::now();
     const int views = model.views;
+    ctx_.report("views", std::to_string(views));  // analysed so far: the run's figure when it ends
     write_model(model);
     const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_});
     if (surface.samples.empty())
@@ -189,7 +190,8 @@ class GraspSynthesisFilter final : public fba::Component {
     }
     // One request per view: the carver's refinement on it brings a new model of the same views,
     // whose regions differ a little again; answering each would circle between the two for ever.
-    if (views == requested_views_) return;
+    // The view asked for is still on its way: back to waiting for it.
+    if (views == requested_views_) return stages_.go("exploration_movement");
     requested_views_ = views;
 
     // Where more information would help: the unresolved regions of the best candidates, else every
@@ -266,7 +268,9 @@ class GraspSynthesisFilter final : public fba::Component {
     // The carver integrates silhouettes in arrival order: the model's views are the first ones.
     for (int v = 0; v < views; ++v) g.views.push_back(v < int(view_index_.size()) ? view_index_[v] : v);
     g.stamp = ctx_(kOctree).packet().header().stamp_ns * 1e-9;
-    ctx_.emit(kGraspSelected, fba::grasp::grasp_to_json(g).dump());
+    const std::string json = fba::grasp::grasp_to_json(g).dump();
+    ctx_.report("grasp", json);
+    ctx_.emit(kGraspSelected, json);
     write_pictures(g, ctx_(kOctree).get());
     ctx_(kGrasp).emit(std::move(g));
     done_ = true;
@@ -335,6 +339,7 @@ class GraspSynthesisFilter final : public fba::Component {
 
   void fail(const std::string& reason) {
     ctx_.log().warn("grasp synthesis failed: {}", reason);
+    ctx_.report("failure", nlohmann::json(reason).dump());
     ctx_.emit(kFailed, reason);
     done_ = true;
   }
