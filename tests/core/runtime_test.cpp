@@ -410,16 +410,22 @@ connections:
   EXPECT_TRUE(has_event(r, "slow", "safe_state"));
 }
 
-TEST_P(RuntimeBoth, StagesAreObservableAsEventsAndInTheSummary) {
-  fba::Task task(load(R"(
-components:
-  src: { type: examples.counter, params: { count: 2, start: 1 } }
+namespace {
+// The counter's values `start`, `start + 1`, ... drive test.staged (1: working, 2: done, 4: a bad result).
+std::string staged(int count, int start) {
+  return "components:\n  src: { type: examples.counter, params: { count: " + std::to_string(count) + ", start: " +
+         std::to_string(start) + R"( } }
   st: { type: test.staged }
   sink: { type: examples.sink }
 connections:
   - src.out -> st.in
   - st.out -> sink.in
-)"),
+)";
+}
+}  // namespace
+
+TEST_P(RuntimeBoth, StagesAreObservableAsEventsAndInTheSummary) {
+  fba::Task task(load(staged(2, 1)),
                  with(GetParam()));
   const auto r = task.run();
   ASSERT_EQ(r.outcome, Outcome::Success) << r.reason;
@@ -433,15 +439,7 @@ connections:
 // The time per stage and the reported results, in the summary: where a component's work went, and
 // what it found, without replaying its events.
 TEST_P(RuntimeBoth, TheSummaryGivesEachStagesTimeAndTheReportedResults) {
-  const auto cfg = load(R"(
-components:
-  src: { type: examples.counter, params: { count: 2, start: 1 } }
-  st: { type: test.staged }
-  sink: { type: examples.sink }
-connections:
-  - src.out -> st.in
-  - st.out -> sink.in
-)");
+  const auto cfg = load(staged(2, 1));
   fba::Task task(cfg, with(GetParam()));
   const auto r = task.run();
   ASSERT_EQ(r.outcome, Outcome::Success) << r.reason;
@@ -466,15 +464,7 @@ connections:
 }
 
 TEST(Runtime, AResultThatIsNotJsonIsAPluginBugNamingTheResult) {
-  fba::Task task(load(R"(
-components:
-  src: { type: examples.counter, params: { count: 1, start: 4 } }
-  st: { type: test.staged }
-  sink: { type: examples.sink }
-connections:
-  - src.out -> st.in
-  - st.out -> sink.in
-)"),
+  fba::Task task(load(staged(1, 4)),
                  with(ExecutorKind::Deterministic));
   const auto r = task.run();
   EXPECT_EQ(r.outcome, Outcome::RuntimeError);
