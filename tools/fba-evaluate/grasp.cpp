@@ -52,8 +52,8 @@ summary.json's "grasp" object (world frame, metres; the mesh is in world frame t
     "views": [i, ...]                                              optional
   }
 
-A run's summary.json from fba-run is read too: the grasp is then the payload of its last
-grasp_selected event (grasp.synthesis emits the grasp as this JSON).
+A run's summary.json from fba-run is read too: the grasp is then the one a component reported
+(grasp.synthesis's results.grasp, this JSON).
 
 Exit status: 0 when evaluated (with --summary: the grasp is force closure), 1 when the grasp
 is not force closure, 2 for bad input (a mesh that does not load, a malformed summary).
@@ -98,29 +98,15 @@ Eigen::Isometry3d table_pose(double x, double y, double yaw_deg) {
 }
 
 std::optional<Grasp> summary_grasp(const nlohmann::json& j, const std::string& path) {
-  if (j.is_object() && j.contains("grasp")) return grasp::grasp_from_json(j["grasp"], path + ": grasp");
-  // fba-run's own summary: the last grasp_selected event (grasp.synthesis), whose payload is the
-  // grasp as JSON; the final event carries its payload itself when it is not in "events".
   if (!j.is_object()) return std::nullopt;
-  const nlohmann::json* payload = nullptr;
-  std::string where;
-  if (j.contains("events") && j["events"].is_array())
-    for (std::size_t i = 0; i < j["events"].size(); ++i) {
-      const auto& e = j["events"][i];
-      if (e.is_object() && e.value("name", "") == "grasp_selected" && e.contains("payload"))
-        payload = &e["payload"], where = path + ": events[" + std::to_string(i) + "].payload";
-    }
-  const auto fe = j.find("final_event");
-  if (!payload && fe != j.end() && fe->is_object() && fe->value("name", "") == "grasp_selected" && fe->contains("payload"))
-    payload = &(*fe)["payload"], where = path + ": final_event.payload";
-  if (!payload) return std::nullopt;
-  if (!payload->is_string())
-    throw std::invalid_argument(where + ": expected the grasp as a JSON string; found " + std::string(payload->type_name()));
-  try {
-    return grasp::grasp_from_json(nlohmann::json::parse(payload->get<std::string>()), where);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw std::invalid_argument(where + " is not valid JSON: " + e.what());
-  }
+  if (j.contains("grasp")) return grasp::grasp_from_json(j["grasp"], path + ": grasp");
+  // fba-run's own summary: the grasp a component reported (grasp.synthesis: results.grasp). The
+  // results are complete where the event list stops at its first 10000 events.
+  if (!j.contains("components") || !j["components"].is_object()) return std::nullopt;
+  for (const auto& [name, c] : j["components"].items())
+    if (c.is_object() && c.contains("results") && c["results"].is_object() && c["results"].contains("grasp"))
+      return grasp::grasp_from_json(c["results"]["grasp"], path + ": components." + name + ".results.grasp");
+  return std::nullopt;
 }
 
 std::string object_name(const std::string& mesh) {
@@ -141,7 +127,7 @@ Grasp read_summary_grasp(const std::string& path) {
   }
   if (auto g = summary_grasp(j, path)) return *g;
   throw std::invalid_argument("summary '" + path +
-                              "' has no \"grasp\" object and no grasp_selected event (see fba-evaluate grasp --help)");
+                              "' has no \"grasp\" object and no component reported one (see fba-evaluate grasp --help)");
 }
 
 int evaluate_summary(const Options& o, const grasp::ObjectSurface& surface) {

@@ -442,34 +442,31 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
   row.reason = s.value("reason", "");
   if (!ended.empty()) row.reason = ended + "; " + row.reason;
 
-  // Components by type: the task's names are its own.
-  std::map<std::string, std::string> type_of;
-  if (s.contains("components") && s["components"].is_object())
-    for (const auto& [name, c] : s["components"].items())
-      if (c.is_object()) type_of[name] = c.value("type", "");
-  nlohmann::json events = s.contains("events") && s["events"].is_array() ? s["events"] : nlohmann::json::array();
-  if (s.contains("final_event") && s["final_event"].is_object() && s["final_event"].contains("payload"))
-    events.push_back(s["final_event"]);
+  // What the components reported (summary.json's results): the task's names are its own, so a
+  // result is found by its name; the carver's comparison with uniform refinement (compare_uniform)
+  // is its last `detail` event.
   int model_views = -1;
-  for (const auto& e : events) {
-    if (!e.is_object()) continue;
-    const std::string type = type_of[e.value("source", "")], name = e.value("name", "");
-    if (type == "vision.octree_carver" && name == "updated") {
-      const auto p = payload_json(e);
-      if (p.is_object()) {
-        model_views = p.value("views", model_views);
-        row.nodes = std::max<long long>(row.nodes, 0) + p.value("nodes_visited", 0LL);
-      }
-    } else if (type == "vision.octree_carver" && name == "detail") {
-      if (const auto p = payload_json(e); p.is_object()) row.detail = p;
-    } else if (type == "sim.hand" && (name == "held" || name == "dropped")) {
-      row.held = name == "held";
-      const auto p = payload_json(e);
-      if (name == "dropped" && p.is_object() && p.contains("reason")) row.reason = "dropped: " + p.value("reason", "");
-    } else if (type == "grasp.synthesis" && name == "grasp_synthesis_failed") {
-      row.reason = "synthesis failed: " + e.value("payload", "");
+  const nlohmann::json components = s.contains("components") && s["components"].is_object() ? s["components"] : nlohmann::json::object();
+  for (const auto& [name, c] : components.items()) {
+    if (!c.is_object() || !c.contains("results") || !c["results"].is_object()) continue;
+    const auto& r = c["results"];
+    if (r.contains("carving") && r["carving"].is_object()) {
+      row.nodes = r["carving"].value("nodes_visited", 0LL);
+      model_views = r["carving"].value("views", model_views);
     }
+    if (r.contains("lift") && r["lift"].is_object()) {
+      row.held = r["lift"].value("held", false);
+      if (!*row.held) row.reason = "dropped: " + r["lift"].value("reason", std::string("?"));
+    }
+    if (r.contains("failure") && r["failure"].is_string()) row.reason = "synthesis failed: " + r["failure"].get<std::string>();
   }
+  if (s.contains("events") && s["events"].is_array())
+    for (const auto& e : s["events"]) {
+      if (!e.is_object() || e.value("name", "") != "detail") continue;
+      const auto c = components.find(e.value("source", ""));
+      if (c != components.end() && c->is_object() && c->value("type", "") == "vision.octree_carver")
+        if (const auto p = payload_json(e); p.is_object()) row.detail = p;
+    }
   row.views = model_views;
   try {
     if (const auto g = summary_grasp(s, summary.string())) {

@@ -23,8 +23,8 @@ constexpr std::size_t kMaxSamples = 1'000'000;
 constexpr double kMaxFriction = 10.0;
 constexpr int kMaxConeEdges = 64;
 
-// The grasp in a parsed summary.json: its "grasp" object, else the payload of the last
-// grasp_selected event (fba-run's summary). nullopt when it has neither; throws
+// The grasp in a parsed summary.json: its "grasp" object, else the grasp a component reported
+// (fba-run's summary: components.NAME.results.grasp). nullopt when it has neither; throws
 // std::invalid_argument, naming `path` and the member, for a grasp that is malformed.
 std::optional<Grasp> summary_grasp(const nlohmann::json& summary, const std::string& path);
 

@@ -71,31 +71,24 @@ TEST_F(EvaluateGraspCli, RandomSetsGiveTheirFigures) {
   EXPECT_NE(r.output.find("cube.ply"), std::string::npos) << r.output;
 }
 
-// fba-run's summary.json: the grasp is the payload of grasp.synthesis's grasp_selected event,
-// a JSON string inside the events list, or in the final event itself.
-TEST_F(EvaluateGraspCli, ReadsTheGraspFromARunsGraspSelectedEvent) {
-  const std::string grasp = R"({\"contacts\": [{\"position\": [-0.05, 0, 0], \"normal\": [1, 0, 0]}, )"
-                            R"({\"position\": [0.05, 0.02, 0], \"normal\": [-1, 0, 0]}, )"
-                            R"({\"position\": [0.05, -0.02, 0], \"normal\": [-1, 0, 0]}]})";
+// fba-run's summary.json: the grasp is the one grasp.synthesis reported, under its results.
+TEST_F(EvaluateGraspCli, ReadsTheGraspAComponentReported) {
+  const std::string grasp = R"({"contacts": [{"position": [-0.05, 0, 0], "normal": [1, 0, 0]}, )"
+                            R"({"position": [0.05, 0.02, 0], "normal": [-1, 0, 0]}, )"
+                            R"({"position": [0.05, -0.02, 0], "normal": [-1, 0, 0]}]})";
   const fs::path p = dir_ / "run-summary.json";
-  std::ofstream(p) << R"({"outcome": "success", "events": [{"source": "synthesis", "name": "planning_performed", "payload": "{}"},)"
-                   << R"( {"source": "synthesis", "name": "grasp_selected", "payload": ")" << grasp << R"("}],)"
-                   << R"( "final_event": {"source": "synthesis", "name": "grasp_selected", "index": 1}})";
+  std::ofstream(p) << R"({"outcome": "success", "events": [], "components": {"carver": {"type": "vision.octree_carver"},)"
+                   << R"( "synthesis": {"type": "grasp.synthesis", "results": {"views": 4, "grasp": )" << grasp << "}}}}";
   Result r = run("--mesh " + mesh() + " --summary " + p.string() + " --random 0");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("grasp: force closure yes"), std::string::npos) << r.output;
 
-  const fs::path q = dir_ / "final-summary.json";
-  std::ofstream(q) << R"({"outcome": "success", "events": [],)"
-                   << R"( "final_event": {"source": "synthesis", "name": "grasp_selected", "payload": ")" << grasp << R"("}})";
-  r = run("--mesh " + mesh() + " --summary " + q.string() + " --random 0");
-  EXPECT_EQ(r.status, 0) << r.output;
-
-  const fs::path bad = dir_ / "bad-payload.json";
-  std::ofstream(bad) << R"({"events": [{"name": "grasp_selected", "payload": "{ not json"}]})";
+  const fs::path bad = dir_ / "bad-grasp.json";
+  std::ofstream(bad) << R"({"components": {"synthesis": {"results": {"grasp": {"contacts": [1, 2]}}}}})";
   r = run("--mesh " + mesh() + " --summary " + bad.string());
   EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("events[0].payload is not valid JSON"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("components.synthesis.results.grasp.contacts: expected an array of 3 contacts"), std::string::npos)
+      << r.output;
 }
 
 TEST_F(EvaluateGraspCli, BadInputIsAClearErrorWithStatusTwo) {
