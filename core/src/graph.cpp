@@ -412,7 +412,7 @@ void Node::invoke() {
   const std::string error = guarded("process()", [&] { component->process(); });
   if (timed) {
     std::lock_guard lock(stage_mutex);
-    stage_times[stage].busy_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - *busy_since).count();
+    count_stage_time();
     busy_since.reset();
   }
   if (!error.empty())
@@ -422,17 +422,21 @@ void Node::invoke() {
   if (finish_requested && !finished.load()) on_finish();
 }
 
-void Node::enter_stage(const std::string& next) {
+void Node::count_stage_time() {
   const auto now = std::chrono::steady_clock::now();
   const std::int64_t clock = graph.now_ns();
-  std::lock_guard lock(stage_mutex);
   auto& current = stage_times[stage];
   current.clock_s += static_cast<double>(clock - stage_clock_since_ns) * 1e-9;
+  stage_clock_since_ns = clock;
   if (busy_since) {
     current.busy_s += std::chrono::duration<double>(now - *busy_since).count();
     busy_since = now;
   }
-  stage_clock_since_ns = clock;
+}
+
+void Node::enter_stage(const std::string& next) {
+  std::lock_guard lock(stage_mutex);
+  count_stage_time();
   stage = next;
   ++stage_times[next].entered;
 }
@@ -952,19 +956,10 @@ std::uint64_t Graph::collect_stats(RunResult& r) {
         default: s.state = "running"; break;
       }
     {
-      const auto now = std::chrono::steady_clock::now();
-      const std::int64_t clock = now_ns();
       std::lock_guard stage_lock(n->stage_mutex);
       s.stage = n->stage;
-      for (const auto& name : n->spec.stage_names()) {
-        StageTime t;
-        if (auto it = n->stage_times.find(name); it != n->stage_times.end()) t = it->second;
-        if (name == n->stage) {  // the current stage, up to now
-          t.clock_s += static_cast<double>(clock - n->stage_clock_since_ns) * 1e-9;
-          if (n->busy_since) t.busy_s += std::chrono::duration<double>(now - *n->busy_since).count();
-        }
-        s.stages.emplace_back(name, t);
-      }
+      if (!s.stage.empty()) n->count_stage_time();  // the current stage, up to now
+      for (const auto& name : n->spec.stage_names()) s.stages.emplace_back(name, n->stage_times[name]);
       s.results = n->results;
     }
     r.components.push_back(std::move(s));

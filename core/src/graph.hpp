@@ -202,8 +202,9 @@ class Node {
   std::string stage;
   // Under stage_mutex: the time per stage (StageTime), and process()'s share of it so far.
   std::map<std::string, StageTime, std::less<>> stage_times;
-  std::int64_t stage_clock_since_ns = 0;  // when the current stage began, on the task's clock
-  std::optional<std::chrono::steady_clock::time_point> busy_since;  // inside process(): since the last change
+  std::int64_t stage_clock_since_ns = 0;  // since when the current stage's time is not yet counted
+  std::optional<std::chrono::steady_clock::time_point> busy_since;  // inside process(): the same for its busy time
+  void count_stage_time();  // adds the current stage's time up to now; the caller holds stage_mutex
   std::map<std::string, std::string> results;  // Context::report
   void enter_stage(const std::string& next);  // takes stage_mutex
 
