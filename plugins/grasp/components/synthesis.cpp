@@ -123,8 +123,10 @@ class GraspSynthesisFilter final : public fba::Component {
     if (auto s = ctx_(kSilhouette); s.has()) {
       const auto& frame = s.get().frame;
       view_index_.push_back(frame && frame->index >= 0 ? frame->index : int(view_index_.size()));
-      if (frame && frame->has_pose) eyes_.push_back(frame->camera.centre_in_world());
-      if (frame && frame->has_pose) last_frame_ = frame;
+      if (frame && frame->has_pose) {
+        eyes_.push_back(frame->camera.centre_in_world());
+        last_frame_ = frame;
+      }
     }
     auto in = ctx_(kOctree);
     if (!in.has()) return;
@@ -140,21 +142,29 @@ class GraspSynthesisFilter final : public fba::Component {
     const int views = model.views;
     ctx_.report("views", std::to_string(views));  // analysed so far: the run's figure when it ends
     write_model(model);
-    const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_});
+    // The model's views are the first silhouettes (the carver takes them in arrival order).
+    const std::span<const Eigen::Vector3d> eyes = std::span(eyes_).first(std::min<std::size_t>(eyes_.size(), std::size_t(views)));
+    const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_, params_.table_z});
+    if (surface.samples.empty() && surface.leaves > 0)
+      return fail("none of the model's " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
+                  " views is joined to the table at z = " + fixed(params_.table_z.value_or(0)) +
+                  ": the object rests on it (check table_z, and the carver's bounds reach down to it)");
     if (surface.samples.empty())
       return fail("the model is empty after " + std::to_string(views) +
                   " views: no occupied leaf to grasp (no target in the silhouettes, or a root box that misses the object)");
     fba::grasp::ModelSurface observed = surface;
-    // The model's views are the first silhouettes (the carver takes them in arrival order).
-    if (rim_deg_ > 0 && !eyes_.empty())
-      fba::grasp::mark_unobserved(observed.samples, std::span(eyes_).first(std::min<std::size_t>(eyes_.size(), std::size_t(views))),
-                                  rim_deg_, rim_separation_deg_);
+    if (rim_deg_ > 0 && !eyes.empty()) fba::grasp::mark_unobserved(observed.samples, eyes, rim_deg_, rim_separation_deg_);
     fba::grasp::SynthesisParams p = params_;
     p.neighbour_radius = surface.radius;
     const fba::grasp::SynthesisResult r = fba::grasp::synthesise(observed.samples, p);
 
     double best_total = 0;  // the candidates come reliable first, most stable first: not by total
     for (const auto& c : r.candidates) best_total = std::max(best_total, c.grasp.scores.total);
+    // What the search saw: why a model gives few or weak candidates.
+    ctx_.log().debug("views {}: {} of {} occupied leaves joined to the table; {} surface samples in {} regions; {} candidates "
+                     "(best total {:.3f}); left out: {} into the table, {} blocked by the model, {} not force closure",
+                     views, surface.leaves - surface.unsupported_leaves, surface.leaves, observed.samples.size(), r.regions.size(),
+                     r.candidates.size(), best_total, r.below_table, r.hand_blocked, r.not_force_closure);
     double best_resolved = 0;  // the best candidate whose contacts are all on resolved parts of the model
     const fba::grasp::GraspCandidate* best_resolved_candidate = nullptr;
     for (const auto& c : r.candidates) {  // best first
@@ -216,11 +226,10 @@ class GraspSynthesisFilter final : public fba::Component {
     // surface under their fingers (each contact and its neighbourhood, as synthesis judges it), one
     // group per candidate. The next view should graze it. The candidates above the threshold, else
     // the best few.
-    if (rim_deg_ > 0 && !eyes_.empty()) {
+    if (rim_deg_ > 0 && !eyes.empty()) {
       std::vector<fba::grasp::SurfaceSample> rim = surface.samples;
       for (auto& x : rim) x.uncertain = false;
-      fba::grasp::mark_unobserved(rim, std::span(eyes_).first(std::min<std::size_t>(eyes_.size(), std::size_t(views))), rim_deg_,
-                                  rim_separation_deg_);
+      fba::grasp::mark_unobserved(rim, eyes, rim_deg_, rim_separation_deg_);
       constexpr std::size_t kMostCandidates = 5, kFewCandidates = 3;
       const bool any_reliable = !r.candidates.empty() && r.candidates.front().grasp.scores.total >= threshold_;
       const double r2 = surface.radius * surface.radius;
@@ -352,8 +361,8 @@ class GraspSynthesisFilter final : public fba::Component {
   const double radius_;
   const double rim_deg_;
   const double rim_separation_deg_;
-  std::vector<Eigen::Vector3d> eyes_;
-  std::shared_ptr<const fba::Frame> last_frame_;  // the last posed view: the pictures of the grasp are drawn on it  // the silhouettes' camera centres, in arrival order
+  std::vector<Eigen::Vector3d> eyes_;             // the posed silhouettes' camera centres, in arrival order
+  std::shared_ptr<const fba::Frame> last_frame_;  // the last posed view: the pictures of the grasp are drawn on it
   std::vector<int> view_index_;  // the silhouettes' view indices, in arrival order (their images are not kept)
   int requested_views_ = -1;      // the model views of the last regions request
   bool done_ = false;

@@ -6,29 +6,101 @@
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 #include <Eigen/Eigenvalues>
 
 namespace fba::grasp {
 namespace {
 
-// The state of the model at p: Empty outside the root box, else the state of the leaf holding p.
-NodeState state_at(const Octree& model, const Eigen::Vector3d& p) {
-  if (!model.bounds.contains(p)) return NodeState::Empty;
-  const OctreeNode* n = &model.root;
+// The leaf holding p (none outside the root box), with its depth and lattice position as
+// OctreeCell gives them.
+struct Located {
+  const OctreeNode* node = nullptr;
+  int depth = 0;
+  Eigen::Vector3i lattice = Eigen::Vector3i::Zero();
+};
+
+Located locate(const Octree& model, const Eigen::Vector3d& p) {
+  Located at;
+  if (!model.bounds.contains(p)) return at;
+  at.node = &model.root;
   Eigen::Vector3d lo = model.bounds.min();
   double edge = model.bounds.sizes().x();
-  while (!n->is_leaf()) {
+  while (!at.node->is_leaf()) {
     edge /= 2;
+    ++at.depth;
     int i = 0;
-    for (int a = 0; a < 3; ++a)
+    for (int a = 0; a < 3; ++a) {
+      at.lattice[a] *= 2;
       if (p[a] >= lo[a] + edge) {
         i |= 1 << a;
         lo[a] += edge;
+        ++at.lattice[a];
       }
-    n = &model.children(*n)[i];
+    }
+    at.node = &model.children(*at.node)[i];
   }
-  return n->state();
+  return at;
+}
+
+std::uint64_t leaf_key(int depth, const Eigen::Vector3i& c) {
+  return (static_cast<std::uint64_t>(depth) << 60) | (static_cast<std::uint64_t>(c.x()) << 40) |
+         (static_cast<std::uint64_t>(c.y()) << 20) | static_cast<std::uint64_t>(c.z());
+}
+
+// Calls f(p) for the four quarter points just outside each of the cell's six faces: probing them
+// finds every face neighbour as large as the cell or larger, and the finer ones at those points.
+template <class F>
+void for_face_probes(const OctreeCell& c, F&& f) {
+  const double h = c.half_size, eps = 1e-3 * h;
+  for (int a = 0; a < 3; ++a) {
+    const int u = (a + 1) % 3, v = (a + 2) % 3;
+    for (int sign : {-1, 1})
+      for (int qu : {-1, 1})
+        for (int qv : {-1, 1}) {
+          Eigen::Vector3d p = c.centre;
+          p[a] += sign * (h + eps);
+          p[u] += qu * h / 2;
+          p[v] += qv * h / 2;
+          f(a, sign, p);
+        }
+  }
+}
+
+// The occupied leaves an object resting on the table can be (keys as leaf_key): those joined
+// through shared faces to a leaf that reaches down to the table. A pillar the views could not
+// carve stays joined; space above the object that no view saw (carving keeps it: nothing there
+// was seen to be empty), cut off from the object by carved space, does not.
+struct SupportedLeaves {
+  std::unordered_set<std::uint64_t> keys;
+  std::size_t unsupported = 0;
+};
+
+SupportedLeaves supported_leaves(const Octree& model, double table_z) {
+  std::unordered_map<std::uint64_t, OctreeCell> occupied;
+  SupportedLeaves out;
+  std::vector<std::uint64_t> queue;
+  model.for_each_occupied_leaf([&](const OctreeCell& c) {
+    const std::uint64_t k = leaf_key(c.depth, Eigen::Vector3i(c.x, c.y, c.z));
+    occupied.emplace(k, c);
+    if (c.centre.z() - c.half_size <= table_z) {
+      out.keys.insert(k);
+      queue.push_back(k);
+    }
+  });
+  while (!queue.empty()) {
+    const OctreeCell c = occupied.at(queue.back());
+    queue.pop_back();
+    for_face_probes(c, [&](int, int, const Eigen::Vector3d& p) {
+      const Located at = locate(model, p);
+      if (!at.node || at.node->state() == NodeState::Empty) return;
+      const std::uint64_t k = leaf_key(at.depth, at.lattice);
+      if (out.keys.insert(k).second) queue.push_back(k);
+    });
+  }
+  out.unsupported = occupied.size() - out.keys.size();
+  return out;
 }
 
 // Points closer than r to one another are in the same or adjacent cells of edge r.
@@ -80,26 +152,21 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
   };
   std::vector<Raw> raw;
   int finest_depth = -1;
+  SupportedLeaves supported;
+  if (params.table_z) supported = supported_leaves(model, *params.table_z);
+  out.unsupported_leaves = supported.unsupported;
+  auto is_object = [&](const Located& at) {
+    return at.node && at.node->state() != NodeState::Empty && (!params.table_z || supported.keys.contains(leaf_key(at.depth, at.lattice)));
+  };
   model.for_each_occupied_leaf([&](const OctreeCell& c) {
     ++out.leaves;
+    if (params.table_z && !supported.keys.contains(leaf_key(c.depth, Eigen::Vector3i(c.x, c.y, c.z)))) return;
     finest_depth = std::max(finest_depth, c.depth);
     const double h = c.half_size, eps = 1e-3 * h;
-    Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();
-    for (int a = 0; a < 3; ++a) {
-      const int u = (a + 1) % 3, v = (a + 2) % 3;
-      for (int sign : {-1, 1}) {
-        int free = 0;
-        for (int qu : {-1, 1})
-          for (int qv : {-1, 1}) {
-            Eigen::Vector3d p = c.centre;
-            p[a] += sign * (h + eps);
-            p[u] += qu * h / 2;
-            p[v] += qv * h / 2;
-            free += state_at(model, p) == NodeState::Empty;
-          }
-        free_direction[a] += sign * free / 4.0;
-      }
-    }
+    Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();  // towards the faces no object leaf is beyond
+    for_face_probes(c, [&](int a, int sign, const Eigen::Vector3d& p) {
+      if (!is_object(locate(model, p))) free_direction[a] += sign / 4.0;
+    });
     bool any_free = false;
     for (int a = 0; a < 3; ++a) any_free = any_free || free_direction[a] != 0;
     // Faces free on both sides of an axis cancel there (a wall one leaf thick): such a leaf is
@@ -110,11 +177,13 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
         Eigen::Vector3d lo = c.centre, hi = c.centre;
         lo[a] -= h + eps;
         hi[a] += h + eps;
-        two_sided = state_at(model, lo) == NodeState::Empty && state_at(model, hi) == NodeState::Empty;
+        two_sided = !is_object(locate(model, lo)) && !is_object(locate(model, hi));
       }
       if (!two_sided) return;
     }
-    raw.push_back({c.centre + h * free_direction.cwiseMax(-1.0).cwiseMin(1.0), free_direction, c.state() == NodeState::Partial && c.depth < model.max_depth});
+    const Eigen::Vector3d position = c.centre + h * free_direction.cwiseMax(-1.0).cwiseMin(1.0);
+    if (params.table_z && position.z() < *params.table_z) return;  // the model's cone below the table
+    raw.push_back({position, free_direction, c.state() == NodeState::Partial && c.depth < model.max_depth});
   });
   if (raw.empty()) return out;
   out.finest_edge = size.x() / double(std::int64_t(1) << finest_depth);

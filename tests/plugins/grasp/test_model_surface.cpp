@@ -146,6 +146,34 @@ TEST(ModelSurface, OnlySamplesTwoViewsGrazeAreObserved) {
   EXPECT_THROW(mark_unobserved(s, std::vector<Eigen::Vector3d>{}, 0.0), std::invalid_argument);
 }
 
+// Carving keeps what no view saw: here a block above the object that no view had in its image,
+// and the silhouettes' cone under the table (the object box reaches down to z = -0.02). On a
+// table at z = 0, the object is what rests on it, above it.
+TEST(ModelSurface, OnATableTheObjectIsWhatRestsOnIt) {
+  const Eigen::AlignedBox3d workspace(Eigen::Vector3d(-0.1, -0.1, -0.02), Eigen::Vector3d(0.1, 0.1, 0.18));
+  const test::Sdf object = test::box_sdf({0, 0, 0.02}, {0.06, 0.06, 0.08});  // z -0.02 .. 0.06
+  const test::Sdf above = test::box_sdf({0, 0, 0.14}, {0.08, 0.08, 0.04});   // z 0.12 .. 0.16
+  const Octree model = test::voxelise([&](const Eigen::Vector3d& p) { return std::min(object(p), above(p)); }, workspace, 6);
+  auto count = [](const ModelSurface& s, auto&& where) {
+    return std::count_if(s.samples.begin(), s.samples.end(), [&](const SurfaceSample& x) { return where(x.position.z()); });
+  };
+  const ModelSurface all = model_surface(model);
+  EXPECT_EQ(all.unsupported_leaves, 0u);
+  EXPECT_GT(count(all, [](double z) { return z > 0.11; }), 100);
+  EXPECT_GT(count(all, [](double z) { return z < -0.005; }), 50);
+
+  ModelSurfaceParams params;
+  params.table_z = 0.0;
+  const ModelSurface s = model_surface(model, params);
+  EXPECT_GT(s.unsupported_leaves, 0u);  // the block above: nothing joins it to the table
+  EXPECT_EQ(s.leaves, all.leaves);
+  EXPECT_GT(count(s, [](double z) { return z > 0.055; }), 100);  // the object's top face
+  EXPECT_EQ(count(s, [](double z) { return z > 0.07; }), 0);
+  EXPECT_EQ(count(s, [](double z) { return z < 0.0; }), 0);
+  // The object's sides are as without the table.
+  EXPECT_EQ(count(s, [](double z) { return z > 0.01 && z < 0.05; }), count(all, [](double z) { return z > 0.01 && z < 0.05; }));
+}
+
 TEST(ModelSurface, AnEmptyModelHasNoSurface) {
   Octree empty;
   empty.bounds = kCube;

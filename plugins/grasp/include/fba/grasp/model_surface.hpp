@@ -4,6 +4,7 @@
 // resolved the boundary to its finest depth.
 #pragma once
 
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -18,6 +19,11 @@ struct ModelSurfaceParams {
   // Metres: the neighbourhood that smooths normals and positions and estimates curvature; 0 means
   // 3 edges of the finest occupied leaf (the staircase of voxel faces needs a few steps to average).
   double radius = 0;
+  // World z of the table the object rests on, when known. Carving keeps what no view saw, as
+  // nothing there was seen to be empty: space out of every image (often above the object, at the
+  // top of the root box) and the silhouettes' cones under the table. With a table, only the leaves
+  // joined through shared faces to one that reaches down to it are the object, and only above it.
+  std::optional<double> table_z;
 };
 
 struct ModelSurface {
@@ -25,6 +31,7 @@ struct ModelSurface {
   double radius = 0;          // the neighbourhood used (pass it on as SynthesisParams::neighbour_radius)
   double finest_edge = 0;     // edge of the finest occupied leaf, metres (0 when there is none)
   std::size_t leaves = 0;     // occupied leaves in the model
+  std::size_t unsupported_leaves = 0;  // of those, left out as not joined to the table (ModelSurfaceParams::table_z)
 };
 
 // Empty samples for a model with no occupied leaf. Throws std::invalid_argument for a model whose
