@@ -366,15 +366,16 @@ GraspExecution LiftTest::run_steps(const Grasp& grasp) {
   };
   // The fingers are straight, so they may touch nearer their tips than the pads: where the pads at
   // the contacts would put a fingertip on the table (a low object, such as a banana lying flat),
-  // the hand stays higher, by at most what keeps the contacts on the fingers' straight part.
+  // the hand stays higher, by at most what keeps the contacts on the fingers' straight part. How
+  // high depends on the opening: with the approach tilted, a finger opened wider reaches lower.
   constexpr double kStep = 0.001, kMargin = 0.003;
-  for (double raise = 0; raise <= s.pad_to_end - kMargin; raise += kStep) {
-    pose_hand(centre - a * (depth + raise), initial_travel);
-    if (s.hand_touches_table()) continue;
-    grasp_palm = centre - a * (depth + raise);
-    break;
-  }
-  const Eigen::Vector3d pregrasp_palm = grasp_palm - a * p.pregrasp_distance;
+  auto palm_at_grasp = [&](double travel) {
+    for (double raise = 0; raise <= s.pad_to_end - kMargin; raise += kStep) {
+      pose_hand(centre - a * (depth + raise), travel);
+      if (!s.hand_touches_table()) return Eigen::Vector3d(centre - a * (depth + raise));
+    }
+    return grasp_palm;  // no height clears the table: the way in below names what touches it
+  };
 
   // The pregrasp opening: the grasp's aperture if the way in is clear, else wider (as far as the
   // hand opens): a finger whose contact normal is far from its closing direction passes the
@@ -382,14 +383,18 @@ GraspExecution LiftTest::run_steps(const Grasp& grasp) {
   std::string hit;
   bool hit_at_pregrasp = false;
   double open_travel = initial_travel;
+  Eigen::Vector3d pregrasp_palm;
   for (;; open_travel = std::max(open_travel - 0.01, 0.0)) {
+    const Eigen::Vector3d palm = palm_at_grasp(open_travel);
+    pregrasp_palm = palm - a * p.pregrasp_distance;
     hit.clear();
     constexpr int kChecks = 10;
     for (int i = 0; i <= kChecks && hit.empty(); ++i) {
-      pose_hand(pregrasp_palm + (grasp_palm - pregrasp_palm) * i / kChecks, open_travel);
+      pose_hand(pregrasp_palm + (palm - pregrasp_palm) * i / kChecks, open_travel);
       hit = s.hand_collision();
       hit_at_pregrasp = i == 0;
     }
+    if (hit.empty()) grasp_palm = palm;
     if (hit.empty() || open_travel == 0) break;
   }
   if (!hit.empty()) {
