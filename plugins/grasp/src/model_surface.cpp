@@ -44,9 +44,12 @@ Located locate(const Octree& model, const Eigen::Vector3d& p) {
   return at;
 }
 
+// A leaf's identity: its depth (5 bits) and lattice position (19 bits per axis; model_surface
+// refuses deeper models).
+constexpr int kMaxKeyDepth = 19;
 std::uint64_t leaf_key(int depth, const Eigen::Vector3i& c) {
-  return (static_cast<std::uint64_t>(depth) << 60) | (static_cast<std::uint64_t>(c.x()) << 40) |
-         (static_cast<std::uint64_t>(c.y()) << 20) | static_cast<std::uint64_t>(c.z());
+  return (static_cast<std::uint64_t>(depth) << 57) | (static_cast<std::uint64_t>(c.x()) << 38) |
+         (static_cast<std::uint64_t>(c.y()) << 19) | static_cast<std::uint64_t>(c.z());
 }
 
 // Calls f(p) for the four quarter points just outside each of the cell's six faces: probing them
@@ -152,6 +155,9 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
   };
   std::vector<Raw> raw;
   int finest_depth = -1;
+  if (params.table_z && model.max_depth > kMaxKeyDepth)
+    throw std::invalid_argument("model surface: with a table, models up to depth " + std::to_string(kMaxKeyDepth) +
+                                " are supported; found max_depth " + std::to_string(model.max_depth));
   SupportedLeaves supported;
   if (params.table_z) supported = supported_leaves(model, *params.table_z);
   out.unsupported_leaves = supported.unsupported;
