@@ -92,6 +92,20 @@ TEST(GraspSynthesisComponent, AnEmptyModelFailsWithTheReason) {
   EXPECT_TRUE(h.failure().empty()) << h.failure();  // a reason for the task's rules, not a crash
 }
 
+// A table below the whole model (a wrong table_z, or a root box that stops short of the table):
+// nothing rests on it, and the reason names the table.
+TEST(GraspSynthesisComponent, AModelNotJoinedToTheTableFailsNamingTheTable) {
+  ComponentHarness h(registry(), "grasp.synthesis", {{"table_z", std::vector<double>{-0.5}}});
+  h.push<fba::Octree>("octree", cylinder(3));
+  h.run();
+  const auto failed = named(h.events(), "grasp_synthesis_failed");
+  ASSERT_EQ(failed.size(), 1u);
+  EXPECT_EQ(failed[0].payload.rfind("none of the model's ", 0), 0u) << failed[0].payload;
+  EXPECT_NE(failed[0].payload.find("views is joined to the table at z = -0.500"), std::string::npos) << failed[0].payload;
+  EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
+  EXPECT_TRUE(h.failure().empty()) << h.failure();
+}
+
 TEST(GraspSynthesisComponent, AModelWithoutATreeYetIsWaitedFor) {
   ComponentHarness h(registry(), "grasp.synthesis");
   fba::Octree none;
