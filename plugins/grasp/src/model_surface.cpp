@@ -13,43 +13,41 @@
 namespace fba::grasp {
 namespace {
 
-// The leaf holding p (none outside the root box), with its depth and lattice position as
-// OctreeCell gives them.
-struct Located {
-  const OctreeNode* node = nullptr;
-  int depth = 0;
-  Eigen::Vector3i lattice = Eigen::Vector3i::Zero();
-};
-
-Located locate(const Octree& model, const Eigen::Vector3d& p) {
-  Located at;
-  if (!model.bounds.contains(p)) return at;
-  at.node = &model.root;
+// The leaf holding p, as for_each_occupied_leaf gives it; its node is null outside the root box.
+OctreeCell leaf_at(const Octree& model, const Eigen::Vector3d& p) {
+  OctreeCell c;
+  if (!model.bounds.contains(p)) return c;
+  c.node = &model.root;
   Eigen::Vector3d lo = model.bounds.min();
+  Eigen::Vector3i lattice = Eigen::Vector3i::Zero();
   double edge = model.bounds.sizes().x();
-  while (!at.node->is_leaf()) {
+  while (!c.node->is_leaf()) {
     edge /= 2;
-    ++at.depth;
+    ++c.depth;
+    lattice *= 2;
     int i = 0;
-    for (int a = 0; a < 3; ++a) {
-      at.lattice[a] *= 2;
+    for (int a = 0; a < 3; ++a)
       if (p[a] >= lo[a] + edge) {
         i |= 1 << a;
         lo[a] += edge;
-        ++at.lattice[a];
+        ++lattice[a];
       }
-    }
-    at.node = &model.children(*at.node)[i];
+    c.node = &model.children(*c.node)[i];
   }
-  return at;
+  c.x = lattice.x(), c.y = lattice.y(), c.z = lattice.z();
+  c.half_size = edge / 2;
+  c.centre = lo + Eigen::Vector3d::Constant(c.half_size);
+  return c;
 }
+
+bool occupied_leaf(const OctreeCell& c) { return c.node && c.occupied(); }
 
 // A leaf's identity: its depth (5 bits) and lattice position (19 bits per axis; model_surface
 // refuses deeper models).
 constexpr int kMaxKeyDepth = 19;
-std::uint64_t leaf_key(int depth, const Eigen::Vector3i& c) {
-  return (static_cast<std::uint64_t>(depth) << 57) | (static_cast<std::uint64_t>(c.x()) << 38) |
-         (static_cast<std::uint64_t>(c.y()) << 19) | static_cast<std::uint64_t>(c.z());
+std::uint64_t leaf_key(const OctreeCell& c) {
+  return (static_cast<std::uint64_t>(c.depth) << 57) | (static_cast<std::uint64_t>(c.x) << 38) |
+         (static_cast<std::uint64_t>(c.y) << 19) | static_cast<std::uint64_t>(c.z);
 }
 
 // Calls f(p) for the four quarter points just outside each of the cell's six faces: probing them
@@ -81,28 +79,22 @@ struct SupportedLeaves {
 };
 
 SupportedLeaves supported_leaves(const Octree& model, double table_z) {
-  std::unordered_map<std::uint64_t, OctreeCell> occupied;
   SupportedLeaves out;
-  std::vector<std::uint64_t> queue;
+  std::size_t occupied = 0;
+  std::vector<OctreeCell> queue;
   model.for_each_occupied_leaf([&](const OctreeCell& c) {
-    const std::uint64_t k = leaf_key(c.depth, Eigen::Vector3i(c.x, c.y, c.z));
-    occupied.emplace(k, c);
-    if (c.centre.z() - c.half_size <= table_z) {
-      out.keys.insert(k);
-      queue.push_back(k);
-    }
+    ++occupied;
+    if (c.centre.z() - c.half_size <= table_z && out.keys.insert(leaf_key(c)).second) queue.push_back(c);
   });
   while (!queue.empty()) {
-    const OctreeCell c = occupied.at(queue.back());
+    const OctreeCell c = queue.back();
     queue.pop_back();
     for_face_probes(c, [&](int, int, const Eigen::Vector3d& p) {
-      const Located at = locate(model, p);
-      if (!at.node || at.node->state() == NodeState::Empty) return;
-      const std::uint64_t k = leaf_key(at.depth, at.lattice);
-      if (out.keys.insert(k).second) queue.push_back(k);
+      const OctreeCell n = leaf_at(model, p);
+      if (occupied_leaf(n) && out.keys.insert(leaf_key(n)).second) queue.push_back(n);
     });
   }
-  out.unsupported = occupied.size() - out.keys.size();
+  out.unsupported = occupied - out.keys.size();
   return out;
 }
 
@@ -161,17 +153,17 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
   SupportedLeaves supported;
   if (params.table_z) supported = supported_leaves(model, *params.table_z);
   out.unsupported_leaves = supported.unsupported;
-  auto is_object = [&](const Located& at) {
-    return at.node && at.node->state() != NodeState::Empty && (!params.table_z || supported.keys.contains(leaf_key(at.depth, at.lattice)));
+  auto is_object = [&](const OctreeCell& c) {
+    return occupied_leaf(c) && (!params.table_z || supported.keys.contains(leaf_key(c)));
   };
   model.for_each_occupied_leaf([&](const OctreeCell& c) {
     ++out.leaves;
-    if (params.table_z && !supported.keys.contains(leaf_key(c.depth, Eigen::Vector3i(c.x, c.y, c.z)))) return;
+    if (!is_object(c)) return;
     finest_depth = std::max(finest_depth, c.depth);
     const double h = c.half_size, eps = 1e-3 * h;
     Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();  // towards the faces no object leaf is beyond
     for_face_probes(c, [&](int a, int sign, const Eigen::Vector3d& p) {
-      if (!is_object(locate(model, p))) free_direction[a] += sign / 4.0;
+      if (!is_object(leaf_at(model, p))) free_direction[a] += sign / 4.0;
     });
     bool any_free = false;
     for (int a = 0; a < 3; ++a) any_free = any_free || free_direction[a] != 0;
@@ -183,7 +175,7 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
         Eigen::Vector3d lo = c.centre, hi = c.centre;
         lo[a] -= h + eps;
         hi[a] += h + eps;
-        two_sided = !is_object(locate(model, lo)) && !is_object(locate(model, hi));
+        two_sided = !is_object(leaf_at(model, lo)) && !is_object(leaf_at(model, hi));
       }
       if (!two_sided) return;
     }
