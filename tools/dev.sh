@@ -50,10 +50,12 @@ use_ccache() {
 }
 
 # configure <name> [cmake args...]
+# Each test binary is one CTest test (FBA_TEST_EACH_CASE=OFF, cmake/FbaTests.cmake): a process per
+# case spent more time loading OpenCV's 150 shared libraries than testing.
 configure() {
   local name=$1
   shift
-  cmake -S "$top" -B "build/$name" -G Ninja "${launcher[@]}" "$@" >"build/$name.configure.log" 2>&1 ||
+  cmake -S "$top" -B "build/$name" -G Ninja "${launcher[@]}" -DFBA_TEST_EACH_CASE=OFF "$@" >"build/$name.configure.log" 2>&1 ||
     { cat "build/$name.configure.log"; exit 1; }
 }
 
@@ -78,17 +80,27 @@ plain=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -
 
 build() { cmake --build "build/$1" --parallel "$jobs" "${@:2}"; }
 
-# A failing test's output scrolls away among the others' lines; on failure it is printed again, whole,
-# at the end, where a CI log's tail shows it.
+# A failing case's output scrolls away among the others' lines; on failure it is printed again at the
+# end, where a CI log's tail shows it: from each failed binary, the output of each failed case (from
+# its "[ RUN" line to its "[  FAILED" line) and of a case that never finished (a crash, a timeout).
 run_tests() {
   local name=$1
   shift
   (cd "build/$name" && ctest --output-on-failure --parallel "$jobs" --timeout 900 "$@") && return 0
   local rc=$?
-  echo "== failed in build/$name, their output again:"
+  echo "== failed in build/$name, their failed cases again:"
   awk -F: 'NR == FNR { failed[$2] = 1; next }
-           /^[0-9]+\/[0-9]+ Testing: / { name = $0; sub(/^[0-9]+\/[0-9]+ Testing: /, "", name); show = name in failed }
-           show' "build/$name/Testing/Temporary/LastTestsFailed.log" "build/$name/Testing/Temporary/LastTest.log" | tail -c 20000
+           function flush() { if (show && running) printf "%s", buf; buf = ""; running = 0 }
+           /^[0-9]+\/[0-9]+ Testing: / { flush(); name = $0; sub(/^[0-9]+\/[0-9]+ Testing: /, "", name)
+                                          show = name in failed; if (show) print "== " name; next }
+           !show { next }
+           /^\[ RUN      \]/ { buf = ""; running = 1 }
+           running { buf = buf $0 "\n" }
+           /^\[       OK \]/ { buf = ""; running = 0 }
+           /^\[  FAILED  \] .*\(/ { printf "%s", buf; buf = ""; running = 0 }
+           /^Test (Passed|Failed)|^<end of output>/ { flush() }
+           END { flush() }' \
+    "build/$name/Testing/Temporary/LastTestsFailed.log" "build/$name/Testing/Temporary/LastTest.log" | tail -c 40000
   exit "$rc"
 }
 
@@ -124,12 +136,14 @@ case "$cmd" in
 
     stage "ThreadSanitizer: the runtime's concurrency tests and the hardware drivers' threads"
     configure tsan "${sanitized[@]}" -DFBA_SANITIZE=thread -DFBA_BUILD_VISION=OFF -DFBA_BUILD_BENCHMARKS=OFF
-    build tsan --target fba_core_tests fba_task_tests fba_can_tests fba_canopen_tests fba_canopen_program_tests \
-      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests
-    # In-process tests only: the command-line tests (Cli*, and the random signals) run fba-run as a
-    # process and check its crash and signal handling, which by design calls what TSan calls
+    tsan_tests=(fba_core_tests fba_task_tests fba_can_tests fba_canopen_tests fba_canopen_program_tests
+      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests)
+    build tsan --target "${tsan_tests[@]}"
+    # In-process tests only: the command-line tests (Cli*, and the random signals' binary) run fba-run
+    # as a process and check its crash and signal handling, which by design calls what TSan calls
     # signal-unsafe (the best-effort crash report); they run in the plain and ASan stages.
-    TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 run_tests tsan -L "core|tasks|hardware" -LE signals -E "^Cli"
+    GTEST_FILTER='-Cli*' TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+      run_tests tsan -R "^($(IFS='|'; echo "${tsan_tests[*]}"))\$"
 
     stage "fuzzing the task loader: every corpus input once, then a bounded exploration"
     CC=clang CXX=clang++ configure fuzz "${sanitized[@]}" -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_VISION=OFF \
