@@ -360,6 +360,35 @@ TEST(GraspSynthesis, ALedgeBetweenTheOpenThumbAndItsContactBlocksTheHand) {
   EXPECT_FALSE(hand_path_blocked(on_cap, hand, samples, tolerance));
 }
 
+// The check passes over whole cells of samples whose ball cannot reach the hand; a sample checked
+// alone is the rule itself. Small clouds of samples around the hand's way (beside a box's sides,
+// x beyond +-0.03, and about the palm's face, z 0.205), several to a cell: blocked exactly when
+// one of their samples alone blocks.
+TEST(GraspSynthesis, TheHandsWayCheckFindsWhatEverySampleCheckedAloneFinds) {
+  const HandGeometry hand;
+  const double tolerance = SynthesisParams{}.path_tolerance;
+  const Grasp g = grasp_across_x(0.05);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> x(0.03, 0.09), y(-0.05, 0.05), z(0.0, 0.26), near(-0.015, 0.015);
+  std::bernoulli_distribution thumb_side(0.5);
+  int blocked = 0, free = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Eigen::Vector3d at(thumb_side(rng) ? -x(rng) : x(rng), y(rng), z(rng));
+    std::vector<SurfaceSample> cloud(8, SurfaceSample{});
+    for (auto& s : cloud) {
+      s.position = at + Eigen::Vector3d(near(rng), near(rng), near(rng));
+      s.normal = {0, 0, 1};
+    }
+    const bool alone = std::any_of(cloud.begin(), cloud.end(), [&](const SurfaceSample& s) {
+      return hand_path_blocked(g, hand, std::span(&s, 1), tolerance).has_value();
+    });
+    ASSERT_EQ(hand_path_blocked(g, hand, cloud, tolerance).has_value(), alone) << "cloud about " << at.transpose();
+    (alone ? blocked : free) += 1;
+  }
+  EXPECT_GT(blocked, 100);
+  EXPECT_GT(free, 100);
+}
+
 // An approach tilted towards the thumb: the open thumb stands beyond its contact, lower than it.
 TEST(GraspSynthesis, TheOpenThumbIsLowerThanItsContactWhenTheHandTilts) {
   Grasp g = grasp_across_x(0.05);

@@ -100,8 +100,8 @@ struct SynthesisParams {
   double friction = 0.5;
   double min_model_epsilon = 0;
   std::optional<double> rank_total;
-  // Candidates checked on the model (the hand's way, force closure), best total first: each check
-  // is a pass over the samples and a 6-D hull.
+  // Candidates checked for force closure on the model, best total first, among those the hand can
+  // take (path_tolerance, checked on every candidate in turn): each check is a 6-D hull.
   std::size_t max_checks = 400;
   // Bounds on the search: thumbs tried, finger positions per thumb, candidates returned.
   std::size_t max_thumbs = 80;
@@ -143,7 +143,7 @@ struct SynthesisResult {
 // models it, with the hand moved back along the approach by `back` metres (0: at the grasp).
 double hand_lowest_z(const Grasp& grasp, const HandGeometry& hand, double back = 0);
 
-// The first sample (index) that blocks the hand taking `grasp` (contacts, approach, aperture) as
+// A sample (index) that blocks the hand taking `grasp` (contacts, approach, aperture) as
 // SynthesisParams::path_tolerance describes, or none.
 std::optional<std::size_t> hand_path_blocked(const Grasp& grasp, const HandGeometry& hand,
                                              std::span<const SurfaceSample> samples, double tolerance);
