@@ -26,8 +26,9 @@ class NeighbourGrid {
   NeighbourGrid(std::span<const SurfaceSample> s, double r) : samples_(s), r_(r) {
     for (std::size_t i = 0; i < s.size(); ++i) {
       // Cell indices must fit the key's 21 bits per axis (and an int): metres over a sane radius.
-      if (!((s[i].position.cwiseAbs() / r).maxCoeff() < 1e6))
-        throw std::invalid_argument("grasp synthesis: sample " + std::to_string(i) + " lies more than 10^6 neighbour radii (" +
+      // (allFinite first: Eigen's maxCoeff may pass over a NaN.)
+      if (!s[i].position.allFinite() || !((s[i].position.cwiseAbs() / r).maxCoeff() < 1e6))
+        throw std::invalid_argument("grasp synthesis: sample " + std::to_string(i) + " is not finite or lies more than 10^6 neighbour radii (" +
                                     std::to_string(r) + " m) from the origin; expected metres and a radius near the sample spacing");
       cells_[key(cell(s[i].position))].push_back(i);
     }
@@ -207,9 +208,13 @@ bool in_hand_way(const Eigen::Vector3d& q, const Grasp& g, const HandPose& h, co
 class SampleCells {
  public:
   SampleCells(std::span<const SurfaceSample> samples, double size) : samples_(samples) {
+    if (!(size > 0)) throw std::invalid_argument("grasp synthesis: the hand's finger_width must be > 0, found " + num(size));
     std::vector<std::pair<std::array<std::int64_t, 3>, std::size_t>> at(samples.size());
     for (std::size_t i = 0; i < samples.size(); ++i) {
       const Eigen::Vector3d c = (samples[i].position / size).array().floor();
+      // A cell index must fit an int64 (a NaN fits nothing).
+      if (!c.allFinite() || !(c.cwiseAbs().maxCoeff() < 1e15))
+        throw std::invalid_argument("grasp synthesis: sample " + std::to_string(i) + " is not finite or lies beyond 10^15 finger widths from the origin");
       at[i] = {{static_cast<std::int64_t>(c.x()), static_cast<std::int64_t>(c.y()), static_cast<std::int64_t>(c.z())}, i};
     }
     std::sort(at.begin(), at.end());

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -168,6 +169,13 @@ TEST(GraspSynthesis, TheHandsLowestPointFollowsItsGeometry) {
   // (thumb to fingers, along x: level) and its depth (across, along z) about the contacts' height.
   g.approach = {0, 1, 0};
   EXPECT_NEAR(hand_lowest_z(g, hand), 0.05 - hand.palm_half_depth, 1e-12);
+}
+
+TEST(GraspSynthesis, EstimatingCurvatureRefusesASampleThatIsNotFinite) {
+  std::vector<SurfaceSample> samples(3, SurfaceSample{});
+  for (auto& s : samples) s.normal = {0, 0, 1};
+  samples[1].position.y() = std::numeric_limits<double>::quiet_NaN();  // not x: maxCoeff may pass over it
+  EXPECT_THROW(estimate_curvature(samples, 0.01), std::invalid_argument);
 }
 
 TEST(GraspSynthesis, CurvatureScoreOrdersConcaveAboveFlatAboveSphere) {
@@ -387,6 +395,13 @@ TEST(GraspSynthesis, TheHandsWayCheckFindsWhatEverySampleCheckedAloneFinds) {
   }
   EXPECT_GT(blocked, 100);
   EXPECT_GT(free, 100);
+
+  std::vector<SurfaceSample> bad(2, SurfaceSample{});
+  bad[1].position.y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(hand_path_blocked(g, hand, bad, tolerance), std::invalid_argument);
+  HandGeometry no_width = hand;
+  no_width.finger_width = 0;
+  EXPECT_THROW(hand_path_blocked(g, no_width, std::span(bad.data(), 1), tolerance), std::invalid_argument);
 }
 
 // An approach tilted towards the thumb: the open thumb stands beyond its contact, lower than it.

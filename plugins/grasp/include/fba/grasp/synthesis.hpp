@@ -144,7 +144,8 @@ struct SynthesisResult {
 double hand_lowest_z(const Grasp& grasp, const HandGeometry& hand, double back = 0);
 
 // A sample (index) that blocks the hand taking `grasp` (contacts, approach, aperture) as
-// SynthesisParams::path_tolerance describes, or none.
+// SynthesisParams::path_tolerance describes, or none. Throws std::invalid_argument for a sample
+// that is not finite, or a finger_width that is not positive.
 std::optional<std::size_t> hand_path_blocked(const Grasp& grasp, const HandGeometry& hand,
                                              std::span<const SurfaceSample> samples, double tolerance);
 
