@@ -25,11 +25,11 @@ class NeighbourGrid {
  public:
   NeighbourGrid(std::span<const SurfaceSample> s, double r) : samples_(s), r_(r) {
     for (std::size_t i = 0; i < s.size(); ++i) {
-      // Cell indices must fit the key's 21 bits per axis (and an int): metres over a sane radius.
+      // Cell indices must fit the key's 21 bits per axis (and an int): metres over a sane cell size.
       // (allFinite first: Eigen's maxCoeff may pass over a NaN.)
       if (!s[i].position.allFinite() || !((s[i].position.cwiseAbs() / r).maxCoeff() < 1e6))
-        throw std::invalid_argument("grasp synthesis: sample " + std::to_string(i) + " is not finite or lies more than 10^6 neighbour radii (" +
-                                    std::to_string(r) + " m) from the origin; expected metres and a radius near the sample spacing");
+        throw std::invalid_argument("grasp synthesis: sample " + std::to_string(i) + " is not finite or lies more than 10^6 grid cells (" +
+                                    std::to_string(r) + " m) from the origin; expected metres and a cell size near the sample spacing");
       cells_[key(cell(s[i].position))].push_back(i);
     }
   }
@@ -45,6 +45,11 @@ class NeighbourGrid {
             if (j != i && (samples_[j].position - samples_[i].position).squaredNorm() <= r_ * r_) out.push_back(j);
         }
     return out;
+  }
+  // f(indices) for each cell's samples, in no order.
+  template <typename F>
+  void for_each_cell(F f) const {
+    for (const auto& [key, members] : cells_) f(members);
   }
 
  private:
@@ -208,24 +213,11 @@ bool in_hand_way(const Eigen::Vector3d& q, const Grasp& g, const HandPose& h, co
 class SampleCells {
  public:
   SampleCells(std::span<const SurfaceSample> samples, double size) : samples_(samples) {
-    if (!(size > 0)) throw std::invalid_argument("grasp synthesis: the hand's finger_width must be > 0, found " + num(size));
-    std::vector<std::pair<std::array<std::int64_t, 3>, std::size_t>> at(samples.size());
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-      const Eigen::Vector3d c = (samples[i].position / size).array().floor();
-      // A cell index must fit an int64 (a NaN fits nothing).
-      if (!c.allFinite() || !(c.cwiseAbs().maxCoeff() < 1e15))
-        throw std::invalid_argument("grasp synthesis: sample " + std::to_string(i) + " is not finite or lies beyond 10^15 finger widths from the origin");
-      at[i] = {{static_cast<std::int64_t>(c.x()), static_cast<std::int64_t>(c.y()), static_cast<std::int64_t>(c.z())}, i};
-    }
-    std::sort(at.begin(), at.end());
-    for (std::size_t i = 0; i < at.size(); ++i) {
-      if (i == 0 || at[i].first != at[i - 1].first) cells_.emplace_back();
-      cells_.back().samples.push_back(at[i].second);
-    }
-    for (Cell& cell : cells_) {
-      for (std::size_t i : cell.samples) cell.centre += samples[i].position / static_cast<double>(cell.samples.size());
-      for (std::size_t i : cell.samples) cell.radius = std::max(cell.radius, (samples[i].position - cell.centre).norm());
-    }
+    NeighbourGrid(samples, size).for_each_cell([&](const std::vector<std::size_t>& members) {
+      Cell& cell = cells_.emplace_back(Cell{members});
+      for (std::size_t i : members) cell.centre += samples[i].position / static_cast<double>(members.size());
+      for (std::size_t i : members) cell.radius = std::max(cell.radius, (samples[i].position - cell.centre).norm());
+    });
   }
 
   std::optional<std::size_t> hand_path_blocked(const Grasp& g, const HandGeometry& hand, double tolerance) const {
@@ -252,6 +244,7 @@ class SampleCells {
 
 std::optional<std::size_t> hand_path_blocked(const Grasp& g, const HandGeometry& hand, std::span<const SurfaceSample> samples,
                                              double tolerance) {
+  require(hand.finger_width > 0, "hand.finger_width must be > 0, found " + num(hand.finger_width));
   return SampleCells(samples, hand.finger_width).hand_path_blocked(g, hand, tolerance);
 }
 
