@@ -35,12 +35,21 @@ struct Ray {
   double length;             // |dir|
   double t_max;              // where the ray enters the target's box
   const OctreeNode* target;
+  // For a surface point: its tangent plane (unit normal; zero for none).
+  Eigen::Vector3d plane_point = Eigen::Vector3d::Zero(), plane_normal = Eigen::Vector3d::Zero();
+
+  // Whether the leaf straddles the tangent plane: part of the surface the point lies on.
+  bool on_plane(const OctreeCell& c) const {
+    if (plane_normal.isZero()) return false;
+    const double extent = c.half_size * plane_normal.cwiseAbs().sum();
+    return std::abs((c.centre - plane_point).dot(plane_normal)) < extent;
+  }
 
   bool blocked(const OctreeCell& c) const {
     double t0, t1;
     if (!clip(c.box(), eye, dir, 0, t_max, t0, t1)) return false;
     if (c.state() == NodeState::Empty || c.node == target) return false;
-    if (c.is_leaf()) return (t1 - t0) * length > 0.5 * c.half_size;
+    if (c.is_leaf()) return (t1 - t0) * length > 0.5 * c.half_size && !on_plane(c);
     const OctreeNode* k = model.children(*c.node);
     for (int i = 0; i < 8; ++i) {
       const OctreeCell child =
@@ -111,7 +120,7 @@ bool occluded(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vect
   if (model.node_count == 0) return false;
   const double edge = model.bounds.sizes().x() / double(1 << std::clamp(model.max_depth, 0, 30));
   const Eigen::Vector3d probe = point + normal.normalized() * edge;
-  Ray ray{model, eye, probe - eye, (probe - eye).norm(), 1, nullptr};
+  Ray ray{model, eye, probe - eye, (probe - eye).norm(), 1, nullptr, point, normal.normalized()};
   if (ray.length <= 0) return false;
   return ray.blocked(model.cell(0, 0, 0, 0, model.root));
 }

@@ -241,6 +241,23 @@ TEST(ExplorationGrazing, AGrazingLineOfSightBehindAnOccluderDoesNotCount) {
   EXPECT_EQ(choose_view(uniform_model(box_state), plus_x_contact(), views).scores[0].first, 1u);
 }
 
+TEST(ExplorationGrazing, AFacesOwnVoxelStaircaseDoesNotHideItsPointFromALineOfSightAlongIt) {
+  // A face tilted 27 deg from the lattice, through the origin: voxels whose centre lies below 0.1
+  // along its normal are full, so the face is a staircase whose steps stand up to 0.22 above the
+  // plane. A line of sight 8 deg off the plane, from behind it (within any rim tolerance), climbs
+  // through the steps to the probe one leaf edge out: the steps are the face the view grazes.
+  const Eigen::Vector3d n = Eigen::Vector3d(2, 1, 0).normalized(), along = Eigen::Vector3d(-1, 2, 0).normalized();
+  const double lean = 8 * std::numbers::pi / 180;
+  const Eigen::Vector3d eye = 4 * (along * std::cos(lean) - n * std::sin(lean));
+  auto centre = [](int i) { return -1 + 0.25 * (i + 0.5); };
+  const Octree face = uniform_model([&](int x, int y, int z) {
+    return Eigen::Vector3d(centre(x), centre(y), centre(z)).dot(n) < 0.1 ? NodeState::Full : NodeState::Empty;
+  });
+  EXPECT_FALSE(fba::grasp::occluded(face, eye, Eigen::Vector3d::Zero(), n));
+  // The same line of sight to a point a step lower: the body in front of it now hides it.
+  EXPECT_TRUE(fba::grasp::occluded(face, eye, -0.6 * n, n));
+}
+
 TEST(ExplorationGrazing, ABadSurfacePointIsRefusedNamingIt) {
   const Octree m = uniform_model(box_state);
   const std::vector<Eigen::Isometry3d> views{camera_at({4, 0, 0})};

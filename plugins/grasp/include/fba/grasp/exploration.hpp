@@ -73,7 +73,10 @@ struct ViewChoice {
 bool occluded(const Octree& model, const Eigen::Vector3d& eye, const OctreeCell& target);
 
 // Whether the segment from eye to the surface point (moved one finest leaf edge out along its
-// normal, so that the surface it lies on does not hide it) crosses an occupied node of the model.
+// normal) crosses an occupied leaf of the model that does not straddle the point's tangent plane.
+// A line of sight that grazes a flat face runs along it: the face's own voxel staircase is the
+// surface the view pins, not something hiding it. A leaf wholly in front of the plane (another part
+// of the object) or behind it (the body, seen through from behind the rim) blocks.
 bool occluded(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vector3d& point, const Eigen::Vector3d& normal);
 
 // Scores every candidate (world_from_camera poses, camera z forward) and picks the best one that
