@@ -1,6 +1,7 @@
 // fba-evaluate grasp: the quality of a grasp on the true object surface (force closure and the
 // Ferrari-Canny epsilon), compared with random contact sets and with synthesis on perfect samples.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <fstream>
@@ -26,8 +27,9 @@ const char* kHelp = R"(fba-evaluate grasp: grasp quality on the true object surf
 
   fba-evaluate grasp --mesh M.obj --summary run/summary.json [--random 1000]
       Places the three contacts of summary.json's "grasp" on the mesh (along each contact's
-      normal line, else the closest point), with the mesh's inward normals, and prints force
-      closure and the Ferrari-Canny epsilon; then the same figures for random contact sets.
+      normal line, else the closest point), with the mesh's inward normals, and prints how far
+      each moved and how far its normal is off the mesh's, force closure and the Ferrari-Canny
+      epsilon; then the same figures for random contact sets.
   fba-evaluate grasp --mesh M.obj [M2.obj ...] --random 1000
       Random three-contact sets drawn uniformly by area: share force closure, 99th percentile
       of epsilon (all sets, 0 when not force closure), median epsilon of the force-closure ones.
@@ -137,9 +139,12 @@ int evaluate_summary(const Options& o, const grasp::ObjectSurface& surface) {
     const auto p = surface.place(g.contacts[k]);
     placed[k] = p.contact;
     const Eigen::Vector3d& a = g.contacts[k].position;
-    std::printf("  contact %d%s: (%.4f, %.4f, %.4f) -> (%.4f, %.4f, %.4f), moved %.2f mm %s\n", k,
-                k == 0 ? " (thumb)" : "", a.x(), a.y(), a.z(), p.contact.position.x(), p.contact.position.y(),
-                p.contact.position.z(), 1000 * p.displacement, p.along_normal ? "along its normal" : "to the closest point");
+    // How far the grasp's normal (the model's) is from the true surface's: the error force closure must absorb.
+    const double cos_off = g.contacts[k].normal.normalized().dot(p.contact.normal.normalized());
+    std::printf("  contact %d%s: (%.4f, %.4f, %.4f) -> (%.4f, %.4f, %.4f), moved %.2f mm %s; normal %.1f deg off the surface's\n",
+                k, k == 0 ? " (thumb)" : "", a.x(), a.y(), a.z(), p.contact.position.x(), p.contact.position.y(),
+                p.contact.position.z(), 1000 * p.displacement, p.along_normal ? "along its normal" : "to the closest point",
+                std::acos(std::clamp(cos_off, -1.0, 1.0)) * 180 / std::numbers::pi);
   }
   const grasp::GraspQuality q = surface.evaluate(placed, o.quality);
   std::printf("grasp: force closure %s, epsilon %.4f\n", q.force_closure ? "yes" : "no", q.epsilon);

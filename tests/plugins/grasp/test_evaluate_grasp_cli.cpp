@@ -54,6 +54,23 @@ TEST_F(EvaluateGraspCli, AGraspOnOpposingFacesIsForceClosureAndBeatsRandomSets) 
   EXPECT_NE(r.output.find("random 300 sets: force closure"), std::string::npos) << r.output;
 }
 
+TEST_F(EvaluateGraspCli, EachContactSaysHowFarItsNormalIsFromTheSurfaces) {
+  // The thumb's normal 20 degrees off the face's: the model's error the grasp must absorb.
+  const std::string s = summary(R"({"contacts": [
+      {"position": [-0.05, 0.0, 0.0], "normal": [0.9396926, 0.3420201, 0]},
+      {"position": [0.05, 0.02, 0.0], "normal": [-1, 0, 0]},
+      {"position": [0.05, -0.02, 0.0], "normal": [-1, 0, 0]}]})");
+  const Result r = run("--mesh " + mesh() + " --summary " + s + " --random 0");
+  auto line = [&](const std::string& start) {
+    const auto at = r.output.find(start);
+    return at == std::string::npos ? std::string() : r.output.substr(at, r.output.find('\n', at) - at);
+  };
+  EXPECT_NE(line("contact 0 (thumb)").find("moved 0.00 mm along its normal; normal 20.0 deg off the surface's"), std::string::npos)
+      << r.output;
+  EXPECT_NE(line("contact 1").find("moved 0.00 mm along its normal; normal 0.0 deg off the surface's"), std::string::npos)
+      << r.output;
+}
+
 TEST_F(EvaluateGraspCli, AGraspOnOneFaceIsNotForceClosureAndExitsOne) {
   const std::string s = summary(R"({"contacts": [
       {"position": [0.05, 0.0, 0.0], "normal": [-1, 0, 0]},
