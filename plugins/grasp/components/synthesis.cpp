@@ -80,6 +80,11 @@ class GraspSynthesisFilter final : public fba::Component {
       "metres: a candidate is left out when the model stands more than this nearer an open finger than its contact (it would be "
       "touched first) or reaches behind the palm; the hand of the sim's lift test. 0: off (a grasp that is never executed)")
                                              .range(0, 1);
+  static constexpr auto kNormalErrorDeg = fba::Param<double>(
+      "normal_error_deg", 0.0,
+      "degrees the model's normals may be off the object's: a candidate must stay force closure with each normal turned this far "
+      "(its friction cones narrowed to fit); 0: the model's normals are taken as true")
+                                              .range(0, 24);
   static inline const auto kTableZ = fba::Param<std::vector<double>>(
       "table_z", {}, "[z]: the table the object stands on (world z, up); grasps whose hand would reach into it are left out. "
       "Empty: no table")
@@ -95,7 +100,7 @@ class GraspSynthesisFilter final : public fba::Component {
     return fba::Spec::filter("grasp.synthesis",
                              "Selects a reliable three-finger grasp on an octree model, or asks for views where the model lacks detail.")
         .add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kTableZ, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kTableZ, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -115,6 +120,7 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.weight_curvature = ctx(kWeightCurvature);
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
     params_.path_tolerance = ctx(kPathTolerance);
+    params_.normal_error_deg = ctx(kNormalErrorDeg);
     params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first
   }
 

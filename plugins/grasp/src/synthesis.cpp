@@ -20,6 +20,14 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
+// The half-angle (degrees) of the round cone inside the friction cone's pyramid (QualityParams'
+// edges): turned by any angle, a pyramid keeps only that. A pyramid whose edges lie within this
+// less normal_error_deg of the model's normal lies inside the pyramid about any normal within
+// normal_error_deg of it, so a grasp closed on the model stays closed on such a surface.
+double inscribed_cone_deg(double friction) {
+  return std::atan(friction * std::cos(std::numbers::pi / QualityParams{}.cone_edges)) / kDeg;
+}
+
 // Uniform grid of cell size r: neighbours within r are in the 27 surrounding cells.
 class NeighbourGrid {
  public:
@@ -102,6 +110,9 @@ void check_params(const SynthesisParams& p) {
   require(p.max_thumbs > 0 && p.max_fingers > 1 && p.max_candidates > 0 && p.max_checks > 0,
           "search bounds must be positive");
   require(p.friction >= 0 && std::isfinite(p.friction), "friction must be finite and >= 0, found " + num(p.friction));
+  require(p.normal_error_deg == 0 || (p.normal_error_deg > 0 && p.normal_error_deg < inscribed_cone_deg(p.friction)),
+          "normal_error_deg must be >= 0 and below the friction cone's half-angle (" + num(inscribed_cone_deg(p.friction)) +
+              " degrees inside its " + std::to_string(QualityParams{}.cone_edges) + "-edge pyramid), found " + num(p.normal_error_deg));
   require(p.min_model_epsilon >= 0 && std::isfinite(p.min_model_epsilon),
           "min_model_epsilon must be finite and >= 0, found " + num(p.min_model_epsilon));
   require(!p.rank_total || std::isfinite(*p.rank_total), "rank_total is not finite");
@@ -494,6 +505,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   for (const auto& x : s) r_max = std::max(r_max, (x.position - centre).norm());
   QualityParams quality;
   quality.friction = p.friction;
+  if (p.normal_error_deg > 0) quality.friction = std::tan((inscribed_cone_deg(p.friction) - p.normal_error_deg) * kDeg);
   std::size_t checks = 0;
   for (auto& c : all) {
     if (result.candidates.size() >= p.max_candidates) break;

@@ -266,6 +266,49 @@ TEST(GraspSynthesis, FrictionlessThreeContactsAreNeverKept) {
   EXPECT_FALSE(synthesise(samples, p).candidates.empty()) << "the geometric filters alone keep candidates";
 }
 
+// The normal turned by `deg` degrees about a random axis perpendicular to it.
+Eigen::Vector3d turned(const Eigen::Vector3d& n, double deg, std::mt19937& rng) {
+  std::normal_distribution<double> g;
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+  while (axis.norm() < 1e-6) axis = n.cross(Eigen::Vector3d(g(rng), g(rng), g(rng)));
+  return Eigen::AngleAxisd(deg * kPi / 180, axis.normalized()) * n;
+}
+
+// A carved model's normals are off the true surface's. Allowing for it, every candidate stays force
+// closure with each of its normals turned that far in any direction; without it, some do not. The
+// opposition is loosened (the defaults' margins alone keep these perfect shapes' candidates closed).
+TEST(GraspSynthesis, ACandidateAllowingForNormalErrorStaysClosedWithItsNormalsTurnedThatFar) {
+  const double h = 0.005, error_deg = 10;
+  std::mt19937 rng(7);
+  std::size_t plain_opened = 0;
+  for (auto samples : {cylinder(0.035, 0.12, h), box({0.06, 0.10, 0.15}, h)}) {
+    estimate_curvature(samples, 2.2 * h);
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& x : samples) centre += x.position / static_cast<double>(samples.size());
+    double r_max = 0;
+    for (const auto& x : samples) r_max = std::max(r_max, (x.position - centre).norm());
+    auto stays_closed = [&](const GraspCandidate& c) {
+      for (int trial = 0; trial < 20; ++trial) {
+        auto contacts = c.grasp.contacts;
+        for (auto& k : contacts) k.normal = turned(k.normal, error_deg, rng);
+        if (!evaluate_grasp(contacts, centre, r_max).force_closure) return false;
+      }
+      return true;
+    };
+    SynthesisParams p = params_for(h);
+    p.thumb_alignment_deg = 25;
+    p.balance_deg = 25;
+    p.plane_alignment_deg = 25;
+    for (const auto& c : synthesise(samples, p).candidates)
+      if (plain_opened == 0) plain_opened += stays_closed(c) ? 0 : 1;
+    p.normal_error_deg = error_deg;
+    const SynthesisResult robust = synthesise(samples, p);
+    ASSERT_FALSE(robust.candidates.empty());
+    for (const auto& c : robust.candidates) EXPECT_TRUE(stays_closed(c)) << c.grasp.contacts[0].position.transpose();
+  }
+  EXPECT_GT(plain_opened, 0u) << "on these shapes some candidates closed only with exact normals";
+}
+
 // A higher bar on the model's epsilon keeps fewer candidates, each above it.
 TEST(GraspSynthesis, MinimumModelEpsilonLeavesOutTheLessStable) {
   const double h = 0.005;
@@ -436,6 +479,16 @@ TEST(GraspSynthesis, BadInputIsAClearError) {
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("aperture range"), std::string::npos) << e.what();
+  }
+  SynthesisParams wide;
+  wide.normal_error_deg = 25;  // wider than the pyramid's inscribed cone for friction 0.5 (24.8 degrees)
+  try {
+    synthesise(s, wide);
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("normal_error_deg must be >= 0 and below the friction cone's half-angle (24.79"),
+              std::string::npos)
+        << e.what();
   }
   SynthesisParams tiny;
   tiny.neighbour_radius = 1e-12;

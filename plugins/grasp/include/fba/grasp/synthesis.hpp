@@ -98,6 +98,12 @@ struct SynthesisParams {
   // and the total stay the scores reported.
   bool require_force_closure = true;
   double friction = 0.5;
+  // How far (degrees) the model's normals may be off the true surface's at the same contacts. The
+  // check narrows each friction cone so that, turned by up to this angle, it still lies inside the
+  // full cone (both as the quality measure's pyramids): a grasp closed on the model stays closed
+  // on any surface whose normals are within this angle of the model's. 0: the model's normals are
+  // taken as true. Must be below the pyramid's inscribed half-angle (24.8 degrees for friction 0.5).
+  double normal_error_deg = 0;
   double min_model_epsilon = 0;
   std::optional<double> rank_total;
   // Candidates checked for force closure on the model, best total first, among those the hand can
