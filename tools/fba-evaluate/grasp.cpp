@@ -1,12 +1,11 @@
 // fba-evaluate grasp: the quality of a grasp on the true object surface (force closure and the
 // Ferrari-Canny epsilon), compared with random contact sets and with synthesis on perfect samples.
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -139,12 +138,11 @@ int evaluate_summary(const Options& o, const grasp::ObjectSurface& surface) {
     const auto p = surface.place(g.contacts[k]);
     placed[k] = p.contact;
     const Eigen::Vector3d& a = g.contacts[k].position;
-    // How far the grasp's normal (the model's) is from the true surface's: the error force closure must absorb.
-    const double cos_off = g.contacts[k].normal.normalized().dot(p.contact.normal.normalized());
-    std::printf("  contact %d%s: (%.4f, %.4f, %.4f) -> (%.4f, %.4f, %.4f), moved %.2f mm %s; normal %.1f deg off the surface's\n",
-                k, k == 0 ? " (thumb)" : "", a.x(), a.y(), a.z(), p.contact.position.x(), p.contact.position.y(),
-                p.contact.position.z(), 1000 * p.displacement, p.along_normal ? "along its normal" : "to the closest point",
-                std::acos(std::clamp(cos_off, -1.0, 1.0)) * 180 / std::numbers::pi);
+    std::printf("  contact %d%s: (%.4f, %.4f, %.4f) -> (%.4f, %.4f, %.4f), moved %.2f mm %s", k, k == 0 ? " (thumb)" : "", a.x(),
+                a.y(), a.z(), p.contact.position.x(), p.contact.position.y(), p.contact.position.z(), 1000 * p.displacement,
+                p.along_normal ? "along its normal" : "to the closest point");
+    if (p.normal_error_deg) std::printf("; normal %.1f deg off the surface's", *p.normal_error_deg);
+    std::printf("\n");
   }
   const grasp::GraspQuality q = surface.evaluate(placed, o.quality);
   std::printf("grasp: force closure %s, epsilon %.4f\n", q.force_closure ? "yes" : "no", q.epsilon);

@@ -382,6 +382,7 @@ struct Row {
   bool selected = false;
   std::optional<bool> force_closure;
   double epsilon = 0, score = 0;
+  std::vector<grasp::ObjectSurface::Placement> contacts;  // the selected grasp's contacts placed on the mesh
   std::optional<bool> held;
   int views = -1;
   double wall_s = -1, cpu_s = -1;
@@ -475,7 +476,10 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
       if (!g->views.empty()) row.views = static_cast<int>(g->views.size());
       const grasp::ObjectSurface surface(placed_on_table(*j.run));
       std::array<GraspContact, 3> placed;
-      for (int k = 0; k < 3; ++k) placed[k] = surface.place(g->contacts[k]).contact;
+      for (int k = 0; k < 3; ++k) {
+        row.contacts.push_back(surface.place(g->contacts[k]));
+        placed[k] = row.contacts.back().contact;
+      }
       const auto q = surface.evaluate(placed, quality);
       row.force_closure = q.force_closure;
       row.epsilon = q.epsilon;
@@ -542,9 +546,9 @@ Stats stats_of(const std::vector<const Row*>& rows, const std::map<std::string, 
 }
 
 // One line of the summary table: the rows of one variant and one object (or all objects).
-std::string summary_line(const std::string& variant, const std::string& object, const Stats& st, const Baseline* own) {
+std::string summary_line(int width, const std::string& variant, const std::string& object, const Stats& st, const Baseline* own) {
   char line[512];
-  std::snprintf(line, sizeof line, "%-8s %-18s %4zu %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s", variant.c_str(),
+  std::snprintf(line, sizeof line, "%-*s %-18s %4zu %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s", width, variant.c_str(),
                 object.c_str(), st.runs, percent(st.selected, st.runs).c_str(), percent(st.fc, st.evaluated).c_str(),
                 fixed(st.median_eps, 4).c_str(), own && own->figures ? fixed(own->figures->epsilon_p99, 4).c_str() : "-",
                 percent(st.above, st.evaluated).c_str(),
@@ -560,12 +564,15 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
   out << "fba-evaluate grasp --batch " << l.file.filename().string() << ": task " << l.task.filename().string() << ", "
       << l.runs.size() << " runs x " << l.variants.size() << " variant(s); random baseline: " << random_sets
       << " contact sets per mesh\n\n";
+  // The variant column as wide as the longest name (8 at least).
+  int width = 8;
+  for (const auto& v : l.variants) width = std::max(width, static_cast<int>(v.name.size()));
   char line[1024];
-  std::snprintf(line, sizeof line, "%-8s %-18s %-16s %-10s %5s %4s %7s %5s %7s %7s %9s  %s\n", "variant", "object", "pose x y yaw",
+  std::snprintf(line, sizeof line, "%-*s %-18s %-16s %-10s %5s %4s %7s %5s %7s %7s %9s  %s\n", width, "variant", "object", "pose x y yaw",
                 "outcome", "views", "FC", "epsilon", "held", "wall_s", "cpu_s", "nodes", "reason");
   out << line;
   for (const auto& r : rows) {
-    std::snprintf(line, sizeof line, "%-8s %-18s %-16s %-10s %5s %4s %7s %5s %7s %7s %9s  %s\n", r.variant.c_str(), r.object.c_str(),
+    std::snprintf(line, sizeof line, "%-*s %-18s %-16s %-10s %5s %4s %7s %5s %7s %7s %9s  %s\n", width, r.variant.c_str(), r.object.c_str(),
                   r.pose.c_str(), r.outcome.c_str(), r.views >= 0 ? std::to_string(r.views).c_str() : "-",
                   !r.selected ? "-" : !r.force_closure ? "?" : *r.force_closure ? "yes" : "no",
                   r.force_closure ? fixed(r.epsilon, 4).c_str() : "-", !r.held ? "-" : *r.held ? "yes" : "no",
@@ -574,7 +581,7 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
     out << line;
   }
   out << "\n";
-  std::snprintf(line, sizeof line, "%-8s %-18s %4s %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s\n", "variant", "object", "runs",
+  std::snprintf(line, sizeof line, "%-*s %-18s %4s %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s\n", width, "variant", "object", "runs",
                 "grasp", "FC", "med_eps", "rand_p99", ">p99", "rand_FC", "held", "views", "wall_s", "cpu_s", "nodes");
   out << line;
   // Objects in the list's order; the rows of one variant and one object ("" : all objects).
@@ -590,9 +597,9 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
   for (const auto& v : l.variants) {
     for (const auto& mesh : objects) {
       const auto b = baselines.find(mesh);
-      out << summary_line(v.name, object_name(mesh), group(v.name, mesh), b == baselines.end() ? nullptr : &b->second) << "\n";
+      out << summary_line(width, v.name, object_name(mesh), group(v.name, mesh), b == baselines.end() ? nullptr : &b->second) << "\n";
     }
-    out << summary_line(v.name, "all", group(v.name, ""), nullptr) << "\n";
+    out << summary_line(width, v.name, "all", group(v.name, ""), nullptr) << "\n";
   }
   // The variants side by side: the loop beside its baselines.
   if (l.variants.size() > 1) {
@@ -629,6 +636,27 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
       out << "\n";
     }
   }
+  // How far the model's normals are off the object's at the selected contacts: what grasp.synthesis'
+  // normal_error_deg is chosen from. Contacts that moved farther than kOnObject were on space the
+  // object does not fill; their normals say nothing about the model's surface.
+  constexpr double kOnObject = 0.01;
+  out << "\nmodel normals at the selected contacts on the object (moved under 1 cm onto the mesh):\n";
+  std::snprintf(line, sizeof line, "%-*s %8s %10s %8s %8s %9s\n", width, "variant", "contacts", "median_deg", "p75_deg", "max_deg", "off_mesh");
+  out << line;
+  for (const auto& v : l.variants) {
+    std::vector<double> errors;
+    std::size_t off = 0;
+    for (const auto& r : rows)
+      if (r.variant == v.name)
+        for (const auto& c : r.contacts) {
+          if (c.displacement >= kOnObject) ++off;
+          else if (c.normal_error_deg) errors.push_back(*c.normal_error_deg);
+        }
+    const auto q = [&](double at) { return errors.empty() ? std::string("-") : fixed(grasp::quantile(errors, at), 1); };
+    std::snprintf(line, sizeof line, "%-*s %8zu %10s %8s %8s %9zu\n", width, v.name.c_str(), errors.size(), q(0.5).c_str(), q(0.75).c_str(),
+                  q(1.0).c_str(), off);
+    out << line;
+  }
   out << "\ngrasp: runs with a grasp selected; FC: of those, force closure on the true mesh; med_eps: their median epsilon;\n"
          "rand_p99, rand_FC: the random contact sets' 99th percentile of epsilon and force-closure share on the same mesh;\n"
          ">p99: selected grasps whose epsilon is above their mesh's rand_p99; held: runs held through the lift test;\n"
@@ -655,6 +683,11 @@ nlohmann::json rows_json(const std::vector<Row>& rows) {
                      {"wall_s", r.wall_s}, {"cpu_s", r.cpu_s}, {"nodes", r.nodes}};
     if (r.selected) j["score"] = r.score;
     if (r.force_closure) j["force_closure"] = *r.force_closure, j["epsilon"] = r.epsilon;
+    for (const auto& c : r.contacts) {
+      nlohmann::json k{{"moved_mm", 1000 * c.displacement}};
+      if (c.normal_error_deg) k["normal_error_deg"] = *c.normal_error_deg;
+      j["contacts"].push_back(k);
+    }
     if (r.held) j["held"] = *r.held;
     if (!r.detail.is_null()) j["detail"] = r.detail;
     a.push_back(j);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <random>
 #include <string>
@@ -121,7 +122,15 @@ ObjectSurface::Placement ObjectSurface::place(const GraspContact& approximate) c
   if (!approximate.position.allFinite())
     throw std::invalid_argument("object surface: a contact position is not finite");
   Placement out;
-  if (approximate.normal.allFinite() && approximate.normal.norm() > 0) {
+  const bool has_normal = approximate.normal.allFinite() && approximate.normal.norm() > 0;
+  auto with_error = [&](Placement& p) {
+    if (has_normal) {
+      const double c = approximate.normal.normalized().dot(p.contact.normal.normalized());
+      p.normal_error_deg = std::acos(std::clamp(c, -1.0, 1.0)) * 180 / std::numbers::pi;
+    }
+    return p;
+  };
+  if (has_normal) {
     const Eigen::Vector3d d = approximate.normal.normalized();
     double best = std::numeric_limits<double>::infinity();
     for (std::size_t t = 0; t < triangles_.size(); ++t) {
@@ -133,13 +142,13 @@ ObjectSurface::Placement ObjectSurface::place(const GraspContact& approximate) c
     }
     if (std::isfinite(best)) {
       out.displacement = best;
-      return out;
+      return with_error(out);
     }
   }
   out.contact = closest_point(approximate.position);
   out.displacement = (out.contact.position - approximate.position).norm();
   out.along_normal = false;
-  return out;
+  return with_error(out);
 }
 
 SurfaceSampling sample_for_synthesis(const ObjectSurface& surface, std::size_t count, std::uint64_t seed) {

@@ -91,6 +91,14 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   EXPECT_GT(runs[0]["detail"].value("uniform_nodes", 0), 0) << runs[0].dump(2);
   EXPECT_TRUE(runs[0]["detail"].contains("saved_share")) << runs[0].dump(2);
   EXPECT_EQ(runs[1]["outcome"], "no summary");
+  // A selected grasp's contacts as placed on the mesh, and the normals' error over the variant.
+  if (runs[0].value("selected", false)) {
+    ASSERT_EQ(runs[0]["contacts"].size(), 3u) << runs[0].dump(2);
+    EXPECT_GE(runs[0]["contacts"][0].value("normal_error_deg", -1.0), 0.0) << runs[0].dump(2);
+    EXPECT_GE(runs[0]["contacts"][0].value("moved_mm", -1.0), 0.0) << runs[0].dump(2);
+  }
+  EXPECT_NE(r.output.find("model normals at the selected contacts on the object"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("variant  contacts median_deg  p75_deg  max_deg  off_mesh"), std::string::npos) << r.output;
   EXPECT_EQ(runs[2]["variant"], "uniform");
   // The variants side by side, per object and overall.
   EXPECT_NE(r.output.find("side by side (loop / uniform):"), std::string::npos) << r.output;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -76,6 +77,15 @@ TEST(ObjectSurface, PlacementFollowsTheNormalLineToTheNearestHit) {
   EXPECT_TRUE(p.contact.position.isApprox(Eigen::Vector3d(0.05, 0.01, -0.02), 1e-6));
   EXPECT_TRUE(p.contact.normal.isApprox(Eigen::Vector3d(-1, 0, 0), 1e-6));
   EXPECT_NEAR(p.displacement, 0.01, 1e-6);
+  ASSERT_TRUE(p.normal_error_deg.has_value());
+  EXPECT_NEAR(*p.normal_error_deg, 0.0, 1e-3);
+  // A normal 30 degrees off the face's: placed along it, and the error is the angle.
+  p = s.place({{0.06, 0.0, 0.0}, {-std::cos(std::numbers::pi / 6), std::sin(std::numbers::pi / 6), 0}});
+  EXPECT_TRUE(p.along_normal);
+  ASSERT_TRUE(p.normal_error_deg.has_value());
+  EXPECT_NEAR(*p.normal_error_deg, 30.0, 1e-6);
+  // No normal given: no error to say.
+  EXPECT_FALSE(s.place({{0.06, 0.0, 0.0}, {0, 0, 0}}).normal_error_deg.has_value());
   // Inside the box, the nearer face along the line wins (the -x face is 0.09 away, +x 0.01).
   p = s.place({{0.04, 0.0, 0.0}, {-1, 0, 0}});
   EXPECT_NEAR(p.contact.position.x(), 0.05, 1e-6);  // float vertices

@@ -2,6 +2,7 @@
 // on the true surface with inward normals, and uniform random contacts for the random baseline.
 #pragma once
 
+#include <optional>
 #include <array>
 #include <algorithm>
 #include <cstdint>
@@ -35,6 +36,9 @@ class ObjectSurface {
     GraspContact contact;      // on the surface, with the triangle's inward normal
     double displacement = 0;   // distance from the given position to the placed one, metres
     bool along_normal = true;  // false when the line along the normal missed and the closest point was used
+    // Degrees between the given normal and the surface's there: the model's error a grasp on it
+    // must absorb. None when the given normal is zero or not finite.
+    std::optional<double> normal_error_deg;
   };
   // Puts an approximate contact on the surface: the hit of the line through its position along its
   // normal that is nearest to the position; if that line misses the mesh, the closest surface point.
