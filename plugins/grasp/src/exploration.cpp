@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "fba/grasp/angles.hpp"
+
 namespace fba::grasp {
 namespace {
 
@@ -64,12 +66,6 @@ bool in_view(const Eigen::Isometry3d& world_from_camera, const Eigen::Vector3d& 
   const Eigen::Vector3d p = world_from_camera.inverse() * point;
   const double n = p.norm();
   return n > 0 && p.z() >= cos_half_fov * n;
-}
-
-double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const double n = a.norm() * b.norm();
-  if (n <= 0) return 0;
-  return std::acos(std::clamp(a.dot(b) / n, -1.0, 1.0));
 }
 
 // A surface point of the request and the grazing lines of sight the views taken already give it.

@@ -10,6 +10,8 @@
 
 #include <Eigen/Geometry>
 
+#include "fba/grasp/angles.hpp"
+
 namespace fba::grasp {
 namespace {
 
@@ -123,16 +125,9 @@ ObjectSurface::Placement ObjectSurface::place(const GraspContact& approximate) c
     throw std::invalid_argument("object surface: a contact position is not finite");
   Placement out;
   const bool has_normal = approximate.normal.allFinite() && approximate.normal.norm() > 0;
-  auto with_error = [&](Placement& p) {
-    if (has_normal) {
-      const double c = approximate.normal.normalized().dot(p.contact.normal.normalized());
-      p.normal_error_deg = std::acos(std::clamp(c, -1.0, 1.0)) * 180 / std::numbers::pi;
-    }
-    return p;
-  };
+  double best = std::numeric_limits<double>::infinity();
   if (has_normal) {
     const Eigen::Vector3d d = approximate.normal.normalized();
-    double best = std::numeric_limits<double>::infinity();
     for (std::size_t t = 0; t < triangles_.size(); ++t) {
       const auto hit = line_hit(approximate.position, d, triangles_[t][0], triangles_[t][1], triangles_[t][2]);
       if (hit && std::abs(*hit) < best) {
@@ -140,15 +135,16 @@ ObjectSurface::Placement ObjectSurface::place(const GraspContact& approximate) c
         out.contact = {approximate.position + *hit * d, inward_[t]};
       }
     }
-    if (std::isfinite(best)) {
-      out.displacement = best;
-      return with_error(out);
-    }
   }
-  out.contact = closest_point(approximate.position);
-  out.displacement = (out.contact.position - approximate.position).norm();
-  out.along_normal = false;
-  return with_error(out);
+  if (std::isfinite(best)) {
+    out.displacement = best;
+  } else {
+    out.contact = closest_point(approximate.position);
+    out.displacement = (out.contact.position - approximate.position).norm();
+    out.along_normal = false;
+  }
+  if (has_normal) out.normal_error_deg = angle_between(approximate.normal, out.contact.normal) * 180 / std::numbers::pi;
+  return out;
 }
 
 SurfaceSampling sample_for_synthesis(const ObjectSurface& surface, std::size_t count, std::uint64_t seed) {

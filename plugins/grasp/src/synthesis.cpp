@@ -1,5 +1,6 @@
 #include "fba/grasp/synthesis.hpp"
 
+#include "fba/grasp/angles.hpp"
 #include "fba/grasp/grasp_quality.hpp"
 
 #include <algorithm>
@@ -130,10 +131,6 @@ std::vector<SurfaceSample> normalised_input(std::span<const SurfaceSample> in) {
     s.normal.normalize();
   }
   return out;
-}
-
-double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
 }  // namespace

@@ -2,10 +2,10 @@
 // on the true surface with inward normals, and uniform random contacts for the random baseline.
 #pragma once
 
-#include <optional>
-#include <array>
 #include <algorithm>
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <vector>
