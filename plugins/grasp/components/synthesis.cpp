@@ -130,7 +130,7 @@ class GraspSynthesisFilter final : public fba::Component {
       const auto& frame = s.get().frame;
       view_index_.push_back(frame && frame->index >= 0 ? frame->index : int(view_index_.size()));
       if (frame && frame->has_pose) {
-        eyes_.push_back(frame->camera.centre_in_world());
+        if (rim_deg_ > 0) rims_.push_back(fba::grasp::silhouette_rim(s.get()));
         last_frame_ = frame;
       }
     }
@@ -149,7 +149,7 @@ class GraspSynthesisFilter final : public fba::Component {
     ctx_.report("views", std::to_string(views));  // analysed so far: the run's figure when it ends
     write_model(model);
     // The model's views are the first silhouettes (the carver takes them in arrival order).
-    const std::span<const Eigen::Vector3d> eyes = std::span(eyes_).first(std::min<std::size_t>(eyes_.size(), std::size_t(views)));
+    const std::span<const fba::grasp::SilhouetteRim> rims = std::span(rims_).first(std::min<std::size_t>(rims_.size(), std::size_t(views)));
     const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_, params_.table_z});
     if (surface.samples.empty() && surface.leaves > 0)
       return fail("none of the model's " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
@@ -159,7 +159,7 @@ class GraspSynthesisFilter final : public fba::Component {
       return fail("the model is empty after " + std::to_string(views) +
                   " views: no occupied leaf to grasp (no target in the silhouettes, or a root box that misses the object)");
     fba::grasp::ModelSurface observed = surface;
-    if (rim_deg_ > 0 && !eyes.empty()) fba::grasp::mark_unobserved(observed.samples, eyes, rim_deg_, rim_separation_deg_);
+    if (rim_deg_ > 0 && !rims.empty()) fba::grasp::mark_unobserved(observed.samples, rims, surface.finest_edge, rim_deg_, rim_separation_deg_);
     fba::grasp::SynthesisParams p = params_;
     p.neighbour_radius = surface.radius;
     const fba::grasp::SynthesisResult r = fba::grasp::synthesise(observed.samples, p);
@@ -232,21 +232,19 @@ class GraspSynthesisFilter final : public fba::Component {
     // surface under their fingers (each contact and its neighbourhood, as synthesis judges it), one
     // group per candidate. The next view should graze it. The candidates above the threshold, else
     // the best few.
-    if (rim_deg_ > 0 && !eyes.empty()) {
-      std::vector<fba::grasp::SurfaceSample> rim = surface.samples;
-      for (auto& x : rim) x.uncertain = false;
-      fba::grasp::mark_unobserved(rim, eyes, rim_deg_, rim_separation_deg_);
+    if (rim_deg_ > 0 && !rims.empty()) {
+      const auto& samples = observed.samples;
       constexpr std::size_t kMostCandidates = 5, kFewCandidates = 3;
       const bool any_reliable = !r.candidates.empty() && r.candidates.front().grasp.scores.total >= threshold_;
       const double r2 = surface.radius * surface.radius;
       for (std::size_t i = 0; i < r.candidates.size() && i < (any_reliable ? kMostCandidates : kFewCandidates); ++i) {
         const auto& c = r.candidates[i];
         if (any_reliable && c.grasp.scores.total < threshold_) break;
-        for (std::size_t k = 0; k < rim.size(); ++k) {
-          if (!rim[k].uncertain) continue;
+        for (const auto& x : samples) {
+          if (!x.unpinned) continue;
           bool near = false;
-          for (std::size_t contact : c.samples) near |= (rim[k].position - rim[contact].position).squaredNorm() <= r2;
-          if (near) roi.points.push_back({rim[k].position, rim[k].normal.normalized(), int(i)});
+          for (std::size_t contact : c.samples) near |= (x.position - samples[contact].position).squaredNorm() <= r2;
+          if (near) roi.points.push_back({x.position, x.normal.normalized(), int(i)});
         }
       }
       roi.rim_deg = rim_deg_;
@@ -367,7 +365,7 @@ class GraspSynthesisFilter final : public fba::Component {
   const double radius_;
   const double rim_deg_;
   const double rim_separation_deg_;
-  std::vector<Eigen::Vector3d> eyes_;             // the posed silhouettes' camera centres, in arrival order
+  std::vector<fba::grasp::SilhouetteRim> rims_;   // the posed silhouettes' rims, in arrival order
   std::shared_ptr<const fba::Frame> last_frame_;  // the last posed view: the pictures of the grasp are drawn on it
   std::vector<int> view_index_;  // the silhouettes' view indices, in arrival order (their images are not kept)
   int requested_views_ = -1;      // the model views of the last regions request

@@ -9,6 +9,7 @@
 #include <unordered_set>
 
 #include <Eigen/Eigenvalues>
+#include <opencv2/core.hpp>
 
 namespace fba::grasp {
 namespace {
@@ -225,24 +226,105 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
   return out;
 }
 
-void mark_unobserved(std::span<SurfaceSample> samples, std::span<const Eigen::Vector3d> eyes, double rim_deg, double separation_deg) {
+SilhouetteRim silhouette_rim(const Silhouette& silhouette) {
+  if (!silhouette.frame || !silhouette.frame->has_pose)
+    throw std::invalid_argument("silhouette rim: the silhouette's frame has no camera pose; a rim needs the view's pose");
+  const CameraModel& camera = silhouette.frame->camera;
+  if (!camera.distortion.empty() && cv::countNonZero(camera.distortion) > 0)
+    throw std::invalid_argument("silhouette rim: the camera has lens distortion; expected the undistorted frame contour extraction gives");
+  SilhouetteRim rim;
+  rim.camera = camera;
+  const Eigen::Matrix3d to_world = camera.camera_from_world.linear().transpose();
+  auto add = [&](const Outline& o) {
+    for (std::size_t i = 0; i < o.contour.size() && i < o.normals.size(); ++i) {
+      const cv::Point2d& q = o.contour[i];
+      constexpr double kBorder = 1.5;  // the image's edge, where the outline is the border, not the object's rim
+      if (q.x < kBorder || q.y < kBorder || q.x > camera.width - 1 - kBorder || q.y > camera.height - 1 - kBorder) continue;
+      const cv::Point2d& m = o.normals[i];
+      // The image line through q across the normal, positive outside; its plane through the eye has
+      // normal K^T l in the camera's frame, outward (l . K X = depth * l . x > 0 outside).
+      const Eigen::Vector3d line(m.x, m.y, -(m.x * q.x + m.y * q.y));
+      const Eigen::Vector3d n = to_world * (camera.K.transpose() * line);
+      if (n.squaredNorm() == 0) continue;
+      rim.points.emplace_back(q.x, q.y);
+      rim.normals.push_back(n.normalized());
+    }
+  };
+  add(silhouette);
+  for (const auto& h : silhouette.holes) add(h);
+  return rim;
+}
+
+namespace {
+
+// A view's rim points bucketed in square cells of the image, for the nearest one within a radius.
+class RimLookup {
+ public:
+  static constexpr double kCell = 16;  // pixels
+  explicit RimLookup(const SilhouetteRim& rim) : rim(rim), projection(rim.camera.projection()), eye(rim.camera.centre_in_world()) {
+    for (std::size_t i = 0; i < rim.points.size(); ++i) cells_[key(cell(rim.points[i]))].push_back(i);
+  }
+  // The index of the rim point nearest q within radius pixels, or -1.
+  long nearest(const Eigen::Vector2d& q, double radius) const {
+    const Eigen::Vector2i c = cell(q);
+    const int reach = static_cast<int>(std::ceil(radius / kCell));
+    long best = -1;
+    double best_d2 = radius * radius;
+    for (int dx = -reach; dx <= reach; ++dx)
+      for (int dy = -reach; dy <= reach; ++dy) {
+        const auto it = cells_.find(key(c + Eigen::Vector2i(dx, dy)));
+        if (it == cells_.end()) continue;
+        for (std::size_t j : it->second)
+          if (const double d2 = (rim.points[j] - q).squaredNorm(); d2 <= best_d2) best_d2 = d2, best = static_cast<long>(j);
+      }
+    return best;
+  }
+
+  const SilhouetteRim& rim;
+  const Eigen::Matrix<double, 3, 4> projection;
+  const Eigen::Vector3d eye;
+
+ private:
+  static Eigen::Vector2i cell(const Eigen::Vector2d& q) { return (q / kCell).array().floor().cast<int>(); }
+  static std::uint64_t key(const Eigen::Vector2i& c) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 32) | static_cast<std::uint32_t>(c.y());
+  }
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
+};
+
+}  // namespace
+
+void mark_unobserved(std::span<SurfaceSample> samples, std::span<const SilhouetteRim> views, double tolerance, double rim_deg,
+                     double separation_deg) {
   if (!(rim_deg > 0 && rim_deg < 90) || !(separation_deg > 0 && separation_deg < 90))
     throw std::invalid_argument("model surface: rim_deg and separation_deg must be in (0, 90) degrees, found " +
                                 std::to_string(rim_deg) + " and " + std::to_string(separation_deg));
+  if (!(tolerance >= 0)) throw std::invalid_argument("model surface: the rim tolerance must be >= 0 metres, found " + std::to_string(tolerance));
   const double kDeg = 3.14159265358979323846 / 180;
-  const double sin_rim = std::sin(rim_deg * kDeg), cos_separation = std::cos(separation_deg * kDeg);
-  std::vector<Eigen::Vector3d> grazing;
+  const double sin_rim = std::sin(rim_deg * kDeg), cos_rim = std::cos(rim_deg * kDeg), cos_separation = std::cos(separation_deg * kDeg);
+  std::vector<RimLookup> lookups;
+  lookups.reserve(views.size());
+  for (const auto& v : views) lookups.emplace_back(v);
+  struct Rim {
+    Eigen::Vector3d sight, cone_normal;  // the line of sight (unit, eye to sample); the cone of sight's outward normal there
+  };
+  std::vector<Rim> rims;
   for (auto& s : samples) {
-    grazing.clear();
+    rims.clear();
     const Eigen::Vector3d n = s.normal.normalized();
-    for (const auto& eye : eyes) {
-      const Eigen::Vector3d d = (s.position - eye).normalized();
-      if (std::abs(d.dot(n)) <= sin_rim) grazing.push_back(d);
+    for (const auto& v : lookups) {
+      const Eigen::Vector3d d = (s.position - v.eye).normalized();
+      if (std::abs(d.dot(n)) > sin_rim) continue;
+      const Eigen::Vector3d h = v.projection * s.position.homogeneous();
+      if (!(h.z() > 0)) continue;
+      const double radius_px = v.rim.camera.K(0, 0) * tolerance / h.z() + 1;
+      if (const long k = v.nearest(h.hnormalized(), radius_px); k >= 0) rims.push_back({d, v.rim.normals[static_cast<std::size_t>(k)]});
     }
     bool pinned = false;
-    for (std::size_t i = 0; i < grazing.size() && !pinned; ++i)
-      for (std::size_t j = i + 1; j < grazing.size() && !pinned; ++j) pinned = std::abs(grazing[i].dot(grazing[j])) <= cos_separation;
-    if (!pinned) s.uncertain = true;
+    for (std::size_t i = 0; i < rims.size() && !pinned; ++i)
+      for (std::size_t j = i + 1; j < rims.size() && !pinned; ++j)
+        pinned = std::abs(rims[i].sight.dot(rims[j].sight)) <= cos_separation && rims[i].cone_normal.dot(rims[j].cone_normal) >= cos_rim;
+    s.unpinned = !pinned;
   }
 }
 

@@ -5,10 +5,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <numbers>
 
 #include "fba/grasp/model_surface.hpp"
 #include "fba/grasp/object_surface.hpp"
+#include "fba/geometry/mesh_io.hpp"
+#include "fba/geometry/renderer.hpp"
+#include "fba/geometry/viewpoints.hpp"
+#include "fba/vision/contour_extraction.hpp"
 #include "voxel_shapes.hpp"
 
 namespace fba::grasp {
@@ -118,32 +123,150 @@ TEST(ModelSurface, LeavesCoarserThanTheMaxDepthAreUncertain) {
   EXPECT_GT(lower, 100);
 }
 
-// A silhouette pins the surface only where its line of sight grazes it: a sample counts as
-// observed when two views graze it along different lines, and stays uncertain when one view, or
-// none, does (the far side of an object seen from one side).
-TEST(ModelSurface, OnlySamplesTwoViewsGrazeAreObserved) {
-  // A sample on the +x side of an object, outward normal +x.
-  const SurfaceSample side{{0.05, 0, 0}, {1, 0, 0}};
-  auto observed = [&](std::vector<Eigen::Vector3d> eyes) {
-    std::vector<SurfaceSample> s{side};
-    mark_unobserved(s, eyes);
-    return !s[0].uncertain;
-  };
-  // Two cameras in the tangent plane x = 0.05, lines of sight 90 degrees apart: pinned.
-  EXPECT_TRUE(observed({{0.05, 0.3, 0}, {0.05, 0, 0.3}}));
-  // One grazing camera only, or two along the same line: a tangent line, not a point.
-  EXPECT_FALSE(observed({{0.05, 0.3, 0}}));
-  EXPECT_FALSE(observed({{0.05, 0.3, 0}, {0.05, -0.3, 0}}));
-  // Cameras facing the sample (or behind it) see its face, not its rim.
-  EXPECT_FALSE(observed({{0.4, 0, 0}, {0.3, 0.2, 0.1}, {-0.3, 0, 0}}));
-  // Within rim_deg (15 by default) of the tangent plane still grazes.
-  EXPECT_TRUE(observed({{0.05 + 0.3 * std::tan(10 * kPi / 180), 0.3, 0}, {0.05, 0, 0.3}}));
-  // Already uncertain stays uncertain.
-  std::vector<SurfaceSample> s{side};
-  s[0].uncertain = true;
-  mark_unobserved(s, std::vector<Eigen::Vector3d>{{0.05, 0.3, 0}, {0.05, 0, 0.3}});
-  EXPECT_TRUE(s[0].uncertain);
-  EXPECT_THROW(mark_unobserved(s, std::vector<Eigen::Vector3d>{}, 0.0), std::invalid_argument);
+namespace {
+
+// A camera of 320 x 240 pixels, focal length 300, at `eye` looking at the origin.
+CameraModel camera_at(const Eigen::Vector3d& eye) {
+  return geometry::make_camera(320, 240, 300, 300, 159.5, 119.5, geometry::look_at(eye, Eigen::Vector3d::Zero()));
+}
+
+// The rim of a sphere of radius r at the origin seen from `eye`, rendered and outlined as the loop
+// does it (a perfect mask).
+SilhouetteRim sphere_rim(const Eigen::Vector3d& eye, double r, const Eigen::Vector3d& centre = Eigen::Vector3d::Zero()) {
+  auto frame = std::make_shared<Frame>();
+  frame->camera = camera_at(eye);
+  frame->has_pose = true;
+  const auto rendered = geometry::render(geometry::make_uv_sphere(centre, r, 128, 64), frame->camera);
+  const auto outline = vision::silhouette_from_mask(rendered.mask, frame);
+  EXPECT_TRUE(outline.ok()) << outline.error;
+  return outline.ok() ? silhouette_rim(*outline.silhouette) : SilhouetteRim{};
+}
+
+// A view whose rim passes through `p` with its cone of sight's normal `cone`, looking at p along
+// `sight` (unit): the rim made by hand, one point.
+SilhouetteRim rim_through(const Eigen::Vector3d& p, const Eigen::Vector3d& sight, const Eigen::Vector3d& cone) {
+  SilhouetteRim rim;
+  rim.camera = geometry::make_camera(320, 240, 300, 300, 159.5, 119.5, geometry::look_at(p - 0.3 * sight, p));
+  Eigen::Vector2d q;
+  EXPECT_TRUE(geometry::project(rim.camera, p, q));
+  rim.points.push_back(q);
+  rim.normals.push_back(cone.normalized());
+  return rim;
+}
+
+bool pinned(const SurfaceSample& sample, const std::vector<SilhouetteRim>& views, double tolerance = 0.0025) {
+  std::vector<SurfaceSample> s{sample};
+  mark_unobserved(s, views, tolerance);
+  return !s[0].unpinned;
+}
+
+}  // namespace
+
+// The rim's normals are the cone of sight's: each is the normal of a plane through the eye that
+// touches the sphere (at distance r from its centre), pointing away from it.
+TEST(SilhouetteRim, ASpheresRimNormalsAreItsTangentPlanesThroughTheEye) {
+  const double r = 0.05;
+  const Eigen::Vector3d eye(0.3, 0.1, 0.2);
+  const SilhouetteRim rim = sphere_rim(eye, r);
+  ASSERT_GT(rim.points.size(), 200u);
+  ASSERT_EQ(rim.normals.size(), rim.points.size());
+  const double pixel = eye.norm() / 300;  // a pixel's size at the sphere, metres
+  for (const auto& n : rim.normals) {
+    EXPECT_NEAR(n.norm(), 1.0, 1e-9);
+    EXPECT_NEAR(n.dot(Eigen::Vector3d::Zero() - eye), -r, 1.5 * pixel) << n.transpose();
+  }
+}
+
+// Where the object leaves the image, the outline runs along the border: that is where the image
+// ends, not where the line of sight grazes the object.
+TEST(SilhouetteRim, TheImagesBorderIsNotARim) {
+  // The sphere's centre 13 cm aside of the line of sight: part of it out of the image.
+  auto frame = std::make_shared<Frame>();
+  frame->camera = camera_at({0.3, 0, 0});
+  frame->has_pose = true;
+  const auto rendered = geometry::render(geometry::make_uv_sphere({0, 0.13, 0}, 0.05, 128, 64), frame->camera);
+  const auto outline = vision::silhouette_from_mask(rendered.mask, frame);
+  ASSERT_TRUE(outline.ok()) << outline.error;
+  ASSERT_TRUE(outline.silhouette->touches_border);
+  const SilhouetteRim rim = silhouette_rim(*outline.silhouette);
+  ASSERT_GT(rim.points.size(), 50u);
+  EXPECT_LT(rim.points.size(), outline.silhouette->contour.size() - 50);  // the border's stretch is left out
+  for (const auto& q : rim.points) {
+    EXPECT_GE(q.x(), 1.5);
+    EXPECT_LE(q.x(), 320 - 1 - 1.5);
+    EXPECT_GE(q.y(), 1.5);
+    EXPECT_LE(q.y(), 240 - 1 - 1.5);
+  }
+  Silhouette no_frame;
+  EXPECT_THROW(silhouette_rim(no_frame), std::invalid_argument);
+  no_frame.frame = std::make_shared<Frame>();  // no pose
+  EXPECT_THROW(silhouette_rim(no_frame), std::invalid_argument);
+  auto distorted = std::make_shared<Frame>();
+  distorted->has_pose = true;
+  distorted->camera.distortion = (cv::Mat_<double>(1, 4) << 0.1, 0, 0, 0);
+  no_frame.frame = distorted;
+  EXPECT_THROW(silhouette_rim(no_frame), std::invalid_argument);
+}
+
+// Two views of a sphere pin it where their rims cross (where both cones touch it) and nowhere
+// else: not on one view's rim alone, not where neither rim passes.
+TEST(ModelSurface, ASphereIsPinnedWhereTwoViewsRimsCrossAndNowhereElse) {
+  const double r = 0.05, d = 0.3;
+  const std::vector<SilhouetteRim> views{sphere_rim({d, 0, 0}, r), sphere_rim({0, d, 0}, r)};
+  // The rims are the circles x = r^2/d and y = r^2/d; they cross at z = +-sqrt(r^2 - 2 (r^2/d)^2).
+  const double a = r * r / d;
+  const std::vector<Eigen::Vector3d> frontier{{a, a, std::sqrt(r * r - 2 * a * a)}, {a, a, -std::sqrt(r * r - 2 * a * a)}};
+  auto on_sphere = [&](const Eigen::Vector3d& u) { return SurfaceSample{r * u.normalized(), u.normalized()}; };
+  for (const auto& f : frontier) EXPECT_TRUE(pinned(on_sphere(f), views)) << f.transpose();
+  // On the first view's rim only, half way round from the crossings; and facing both views.
+  EXPECT_FALSE(pinned(on_sphere({a, -std::sqrt(r * r - a * a), 0}), views));
+  EXPECT_FALSE(pinned(on_sphere({1, 1, 0}), views));
+  // Every pinned sample of the sphere lies near a crossing.
+  int pinned_count = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const double z = 1 - 2 * (i + 0.5) / 2000, phi = i * 2.399963229728653;  // a Fibonacci sphere
+    const Eigen::Vector3d u(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
+    if (!pinned(on_sphere(u), views)) continue;
+    ++pinned_count;
+    double nearest = 180;
+    for (const auto& f : frontier) nearest = std::min(nearest, angle_deg(u, f));
+    EXPECT_LT(nearest, 25.0) << u.transpose();
+  }
+  EXPECT_GT(pinned_count, 4);
+  EXPECT_LT(pinned_count, 200);  // of 2000
+}
+
+// Two cones of sight also cross along an edge of the carved model, away from the object. There the
+// model's fitted normal lies between the two cones' and both lines of sight graze it; the cones'
+// tangent planes meet at an angle, which tells the edge from a point both cones touch.
+TEST(ModelSurface, TwoConesCrossingAtAnEdgeOfTheModelDoNotPinIt) {
+  const double k = 20 * kPi / 180;
+  const SurfaceSample edge{{0.01, 0.02, 0.03}, {0, 0, 1}};  // the crease runs along y; the fit's normal +z between its faces
+  const Eigen::Vector3d face_a(std::sin(k), 0, std::cos(k)), face_b(-std::sin(k), 0, std::cos(k));
+  // Each line of sight in its cone's plane, 45 degrees from the crease: 83 degrees apart, each 14
+  // degrees from the fitted tangent plane.
+  const Eigen::Vector3d y = Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d sight_a = (y + Eigen::Vector3d(std::cos(k), 0, -std::sin(k))).normalized();
+  const Eigen::Vector3d sight_b = (y - Eigen::Vector3d(std::cos(k), 0, std::sin(k))).normalized();
+  ASSERT_LT(std::abs(sight_a.dot(edge.normal)), std::sin(15 * kPi / 180));
+  ASSERT_LT(std::abs(sight_b.dot(edge.normal)), std::sin(15 * kPi / 180));
+  EXPECT_FALSE(pinned(edge, {rim_through(edge.position, sight_a, face_a), rim_through(edge.position, sight_b, face_b)}));
+  // The same lines of sight with cones tangent to one surface there: pinned.
+  const Eigen::Vector3d sa = (y + Eigen::Vector3d::UnitX()).normalized(), sb = (y - Eigen::Vector3d::UnitX()).normalized();
+  EXPECT_TRUE(pinned(edge, {rim_through(edge.position, sa, edge.normal), rim_through(edge.position, sb, edge.normal)}));
+  // One rim, or two along the same line of sight: a tangent line, not a point.
+  EXPECT_FALSE(pinned(edge, {rim_through(edge.position, sa, edge.normal)}));
+  EXPECT_FALSE(pinned(edge, {rim_through(edge.position, sa, edge.normal), rim_through(edge.position, -sa, edge.normal)}));
+  // A line of sight that does not graze the sample's tangent plane: the rim is elsewhere.
+  const Eigen::Vector3d steep = (y + Eigen::Vector3d(0, 0, -1)).normalized();
+  EXPECT_FALSE(pinned(edge, {rim_through(edge.position, sa, edge.normal), rim_through(edge.position, steep, edge.normal)}));
+  // A rim that passes 2 cm away from the sample in the image's plane: not through it.
+  const SilhouetteRim far = rim_through(edge.position + Eigen::Vector3d(0, 0, 0.02), sb, edge.normal);
+  EXPECT_FALSE(pinned(edge, {rim_through(edge.position, sa, edge.normal), far}));
+  EXPECT_TRUE(pinned(edge, {rim_through(edge.position, sa, edge.normal), far}, 0.025));  // within a 2.5 cm tolerance
+  std::vector<SurfaceSample> s{edge};
+  EXPECT_THROW(mark_unobserved(s, std::vector<SilhouetteRim>{}, 0.0025, 0.0), std::invalid_argument);
+  EXPECT_THROW(mark_unobserved(s, std::vector<SilhouetteRim>{}, -1.0), std::invalid_argument);
 }
 
 // Carving keeps what no view saw: here a block above the object that no view had in its image,

@@ -11,7 +11,9 @@
 #include <Eigen/Core>
 
 #include "fba/grasp/synthesis.hpp"
+#include "fba/types/camera.hpp"
 #include "fba/types/octree.hpp"
+#include "fba/types/silhouette.hpp"
 
 namespace fba::grasp {
 
@@ -46,15 +48,32 @@ struct ModelSurface {
 // depth: every view has it inside, and the face between them is where a view cut the object.
 ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params = {});
 
-// Flags as uncertain the samples that no pair of views pins down. A silhouette fixes the surface
+// What a posed silhouette says about the surface: its rim, the outline points where the line of
+// sight grazes the object (a point where the outline meets the image's border is where the image
+// cuts the object off, not a rim), each with the outward normal of the cone of sight there.
+struct SilhouetteRim {
+  CameraModel camera;                     // an ideal pinhole: the silhouette's frame is undistorted
+  std::vector<Eigen::Vector2d> points;    // image pixels
+  std::vector<Eigen::Vector3d> normals;   // world, unit: the tangent plane of the cone of sight through the eye and the point
+};
+
+// The rim of a silhouette whose frame has a pose: its outer contour and holes, less the points
+// within 1.5 px of the image's border. Throws std::invalid_argument for a silhouette with no
+// frame, an unposed frame, or a camera with lens distortion.
+SilhouetteRim silhouette_rim(const Silhouette& silhouette);
+
+// Flags as unpinned the samples that no pair of views pins down. A silhouette fixes the surface
 // only on its rim, where the line of sight grazes the object; elsewhere a carved model is the
 // intersection of the views' cones and may lie centimetres off the object: from three views on one
-// side of a can, the model's far side is a wedge whose faces touch the can on one line each. A
-// sample counts as observed when the lines of sight from at least two camera centres (`eyes`)
-// graze it (within rim_deg of its tangent plane) along directions at least separation_deg apart:
-// two tangents cross at the sample only where the surface is there. Throws std::invalid_argument
-// for angles out of (0, 90).
-void mark_unobserved(std::span<SurfaceSample> samples, std::span<const Eigen::Vector3d> eyes, double rim_deg = 15,
+// side of a can, the model's far side is a wedge whose faces touch the can on one line each.
+// A view's rim passes through a sample when the sample projects within `tolerance` (metres at its
+// depth, plus a pixel) of the rim and the line of sight lies within rim_deg of the sample's
+// tangent plane. Two such views pin the sample when their lines of sight are at least
+// separation_deg apart and their cones' tangent planes there agree within rim_deg: two cones also
+// cross along edges of the model that neither touches the object on (their planes meet at an angle
+// there), and touch the object together only where both are tangent to it. Throws
+// std::invalid_argument for angles out of (0, 90) or a negative tolerance.
+void mark_unobserved(std::span<SurfaceSample> samples, std::span<const SilhouetteRim> views, double tolerance, double rim_deg = 15,
                      double separation_deg = 20);
 
 }  // namespace fba::grasp

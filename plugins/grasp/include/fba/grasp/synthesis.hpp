@@ -21,7 +21,8 @@ struct SurfaceSample {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world, metres
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();    // outward; normalised on input
   double curvature = 0;    // mean curvature, 1/m: positive convex, negative concave, 0 flat
-  bool uncertain = false;  // the model is not yet sure of this part of the surface
+  bool uncertain = false;  // the model has not resolved this part of the surface to its finest depth
+  bool unpinned = false;   // no two silhouettes' rims cross here: the model may lie off the object (mark_unobserved)
 };
 
 // The hand: a three-fingered gripper whose thumb opposes two fingers side by side.
