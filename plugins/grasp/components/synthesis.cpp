@@ -61,7 +61,9 @@ class GraspSynthesisFilter final : public fba::Component {
       "reaches 0.46-0.58, carved YCB meshes 0.65-0.80)")
                                          .range(0, 1);
   static constexpr auto kMaxViews = fba::Param<int>(
-      "max_views", 12, "gives up (grasp_synthesis_failed) when a model of this many views has no reliable candidate").range(1, 10000);
+      "max_views", 12,
+      "the last view: a model of this many views with no reliable candidate on resolved surface selects one whose contacts are "
+      "resolved (the surface around them need not be), else gives up (grasp_synthesis_failed)").range(1, 10000);
   static constexpr auto kWeightSymmetry = fba::Param<double>("weight_symmetry", 1.0, "weight of S1 in the total").at_least(0);
   static constexpr auto kWeightSafety = fba::Param<double>("weight_safety", 1.0, "weight of S3 in the total").at_least(0);
   static constexpr auto kWeightCurvature = fba::Param<double>("weight_curvature", 1.0, "weight of S4 in the total").at_least(0);
@@ -180,13 +182,26 @@ class GraspSynthesisFilter final : public fba::Component {
                         "({:.3f}, {:.3f}, {:.3f})",
                         c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                         c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
-        return select(c.grasp, views);
+        return select(c.grasp, views, "surface");
       }
       if (c.grasp.scores.total > best_resolved) {
         best_resolved = c.grasp.scores.total;
         best_resolved_candidate = &c;
       }
     }
+    // The last view: settle for a reliable candidate whose contacts are resolved (pinned by two
+    // views, with rim_deg), though the surface around them is not all resolved yet: on thin,
+    // curved objects such as the banana two rims cross on little of the surface, and a whole
+    // neighbourhood is rarely pinned.
+    if (views >= max_views_)
+      for (const auto& c : r.candidates)
+        if (!c.contacts_uncertain && c.grasp.scores.total >= threshold_) {
+          ctx_.log().info("selected after the last view, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
+                          "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
+                          c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
+                          c.model_epsilon);
+          return select(c.grasp, views, "contacts");
+        }
     if (views >= max_views_) {
       std::string reason = "no reliable grasp after " + std::to_string(views) + " views: best total " + fixed(best_resolved);
       // Which criteria held it back: what a user tunes (weights, hand geometry) or learns about the object.
@@ -277,7 +292,11 @@ class GraspSynthesisFilter final : public fba::Component {
     stages_.go("exploration_movement");
   }
 
-  void select(fba::Grasp g, int views) {
+  // resolved: what the model had resolved (and two views pinned, with rim_deg) under the fingers:
+  // "surface", each contact and its neighbourhood, or "contacts", the contacts only (after the
+  // last view).
+  void select(fba::Grasp g, int views, const char* resolved) {
+    ctx_.report("resolved", nlohmann::json(resolved).dump());
     // The carver integrates silhouettes in arrival order: the model's views are the first ones.
     for (int v = 0; v < views; ++v) g.views.push_back(v < int(view_index_.size()) ? view_index_[v] : v);
     g.stamp = ctx_(kOctree).packet().header().stamp_ns * 1e-9;

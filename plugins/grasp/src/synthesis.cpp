@@ -478,6 +478,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
         cand.samples = {t, f1, f2};
         cand.regions = {region_of[t], region_of[f1], region_of[f2]};
         for (std::size_t i : cand.samples) {
+          cand.contacts_uncertain = cand.contacts_uncertain || s[i].uncertain || s[i].unpinned;
           cand.uncertain = cand.uncertain || s[i].uncertain || s[i].unpinned;
           for (std::size_t j : nb[i]) cand.uncertain = cand.uncertain || s[j].uncertain || s[j].unpinned;
         }

@@ -142,19 +142,42 @@ TEST(GraspSynthesisComponent, AnUnresolvedModelEmitsRegionsAndPlansAView) {
   EXPECT_EQ(h.stage(), "grasp_synthesis");
 }
 
-TEST(GraspSynthesisComponent, GivesUpAfterMaxViewsWithTheBestTotal) {
+// A model resolved only to depth 4 of 6: its partial leaves are unresolved, the full ones beside
+// empty space are resolved at any depth. No candidate has all the surface under its fingers
+// resolved; after the last view synthesis settles for one whose contacts are.
+TEST(GraspSynthesisComponent, AfterMaxViewsItSettlesForACandidateWhoseContactsAreResolved) {
   ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 4}});
   auto coarse = [](const Eigen::Vector3d&) { return 4; };
   h.push<fba::Octree>("octree", cylinder(3, coarse));
   h.run();
   EXPECT_EQ(named(h.events(), "planning_performed").size(), 1u);
-  EXPECT_TRUE(named(h.events(), "grasp_synthesis_failed").empty());
+  EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
   h.push<fba::Octree>("octree", cylinder(4, coarse));
+  h.run();
+  EXPECT_TRUE(named(h.events(), "grasp_synthesis_failed").empty());
+  EXPECT_EQ(h.values<fba::Grasp>("grasp").size(), 1u);
+}
+
+// With rim_deg, a view whose silhouette has no rim pins nothing: no contact is ever resolved, and
+// after max_views synthesis gives up with the best total.
+TEST(GraspSynthesisComponent, GivesUpAfterMaxViewsWithTheBestTotal) {
+  ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 4}, {"rim_deg", 15.0}}, {"silhouette"});
+  auto frame = std::make_shared<fba::Frame>();
+  frame->has_pose = true;
+  fba::Silhouette silhouette;
+  silhouette.frame = frame;
+  h.push<fba::Silhouette>("silhouette", silhouette);
+  h.push<fba::Octree>("octree", cylinder(3));
+  h.run();
+  EXPECT_EQ(named(h.events(), "planning_performed").size(), 1u);
+  EXPECT_TRUE(named(h.events(), "grasp_synthesis_failed").empty());
+  h.push<fba::Octree>("octree", cylinder(4));
   h.run();
   const auto failed = named(h.events(), "grasp_synthesis_failed");
   ASSERT_EQ(failed.size(), 1u);
   EXPECT_EQ(failed[0].payload.rfind("no reliable grasp after 4 views: best total ", 0), 0u) << failed[0].payload;
   EXPECT_NE(failed[0].payload.find(" < threshold 0.450"), std::string::npos) << failed[0].payload;
+  EXPECT_NE(failed[0].payload.find("touches a part of the model not yet resolved"), std::string::npos) << failed[0].payload;
   EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
   // Then it ignores input.
   h.push<fba::Octree>("octree", cylinder(5));

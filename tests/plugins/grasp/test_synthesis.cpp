@@ -220,6 +220,44 @@ TEST(GraspSynthesis, UncertainSamplesNameTheirRegionAndFlagCandidates) {
   EXPECT_TRUE(flagged);
 }
 
+// Pinning is checked over each contact's neighbourhood; the contacts themselves are flagged apart
+// (what grasp.synthesis settles for after its last view).
+TEST(GraspSynthesis, UnpinnedSurfaceBesideAContactFlagsTheCandidateButNotItsContacts) {
+  const double h = 0.005;
+  auto samples = box({0.06, 0.10, 0.15}, h);
+  estimate_curvature(samples, 2.2 * h);
+  const SynthesisResult all = synthesise(samples, params_for(h));
+  ASSERT_FALSE(all.candidates.empty());
+  const GraspCandidate& best = all.candidates.front();
+  ASSERT_FALSE(best.uncertain);
+  ASSERT_FALSE(best.contacts_uncertain);
+  // Unpin one sample beside the best candidate's thumb, inside its neighbourhood.
+  const Eigen::Vector3d thumb = samples[best.samples[0]].position;
+  std::size_t beside = samples.size();
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const double d = (samples[i].position - thumb).norm();
+    if (d > 0.5 * h && d < 1.5 * h) beside = i;
+  }
+  ASSERT_LT(beside, samples.size());
+  samples[beside].unpinned = true;
+  const SynthesisResult r = synthesise(samples, params_for(h));
+  bool found = false;
+  for (const auto& c : r.candidates)
+    if (c.samples == best.samples) {
+      found = true;
+      EXPECT_TRUE(c.uncertain);
+      EXPECT_FALSE(c.contacts_uncertain);
+    }
+  EXPECT_TRUE(found);
+  // The thumb's own sample unpinned: both.
+  samples[best.samples[0]].unpinned = true;
+  for (const auto& c : synthesise(samples, params_for(h)).candidates)
+    if (c.samples == best.samples) {
+      EXPECT_TRUE(c.uncertain);
+      EXPECT_TRUE(c.contacts_uncertain);
+    }
+}
+
 TEST(GraspSynthesis, AnObjectTooBigForTheHandGivesNoCandidate) {
   const double h = 0.01;
   auto samples = box({0.4, 0.4, 0.4}, h);

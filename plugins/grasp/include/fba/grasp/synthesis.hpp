@@ -130,7 +130,8 @@ struct GraspCandidate {
   Grasp grasp;                          // contacts (thumb first), approach, pregrasp, scores
   std::array<std::size_t, 3> samples{}; // the contact samples, thumb first
   std::array<std::size_t, 3> regions{}; // their regions
-  bool uncertain = false;               // a contact touches an uncertain sample
+  bool uncertain = false;               // a contact or the surface within neighbour_radius of it is uncertain or unpinned
+  bool contacts_uncertain = false;      // a contact sample itself is
   double model_epsilon = 0;             // Ferrari-Canny epsilon on the model's contacts and normals
 };
 
