@@ -44,7 +44,8 @@ class GraspSynthesisFilter final : public fba::Component {
  public:
   static constexpr fba::In<fba::Octree> kOctree{"octree", "the model after each update (connect with buffer: latest to skip models a newer one replaced)"};
   static constexpr fba::OptionalIn<fba::Silhouette> kSilhouette{
-      "silhouette", "the silhouettes the model was carved from, kept in arrival order: their frames' indices are the grasp's views"};
+      "silhouette", "the silhouettes the model was carved from, kept in arrival order: their frames' indices are the grasp's views, "
+      "and with rim_deg their rims pin the surface"};
   static constexpr fba::Out<fba::Grasp> kGrasp{"grasp", "the selected grasp (once)"};
   static constexpr fba::Out<fba::RegionsOfInterest> kRegions{
       "regions", "boxes of the candidate regions the model has not resolved: where the carver should refine and the next view should look"};
@@ -71,9 +72,10 @@ class GraspSynthesisFilter final : public fba::Component {
       "neighbour_radius", 0.0, "metres: the surface neighbourhood for normals, curvature and regions; 0: 3 edges of the finest leaf").at_least(0);
   static constexpr auto kRimDeg = fba::Param<double>(
       "rim_deg", 0.0,
-      "a silhouette fixes the surface only on its rim: with rim_deg > 0, a contact counts as resolved only where the lines of "
-      "sight of two posed views graze the model within this angle (15 suits the sim: from views on one side the far side of "
-      "the model lies centimetres off the object); 0: off").range(0, 60);
+      "a silhouette fixes the surface only on its rim: with rim_deg > 0, a contact counts as resolved only where the rims of two "
+      "posed silhouettes pass (their lines of sight within this angle of the model's tangent plane) with their cones' planes "
+      "within this angle of each other (15 suits the sim: from views on one side the far side of the model lies centimetres "
+      "off the object); 0: off").range(0, 60);
   static constexpr auto kRimSeparationDeg = fba::Param<double>(
       "rim_separation_deg", 20.0, "the two grazing lines of sight must differ by at least this angle to pin the surface down")
                                                 .range(1, 89);
