@@ -266,6 +266,11 @@ class RimLookup {
   }
   // The index of the rim point nearest q within radius pixels, or -1.
   long nearest(const Eigen::Vector2d& q, double radius) const {
+    // Off the image by more than the radius (a point near the camera's plane projects far out):
+    // no rim point can be near, and the cell's index would overflow.
+    radius = std::min(radius, double(rim.camera.width + rim.camera.height));
+    if (!(q.x() >= -radius && q.y() >= -radius && q.x() <= rim.camera.width + radius && q.y() <= rim.camera.height + radius))
+      return -1;
     const Eigen::Vector2i c = cell(q);
     const int reach = static_cast<int>(std::ceil(radius / kCell));
     long best = -1;

@@ -264,6 +264,11 @@ TEST(ModelSurface, TwoConesCrossingAtAnEdgeOfTheModelDoNotPinIt) {
   const SilhouetteRim far = rim_through(edge.position + Eigen::Vector3d(0, 0, 0.02), sb, edge.normal);
   EXPECT_FALSE(pinned(edge, {rim_through(edge.position, sa, edge.normal), far}));
   EXPECT_TRUE(pinned(edge, {rim_through(edge.position, sa, edge.normal), far}, 0.025));  // within a 2.5 cm tolerance
+  // A sample almost in a camera's plane projects 10^12 pixels off its image: no rim there.
+  const SilhouetteRim v = rim_through(edge.position, sa, edge.normal);
+  const Eigen::Vector3d across = sa.cross(edge.normal).normalized();
+  const SurfaceSample at_eye{v.camera.centre_in_world() + 1e-12 * sa + 0.01 * across, edge.normal};
+  EXPECT_FALSE(pinned(at_eye, {v, rim_through(edge.position, sb, edge.normal)}));
   std::vector<SurfaceSample> s{edge};
   EXPECT_THROW(mark_unobserved(s, std::vector<SilhouetteRim>{}, 0.0025, 0.0), std::invalid_argument);
   EXPECT_THROW(mark_unobserved(s, std::vector<SilhouetteRim>{}, -1.0), std::invalid_argument);
