@@ -377,12 +377,36 @@ GraspExecution LiftTest::run_steps(const Grasp& grasp) {
     return grasp_palm;  // no height clears the table: the way in below names what touches it
   };
 
+  double open_travel = initial_travel;
+  // Closing slides: hold the pregrasp opening (proportional; the joints' damping damps it), or push
+  // with the finger force once closing.
+  bool closing = false;
+  constexpr double kHoldGain = 2000;  // newtons per metre
+  auto step = [&] {
+    for (std::size_t f = 0; f < 3; ++f) {
+      const auto& finger = s.fingers[f];
+      d->ctrl[finger.close_actuator] =
+          closing ? p.finger_force
+                  : std::clamp(kHoldGain * (open_travel - d->qpos[m->jnt_qposadr[finger.close_joint]]), -p.finger_force,
+                               p.finger_force);
+    }
+    if (s.stop.load()) throw Impl::Stopped{};
+    mj_step(m, d);
+    ++s.steps;
+  };
+  auto time_text = [&] { return fmt::format("t={:.2f} s", d->time); };
+
+  // Let the object settle on the table first, the hand far back along the approach: the way in is
+  // checked against the object where it rests. Checked before it settled, a banana that then
+  // rolled 3 mm met the thumb on the way in.
+  pose_hand(centre - a * (depth + 1.0), open_travel);
+  for (int i = 0; i < static_cast<int>(0.2 / dt); ++i) step();
+
   // The pregrasp opening: the grasp's aperture if the way in is clear, else wider (as far as the
   // hand opens): a finger whose contact normal is far from its closing direction passes the
   // surface closer than its contact. The way in is checked at poses along it.
   std::string hit;
   bool hit_at_pregrasp = false;
-  double open_travel = initial_travel;
   Eigen::Vector3d pregrasp_palm;
   for (;; open_travel = std::max(open_travel - 0.01, 0.0)) {
     const Eigen::Vector3d palm = palm_at_grasp(open_travel);
@@ -404,26 +428,7 @@ GraspExecution LiftTest::run_steps(const Grasp& grasp) {
   }
   pose_hand(pregrasp_palm, open_travel);
 
-  // Closing slides: hold the pregrasp opening (proportional; the joints' damping damps it), or push
-  // with the finger force once closing.
-  bool closing = false;
-  constexpr double kHoldGain = 2000;  // newtons per metre
-  auto step = [&] {
-    for (std::size_t f = 0; f < 3; ++f) {
-      const auto& finger = s.fingers[f];
-      d->ctrl[finger.close_actuator] =
-          closing ? p.finger_force
-                  : std::clamp(kHoldGain * (open_travel - d->qpos[m->jnt_qposadr[finger.close_joint]]), -p.finger_force,
-                               p.finger_force);
-    }
-    if (s.stop.load()) throw Impl::Stopped{};
-    mj_step(m, d);
-    ++s.steps;
-  };
-  auto time_text = [&] { return fmt::format("t={:.2f} s", d->time); };
-
-  // Let the object settle on the table, then move in along the approach.
-  for (int i = 0; i < static_cast<int>(0.2 / dt); ++i) step();
+  // Move in along the approach.
   const Eigen::Vector3d start = s.object_centre();
   const int approach_steps = static_cast<int>(std::ceil(0.5 / dt));
   for (int i = 1; i <= approach_steps; ++i) {
