@@ -1,8 +1,9 @@
 // The lift test: a three-fingered hand executes a grasp on an object in the MuJoCo physics engine,
 // the field's ground truth for "the grasp works". Once the object has settled on the table, the
 // hand (hardware/robots/three_finger_hand.xml) goes to the pregrasp back along the approach (an
-// opening whose way in is clear of the settled object), moves in, closes its fingers under force control
-// until they stop on the object, lifts it and holds it; the outcome is measured in the physics.
+// opening whose way in is clear of the settled object), moves in, closes its fingers under force
+// control until they stop on the object, lifts it and holds it; the outcome is measured in the
+// physics.
 // Simulated time alone decides (the step count), never the wall clock.
 #pragma once
 
