@@ -384,6 +384,7 @@ struct Row {
   double epsilon = 0, score = 0;
   std::vector<grasp::ObjectSurface::Placement> contacts;  // the selected grasp's contacts placed on the mesh
   std::optional<bool> held;
+  std::string resolved;  // what synthesis had resolved under the fingers: "surface", or "contacts" (after its last view)
   int views = -1;
   double wall_s = -1, cpu_s = -1;
   long long nodes = -1;
@@ -460,6 +461,7 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
       if (!*row.held) row.reason = "dropped: " + r["lift"].value("reason", std::string("?"));
     }
     if (r.contains("failure") && r["failure"].is_string()) row.reason = "synthesis failed: " + r["failure"].get<std::string>();
+    if (r.contains("resolved") && r["resolved"].is_string()) row.resolved = r["resolved"].get<std::string>();
   }
   if (s.contains("events") && s["events"].is_array())
     for (const auto& e : s["events"]) {
@@ -469,6 +471,7 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
         if (const auto p = payload_json(e); p.is_object()) row.detail = p;
     }
   row.views = model_views;
+  if (row.resolved == "contacts") row.reason += (row.reason.empty() ? "" : "; ") + std::string("selected on its contacts alone after the last view");
   try {
     if (const auto g = summary_grasp(s, summary.string())) {
       row.selected = true;
@@ -689,6 +692,7 @@ nlohmann::json rows_json(const std::vector<Row>& rows) {
       j["contacts"].push_back(k);
     }
     if (r.held) j["held"] = *r.held;
+    if (!r.resolved.empty()) j["resolved"] = r.resolved;
     if (!r.detail.is_null()) j["detail"] = r.detail;
     a.push_back(j);
   }
