@@ -96,6 +96,10 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
     ASSERT_EQ(runs[0]["contacts"].size(), 3u) << runs[0].dump(2);
     EXPECT_GE(runs[0]["contacts"][0].value("normal_error_deg", -1.0), 0.0) << runs[0].dump(2);
     EXPECT_GE(runs[0]["contacts"][0].value("moved_mm", -1.0), 0.0) << runs[0].dump(2);
+    // What synthesis had resolved under the fingers; a grasp settled for on its contacts says so.
+    const std::string resolved = runs[0].value("resolved", "");
+    EXPECT_TRUE(resolved == "surface" || resolved == "contacts") << runs[0].dump(2);
+    EXPECT_EQ(resolved == "contacts", ran.find("selected on its contacts alone after the last view") != std::string::npos) << ran;
   }
   EXPECT_NE(r.output.find("model normals at the selected contacts on the object"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("variant  contacts median_deg  p75_deg  max_deg  off_mesh"), std::string::npos) << r.output;
