@@ -191,11 +191,11 @@ class GraspSynthesisFilter final : public fba::Component {
         best_resolved_candidate = &c;
       }
     }
-    // The last view: settle for a reliable candidate whose contacts are resolved (pinned by two
-    // views, with rim_deg), though the surface around them is not all resolved yet: on thin,
-    // curved objects such as the banana two rims cross on little of the surface, and a whole
-    // neighbourhood is rarely pinned.
-    if (views >= max_views_)
+    if (views >= max_views_) {
+      // The last view: settle for a reliable candidate whose contacts are resolved (pinned by two
+      // views, with rim_deg), though the surface around them is not all resolved yet: on thin,
+      // curved objects such as the banana two rims cross on little of the surface, and a whole
+      // neighbourhood is rarely pinned.
       for (const auto& c : r.candidates)
         if (!c.contacts_uncertain && c.grasp.scores.total >= threshold_) {
           ctx_.log().info("selected after the last view, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
@@ -204,7 +204,6 @@ class GraspSynthesisFilter final : public fba::Component {
                           c.model_epsilon);
           return select(c.grasp, views, "contacts");
         }
-    if (views >= max_views_) {
       std::string reason = "no reliable grasp after " + std::to_string(views) + " views: best total " + fixed(best_resolved);
       // Which criteria held it back: what a user tunes (weights, hand geometry) or learns about the object.
       if (const auto* b = best_resolved_candidate)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -305,7 +306,7 @@ void mark_unobserved(std::span<SurfaceSample> samples, std::span<const Silhouett
     throw std::invalid_argument("model surface: rim_deg and separation_deg must be in (0, 90) degrees, found " +
                                 std::to_string(rim_deg) + " and " + std::to_string(separation_deg));
   if (!(tolerance >= 0)) throw std::invalid_argument("model surface: the rim tolerance must be >= 0 metres, found " + std::to_string(tolerance));
-  const double kDeg = 3.14159265358979323846 / 180;
+  constexpr double kDeg = std::numbers::pi / 180;
   const double sin_rim = std::sin(rim_deg * kDeg), cos_rim = std::cos(rim_deg * kDeg), cos_separation = std::cos(separation_deg * kDeg);
   std::vector<RimLookup> lookups;
   lookups.reserve(views.size());

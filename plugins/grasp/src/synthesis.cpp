@@ -317,7 +317,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
       region.centroid += s[i].position;
       normal += s[i].normal;
       k += s[i].curvature;
-      unsure += s[i].uncertain || s[i].unpinned ? 1 : 0;
+      unsure += s[i].unresolved() ? 1 : 0;
       region.box.extend(s[i].position);
     }
     const double m = static_cast<double>(region.samples.size());
@@ -478,10 +478,10 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
         cand.samples = {t, f1, f2};
         cand.regions = {region_of[t], region_of[f1], region_of[f2]};
         for (std::size_t i : cand.samples) {
-          cand.contacts_uncertain = cand.contacts_uncertain || s[i].uncertain || s[i].unpinned;
-          cand.uncertain = cand.uncertain || s[i].uncertain || s[i].unpinned;
-          for (std::size_t j : nb[i]) cand.uncertain = cand.uncertain || s[j].uncertain || s[j].unpinned;
+          cand.contacts_uncertain = cand.contacts_uncertain || s[i].unresolved();
+          for (std::size_t j : nb[i]) cand.uncertain = cand.uncertain || s[j].unresolved();
         }
+        cand.uncertain = cand.uncertain || cand.contacts_uncertain;
         all.push_back(std::move(cand));
       }
     }

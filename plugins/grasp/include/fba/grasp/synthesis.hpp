@@ -23,6 +23,7 @@ struct SurfaceSample {
   double curvature = 0;    // mean curvature, 1/m: positive convex, negative concave, 0 flat
   bool uncertain = false;  // the model has not resolved this part of the surface to its finest depth
   bool unpinned = false;   // no two silhouettes' rims cross here: the model may lie off the object (mark_unobserved)
+  bool unresolved() const { return uncertain || unpinned; }  // either: no contact is trusted here
 };
 
 // The hand: a three-fingered gripper whose thumb opposes two fingers side by side.
