@@ -65,6 +65,12 @@ class GraspSynthesisFilter final : public fba::Component {
       "max_views", 12,
       "the last view: a model of this many views with no reliable candidate on resolved surface selects one whose contacts are "
       "resolved (the surface around them need not be), else gives up (grasp_synthesis_failed)").range(1, 10000);
+  static constexpr auto kStabilityShare = fba::Param<double>(
+      "stability_share", 0.5,
+      "before the last view, a reliable candidate on resolved surface is selected only when its epsilon on the model is at least "
+      "this share of the best reliable candidate's, resolved or not: a grasp much less stable than one in sight waits for the "
+      "views that resolve the better one (the cracker box's pinches at a corner: 0.005 against 0.03). 0: the first one")
+                                               .range(0, 1);
   static constexpr auto kWeightSymmetry = fba::Param<double>("weight_symmetry", 1.0, "weight of S1 in the total").at_least(0);
   static constexpr auto kWeightSafety = fba::Param<double>("weight_safety", 1.0, "weight of S3 in the total").at_least(0);
   static constexpr auto kWeightCurvature = fba::Param<double>("weight_curvature", 1.0, "weight of S4 in the total").at_least(0);
@@ -104,7 +110,7 @@ class GraspSynthesisFilter final : public fba::Component {
     return fba::Spec::filter("grasp.synthesis",
                              "Selects a reliable three-finger grasp on an octree model, or asks for views where the model lacks detail.")
         .add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kTableZ, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kTableZ, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -116,8 +122,8 @@ class GraspSynthesisFilter final : public fba::Component {
   }
 
   explicit GraspSynthesisFilter(fba::Context& ctx)
-      : ctx_(ctx), stages_(ctx), threshold_(ctx(kThreshold)), max_views_(ctx(kMaxViews)), radius_(ctx(kNeighbourRadius)),
-        rim_deg_(ctx(kRimDeg)), rim_separation_deg_(ctx(kRimSeparationDeg)) {
+      : ctx_(ctx), stages_(ctx), threshold_(ctx(kThreshold)), max_views_(ctx(kMaxViews)), stability_share_(ctx(kStabilityShare)),
+        radius_(ctx(kNeighbourRadius)), rim_deg_(ctx(kRimDeg)), rim_separation_deg_(ctx(kRimSeparationDeg)) {
     params_.hand = {ctx(kFingerWidth), ctx(kApertureMin), ctx(kApertureMax), ctx(kSpreadMin), ctx(kSpreadMax)};
     params_.weight_symmetry = ctx(kWeightSymmetry);
     params_.weight_safety = ctx(kWeightSafety);
@@ -177,9 +183,17 @@ class GraspSynthesisFilter final : public fba::Component {
                      r.candidates.size(), best_total, r.below_table, r.hand_blocked, r.not_force_closure);
     double best_resolved = 0;  // the best candidate whose contacts are all on resolved parts of the model
     const fba::grasp::GraspCandidate* best_resolved_candidate = nullptr;
+    // The reliable candidates come first, the most stable on the model first.
+    const double best_epsilon = r.candidates.empty() ? 0.0 : r.candidates.front().model_epsilon;
     for (const auto& c : r.candidates) {  // best first
       if (c.uncertain) continue;
       if (c.grasp.scores.total >= threshold_) {
+        if (views < max_views_ && c.model_epsilon < stability_share_ * best_epsilon) {
+          ctx_.log().info("not selected yet: the most stable reliable candidate on resolved surface has epsilon {:.4f} on the "
+                          "model, below {:.2f} of the best reliable candidate's {:.4f}, whose surface is not all resolved",
+                          c.model_epsilon, stability_share_, best_epsilon);
+          break;  // the reliable ones after it are less stable still
+        }
         ctx_.log().info("selected: total {:.3f} (S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model about its centre "
                         "({:.3f}, {:.3f}, {:.3f})",
                         c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
@@ -382,6 +396,7 @@ class GraspSynthesisFilter final : public fba::Component {
   fba::grasp::SynthesisParams params_;
   const double threshold_;
   const int max_views_;
+  const double stability_share_;
   const double radius_;
   const double rim_deg_;
   const double rim_separation_deg_;
