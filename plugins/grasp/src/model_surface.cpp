@@ -52,22 +52,30 @@ std::uint64_t leaf_key(const OctreeCell& c) {
          (static_cast<std::uint64_t>(c.y) << 19) | static_cast<std::uint64_t>(c.z);
 }
 
-// Calls f(p) for the four quarter points just outside each of the cell's six faces: probing them
-// finds every face neighbour as large as the cell or larger, and the finer ones at those points.
+// Calls f(axis, sign, leaf, quarters) for the leaves just beyond each of the cell's six faces: the
+// leaf at the face's centre when it is as large as the cell or larger (or the face is on the root
+// box's: no leaf, node null), as it then covers the whole face (quarters 4); else the leaf at each
+// of the face's four quarter points (quarters 1), which finds the finer neighbours there.
 template <class F>
-void for_face_probes(const OctreeCell& c, F&& f) {
+void for_face_neighbours(const Octree& model, const OctreeCell& c, F&& f) {
   const double h = c.half_size, eps = 1e-3 * h;
   for (int a = 0; a < 3; ++a) {
     const int u = (a + 1) % 3, v = (a + 2) % 3;
-    for (int sign : {-1, 1})
+    for (int sign : {-1, 1}) {
+      Eigen::Vector3d centre = c.centre;
+      centre[a] += sign * (h + eps);
+      if (const OctreeCell n = leaf_at(model, centre); !n.node || n.depth <= c.depth) {
+        f(a, sign, n, 4);
+        continue;
+      }
       for (int qu : {-1, 1})
         for (int qv : {-1, 1}) {
-          Eigen::Vector3d p = c.centre;
-          p[a] += sign * (h + eps);
+          Eigen::Vector3d p = centre;
           p[u] += qu * h / 2;
           p[v] += qv * h / 2;
-          f(a, sign, p);
+          f(a, sign, leaf_at(model, p), 1);
         }
+    }
   }
 }
 
@@ -91,8 +99,7 @@ SupportedLeaves supported_leaves(const Octree& model, double table_z) {
   while (!queue.empty()) {
     const OctreeCell c = queue.back();
     queue.pop_back();
-    for_face_probes(c, [&](int, int, const Eigen::Vector3d& p) {
-      const OctreeCell n = leaf_at(model, p);
+    for_face_neighbours(model, c, [&](int, int, const OctreeCell& n, int) {
       if (occupied_leaf(n) && out.keys.insert(leaf_key(n)).second) queue.push_back(n);
     });
   }
@@ -141,8 +148,8 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
     throw std::invalid_argument("model surface: the octree's root box must be a cube of positive size; found sizes " +
                                 std::to_string(size.x()) + " x " + std::to_string(size.y()) + " x " + std::to_string(size.z()));
 
-  // Surface leaves and their free faces. A face is probed at its four quarter points just outside
-  // it, so a coarse leaf next to finer ones sees a free finer neighbour too.
+  // Surface leaves and their free faces. A face whose neighbour is finer is probed at its four
+  // quarter points just outside it, so a coarse leaf next to finer ones sees a free finer one too.
   struct Raw {
     Eigen::Vector3d position, free_direction;
     bool uncertain;
@@ -164,8 +171,8 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
     finest_depth = std::max(finest_depth, c.depth);
     const double h = c.half_size, eps = 1e-3 * h;
     Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();  // towards the faces no object leaf is beyond
-    for_face_probes(c, [&](int a, int sign, const Eigen::Vector3d& p) {
-      if (!is_object(leaf_at(model, p))) free_direction[a] += sign / 4.0;
+    for_face_neighbours(model, c, [&](int a, int sign, const OctreeCell& n, int quarters) {
+      if (!is_object(n)) free_direction[a] += sign * quarters / 4.0;
     });
     bool any_free = false;
     for (int a = 0; a < 3; ++a) any_free = any_free || free_direction[a] != 0;
