@@ -1,5 +1,7 @@
 #include "fba/grasp/model_surface.hpp"
 
+#include "neighbour_grid.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -107,36 +109,6 @@ SupportedLeaves supported_leaves(const Octree& model, double table_z) {
   return out;
 }
 
-// Points closer than r to one another are in the same or adjacent cells of edge r.
-class Grid {
- public:
-  Grid(const std::vector<SurfaceSample>& s, double r) : s_(s), r_(r) {
-    for (std::size_t i = 0; i < s.size(); ++i) cells_[key(cell(s[i].position))].push_back(i);
-  }
-  template <class F>
-  void within(const Eigen::Vector3d& p, F&& f) const {
-    const Eigen::Vector3i c = cell(p);
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells_.end()) continue;
-          for (std::size_t j : it->second)
-            if ((s_[j].position - p).squaredNorm() <= r_ * r_) f(j);
-        }
-  }
-
- private:
-  Eigen::Vector3i cell(const Eigen::Vector3d& p) const { return (p / r_).array().floor().cast<int>(); }
-  static std::uint64_t key(const Eigen::Vector3i& c) {
-    return (static_cast<std::uint64_t>(c.x() & 0x1fffff) << 42) | (static_cast<std::uint64_t>(c.y() & 0x1fffff) << 21) |
-           static_cast<std::uint64_t>(c.z() & 0x1fffff);
-  }
-  const std::vector<SurfaceSample>& s_;
-  double r_;
-  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
-};
-
 }  // namespace
 
 ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params) {
@@ -198,7 +170,7 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
 
   std::vector<SurfaceSample> s(raw.size());
   for (std::size_t i = 0; i < raw.size(); ++i) s[i].position = raw[i].position, s[i].uncertain = raw[i].uncertain;
-  const Grid grid(s, out.radius);
+  const NeighbourGrid grid(s, out.radius);
   std::vector<SurfaceSample> smoothed = s;
   for (std::size_t i = 0; i < s.size(); ++i) {
     Eigen::Vector3d mean = Eigen::Vector3d::Zero(), direction = Eigen::Vector3d::Zero();

@@ -2,6 +2,7 @@
 
 #include "fba/grasp/angles.hpp"
 #include "fba/grasp/grasp_quality.hpp"
+#include "neighbour_grid.hpp"
 
 #include <algorithm>
 #include <array>
@@ -13,7 +14,6 @@
 #include <queue>
 #include <random>
 #include <string>
-#include <unordered_map>
 #include <utility>
 
 namespace fba::grasp {
@@ -28,49 +28,6 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 double inscribed_cone_deg(double friction) {
   return std::atan(friction * std::cos(std::numbers::pi / QualityParams{}.cone_edges)) / kDeg;
 }
-
-// Uniform grid of cell size r: neighbours within r are in the 27 surrounding cells.
-class NeighbourGrid {
- public:
-  NeighbourGrid(std::span<const SurfaceSample> s, double r) : samples_(s), r_(r) {
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      // Cell indices must fit the key's 21 bits per axis (and an int): metres over a sane cell size.
-      // (allFinite first: Eigen's maxCoeff may pass over a NaN.)
-      if (!s[i].position.allFinite() || !((s[i].position.cwiseAbs() / r).maxCoeff() < 1e6))
-        throw std::invalid_argument("grasp synthesis: sample " + std::to_string(i) + " is not finite or lies more than 10^6 grid cells (" +
-                                    std::to_string(r) + " m) from the origin; expected metres and a cell size near the sample spacing");
-      cells_[key(cell(s[i].position))].push_back(i);
-    }
-  }
-  std::vector<std::size_t> within(std::size_t i) const {
-    std::vector<std::size_t> out;
-    const Eigen::Vector3i c = cell(samples_[i].position);
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells_.end()) continue;
-          for (std::size_t j : it->second)
-            if (j != i && (samples_[j].position - samples_[i].position).squaredNorm() <= r_ * r_) out.push_back(j);
-        }
-    return out;
-  }
-  // f(indices) for each cell's samples, in no order.
-  template <typename F>
-  void for_each_cell(F f) const {
-    for (const auto& [key, members] : cells_) f(members);
-  }
-
- private:
-  Eigen::Vector3i cell(const Eigen::Vector3d& p) const { return (p / r_).array().floor().cast<int>(); }
-  static std::uint64_t key(const Eigen::Vector3i& c) {
-    return (static_cast<std::uint64_t>(c.x() & 0x1fffff) << 42) | (static_cast<std::uint64_t>(c.y() & 0x1fffff) << 21) |
-           static_cast<std::uint64_t>(c.z() & 0x1fffff);
-  }
-  std::span<const SurfaceSample> samples_;
-  double r_;
-  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
-};
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("grasp synthesis: " + what);

@@ -1,0 +1,71 @@
+// Surface samples bucketed in cubic cells of edge r: the samples within r of a point lie in its
+// cell or the 26 around it. Shared by the model's surface (normals) and synthesis (regions).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fba/grasp/synthesis.hpp"
+
+namespace fba::grasp {
+
+class NeighbourGrid {
+ public:
+  NeighbourGrid(std::span<const SurfaceSample> s, double r) : samples_(s), r_(r) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      // Cell indices must fit the key's 21 bits per axis (and an int): metres over a sane cell size.
+      // (allFinite first: Eigen's maxCoeff may pass over a NaN.)
+      if (!s[i].position.allFinite() || !((s[i].position.cwiseAbs() / r).maxCoeff() < 1e6))
+        throw std::invalid_argument("surface sample " + std::to_string(i) + " is not finite or lies more than 10^6 grid cells (" +
+                                    std::to_string(r) + " m) from the origin; expected metres and a cell size near the sample spacing");
+      cells_[key(cell(s[i].position))].push_back(i);
+    }
+  }
+
+  // f(j) for each sample j within r of p, cell by cell.
+  template <class F>
+  void within(const Eigen::Vector3d& p, F&& f) const {
+    const Eigen::Vector3i c = cell(p);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it == cells_.end()) continue;
+          for (std::size_t j : it->second)
+            if ((samples_[j].position - p).squaredNorm() <= r_ * r_) f(j);
+        }
+  }
+
+  // The samples within r of sample i, i left out.
+  std::vector<std::size_t> within(std::size_t i) const {
+    std::vector<std::size_t> out;
+    within(samples_[i].position, [&](std::size_t j) {
+      if (j != i) out.push_back(j);
+    });
+    return out;
+  }
+
+  // f(indices) for each cell's samples, in no order.
+  template <typename F>
+  void for_each_cell(F f) const {
+    for (const auto& [key, members] : cells_) f(members);
+  }
+
+ private:
+  Eigen::Vector3i cell(const Eigen::Vector3d& p) const { return (p / r_).array().floor().cast<int>(); }
+  static std::uint64_t key(const Eigen::Vector3i& c) {
+    return (static_cast<std::uint64_t>(c.x() & 0x1fffff) << 42) | (static_cast<std::uint64_t>(c.y() & 0x1fffff) << 21) |
+           static_cast<std::uint64_t>(c.z() & 0x1fffff);
+  }
+  std::span<const SurfaceSample> samples_;
+  double r_;
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
+};
+
+}  // namespace fba::grasp
