@@ -55,9 +55,9 @@ std::uint64_t leaf_key(const OctreeCell& c) {
 }
 
 // Calls f(axis, sign, leaf, quarters) for the leaves just beyond each of the cell's six faces: the
-// leaf at the face's centre when it is as large as the cell or larger (or the face is on the root
-// box's: no leaf, node null), as it then covers the whole face (quarters 4); else the leaf at each
-// of the face's four quarter points (quarters 1), which finds the finer neighbours there.
+// leaf at the face's centre when it is as large as the cell or larger, as it then covers the whole
+// face (quarters 4; beyond the root box's faces, a cell with a null node); else the leaf at each of
+// the face's four quarter points (quarters 1), which finds the finer neighbours there.
 template <class F>
 void for_face_neighbours(const Octree& model, const OctreeCell& c, F&& f) {
   const double h = c.half_size, eps = 1e-3 * h;
