@@ -357,6 +357,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   const double sin_plane = std::sin(p.plane_alignment_deg * kDeg);
   const double reach = std::hypot(hand.aperture_max, hand.spread_max / 2);
   const double min_spread = std::max(hand.spread_min, hand.finger_width);
+  const double min_spread2 = min_spread * min_spread, max_spread2 = hand.spread_max * hand.spread_max;
   const Eigen::Vector3d preferred = p.preferred_approach.normalized();
   const double weights = p.weight_symmetry + p.weight_safety + p.weight_curvature;
   auto s4 = [&](std::size_t i) { return std::clamp(0.5 - 0.5 * s[i].curvature / p.curvature_scale, 0.0, 1.0); };
@@ -381,8 +382,9 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
       for (std::size_t b = a + 1; b < fingers.size(); ++b) {
         const std::size_t f1 = fingers[a], f2 = fingers[b];
         const Eigen::Vector3d p1 = s[f1].position, p2 = s[f2].position;
-        const double spread = (p1 - p2).norm();
-        if (spread < min_spread || spread > hand.spread_max) continue;
+        const double spread2 = (p1 - p2).squaredNorm();  // no root for the many pairs out of range
+        if (spread2 < min_spread2 || spread2 > max_spread2) continue;
+        const double spread = std::sqrt(spread2);
         const Eigen::Vector3d mid = (p1 + p2) / 2;
         const double aperture = (mid - tp).norm();
         if (aperture < hand.aperture_min || aperture > hand.aperture_max) continue;
