@@ -170,16 +170,15 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
 
   std::vector<SurfaceSample> s(raw.size());
   for (std::size_t i = 0; i < raw.size(); ++i) s[i].position = raw[i].position, s[i].uncertain = raw[i].uncertain;
-  const NeighbourGrid grid(s, out.radius);
+  const std::vector<std::vector<std::size_t>> neighbourhoods = NeighbourGrid(s, out.radius).neighbourhoods(true);
   std::vector<SurfaceSample> smoothed = s;
   for (std::size_t i = 0; i < s.size(); ++i) {
     Eigen::Vector3d mean = Eigen::Vector3d::Zero(), direction = Eigen::Vector3d::Zero();
-    std::vector<std::size_t> nb;
-    grid.within(s[i].position, [&](std::size_t j) {
-      nb.push_back(j);
+    const std::vector<std::size_t>& nb = neighbourhoods[i];
+    for (std::size_t j : nb) {
       mean += s[j].position;
       direction += raw[j].free_direction;
-    });
+    }
     mean /= double(nb.size());
     Eigen::Vector3d normal = direction;
     if (nb.size() >= 6) {

@@ -2,6 +2,7 @@
 // cell or the 26 around it. Shared by the model's surface (normals) and synthesis (regions).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <stdexcept>
@@ -28,26 +29,28 @@ class NeighbourGrid {
     }
   }
 
-  // f(j) for each sample j within r of p, cell by cell.
-  template <class F>
-  void within(const Eigen::Vector3d& p, F&& f) const {
-    const Eigen::Vector3i c = cell(p);
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells_.end()) continue;
-          for (std::size_t j : it->second)
-            if ((samples_[j].position - p).squaredNorm() <= r_ * r_) f(j);
-        }
-  }
-
-  // The samples within r of sample i, i left out.
-  std::vector<std::size_t> within(std::size_t i) const {
-    std::vector<std::size_t> out;
-    within(samples_[i].position, [&](std::size_t j) {
-      if (j != i) out.push_back(j);
-    });
+  // For each sample, the samples within r of it (itself too, or not), cell by cell (x, then y, then
+  // z outermost) and in each cell in index order. The 27 cells around are looked up once per cell.
+  std::vector<std::vector<std::size_t>> neighbourhoods(bool with_self) const {
+    std::vector<std::vector<std::size_t>> out(samples_.size());
+    std::array<const std::vector<std::size_t>*, 27> around{};
+    for (const auto& [k, members] : cells_) {
+      const Eigen::Vector3i c = cell(samples_[members.front()].position);
+      std::size_t m = 0;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+            around[m++] = it == cells_.end() ? nullptr : &it->second;
+          }
+      for (std::size_t i : members) {
+        const Eigen::Vector3d& p = samples_[i].position;
+        for (const auto* near : around)
+          if (near)
+            for (std::size_t j : *near)
+              if ((with_self || j != i) && (samples_[j].position - p).squaredNorm() <= r_ * r_) out[i].push_back(j);
+      }
+    }
     return out;
   }
 

@@ -215,13 +215,13 @@ std::optional<std::size_t> hand_path_blocked(const Grasp& g, const HandGeometry&
 
 void estimate_curvature(std::span<SurfaceSample> samples, double radius) {
   require(radius > 0, "curvature radius must be > 0, found " + num(radius));
-  const NeighbourGrid grid(samples, radius);
+  const std::vector<std::vector<std::size_t>> nb = NeighbourGrid(samples, radius).neighbourhoods(false);
   std::vector<double> k(samples.size(), 0.0);
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const Eigen::Vector3d n = samples[i].normal.normalized();
     double sum = 0;
     int count = 0;
-    for (std::size_t j : grid.within(i)) {
+    for (std::size_t j : nb[i]) {
       const Eigen::Vector3d d = samples[j].position - samples[i].position;
       const double d2 = d.squaredNorm();
       if (d2 < 1e-6 * radius * radius) continue;  // a duplicate says nothing about the bending
@@ -240,10 +240,8 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   const double sharp = p.sharp_curvature > 0 ? p.sharp_curvature : 2.0 / hand.finger_width;
   const double safety_ref = p.safety_reference > 0 ? p.safety_reference : hand.finger_width;
   const std::size_t n = s.size();
-  const NeighbourGrid grid(s, p.neighbour_radius);
   const SampleCells cells(s, hand.finger_width);
-  std::vector<std::vector<std::size_t>> nb(n);
-  for (std::size_t i = 0; i < n; ++i) nb[i] = grid.within(i);
+  const std::vector<std::vector<std::size_t>> nb = NeighbourGrid(s, p.neighbour_radius).neighbourhoods(false);
 
   // Regions: connected graspable samples whose normals turn gently.
   const double max_step = p.max_normal_step_deg * kDeg;
