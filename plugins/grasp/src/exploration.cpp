@@ -48,9 +48,9 @@ struct Ray {
   }
 
   bool blocked(const OctreeCell& c) const {
+    if (c.state() == NodeState::Empty || c.node == target) return false;  // first: most cells are empty
     double t0, t1;
     if (!clip(c.box(), eye, dir, 0, t_max, t0, t1)) return false;
-    if (c.state() == NodeState::Empty || c.node == target) return false;
     if (c.is_leaf()) return (t1 - t0) * length > 0.5 * c.half_size && !on_plane(c);
     const OctreeNode* k = model.children(*c.node);
     for (int i = 0; i < 8; ++i) {
