@@ -29,8 +29,9 @@ class NeighbourGrid {
     }
   }
 
-  // For each sample, the samples within r of it (itself too, or not), cell by cell (x, then y, then
-  // z outermost) and in each cell in index order. The 27 cells around are looked up once per cell.
+  // For each sample, the samples within r of it (itself too, or not): the 27 cells around its own
+  // in x-major order (x outermost, z innermost), each cell's samples in index order. The cells
+  // around are looked up once per cell, not once per sample.
   std::vector<std::vector<std::size_t>> neighbourhoods(bool with_self) const {
     std::vector<std::vector<std::size_t>> out(samples_.size());
     std::array<const std::vector<std::size_t>*, 27> around{};
