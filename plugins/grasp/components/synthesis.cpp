@@ -218,11 +218,25 @@ class GraspSynthesisFilter final : public fba::Component {
                           c.model_epsilon);
           return select(c.grasp, views, "contacts");
         }
-      std::string reason = "no reliable grasp after " + std::to_string(views) + " views: best total " + fixed(best_resolved);
+      std::string reason = "no reliable grasp after " + std::to_string(views) + " views: ";
       // Which criteria held it back: what a user tunes (weights, hand geometry) or learns about the object.
-      if (const auto* b = best_resolved_candidate)
-        reason += " (S1 symmetry " + fixed(b->grasp.scores.symmetry) + ", S3 safety margin " + fixed(b->grasp.scores.safety_margin) +
-                  ", S4 curvature " + fixed(b->grasp.scores.curvature) + ")";
+      auto criteria = [](const fba::grasp::GraspCandidate& c) {
+        return " (S1 symmetry " + fixed(c.grasp.scores.symmetry) + ", S3 safety margin " + fixed(c.grasp.scores.safety_margin) +
+               ", S4 curvature " + fixed(c.grasp.scores.curvature) + ")";
+      };
+      if (!best_resolved_candidate && !r.candidates.empty()) {
+        // Nothing to weigh against the threshold: the model never resolved where the candidates are.
+        const auto& best = *std::max_element(r.candidates.begin(), r.candidates.end(), [](const auto& a, const auto& b) {
+          return a.grasp.scores.total < b.grasp.scores.total;
+        });
+        return fail(reason + "none of the " + std::to_string(r.candidates.size()) +
+                    " candidates has its contacts and the surface around them resolved" +
+                    (rim_deg_ > 0 ? " (pinned by two views' rims)" : "") + ", nor a reliable one its contacts; the best, of total " +
+                    fixed(best.grasp.scores.total) + criteria(best) + ", touches a part of the model not yet resolved (threshold " +
+                    fixed(threshold_) + ")");
+      }
+      reason += "best total " + fixed(best_resolved);
+      if (const auto* b = best_resolved_candidate) reason += criteria(*b);
       reason += " < threshold " + fixed(threshold_);
       if (r.candidates.empty() && r.below_table > 0)
         reason += " (no candidate the hand can reach: " + std::to_string(r.below_table) + " would put the hand into the table)";

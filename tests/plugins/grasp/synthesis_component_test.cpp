@@ -192,8 +192,8 @@ TEST(GraspSynthesisComponent, AResolvedCandidateMuchLessStableThanTheBestWaitsUn
 }
 
 // With rim_deg, a view whose silhouette has no rim pins nothing: no contact is ever resolved, and
-// after max_views synthesis gives up with the best total.
-TEST(GraspSynthesisComponent, GivesUpAfterMaxViewsWithTheBestTotal) {
+// after max_views synthesis gives up saying so, with the best candidate's total and criteria.
+TEST(GraspSynthesisComponent, GivesUpAfterMaxViewsSayingNoCandidateIsOnResolvedSurface) {
   ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 4}, {"rim_deg", 15.0}}, {"silhouette"});
   auto frame = std::make_shared<fba::Frame>();
   frame->has_pose = true;
@@ -208,9 +208,15 @@ TEST(GraspSynthesisComponent, GivesUpAfterMaxViewsWithTheBestTotal) {
   h.run();
   const auto failed = named(h.events(), "grasp_synthesis_failed");
   ASSERT_EQ(failed.size(), 1u);
-  EXPECT_EQ(failed[0].payload.rfind("no reliable grasp after 4 views: best total ", 0), 0u) << failed[0].payload;
-  EXPECT_NE(failed[0].payload.find(" < threshold 0.450"), std::string::npos) << failed[0].payload;
-  EXPECT_NE(failed[0].payload.find("touches a part of the model not yet resolved"), std::string::npos) << failed[0].payload;
+  const std::string& why = failed[0].payload;
+  EXPECT_EQ(why.rfind("no reliable grasp after 4 views: none of the ", 0), 0u) << why;
+  EXPECT_NE(why.find(" candidates has its contacts and the surface around them resolved (pinned by two views' rims), nor a "
+                     "reliable one its contacts; the best, of total "),
+            std::string::npos)
+      << why;
+  for (const char* part : {"(S1 symmetry ", ", S3 safety margin ", ", S4 curvature ",
+                           "touches a part of the model not yet resolved (threshold 0.450)"})
+    EXPECT_NE(why.find(part), std::string::npos) << part << " in " << why;
   EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
   // Then it ignores input.
   h.push<fba::Octree>("octree", cylinder(5));
