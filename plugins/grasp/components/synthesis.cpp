@@ -69,7 +69,7 @@ class GraspSynthesisFilter final : public fba::Component {
       "stability_share", 0.5,
       "before the last view, a reliable candidate on resolved surface is selected only when its epsilon on the model is at least "
       "this share of the best reliable candidate's, resolved or not: a grasp much less stable than one in sight waits for the "
-      "views that resolve the better one (the cracker box's pinches at a corner: 0.005 against 0.03). 0: the first one")
+      "views that resolve the better one (the cracker box's pinches at a corner: 0.005 against 0.024). 0: the first one")
                                                .range(0, 1);
   static constexpr auto kWeightSymmetry = fba::Param<double>("weight_symmetry", 1.0, "weight of S1 in the total").at_least(0);
   static constexpr auto kWeightSafety = fba::Param<double>("weight_safety", 1.0, "weight of S3 in the total").at_least(0);
