@@ -174,16 +174,18 @@ class GraspSynthesisFilter final : public fba::Component {
     p.neighbour_radius = surface.radius;
     const fba::grasp::SynthesisResult r = fba::grasp::synthesise(observed.samples, p);
 
-    double best_total = 0;  // the candidates come reliable first, most stable first: not by total
-    for (const auto& c : r.candidates) best_total = std::max(best_total, c.grasp.scores.total);
+    // The candidates come reliable first, the most stable on the model first: not by total.
+    auto total_of = [](const fba::grasp::GraspCandidate* c) { return c ? c->grasp.scores.total : 0.0; };
+    const fba::grasp::GraspCandidate* best =
+        r.candidates.empty() ? nullptr : &*std::max_element(r.candidates.begin(), r.candidates.end(), [](const auto& a, const auto& b) {
+          return a.grasp.scores.total < b.grasp.scores.total;
+        });
     // What the search saw: why a model gives few or weak candidates.
     ctx_.log().debug("views {}: {} of {} occupied leaves joined to the table; {} surface samples in {} regions; {} candidates "
                      "(best total {:.3f}); left out: {} into the table, {} blocked by the model, {} not force closure",
                      views, surface.leaves - surface.unsupported_leaves, surface.leaves, observed.samples.size(), r.regions.size(),
-                     r.candidates.size(), best_total, r.below_table, r.hand_blocked, r.not_force_closure);
-    double best_resolved = 0;  // the best candidate whose contacts are all on resolved parts of the model
-    const fba::grasp::GraspCandidate* best_resolved_candidate = nullptr;
-    // The reliable candidates come first, the most stable on the model first.
+                     r.candidates.size(), total_of(best), r.below_table, r.hand_blocked, r.not_force_closure);
+    const fba::grasp::GraspCandidate* best_resolved = nullptr;  // by total, of those on resolved surface
     const double best_epsilon = r.candidates.empty() ? 0.0 : r.candidates.front().model_epsilon;
     for (const auto& c : r.candidates) {  // best first
       if (c.uncertain) continue;
@@ -200,10 +202,7 @@ class GraspSynthesisFilter final : public fba::Component {
                         c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
         return select(c.grasp, views, "surface");
       }
-      if (c.grasp.scores.total > best_resolved) {
-        best_resolved = c.grasp.scores.total;
-        best_resolved_candidate = &c;
-      }
+      if (c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
     }
     if (views >= max_views_) {
       // The last view: settle for a reliable candidate whose contacts are resolved (pinned by two
@@ -224,19 +223,16 @@ class GraspSynthesisFilter final : public fba::Component {
         return " (S1 symmetry " + fixed(c.grasp.scores.symmetry) + ", S3 safety margin " + fixed(c.grasp.scores.safety_margin) +
                ", S4 curvature " + fixed(c.grasp.scores.curvature) + ")";
       };
-      if (!best_resolved_candidate && !r.candidates.empty()) {
+      if (!best_resolved && best) {
         // Nothing to weigh against the threshold: the model never resolved where the candidates are.
-        const auto& best = *std::max_element(r.candidates.begin(), r.candidates.end(), [](const auto& a, const auto& b) {
-          return a.grasp.scores.total < b.grasp.scores.total;
-        });
         return fail(reason + "none of the " + std::to_string(r.candidates.size()) +
                     " candidates has its contacts and the surface around them resolved" +
                     (rim_deg_ > 0 ? " (pinned by two views' rims)" : "") + ", nor a reliable one its contacts; the best, of total " +
-                    fixed(best.grasp.scores.total) + criteria(best) + ", touches a part of the model not yet resolved (threshold " +
+                    fixed(total_of(best)) + criteria(*best) + ", touches a part of the model not yet resolved (threshold " +
                     fixed(threshold_) + ")");
       }
-      reason += "best total " + fixed(best_resolved);
-      if (const auto* b = best_resolved_candidate) reason += criteria(*b);
+      reason += "best total " + fixed(total_of(best_resolved));
+      if (best_resolved) reason += criteria(*best_resolved);
       reason += " < threshold " + fixed(threshold_);
       if (r.candidates.empty() && r.below_table > 0)
         reason += " (no candidate the hand can reach: " + std::to_string(r.below_table) + " would put the hand into the table)";
@@ -244,8 +240,8 @@ class GraspSynthesisFilter final : public fba::Component {
         reason += " (no candidate the hand can take: " + std::to_string(r.hand_blocked) + " blocked by the model in the hand's way, " +
                   std::to_string(r.not_force_closure) + " not force closure on the model)";
       else if (r.candidates.empty()) reason += " (no candidate the hand can reach)";
-      else if (best_total > best_resolved)
-        reason += " (a candidate of total " + fixed(best_total) + " touches a part of the model not yet resolved)";
+      else if (total_of(best) > total_of(best_resolved))
+        reason += " (a candidate of total " + fixed(total_of(best)) + " touches a part of the model not yet resolved)";
       return fail(reason);
     }
     // One request per view: the carver's refinement on it brings a new model of the same views,
@@ -308,7 +304,7 @@ class GraspSynthesisFilter final : public fba::Component {
                      {"uncertain_regions", r.uncertain_regions.size()},
                      {"regions_requested", requested},
                      {"points_requested", points},
-                     {"best_total", best_total},
+                     {"best_total", total_of(best)},
                      {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
     if (!r.candidates.empty()) {
       const auto& b = r.candidates.front();
