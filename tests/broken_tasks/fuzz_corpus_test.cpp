@@ -14,20 +14,14 @@
 #include "fba/registry.hpp"
 #include "fba/task_config.hpp"
 #include "support/build_paths.hpp"
+#include "support/built_plugins.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
 // The example components and the examples' composite (relay.yaml), as the fuzz target has them.
-const fba::Registry& registry() {
-  static const fba::Registry r = [] {
-    fba::Registry reg;
-    for (const auto& e : reg.load_path({fba::test::plugin_dir()})) ADD_FAILURE() << e.what();
-    return reg;
-  }();
-  return r;
-}
+using fba::test::built_plugins;
 
 std::vector<std::string> corpus() {
   std::vector<std::string> files;
@@ -45,7 +39,7 @@ TEST_P(FuzzCorpus, LoadsOrIsRefusedWithEveryErrorPlaced) {
   text << in.rdbuf();
   try {
     // Relative to the broken-task corpus, as in the fuzz target, so that includes reach its composites.
-    fba::load_task_text(text.str(), "fuzz.yaml", fba::test::source_dir() + "/tests/broken_tasks", registry());
+    fba::load_task_text(text.str(), "fuzz.yaml", fba::test::source_dir() + "/tests/broken_tasks", built_plugins());
   } catch (const fba::ConfigError& e) {
     for (const auto& d : e.diagnostics()) EXPECT_GT(d.where.line, 0) << d.str();
   }

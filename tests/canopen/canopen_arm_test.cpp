@@ -10,6 +10,7 @@
 
 #include "emulated_arm.hpp"
 #include "fba/canopen/arm.hpp"
+#include "support/contains.hpp"
 
 using namespace std::chrono_literals;
 using namespace fba::canopen;
@@ -19,7 +20,7 @@ namespace {
 
 constexpr double kCounts = 10'000;  // counts per radian
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using fba::test::contains;
 
 class CanopenArmTest : public ::testing::TestWithParam<Transport> {
  protected:

@@ -13,6 +13,7 @@
 #include "emulated_arm.hpp"
 #include "fba/canopen/cia402.hpp"
 #include "fba/canopen/master.hpp"
+#include "support/contains.hpp"
 
 using namespace std::chrono_literals;
 using namespace fba::canopen;
@@ -22,7 +23,7 @@ namespace {
 
 using fba::test::Transport;
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using fba::test::contains;
 
 // Three drives (nodes 1, 2, 3) with a 20 ms heartbeat, and a master on the other end of the chosen transport.
 class CanopenMaster : public ::testing::TestWithParam<Transport> {

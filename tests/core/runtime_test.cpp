@@ -18,11 +18,7 @@ using fba::test::with;
 
 namespace {
 
-bool has_event(const fba::RunResult& r, const std::string& source, const std::string& name) {
-  for (const auto& e : r.events)
-    if (e.source == source && e.name == name) return true;
-  return false;
-}
+using fba::test::has_event;
 
 std::string chain(int count, int hops, const std::string& buffer = "lossless", int capacity = 16) {
   std::string y = "components:\n  src: { type: examples.counter, params: { count: " + std::to_string(count) + " } }\n";

@@ -239,12 +239,7 @@ fba::RunOptions options(ExecutorKind e, double grace_s = 0.1) {
   return o;
 }
 
-bool has_event(const fba::RunResult& r, const std::string& source, const std::string& name,
-               const std::string& payload_part = "") {
-  for (const auto& e : r.events)
-    if (e.source == source && e.name == name && e.payload.find(payload_part) != std::string::npos) return true;
-  return false;
-}
+using fba::test::has_event;
 
 const fba::SafeStateResult* safe_state_of(const fba::RunResult& r, const std::string& name) {
   for (const auto& s : r.safe_states)

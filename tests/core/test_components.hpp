@@ -23,4 +23,12 @@ inline RunOptions with(ExecutorKind e, double timeout_s = 60) {
   return o;
 }
 
+// Whether the run recorded event `name` from `source`, its payload containing `payload_part`.
+inline bool has_event(const RunResult& r, const std::string& source, const std::string& name,
+                      const std::string& payload_part = "") {
+  for (const auto& e : r.events)
+    if (e.source == source && e.name == name && e.payload.find(payload_part) != std::string::npos) return true;
+  return false;
+}
+
 }  // namespace fba::test

@@ -12,6 +12,7 @@
 #include "lift_test.hpp"
 #include "ring_grasp.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace {
 
@@ -20,7 +21,7 @@ using fba::sim_hand::LiftTestError;
 using fba::sim_hand::LiftTestParams;
 using fba::sim_hand::ObjectPlacement;
 
-const std::string kCan = fba::test::shared_data_dir() + "/ycb/YcbMasterChefCan/model.obj";
+using fba::test::kCan;
 constexpr double kDegree = M_PI / 180;
 
 const fba::TriangleMesh& can() {

@@ -15,12 +15,13 @@
 #include "object_placement.hpp"
 #include "support/built_plugins.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace {
 
 using fba::testing::ComponentHarness;
 
-const std::string kCan = fba::test::shared_data_dir() + "/ycb/YcbMasterChefCan/model.obj";
+using fba::test::kCan;
 
 // The object's box in the image sim.camera renders from above the table, and the box of the
 // placed mesh's vertices projected with the same camera.

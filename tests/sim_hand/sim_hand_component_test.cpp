@@ -18,12 +18,13 @@
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace {
 
 using fba::testing::ComponentHarness;
 
-const std::string kCan = fba::test::shared_data_dir() + "/ycb/YcbMasterChefCan/model.obj";
+using fba::test::kCan;
 
 // The ring grasp on the can as sim.hand places it (at x, y, yaw degrees).
 fba::Grasp can_grasp(double x, double y, double yaw_deg, double thumb_deg) {

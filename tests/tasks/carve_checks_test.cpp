@@ -19,14 +19,14 @@
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 fba::RunResult run(const std::string& task, std::vector<std::string> overrides, fba::RunOptions o = {}) {
   fba::LoadOptions lo;
   for (auto& s : overrides) lo.overrides.push_back({s});
   o.executor = fba::ExecutorKind::Deterministic;
   o.timeout_s = 300;
-  fba::Task t(fba::load_task(fba::test::tasks_dir() + "/" + task, registry(), lo), o);
+  fba::Task t(fba::load_task(fba::test::tasks_dir() + "/" + task, built_plugins(), lo), o);
   return t.run();
 }
 
@@ -97,7 +97,7 @@ TEST(CarveOutputs, ModelPlyIsTheLastModelsSurfaceAndThePictureShowsIt) {
   o.executor = fba::ExecutorKind::Deterministic;
   o.timeout_s = 300;
   o.output_dir = dir;
-  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_dino.yaml", registry(), lo), o);
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_dino.yaml", built_plugins(), lo), o);
   const auto& models = task.tap("carver.octree", 1);
   const auto r = task.run();
   ASSERT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
@@ -128,7 +128,7 @@ TEST(CarveGraspRegions, KeepsFewerNodesThanUniformDetailToTheSameDepth) {
   fba::RunOptions o;
   o.executor = fba::ExecutorKind::Deterministic;
   o.timeout_s = 300;
-  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_grasp_regions.yaml", registry(), lo), o);
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_grasp_regions.yaml", built_plugins(), lo), o);
   const auto& models = task.tap("carver.octree", 1);
   const auto r = task.run();
   ASSERT_EQ(r.outcome, fba::Outcome::Success) << r.reason;

@@ -9,10 +9,10 @@
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 fba::TaskConfig example(const std::string& name, const fba::LoadOptions& o = {}) {
-  return fba::load_task(fba::test::tasks_dir() + "/examples/" + name, registry(), o);
+  return fba::load_task(fba::test::tasks_dir() + "/examples/" + name, built_plugins(), o);
 }
 
 class ExampleTasks : public ::testing::TestWithParam<fba::ExecutorKind> {

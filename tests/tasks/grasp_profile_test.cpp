@@ -11,7 +11,7 @@
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 const std::string kGrasp = fba::test::tasks_dir() + "/grasp.yaml";
 
@@ -27,7 +27,7 @@ fba::LoadOptions profile(const std::string& name, std::vector<std::string> sets 
 // The object is one parameter: the camera's mesh and the hand's cannot be set apart.
 TEST(GraspTask, TheObjectIsOneParameterOfCameraAndHand) {
   try {
-    fba::load_task(kGrasp, registry(), profile("sim", {"camera.mesh=" + fba::test::tasks_dir() + "/grasp.yaml"}));
+    fba::load_task(kGrasp, built_plugins(), profile("sim", {"camera.mesh=" + fba::test::tasks_dir() + "/grasp.yaml"}));
     FAIL() << "loaded";
   } catch (const fba::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("camera.mesh comes from the task parameter 'mesh' (also hand.mesh); set it with --set mesh=..."),
@@ -35,7 +35,7 @@ TEST(GraspTask, TheObjectIsOneParameterOfCameraAndHand) {
         << e.what();
   }
   const std::string mesh = fba::test::shared_data_dir() + "/ycb/YcbMustardBottle/model.obj";
-  const auto task = fba::load_task(kGrasp, registry(), profile("sim", {"mesh=" + mesh}));
+  const auto task = fba::load_task(kGrasp, built_plugins(), profile("sim", {"mesh=" + mesh}));
   EXPECT_EQ(std::get<std::string>(task.find("camera")->params.at("mesh")), mesh);
   EXPECT_EQ(std::get<std::string>(task.find("hand")->params.at("mesh")), mesh);
 }

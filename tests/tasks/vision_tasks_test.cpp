@@ -23,7 +23,7 @@
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 fba::RunOptions deterministic() {
   fba::RunOptions o;
@@ -58,7 +58,7 @@ constexpr double kDinoOtsuMeanIoU = 0.95, kDinoOtsuMinIoU = 0.88;
 TEST(VisionTasks, CarveDinoReprojectsOntoEverySilhouette) {
   fba::LoadOptions o;
   o.overrides = {{"carver.max_depth=" + std::to_string(kDinoDepth)}};
-  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_dino.yaml", registry(), o), deterministic());
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_dino.yaml", built_plugins(), o), deterministic());
   const auto& silhouettes = task.tap("contours.silhouette");
   const auto& models = task.tap("carver.octree", 1);  // a deep snapshot is large: keep the last
   const auto r = task.run();
@@ -111,7 +111,7 @@ TEST_P(CarveSim, ModelMatchesTheMesh) {
   const std::string mesh = fba::test::shared_data_dir() + "/ycb/" + GetParam() + "/model.obj";
   fba::LoadOptions o;
   o.overrides = {{"camera.mesh=" + mesh}, {"accuracy.mesh=" + mesh}};
-  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_sim.yaml", registry(), o), deterministic());
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_sim.yaml", built_plugins(), o), deterministic());
   const auto& models = task.tap("carver.octree", 1);
   const auto r = task.run();
   ASSERT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
@@ -147,7 +147,7 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   options.timeout_s = 600;  // a hang detector only: the run takes a few seconds
   const fba::test::TempDir out;
   options.output_dir = out.path();
-  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/grasp_sim.yaml", registry()), options);  // the link to grasp.yaml
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/grasp_sim.yaml", built_plugins()), options);  // the link to grasp.yaml
   const auto r = task.run();
   ASSERT_TRUE(r.final_event) << r.reason;
   EXPECT_EQ(r.final_event->source, "hand") << r.reason;

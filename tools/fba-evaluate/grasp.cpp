@@ -22,7 +22,7 @@
 namespace fba::evaluate {
 namespace {
 
-const char* kHelp = R"(fba-evaluate grasp: grasp quality on the true object surface.
+const char* kGraspHelp = R"(fba-evaluate grasp: grasp quality on the true object surface.
 
   fba-evaluate grasp --mesh M.obj --summary run/summary.json [--random 1000]
       Places the three contacts of summary.json's "grasp" on the mesh (along each contact's
@@ -190,7 +190,7 @@ void table_row(const Options& o, const std::string& mesh, const grasp::ObjectSur
 int run_grasp(const std::vector<std::string>& args) {
   if (std::find(args.begin(), args.end(), "--batch") != args.end()) return run_grasp_batch(args);
   Options o;
-  po::options_description opts(kHelp);
+  po::options_description opts(kGraspHelp);
   opts.add_options()("help,h", "this help")
       ("mesh", po::value(&o.meshes)->multitoken()->required(), "the true object mesh(es), closed (OBJ, PLY, STL, ...)")
       ("summary", po::value(&o.summary), "a run's summary.json holding a \"grasp\" object (one mesh only)")

@@ -47,7 +47,7 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-const char* kHelp = R"(fba-evaluate grasp --batch: the grasp loop over objects and poses, and its targets' table.
+const char* kBatchHelp = R"(fba-evaluate grasp --batch: the grasp loop over objects and poses, and its targets' table.
 
   fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR] [--fba-run PATH] [--random 1000]
 
@@ -733,7 +733,7 @@ int run_grasp_batch(const std::vector<std::string>& args) {
   std::size_t random_sets = 1000;
   std::uint64_t seed = 1;
   grasp::QualityParams quality;
-  po::options_description opts(kHelp);
+  po::options_description opts(kBatchHelp);
   opts.add_options()("help,h", "this help")("batch", po::value(&list_file)->required(), "the list of runs (YAML)")(
       "jobs,j", ranged("jobs", &jobs, 1, 64), "runs at a time")(
       "output,o", po::value(&out_dir), "folder of the runs and the table; default: a new folder under the temporary folder")(

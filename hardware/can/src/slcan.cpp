@@ -16,7 +16,6 @@ namespace fba::can::slcan {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr std::chrono::milliseconds kWriteTimeout{500};
 constexpr int kBitrates[] = {10000, 20000, 50000, 100000, 125000, 250000, 500000, 800000, 1000000};
 
 int hex_digit(char c) {

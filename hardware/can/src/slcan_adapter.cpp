@@ -7,10 +7,6 @@
 
 namespace fba::can::slcan {
 
-namespace {
-constexpr std::chrono::milliseconds kWriteTimeout{500};
-}
-
 SlcanAdapter::SlcanAdapter(Fd line, std::string name) : fd_(std::move(line)), name_(std::move(name)) {
   set_nonblocking(fd_.get(), name_);
 }

@@ -143,7 +143,7 @@ ObjectSurface::Placement ObjectSurface::place(const GraspContact& approximate) c
     out.displacement = (out.contact.position - approximate.position).norm();
     out.along_normal = false;
   }
-  if (has_normal) out.normal_error_deg = angle_between(approximate.normal, out.contact.normal) * 180 / std::numbers::pi;
+  if (has_normal) out.normal_error_deg = angle_between_deg(approximate.normal, out.contact.normal);
   return out;
 }
 

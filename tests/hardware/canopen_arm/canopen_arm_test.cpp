@@ -23,9 +23,11 @@
 #include <fba/types/pose.hpp>
 
 #include "arm_model.hpp"
+#include "support/wrist_camera_arm.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
+#include "support/contains.hpp"
 
 using fba::testing::ComponentHarness;
 using namespace std::chrono_literals;
@@ -34,14 +36,11 @@ namespace {
 
 constexpr double kCounts = 100'000;  // drive units per radian
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
-const fba::arm::ArmModel& arm() {
-  static const fba::arm::ArmModel model(fba::test::source_dir() + "/hardware/robots/wrist_camera_arm.urdf", "world", "camera");
-  return model;
-}
+using fba::test::wrist_camera_arm;
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using fba::test::contains;
 
 std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::string& name) {
   std::vector<fba::Event> out;
@@ -95,7 +94,7 @@ class CanopenArmComponent : public ::testing::Test {
     return p;
   }
   void make(fba::testing::Params more = {}) {
-    harness_.emplace(registry(), "hw.canopen_arm", params(std::move(more)),
+    harness_.emplace(built_plugins(), "hw.canopen_arm", params(std::move(more)),
                      std::vector<std::string>{"target", "joint_target"});
   }
   ComponentHarness& h() { return *harness_; }
@@ -131,14 +130,14 @@ class CanopenArmComponent : public ::testing::Test {
 
 fba::Pose pose_of(const std::vector<double>& joints) {
   fba::Pose p;
-  p.world_from_frame = arm().forward(Eigen::Map<const Eigen::VectorXd>(joints.data(), 6));
+  p.world_from_frame = wrist_camera_arm().forward(Eigen::Map<const Eigen::VectorXd>(joints.data(), 6));
   return p;
 }
 
 }  // namespace
 
 TEST(CanopenArmSpec, HasExactlyTheInputsOutputsAndEventsOfSimArm) {
-  const auto real = registry().find("hw.canopen_arm"), sim = registry().find("sim.arm");
+  const auto real = built_plugins().find("hw.canopen_arm"), sim = built_plugins().find("sim.arm");
   ASSERT_TRUE(real && sim);
   const fba::Spec &a = real->spec, &b = sim->spec;
   EXPECT_EQ(a.kind(), b.kind());
@@ -170,7 +169,7 @@ TEST_F(CanopenArmComponent, EnablesEveryDriveAndPublishesWhereItStands) {
   for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_.enabled(node)) << "node " << node;
   const auto states = h().values<fba::JointState>("joint_state");
   ASSERT_EQ(states.size(), 1u);
-  EXPECT_EQ(states[0].names, arm().joint_names());
+  EXPECT_EQ(states[0].names, wrist_camera_arm().joint_names());
   EXPECT_EQ(states[0].positions, std::vector<double>(6, 0.0));  // the emulator's drives start at 0
   ASSERT_EQ(h().values<fba::Pose>("camera_pose").size(), 1u);
   EXPECT_TRUE(h().values<fba::Pose>("camera_pose")[0].world_from_frame.isApprox(
@@ -399,7 +398,7 @@ class CanopenArmInATask : public ::testing::Test {
         "      heartbeat_period_ms: 20\n      heartbeat_timeout_ms: 1000\n"
         "      sdo_timeout_ms: 1000\n" +
         extra;
-    return fba::load_task_text(yaml, "real_arm.yaml", dir_.path(), registry());
+    return fba::load_task_text(yaml, "real_arm.yaml", dir_.path(), built_plugins());
   }
   void wait_until_enabled() {
     for (int i = 0; i < 100'000 && !(emulator_.enabled(1) && emulator_.enabled(6)); ++i)

@@ -15,7 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "fba/can/pty.hpp"
+#include "emulated_hand.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
 
@@ -25,33 +25,9 @@ using fba::testing::ComponentHarness;
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
-// The emulator in a thread of its own on the master end of a pseudo-terminal.
-class EmulatedHand {
- public:
-  explicit EmulatedHand(Robotiq3fOptions options = quick())
-      : pty_(fba::can::open_pty()),
-        emulator_(std::move(pty_.master), "emulator", options),
-        thread_([this] { emulator_.run(); }) {}
-  ~EmulatedHand() {
-    emulator_.stop();
-    thread_.join();
-  }
-  const std::string& device() const { return pty_.slave_path; }
-  Robotiq3fEmulator& emulator() { return emulator_; }
-
-  static Robotiq3fOptions quick() {
-    Robotiq3fOptions o;
-    o.activation_s = 0.05;
-    return o;
-  }
-
- private:
-  fba::can::Pty pty_;
-  Robotiq3fEmulator emulator_;
-  std::thread thread_;
-};
+using fba::test::EmulatedHand;
 
 // Generous answer times: the emulator's thread may wait for a core on a loaded machine.
 fba::testing::Params params(const std::string& device, fba::testing::Params more = {}) {
@@ -102,9 +78,9 @@ bool closing(const Robotiq3fEmulator::State& s) { return s.go && s.axes[0].reque
 }  // namespace
 
 TEST(Robotiq3fSpec, PortsAndEventsAreSimHands) {
-  const auto real = registry().find("hw.robotiq_3f");
+  const auto real = built_plugins().find("hw.robotiq_3f");
   ASSERT_TRUE(real);
-  const auto sim = registry().find("sim.hand");
+  const auto sim = built_plugins().find("sim.hand");
   if (!sim) GTEST_SKIP() << "sim.hand is not built here (no MuJoCo): nothing to compare with";
   auto ports = [](const std::vector<fba::PortSpec>& list) {
     std::vector<std::tuple<std::string, std::string, bool>> out;
@@ -123,7 +99,7 @@ TEST(Robotiq3fSpec, PortsAndEventsAreSimHands) {
 
 TEST(Robotiq3f, ActivatesWhenTheTaskStarts) {
   EmulatedHand hand;
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
   const auto s = hand.emulator().state();
   EXPECT_TRUE(s.activated);
   EXPECT_EQ(s.imc, 3);
@@ -132,7 +108,7 @@ TEST(Robotiq3f, ActivatesWhenTheTaskStarts) {
 
 TEST(Robotiq3f, GraspThatTouchesTheObjectWithEveryFingerIsHeld) {
   EmulatedHand hand;
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
   h.push("grasp", grasp());
   ASSERT_EQ(h.run(), 1);
   ASSERT_EQ(h.failure(), "");
@@ -158,7 +134,7 @@ TEST(Robotiq3f, GraspWithNothingBetweenTheFingersIsNotHeldAndSaysWhy) {
   auto options = EmulatedHand::quick();
   options.object = false;
   EmulatedHand hand(options);
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
   h.push("grasp", grasp());
   ASSERT_EQ(h.run(), 1);
   ASSERT_EQ(h.failure(), "");
@@ -173,7 +149,7 @@ TEST(Robotiq3f, GraspWithNothingBetweenTheFingersIsNotHeldAndSaysWhy) {
 
 TEST(Robotiq3f, SpreadWiderThanTheObjectMissesWithFingersBAndC) {
   EmulatedHand hand;
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
   h.push("grasp", grasp(0.1, 0.1));  // B and C 0.1 m apart pass beside a 0.06 m object
   ASSERT_EQ(h.run(), 1);
   const auto results = h.values<fba::GraspExecution>("result");
@@ -188,7 +164,7 @@ TEST(Robotiq3f, AnObjectLongAlongTheSpreadMeetsFingersBAndCWhereARoundOneDoesNot
   Robotiq3fOptions options = EmulatedHand::quick();
   options.object_length = 0.19;  // a bottle held across, B and C along its height
   EmulatedHand hand(options);
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
   h.push("grasp", grasp(0.1, 0.1));  // the spread that passes beside the 0.06 m cylinder above
   ASSERT_EQ(h.run(), 1);
   ASSERT_EQ(h.failure(), "");
@@ -201,7 +177,7 @@ TEST(Robotiq3f, AnObjectLongAlongTheSpreadMeetsFingersBAndCWhereARoundOneDoesNot
 TEST(Robotiq3f, ObjectSlippingOutDuringTheHoldIsDropped) {
   EmulatedHand hand;
   // A long hold: the object slips out during it however slowly this machine runs.
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
   // The object slips out once the driver holds: two status answers after every finger touched, the
   // first of which ended the close, so the second was the hold's.
   std::uint64_t touched_at = 0;
@@ -225,7 +201,7 @@ TEST(Robotiq3f, ObjectSlippingOutDuringTheHoldIsDropped) {
 
 TEST(Robotiq3f, ScissorModePinchesBetweenFingersBAndC) {
   EmulatedHand hand;
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device(), {{"mode", std::string("scissor")}}));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"mode", std::string("scissor")}}));
   EXPECT_EQ(hand.emulator().state().mode, 3);
   h.push("grasp", grasp());
   ASSERT_EQ(h.run(), 1);
@@ -238,7 +214,7 @@ TEST(Robotiq3f, ScissorModePinchesBetweenFingersBAndC) {
 
 TEST(Robotiq3f, SafeStateStopsThenOpens) {
   EmulatedHand hand;
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
   h.push("grasp", grasp());
   ASSERT_EQ(h.run(), 1);
   h.safe_state();
@@ -254,7 +230,7 @@ TEST(Robotiq3f, SafeStateStopsThenOpens) {
 TEST(Robotiq3fFaults, GripperThatStopsAnsweringIsATimeoutNamingTheDevice) {
   EmulatedHand hand;
   // A long hold: the fault comes before the grasp could end, however slowly this machine runs.
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
   When silence(hand.emulator(), closing, [&] { hand.emulator().silence(); });
   h.push("grasp", grasp());
   h.run();
@@ -275,7 +251,7 @@ TEST(Robotiq3fFaults, GripperThatStopsAnsweringIsATimeoutNamingTheDevice) {
 TEST(Robotiq3fFaults, LineThatDisappearsMidMotionIsReportedAtOnce) {
   EmulatedHand hand;
   // A long hold: the fault comes before the grasp could end, however slowly this machine runs.
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
   When pull(hand.emulator(), closing, [&] { hand.emulator().disconnect(); });
   h.push("grasp", grasp());
   h.run();
@@ -292,7 +268,7 @@ TEST(Robotiq3fFaults, LineThatDisappearsMidMotionIsReportedAtOnce) {
 
 TEST(Robotiq3fFaults, AnswersWithBadCrcsFailTheGraspThenTheSafeStateIsReached) {
   EmulatedHand hand;
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
   hand.emulator().corrupt_replies(-1);
   h.push("grasp", grasp());
   h.run();
@@ -308,7 +284,7 @@ TEST(Robotiq3fFaults, AnswersWithBadCrcsFailTheGraspThenTheSafeStateIsReached) {
 
 TEST(Robotiq3fFaults, OneBurstOfGarbageIsRetriedAndTheGraspHolds) {
   EmulatedHand hand;
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
   hand.emulator().inject_garbage();
   h.push("grasp", grasp());
   ASSERT_EQ(h.run(), 1);
@@ -321,7 +297,7 @@ TEST(Robotiq3fFaults, OneBurstOfGarbageIsRetriedAndTheGraspHolds) {
 TEST(Robotiq3fFaults, FaultCodeFromTheGripperNamesTheFaultAndTheHandStops) {
   EmulatedHand hand;
   // A long hold: the fault comes before the grasp could end, however slowly this machine runs.
-  ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
   When fault(hand.emulator(), closing, [&] { hand.emulator().inject_fault(0x0D); });
   h.push("grasp", grasp());
   h.run();
@@ -339,7 +315,7 @@ TEST(Robotiq3fFaults, GraspOutsideTheHandsRangeIsRefusedBeforeAnythingIsSent) {
            {grasp(0.1, 0.2), "spread must be in [0, 0.12 m]"},
            {grasp(std::numeric_limits<double>::quiet_NaN(), 0.03), "aperture must be in"},
            {grasp(0.1, -0.01), "spread must be in"}}) {
-    ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device()));
+    ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
     const auto before = hand.emulator().state().requests;
     h.push("grasp", bad);
     h.run();
@@ -354,7 +330,7 @@ TEST(Robotiq3fFaults, GraspOutsideTheHandsRangeIsRefusedBeforeAnythingIsSent) {
 TEST(Robotiq3fFaults, GripperOnAnotherSlaveIdFailsTheStartNamingTheDevice) {
   EmulatedHand hand;
   try {
-    ComponentHarness h(registry(), "hw.robotiq_3f", params(hand.device(), {{"slave_id", 10}}));
+    ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"slave_id", 10}}));
     FAIL() << "started without a gripper on slave 10";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("(slave 10)"), std::string::npos) << e.what();
@@ -366,7 +342,7 @@ TEST(Robotiq3fFaults, MissingSerialLineFailsTheStartNamingIt) {
   fba::test::TempDir dir;
   const std::string device = dir.file("ttyUSB9");
   try {
-    ComponentHarness h(registry(), "hw.robotiq_3f", params(device));
+    ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(device));
     FAIL() << "started on a serial line that does not exist";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find(device), std::string::npos) << e.what();

@@ -13,8 +13,7 @@
 #include <fba/types/grasp.hpp>
 #include <thread>
 
-#include "fba/can/pty.hpp"
-#include "fba/emulators/robotiq_3f.hpp"
+#include "emulated_hand.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 
@@ -53,29 +52,7 @@ const fba::Registry& registry() {
   return r;
 }
 
-class EmulatedHand {
- public:
-  EmulatedHand()
-      : pty_(fba::can::open_pty()),
-        emulator_(std::move(pty_.master), "emulator", options()),
-        thread_([this] { emulator_.run(); }) {}
-  ~EmulatedHand() {
-    emulator_.stop();
-    thread_.join();
-  }
-  const std::string& device() const { return pty_.slave_path; }
-  fba::emulators::Robotiq3fEmulator& emulator() { return emulator_; }
-
- private:
-  static fba::emulators::Robotiq3fOptions options() {
-    fba::emulators::Robotiq3fOptions o;
-    o.activation_s = 0.05;
-    return o;
-  }
-  fba::can::Pty pty_;
-  fba::emulators::Robotiq3fEmulator emulator_;
-  std::thread thread_;
-};
+using fba::test::EmulatedHand;
 
 std::string task_yaml(const std::string& device, double aperture, double hold_time = 0.2) {
   return "task: grasp_real_hand\ncomponents:\n"

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "arm_model.hpp"
+#include "support/wrist_camera_arm.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 
@@ -16,12 +17,9 @@ using fba::arm::JointTrajectory;
 
 namespace {
 
-const std::string kUrdf = fba::test::source_dir() + "/hardware/robots/wrist_camera_arm.urdf";
+const std::string kUrdf = fba::test::wrist_camera_arm_urdf();
 
-const ArmModel& arm() {
-  static const ArmModel model(kUrdf, "world", "camera");
-  return model;
-}
+using fba::test::wrist_camera_arm;
 
 Eigen::VectorXd home() {
   Eigen::VectorXd q(6);
@@ -43,8 +41,8 @@ std::string error_of(const std::function<void()>& f) {
 TEST(ArmModel, TheProjectArmHasSixRevoluteJointsWithTheirLimits) {
   const std::vector<std::string> names{"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
                                        "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
-  EXPECT_EQ(arm().joint_names(), names);
-  for (const auto& l : arm().limits()) {
+  EXPECT_EQ(wrist_camera_arm().joint_names(), names);
+  for (const auto& l : wrist_camera_arm().limits()) {
     EXPECT_NEAR(l.lower, -M_PI, 1e-6);
     EXPECT_NEAR(l.upper, M_PI, 1e-6);
     EXPECT_GE(l.velocity, 3.15);
@@ -53,7 +51,7 @@ TEST(ArmModel, TheProjectArmHasSixRevoluteJointsWithTheirLimits) {
 
 // The camera's optical frame at the home joints: 0.35 m from the object's origin, looking at it.
 TEST(ArmModel, HomeJointsPointTheCameraAtTheObject) {
-  const Eigen::Isometry3d camera = arm().forward(home());
+  const Eigen::Isometry3d camera = wrist_camera_arm().forward(home());
   EXPECT_NEAR(camera.translation().norm(), 0.35, 0.005);
   const Eigen::Vector3d to_object = -camera.translation().normalized();
   EXPECT_GT(camera.linear().col(2).dot(to_object), std::cos(1.0 * M_PI / 180));  // z forward, within 1 degree
@@ -77,36 +75,36 @@ TEST(ArmModel, InverseOfForwardReachesTheSamePoseOverRandomReachableConfiguratio
   for (int i = 0; i < 60; ++i) {
     Eigen::VectorXd q(6);
     for (int j = 0; j < 6; ++j) q(j) = joint(random);
-    const Eigen::Isometry3d pose = arm().forward(q);
-    const auto ik = arm().inverse(pose, home());
+    const Eigen::Isometry3d pose = wrist_camera_arm().forward(q);
+    const auto ik = wrist_camera_arm().inverse(pose, home());
     ASSERT_TRUE(ik.ok) << "configuration " << i << ": " << ik.why;
-    EXPECT_EQ(arm().limit_violation(ik.joints), "");
-    const Eigen::Isometry3d reached = arm().forward(ik.joints);
+    EXPECT_EQ(wrist_camera_arm().limit_violation(ik.joints), "");
+    const Eigen::Isometry3d reached = wrist_camera_arm().forward(ik.joints);
     EXPECT_LT((reached.translation() - pose.translation()).norm(), 1e-4) << i;
     EXPECT_LT(fba::arm::angle_between(reached, pose), 1e-3) << i;
   }
 }
 
 TEST(ArmModel, InverseFromTheCurrentJointsStaysThere) {
-  const auto ik = arm().inverse(arm().forward(home()), home());
+  const auto ik = wrist_camera_arm().inverse(wrist_camera_arm().forward(home()), home());
   ASSERT_TRUE(ik.ok) << ik.why;
   EXPECT_LT((ik.joints - home()).cwiseAbs().maxCoeff(), 1e-6);
 }
 
 TEST(ArmModel, JointsOutsideTheirLimitsAreNamed) {
   Eigen::VectorXd q = home();
-  EXPECT_EQ(arm().limit_violation(q), "");
+  EXPECT_EQ(wrist_camera_arm().limit_violation(q), "");
   q(2) = 3.5;
-  EXPECT_EQ(arm().limit_violation(q), "joint 'elbow_joint' at 3.5 rad is outside [-3.14159, 3.14159]");
+  EXPECT_EQ(wrist_camera_arm().limit_violation(q), "joint 'elbow_joint' at 3.5 rad is outside [-3.14159, 3.14159]");
   q(2) = std::nan("");
-  EXPECT_NE(arm().limit_violation(q).find("elbow_joint"), std::string::npos);
-  EXPECT_EQ(arm().limit_violation(Eigen::VectorXd::Zero(5)), "5 joint positions given, the arm has 6");
+  EXPECT_NE(wrist_camera_arm().limit_violation(q).find("elbow_joint"), std::string::npos);
+  EXPECT_EQ(wrist_camera_arm().limit_violation(Eigen::VectorXd::Zero(5)), "5 joint positions given, the arm has 6");
 }
 
 TEST(ArmModel, APoseOutOfReachIsRefusedWithTheErrorOfTheBestAttempt) {
   Eigen::Isometry3d far = Eigen::Isometry3d::Identity();
   far.translation() << 2.0, 0.0, 0.5;  // 2.45 m from the base; the arm reaches about 0.95 m
-  const auto ik = arm().inverse(far, home());
+  const auto ik = wrist_camera_arm().inverse(far, home());
   EXPECT_FALSE(ik.ok);
   EXPECT_GT(ik.position_error, 1.0);
   EXPECT_NE(ik.why.find("no joint positions reach it: the closest of 32 attempts is"), std::string::npos) << ik.why;

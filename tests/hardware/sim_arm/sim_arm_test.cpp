@@ -15,6 +15,7 @@
 #include <fba/types/pose.hpp>
 
 #include "arm_model.hpp"
+#include "support/wrist_camera_arm.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
@@ -23,15 +24,12 @@ using fba::testing::ComponentHarness;
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 const std::string kMesh = fba::test::shared_data_dir() + "/ycb/YcbMustardBottle/model.obj";
 constexpr std::int64_t kPeriodNs = 20'000'000;  // the default rate, 50 Hz
 
-const fba::arm::ArmModel& arm() {
-  static const fba::arm::ArmModel model(fba::test::source_dir() + "/hardware/robots/wrist_camera_arm.urdf", "world", "camera");
-  return model;
-}
+using fba::test::wrist_camera_arm;
 
 // A camera pose `distance` from the origin at an elevation and azimuth (degrees), looking at the
 // origin with the image's x axis horizontal.
@@ -74,11 +72,11 @@ std::pair<cv::Point2d, double> object_in(const fba::Frame& f) {
 }  // namespace
 
 TEST(SimArm, PublishesWhereItStartsAtTheFirstTick) {
-  ComponentHarness h(registry(), "sim.arm");
+  ComponentHarness h(built_plugins(), "sim.arm");
   tick(h);
   const auto states = h.values<fba::JointState>("joint_state");
   ASSERT_EQ(states.size(), 1u);
-  EXPECT_EQ(states[0].names, arm().joint_names());
+  EXPECT_EQ(states[0].names, wrist_camera_arm().joint_names());
   EXPECT_NEAR(states[0].positions[1], -2.1223, 1e-12);
   const auto poses = h.values<fba::Pose>("camera_pose");
   ASSERT_EQ(poses.size(), 1u);
@@ -88,7 +86,7 @@ TEST(SimArm, PublishesWhereItStartsAtTheFirstTick) {
 }
 
 TEST(SimArm, MovesToACameraPoseInTaskTimeWithinTheVelocityLimitsAndReportsArrival) {
-  ComponentHarness h(registry(), "sim.arm", {{"speed_scale", 0.5}}, {"target"});
+  ComponentHarness h(built_plugins(), "sim.arm", {{"speed_scale", 0.5}}, {"target"});
   tick(h);
   const fba::Pose target = looking_at_origin(45, 90, 0.4);  // from the object's left
   h.push<fba::Pose>("target", target);
@@ -112,7 +110,7 @@ TEST(SimArm, MovesToACameraPoseInTaskTimeWithinTheVelocityLimitsAndReportsArriva
   ASSERT_GT(states.size(), 10u);
   for (std::size_t i = 1; i < states.size(); ++i) {
     EXPECT_GT(states[i].stamp, states[i - 1].stamp);
-    for (std::size_t j = 0; j < 6; ++j) EXPECT_LE(std::abs(states[i].velocities[j]), 0.5 * arm().limits()[j].velocity + 1e-9);
+    for (std::size_t j = 0; j < 6; ++j) EXPECT_LE(std::abs(states[i].velocities[j]), 0.5 * wrist_camera_arm().limits()[j].velocity + 1e-9);
   }
   const auto& last = states.back();
   EXPECT_EQ(Eigen::Map<const Eigen::VectorXd>(last.velocities.data(), 6).cwiseAbs().maxCoeff(), 0.0);
@@ -122,7 +120,7 @@ TEST(SimArm, MovesToACameraPoseInTaskTimeWithinTheVelocityLimitsAndReportsArriva
 }
 
 TEST(SimArm, AnUnreachableTargetIsRefusedWithAnEventNamingItAndTheArmStays) {
-  ComponentHarness h(registry(), "sim.arm", {}, {"target"});
+  ComponentHarness h(built_plugins(), "sim.arm", {}, {"target"});
   tick(h);
   fba::Pose far;
   far.world_from_frame.translation() << 2.0, 0.0, 0.5;
@@ -138,7 +136,7 @@ TEST(SimArm, AnUnreachableTargetIsRefusedWithAnEventNamingItAndTheArmStays) {
 }
 
 TEST(SimArm, AJointTargetOutsideTheLimitsIsRefusedNamingTheJoint) {
-  ComponentHarness h(registry(), "sim.arm", {}, {"joint_target"});
+  ComponentHarness h(built_plugins(), "sim.arm", {}, {"joint_target"});
   fba::JointState target;
   target.names = {"elbow_joint"};
   target.positions = {4.0};
@@ -158,7 +156,7 @@ TEST(SimArm, AJointTargetOutsideTheLimitsIsRefusedNamingTheJoint) {
 }
 
 TEST(SimArm, AJointTargetByNameMovesOnlyThatJoint) {
-  ComponentHarness h(registry(), "sim.arm", {}, {"joint_target"});
+  ComponentHarness h(built_plugins(), "sim.arm", {}, {"joint_target"});
   fba::JointState target;
   target.names = {"wrist_3_joint"};
   target.positions = {1.0};
@@ -172,7 +170,7 @@ TEST(SimArm, AJointTargetByNameMovesOnlyThatJoint) {
 
 // A target that arrives during a motion waits for it to end; the arm never jumps.
 TEST(SimArm, ATargetDuringAMotionStartsWhenTheMotionEnds) {
-  ComponentHarness h(registry(), "sim.arm", {}, {"target"});
+  ComponentHarness h(built_plugins(), "sim.arm", {}, {"target"});
   h.push<fba::Pose>("target", looking_at_origin(45, 90, 0.4));
   tick(h);
   tick(h);
@@ -183,14 +181,14 @@ TEST(SimArm, ATargetDuringAMotionStartsWhenTheMotionEnds) {
   for (std::size_t i = 1; i < states.size(); ++i) {
     const double dt = states[i].stamp - states[i - 1].stamp;
     for (std::size_t j = 0; j < 6; ++j)  // no step larger than the speed allows
-      EXPECT_LE(std::abs(states[i].positions[j] - states[i - 1].positions[j]), 0.5 * arm().limits()[j].velocity * dt + 1e-9);
+      EXPECT_LE(std::abs(states[i].positions[j] - states[i - 1].positions[j]), 0.5 * wrist_camera_arm().limits()[j].velocity * dt + 1e-9);
   }
 }
 
 // A planner asks for several views at once: every target is reached, in the order it came (the
 // exploration loop waits for each view; one dropped would stall it).
 TEST(SimArm, TargetsThatComeTogetherAreAllReachedInOrder) {
-  ComponentHarness h(registry(), "sim.arm", {}, {"target"});
+  ComponentHarness h(built_plugins(), "sim.arm", {}, {"target"});
   h.push<fba::Pose>("target", looking_at_origin(45, 90, 0.4));
   tick(h);
   h.push<fba::Pose>("target", looking_at_origin(60, -90, 0.35));
@@ -208,7 +206,7 @@ TEST(SimArm, TargetsThatComeTogetherAreAllReachedInOrder) {
 
 // No tick comes after the end of the stream: the motion under way runs to its end, stamped in task time.
 TEST(SimArm, AtTheEndOfTheStreamTheMotionUnderWayIsCompleted) {
-  ComponentHarness h(registry(), "sim.arm", {}, {"target"});
+  ComponentHarness h(built_plugins(), "sim.arm", {}, {"target"});
   h.push<fba::Pose>("target", looking_at_origin(45, 90, 0.4));
   tick(h);
   h.close("target");
@@ -221,7 +219,7 @@ TEST(SimArm, AtTheEndOfTheStreamTheMotionUnderWayIsCompleted) {
 }
 
 TEST(SimArm, SafeStateStopsTheMotionAndDropsWhatWasPending) {
-  ComponentHarness h(registry(), "sim.arm", {}, {"target"});
+  ComponentHarness h(built_plugins(), "sim.arm", {}, {"target"});
   h.push<fba::Pose>("target", looking_at_origin(45, 90, 0.4));
   tick(h);
   tick(h);
@@ -234,7 +232,7 @@ TEST(SimArm, SafeStateStopsTheMotionAndDropsWhatWasPending) {
 
 TEST(SimArm, AMissingCameraLinkIsAClearConfigurationError) {
   try {
-    ComponentHarness h(registry(), "sim.arm", {{"camera_link", "gripper"}});
+    ComponentHarness h(built_plugins(), "sim.arm", {{"camera_link", "gripper"}});
     FAIL() << "accepted";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("no link 'gripper' in "), std::string::npos) << e.what();
@@ -247,7 +245,7 @@ TEST(SimArm, InitialJointsOfTheWrongCountOrOutsideTheLimitsAreRefused) {
        std::vector<std::pair<std::vector<double>, std::string>>{{{0, 0, 0}, "has 3 positions; the arm from 'world' to 'camera' has 6"},
                                                                 {{0, -1, 3.5, 0, 0, 0}, "joint 'elbow_joint' at 3.5 rad"}}) {
     try {
-      ComponentHarness h(registry(), "sim.arm", {{"initial_joints", joints}});
+      ComponentHarness h(built_plugins(), "sim.arm", {{"initial_joints", joints}});
       ADD_FAILURE() << "accepted " << expected;
     } catch (const std::exception& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
@@ -258,8 +256,8 @@ TEST(SimArm, InitialJointsOfTheWrongCountOrOutsideTheLimitsAreRefused) {
 // The arm moves the camera; sim.camera renders from the arm's camera pose: the object is in the
 // middle of the picture wherever the arm has taken the camera to look at it.
 TEST(SimArm, SimCameraRendersTheMeshFromWhereTheArmTookIt) {
-  ComponentHarness arm_h(registry(), "sim.arm", {}, {"target"});
-  ComponentHarness camera(registry(), "sim.camera", {{"mesh", kMesh}}, {"pose"});
+  ComponentHarness arm_h(built_plugins(), "sim.arm", {}, {"target"});
+  ComponentHarness camera(built_plugins(), "sim.camera", {{"mesh", kMesh}}, {"pose"});
   arm_h.push<fba::Pose>("target", looking_at_origin(30, 90, 0.45));
   tick_until_arrived(arm_h);
   for (const auto& p : arm_h.packets("camera_pose")) camera.push_packet("pose", p);
@@ -284,7 +282,7 @@ TEST(SimArm, InATaskTheCameraSeesTheObjectFromTheArmsStartingPose) {
                            "  sink: { type: examples.sink, params: { expected: 1 } }\n"
                            "connections:\n  - arm.camera_pose -> camera.pose\n  - camera.frame -> sink.in\n"
                            "on:\n  sink.done: stop_success\n";
-  fba::Task task(fba::load_task_text(yaml, "arm_camera.yaml", dir.path(), registry()));
+  fba::Task task(fba::load_task_text(yaml, "arm_camera.yaml", dir.path(), built_plugins()));
   const auto& frames = task.tap("camera.frame");
   const auto result = task.run();
   EXPECT_EQ(result.outcome, fba::Outcome::Success) << result.reason;
@@ -296,7 +294,7 @@ TEST(SimArm, InATaskTheCameraSeesTheObjectFromTheArmsStartingPose) {
   EXPECT_LT(std::abs(centre.y - 240), 60) << centre;
   Eigen::VectorXd home(6);
   home << -0.4148, -2.1223, 2.2888, -2.2234, -1.3679, -0.3644;
-  EXPECT_LT((f.camera.centre_in_world() - arm().forward(home).translation()).norm(), 1e-9);
+  EXPECT_LT((f.camera.centre_in_world() - wrist_camera_arm().forward(home).translation()).norm(), 1e-9);
   bool arm_safe = false;  // the arm is an actuator: told to go safe at the end
   for (const auto& s : result.safe_states) arm_safe |= s.component == "arm" && s.status == "reached";
   EXPECT_TRUE(arm_safe);

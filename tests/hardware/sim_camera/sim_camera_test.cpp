@@ -10,12 +10,13 @@
 
 #include "support/built_plugins.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace {
 
 using fba::testing::ComponentHarness;
 
-const std::string kCan = fba::test::shared_data_dir() + "/ycb/YcbMasterChefCan/model.obj";
+using fba::test::kCan;
 
 std::vector<std::tuple<std::string, std::string, bool>> ports(const std::vector<fba::PortSpec>& list) {
   std::vector<std::tuple<std::string, std::string, bool>> out;

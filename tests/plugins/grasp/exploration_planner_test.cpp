@@ -25,7 +25,7 @@ using fba::testing::ComponentHarness;
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 // A unit box in the cube [-1, 1]^3 at depth 3: its outer layer of leaves Partial, the inside Full.
 fba::Octree box_model(int views) {
@@ -61,7 +61,7 @@ std::optional<fba::Event> find_event(const std::vector<fba::Event>& events, cons
 }  // namespace
 
 TEST(ExplorationPlanner, StartRequestsTheFirstCandidateAndItsNearestNeighbours) {
-  ComponentHarness h(registry(), "grasp.exploration_planner", ring8(), {"start"});
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8(), {"start"});
   h.push<std::int64_t>("start", 0);
   h.run();
   const auto targets = h.values<fba::Pose>("target");
@@ -75,7 +75,7 @@ TEST(ExplorationPlanner, StartRequestsTheFirstCandidateAndItsNearestNeighbours) 
 }
 
 TEST(ExplorationPlanner, ARequestGetsTheViewThatSeesTheRegion) {
-  ComponentHarness h(registry(), "grasp.exploration_planner", ring8());
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8());
   h.push<fba::Octree>("octree", box_model(1));
   h.push<fba::RegionsOfInterest>("regions", plus_x_face());
   h.run();
@@ -93,7 +93,7 @@ TEST(ExplorationPlanner, ARequestGetsTheViewThatSeesTheRegion) {
 }
 
 TEST(ExplorationPlanner, ARequestWaitsUntilEveryRequestedViewIsInTheModel) {
-  ComponentHarness h(registry(), "grasp.exploration_planner", ring8(), {"start"});
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8(), {"start"});
   h.push<std::int64_t>("start", 0);
   h.run();
   ASSERT_EQ(h.values<fba::Pose>("target").size(), 3u);
@@ -114,7 +114,7 @@ TEST(ExplorationPlanner, ARequestWaitsUntilEveryRequestedViewIsInTheModel) {
 }
 
 TEST(ExplorationPlanner, ARequestWithAContactGetsAViewThatGrazesItNotTheOneFacingIt) {
-  ComponentHarness h(registry(), "grasp.exploration_planner", ring8());
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8());
   auto request = plus_x_face();
   request.points.push_back({Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::UnitX(), 0});
   h.push<fba::Octree>("octree", box_model(1));
@@ -135,7 +135,7 @@ TEST(ExplorationPlanner, ARequestWithAContactGetsAViewThatGrazesItNotTheOneFacin
 }
 
 TEST(ExplorationPlanner, TheViewsAlreadyTakenCountAsGrazingLinesOfSight) {
-  ComponentHarness h(registry(), "grasp.exploration_planner", ring8(), {"start"});
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8(), {"start"});
   h.push<std::int64_t>("start", 0);
   h.push<fba::Octree>("octree", box_model(3));
   h.run();
@@ -158,7 +158,7 @@ TEST(ExplorationPlanner, TheViewsAlreadyTakenCountAsGrazingLinesOfSight) {
 }
 
 TEST(ExplorationPlanner, NothingUncertainLeftGivesNoViewWithTheReason) {
-  ComponentHarness h(registry(), "grasp.exploration_planner", ring8());
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8());
   h.push<fba::Octree>("octree", box_model(1));
   h.push<fba::RegionsOfInterest>("regions", fba::RegionsOfInterest{{Eigen::AlignedBox3d(
                                                 Eigen::Vector3d::Constant(0.8), Eigen::Vector3d::Constant(0.9))}});
@@ -173,7 +173,7 @@ TEST(ExplorationPlanner, NothingUncertainLeftGivesNoViewWithTheReason) {
 TEST(ExplorationPlanner, WithoutACentreTheRingIsAroundTheModel) {
   auto p = ring8();
   p.erase("centre");
-  ComponentHarness h(registry(), "grasp.exploration_planner", p);
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner", p);
   h.push<fba::Octree>("octree", box_model(1));
   h.push<fba::RegionsOfInterest>("regions", plus_x_face());
   h.run();
@@ -183,7 +183,7 @@ TEST(ExplorationPlanner, WithoutACentreTheRingIsAroundTheModel) {
 
 TEST(ExplorationPlanner, RecordedCandidatesAreTheImageSetsCameraPoses) {
   const std::string par = fba::test::shared_data_dir() + "/middlebury-dino/dinoSR_par.txt";
-  ComponentHarness h(registry(), "grasp.exploration_planner",
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner",
                      {{"views", std::string("recorded")}, {"poses_from", par}, {"initial_views", 1}}, {"start"});
   h.push<std::int64_t>("start", 0);
   h.run();
@@ -195,12 +195,12 @@ TEST(ExplorationPlanner, RecordedCandidatesAreTheImageSetsCameraPoses) {
 }
 
 TEST(ExplorationPlanner, BadConfigurationsAreRefusedWithTheReason) {
-  EXPECT_THROW(ComponentHarness(registry(), "grasp.exploration_planner", {{"views", std::string("recorded")}}), fba::ConfigError);
-  EXPECT_THROW(ComponentHarness(registry(), "grasp.exploration_planner",
+  EXPECT_THROW(ComponentHarness(built_plugins(), "grasp.exploration_planner", {{"views", std::string("recorded")}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(built_plugins(), "grasp.exploration_planner",
                                 {{"min_elevation_deg", 40.0}, {"max_elevation_deg", 10.0}}),
                fba::ConfigError);
   try {
-    ComponentHarness h(registry(), "grasp.exploration_planner", {{"views", std::string("ring")}}, {"start"});
+    ComponentHarness h(built_plugins(), "grasp.exploration_planner", {{"views", std::string("ring")}}, {"start"});
     FAIL() << "no exception";
   } catch (const fba::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("set centre"), std::string::npos) << e.what();
@@ -208,7 +208,7 @@ TEST(ExplorationPlanner, BadConfigurationsAreRefusedWithTheReason) {
 }
 
 TEST(ExplorationPlanner, ARequestFromAModelWithoutTheLastViewIsDropped) {
-  ComponentHarness h(registry(), "grasp.exploration_planner", ring8(), {"start"});
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8(), {"start"});
   h.push<std::int64_t>("start", 0);
   h.push<fba::Octree>("octree", box_model(3));
   h.run();

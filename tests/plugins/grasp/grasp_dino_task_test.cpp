@@ -20,7 +20,7 @@
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 // The providers' bounding box of the dino (README.txt), as in the task file.
 const Eigen::AlignedBox3d kDinoBox(Eigen::Vector3d(-0.061897, -0.018874, -0.057845), Eigen::Vector3d(0.010897, 0.068227, 0.015495));
@@ -33,7 +33,7 @@ TEST(GraspDinoTask, SelectsAGraspOnTheDinoWithFewerViewsThanTheRing) {
   o.timeout_s = 300;
   const fba::test::TempDir out;
   o.output_dir = out.path();
-  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/grasp_dino.yaml", registry()), o);
+  fba::Task task(fba::load_task(fba::test::tasks_dir() + "/grasp_dino.yaml", built_plugins()), o);
   const auto& frames = task.tap("views.frame");
   const auto& silhouettes = task.tap("contours.silhouette");
   const auto& targets = task.tap("planner.target");

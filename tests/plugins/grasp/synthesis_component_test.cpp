@@ -24,7 +24,7 @@ namespace {
 using fba::testing::ComponentHarness;
 namespace gt = fba::grasp::test;
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 const Eigen::AlignedBox3d kCube(Eigen::Vector3d::Constant(-0.08), Eigen::Vector3d::Constant(0.08));
 constexpr double kRadius = 0.035;
@@ -43,7 +43,7 @@ std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::
 }
 
 TEST(GraspSynthesisComponent, SelectsAGraspOnACylinderWithContactsOnItsSide) {
-  ComponentHarness h(registry(), "grasp.synthesis");
+  ComponentHarness h(built_plugins(), "grasp.synthesis");
   EXPECT_EQ(h.stage(), "visual_analysis");
   h.push<fba::Octree>("octree", cylinder(8));
   h.run();
@@ -77,7 +77,7 @@ TEST(GraspSynthesisComponent, SelectsAGraspOnACylinderWithContactsOnItsSide) {
 }
 
 TEST(GraspSynthesisComponent, AnEmptyModelFailsWithTheReason) {
-  ComponentHarness h(registry(), "grasp.synthesis");
+  ComponentHarness h(built_plugins(), "grasp.synthesis");
   fba::Octree empty;
   empty.bounds = kCube;
   empty.max_depth = 6;
@@ -95,7 +95,7 @@ TEST(GraspSynthesisComponent, AnEmptyModelFailsWithTheReason) {
 // A table below the whole model (a wrong table_z, or a root box that stops short of the table):
 // nothing rests on it, and the reason names the table.
 TEST(GraspSynthesisComponent, AModelNotJoinedToTheTableFailsNamingTheTable) {
-  ComponentHarness h(registry(), "grasp.synthesis", {{"table_z", std::vector<double>{-0.5}}});
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"table_z", std::vector<double>{-0.5}}});
   h.push<fba::Octree>("octree", cylinder(3));
   h.run();
   const auto failed = named(h.events(), "grasp_synthesis_failed");
@@ -107,7 +107,7 @@ TEST(GraspSynthesisComponent, AModelNotJoinedToTheTableFailsNamingTheTable) {
 }
 
 TEST(GraspSynthesisComponent, AModelWithoutATreeYetIsWaitedFor) {
-  ComponentHarness h(registry(), "grasp.synthesis");
+  ComponentHarness h(built_plugins(), "grasp.synthesis");
   fba::Octree none;
   none.node_count = 0;
   h.push<fba::Octree>("octree", none);
@@ -119,7 +119,7 @@ TEST(GraspSynthesisComponent, AModelWithoutATreeYetIsWaitedFor) {
 // Resolved only to depth 3 of 6 everywhere: every candidate is uncertain, so the component asks
 // for detail and a new view where its candidates' regions are.
 TEST(GraspSynthesisComponent, AnUnresolvedModelEmitsRegionsAndPlansAView) {
-  ComponentHarness h(registry(), "grasp.synthesis");
+  ComponentHarness h(built_plugins(), "grasp.synthesis");
   h.push<fba::Octree>("octree", cylinder(3, [](const Eigen::Vector3d&) { return 4; }));
   h.run();
   EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
@@ -146,7 +146,7 @@ TEST(GraspSynthesisComponent, AnUnresolvedModelEmitsRegionsAndPlansAView) {
 // empty space are resolved at any depth. No candidate has all the surface under its fingers
 // resolved; after the last view synthesis settles for one whose contacts are.
 TEST(GraspSynthesisComponent, AfterMaxViewsItSettlesForACandidateWhoseContactsAreResolved) {
-  ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 4}});
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"max_views", 4}});
   auto coarse = [](const Eigen::Vector3d&) { return 4; };
   h.push<fba::Octree>("octree", cylinder(3, coarse));
   h.run();
@@ -166,14 +166,14 @@ TEST(GraspSynthesisComponent, AfterMaxViewsItSettlesForACandidateWhoseContactsAr
 TEST(GraspSynthesisComponent, AResolvedCandidateMuchLessStableThanTheBestWaitsUntilTheLastView) {
   auto middle_unresolved = [](const Eigen::Vector3d& x) { return std::abs(x.z()) < 0.025 ? 5 : 6; };
   {
-    ComponentHarness h(registry(), "grasp.synthesis", {{"stability_share", 0.0}});
+    ComponentHarness h(built_plugins(), "grasp.synthesis", {{"stability_share", 0.0}});
     h.push<fba::Octree>("octree", cylinder(3, middle_unresolved));
     h.run();
     const auto grasps = h.values<fba::Grasp>("grasp");
     ASSERT_EQ(grasps.size(), 1u);
     for (const auto& c : grasps[0].contacts) EXPECT_GT(std::abs(c.position.z()), 0.025) << c.position.transpose();
   }
-  ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 4}});
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"max_views", 4}});
   h.push<fba::Octree>("octree", cylinder(3, middle_unresolved));
   h.run();
   EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
@@ -194,7 +194,7 @@ TEST(GraspSynthesisComponent, AResolvedCandidateMuchLessStableThanTheBestWaitsUn
 // With rim_deg, a view whose silhouette has no rim pins nothing: no contact is ever resolved, and
 // after max_views synthesis gives up saying so, with the best candidate's total and criteria.
 TEST(GraspSynthesisComponent, GivesUpAfterMaxViewsSayingNoCandidateIsOnResolvedSurface) {
-  ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 4}, {"rim_deg", 15.0}}, {"silhouette"});
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"max_views", 4}, {"rim_deg", 15.0}}, {"silhouette"});
   auto frame = std::make_shared<fba::Frame>();
   frame->has_pose = true;
   fba::Silhouette silhouette;
@@ -225,7 +225,7 @@ TEST(GraspSynthesisComponent, GivesUpAfterMaxViewsSayingNoCandidateIsOnResolvedS
 }
 
 TEST(GraspSynthesisComponent, AThresholdNoCandidateReachesFailsAtMaxViews) {
-  ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 8}, {"threshold", 1.0}});
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"max_views", 8}, {"threshold", 1.0}});
   h.push<fba::Octree>("octree", cylinder(8));
   h.run();
   ASSERT_EQ(named(h.events(), "grasp_synthesis_failed").size(), 1u);
@@ -235,7 +235,7 @@ TEST(GraspSynthesisComponent, AThresholdNoCandidateReachesFailsAtMaxViews) {
 // A hand that opens to 3 cm cannot take a 7 cm cylinder: no candidate, so it asks for the whole
 // model (more views may carve it smaller) until max_views, then names the cause.
 TEST(GraspSynthesisComponent, NoCandidateTheHandCanReachAsksForTheWholeModelThenFails) {
-  ComponentHarness h(registry(), "grasp.synthesis",
+  ComponentHarness h(built_plugins(), "grasp.synthesis",
                      {{"aperture_max", 0.03}, {"spread_max", 0.03}, {"spread_min", 0.02}, {"max_views", 9}});
   h.push<fba::Octree>("octree", cylinder(8));
   h.run();
@@ -259,7 +259,7 @@ TEST(GraspSynthesisComponent, NoCandidateTheHandCanReachAsksForTheWholeModelThen
 // lines of sight cross): no grasp yet, and the request names the surface under the best candidates'
 // fingers, one group per candidate, for the planner to graze.
 TEST(GraspSynthesisComponent, WithOneViewTheRequestNamesTheUnpinnedSurfaceUnderTheBestCandidates) {
-  ComponentHarness h(registry(), "grasp.synthesis", {{"rim_deg", 15.0}}, {"silhouette"});
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"rim_deg", 15.0}}, {"silhouette"});
   auto frame = std::make_shared<fba::Frame>();
   frame->has_pose = true;
   frame->camera.camera_from_world = Eigen::Translation3d(-0.5, 0, 0);  // the camera centre at (0.5, 0, 0)
@@ -292,9 +292,9 @@ TEST(GraspSynthesisComponent, WithOneViewTheRequestNamesTheUnpinnedSurfaceUnderT
 }
 
 TEST(GraspSynthesisComponent, AnInconsistentHandIsRefusedWhenLoaded) {
-  EXPECT_THROW(ComponentHarness(registry(), "grasp.synthesis", {{"aperture_min", 0.2}, {"aperture_max", 0.1}}), fba::ConfigError);
-  EXPECT_THROW(ComponentHarness(registry(), "grasp.synthesis", {{"finger_width", 0.2}}), fba::ConfigError);  // > spread_max
-  EXPECT_THROW(ComponentHarness(registry(), "grasp.synthesis",
+  EXPECT_THROW(ComponentHarness(built_plugins(), "grasp.synthesis", {{"aperture_min", 0.2}, {"aperture_max", 0.1}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(built_plugins(), "grasp.synthesis", {{"finger_width", 0.2}}), fba::ConfigError);  // > spread_max
+  EXPECT_THROW(ComponentHarness(built_plugins(), "grasp.synthesis",
                                 {{"weight_symmetry", 0}, {"weight_safety", 0}, {"weight_curvature", 0}}),
                fba::ConfigError);
 }

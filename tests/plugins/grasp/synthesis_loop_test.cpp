@@ -15,7 +15,7 @@
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 std::string loop_task(const std::string& synthesis_params) {
   return R"(task: grasp_loop
@@ -52,7 +52,7 @@ fba::RunOptions deterministic() {
 }
 
 TEST(GraspSynthesisLoop, TheDinoLoopEndsWithASelectedGraspOnTheModel) {
-  fba::Task task(fba::load_task_text(loop_task("{ max_views: 15 }"), "loop.yaml", ".", registry()), deterministic());
+  fba::Task task(fba::load_task_text(loop_task("{ max_views: 15 }"), "loop.yaml", ".", built_plugins()), deterministic());
   const auto& grasps = task.tap("synthesis.grasp");
   const auto& regions = task.tap("synthesis.regions");
   const auto r = task.run();
@@ -74,7 +74,7 @@ TEST(GraspSynthesisLoop, TheDinoLoopEndsWithASelectedGraspOnTheModel) {
 }
 
 TEST(GraspSynthesisLoop, AnUnreachableThresholdStopsTheTaskWithTheReason) {
-  fba::Task task(fba::load_task_text(loop_task("{ max_views: 5, threshold: 1.0 }"), "loop.yaml", ".", registry()),
+  fba::Task task(fba::load_task_text(loop_task("{ max_views: 5, threshold: 1.0 }"), "loop.yaml", ".", built_plugins()),
                  deterministic());
   const auto r = task.run();
   ASSERT_EQ(r.outcome, fba::Outcome::Failure) << r.reason;

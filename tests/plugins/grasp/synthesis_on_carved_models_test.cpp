@@ -26,7 +26,7 @@ namespace {
 using fba::testing::ComponentHarness;
 const std::string kData = fba::test::shared_data_dir();
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 std::string events_text(const ComponentHarness& h) {
   std::string out;
@@ -59,7 +59,7 @@ TEST(GraspSynthesisOnCarvedModels, TheDinoCarvedAtDepth6YieldsAGrasp) {
     carver.add_view(*r.silhouette);
   }
   // The dino is not executed (tasks/grasp_dino.yaml): no check of a hand's way to the contacts.
-  ComponentHarness h(registry(), "grasp.synthesis", {{"max_views", 16}, {"path_tolerance", 0.0}});
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"max_views", 16}, {"path_tolerance", 0.0}});
   h.push<fba::Octree>("octree", *carver.snapshot());
   h.run();
   const auto grasps = h.values<fba::Grasp>("grasp");
@@ -97,7 +97,7 @@ TEST_P(GraspSynthesisOnCarvedYcb, TheSelectedGraspIsForceClosureOnTheTrueMesh) {
     ASSERT_TRUE(r.ok()) << r.error;
     carver.add_view(*r.silhouette);
   }
-  ComponentHarness h(registry(), "grasp.synthesis");
+  ComponentHarness h(built_plugins(), "grasp.synthesis");
   h.push<fba::Octree>("octree", *carver.snapshot());
   h.run();
   const auto grasps = h.values<fba::Grasp>("grasp");

@@ -13,7 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "support/run_command.hpp"
+#include "evaluate_grasp.hpp"
 #include "support/build_paths.hpp"
 
 namespace {
@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 
 using Result = fba::test::CommandResult;
 
-Result run(const std::string& args) { return fba::test::run_command(std::string("'") + fba::test::program("fba-evaluate") + "' grasp " + args); }
+using fba::test::evaluate_grasp;
 
 // The line of `text` that starts with `start`, or "".
 std::string line_starting(const std::string& text, const std::string& start) {
@@ -59,7 +59,7 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
                    << "  - { mesh: " << mustard() << ", pose: [0, 0, 30] }\n"
                    << "  - { mesh: " << (dir_ / "no-such-mesh.obj").string() << " }\n";
   const fs::path out = dir_ / "out";
-  const Result r = run("--batch " + l.string() + " --jobs 2 --random 50 -o " + out.string());
+  const Result r = evaluate_grasp("--batch " + l.string() + " --jobs 2 --random 50 -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.output;
   // The per-run table and the summary table, with their columns.
   for (const char* column : {"variant", "object", "pose x y yaw", "outcome", "views", "FC", "epsilon", "held", "wall_s", "cpu_s",
@@ -116,7 +116,7 @@ TEST_F(EvaluateGraspBatch, AMeshTheTaskCannotLoadIsARowWithFbaRunsReason) {
   std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "pose_set:\n  - scene.mesh={mesh}\n  - hand.mesh={mesh}\n"
                    << "runs:\n  - { mesh: " << (dir_ / "missing.obj").string() << " }\n";
-  const Result r = run("--batch " + l.string() + " --random 0 -o " + (dir_ / "out").string());
+  const Result r = evaluate_grasp("--batch " + l.string() + " --random 0 -o " + (dir_ / "out").string());
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string row = line_starting(r.output, "task     missing.obj");
   EXPECT_NE(row.find("no summary"), std::string::npos) << r.output;
@@ -140,12 +140,12 @@ TEST_F(EvaluateGraspBatch, AHungOrCrashedRunIsARowAndTheBatchGoesOn) {
   std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "timeout_s: 0.5\n"
                    << "runs:\n  - { mesh: " << mustard() << " }\n";
-  Result r = run("--batch " + l.string() + " --random 0 --fba-run " + hang.string() + " -o " + (dir_ / "hang").string());
+  Result r = evaluate_grasp("--batch " + l.string() + " --random 0 --fba-run " + hang.string() + " -o " + (dir_ / "hang").string());
   ASSERT_EQ(r.status, 0) << r.output;
   std::string row = line_starting(r.output, "task     YcbMustardBottle   0 0 0");
   EXPECT_NE(row.find("timed out"), std::string::npos) << r.output;
 
-  r = run("--batch " + l.string() + " --random 0 --fba-run " + crash.string() + " -o " + (dir_ / "crash").string());
+  r = evaluate_grasp("--batch " + l.string() + " --random 0 --fba-run " + crash.string() + " -o " + (dir_ / "crash").string());
   ASSERT_EQ(r.status, 0) << r.output;
   row = line_starting(r.output, "task     YcbMustardBottle   0 0 0");
   EXPECT_NE(row.find("crashed"), std::string::npos) << r.output;
@@ -157,23 +157,23 @@ TEST_F(EvaluateGraspBatch, ABadListIsAClearErrorWithItsPlace) {
   std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "pose_set:\n  - scene.mesh={mesh}\n  - hand.object_yaw={angle}\n"
                    << "runs:\n  - { mesh: m.obj }\n";
-  Result r = run("--batch " + l.string());
+  Result r = evaluate_grasp("--batch " + l.string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("list.yaml:4:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("unknown placeholder {angle}"), std::string::npos) << r.output;
 
   std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "runs:\n  - { mesh: m.obj, pose: [0, 0] }\n";
-  r = run("--batch " + l.string());
+  r = evaluate_grasp("--batch " + l.string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("pose: expected [x, y, yaw]"), std::string::npos) << r.output;
 
   std::ofstream(l) << "task: no-such-task.yaml\nruns:\n  - { mesh: m.obj }\n";
-  r = run("--batch " + l.string());
+  r = evaluate_grasp("--batch " + l.string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("task: no such file"), std::string::npos) << r.output;
 
-  r = run("--batch " + (dir_ / "absent.yaml").string());
+  r = evaluate_grasp("--batch " + (dir_ / "absent.yaml").string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("is not a readable file"), std::string::npos) << r.output;
 }

@@ -11,7 +11,7 @@
 
 #include "fba/geometry/mesh_io.hpp"
 
-#include "support/run_command.hpp"
+#include "evaluate_grasp.hpp"
 #include "support/build_paths.hpp"
 
 namespace {
@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 
 using Result = fba::test::CommandResult;
 
-Result run(const std::string& args) { return fba::test::run_command(std::string("'") + fba::test::program("fba-evaluate") + "' grasp " + args); }
+using fba::test::evaluate_grasp;
 
 class EvaluateGraspCli : public testing::Test {
  protected:
@@ -47,7 +47,7 @@ TEST_F(EvaluateGraspCli, AGraspOnOpposingFacesIsForceClosureAndBeatsRandomSets) 
       {"position": [-0.051, 0.0, 0.0], "normal": [1, 0, 0]},
       {"position": [0.052, 0.02, 0.0], "normal": [-1, 0, 0]},
       {"position": [0.052, -0.02, 0.0], "normal": [-1, 0, 0]}]})");
-  const Result r = run("--mesh " + mesh() + " --summary " + s + " --random 300");
+  const Result r = evaluate_grasp("--mesh " + mesh() + " --summary " + s + " --random 300");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("moved 1.00 mm along its normal"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("grasp: force closure yes"), std::string::npos) << r.output;
@@ -60,7 +60,7 @@ TEST_F(EvaluateGraspCli, EachContactSaysHowFarItsNormalIsFromTheSurfaces) {
       {"position": [-0.05, 0.0, 0.0], "normal": [0.9396926, 0.3420201, 0]},
       {"position": [0.05, 0.02, 0.0], "normal": [-1, 0, 0]},
       {"position": [0.05, -0.02, 0.0], "normal": [-1, 0, 0]}]})");
-  const Result r = run("--mesh " + mesh() + " --summary " + s + " --random 0");
+  const Result r = evaluate_grasp("--mesh " + mesh() + " --summary " + s + " --random 0");
   auto line = [&](const std::string& start) {
     const auto at = r.output.find(start);
     return at == std::string::npos ? std::string() : r.output.substr(at, r.output.find('\n', at) - at);
@@ -76,13 +76,13 @@ TEST_F(EvaluateGraspCli, AGraspOnOneFaceIsNotForceClosureAndExitsOne) {
       {"position": [0.05, 0.0, 0.0], "normal": [-1, 0, 0]},
       {"position": [0.05, 0.02, 0.01], "normal": [-1, 0, 0]},
       {"position": [0.05, -0.02, 0.01], "normal": [-1, 0, 0]}]})");
-  const Result r = run("--mesh " + mesh() + " --summary " + s + " --random 0");
+  const Result r = evaluate_grasp("--mesh " + mesh() + " --summary " + s + " --random 0");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("grasp: force closure no, epsilon 0.0000"), std::string::npos) << r.output;
 }
 
 TEST_F(EvaluateGraspCli, RandomSetsGiveTheirFigures) {
-  const Result r = run("--mesh " + mesh() + " --random 200");
+  const Result r = evaluate_grasp("--mesh " + mesh() + " --random 200");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("random FC"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("cube.ply"), std::string::npos) << r.output;
@@ -96,48 +96,48 @@ TEST_F(EvaluateGraspCli, ReadsTheGraspAComponentReported) {
   const fs::path p = dir_ / "run-summary.json";
   std::ofstream(p) << R"({"outcome": "success", "events": [], "components": {"carver": {"type": "vision.octree_carver"},)"
                    << R"( "synthesis": {"type": "grasp.synthesis", "results": {"views": 4, "grasp": )" << grasp << "}}}}";
-  Result r = run("--mesh " + mesh() + " --summary " + p.string() + " --random 0");
+  Result r = evaluate_grasp("--mesh " + mesh() + " --summary " + p.string() + " --random 0");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("grasp: force closure yes"), std::string::npos) << r.output;
 
   const fs::path bad = dir_ / "bad-grasp.json";
   std::ofstream(bad) << R"({"components": {"synthesis": {"results": {"grasp": {"contacts": [1, 2]}}}}})";
-  r = run("--mesh " + mesh() + " --summary " + bad.string());
+  r = evaluate_grasp("--mesh " + mesh() + " --summary " + bad.string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("components.synthesis.results.grasp.contacts: expected an array of 3 contacts"), std::string::npos)
       << r.output;
 }
 
 TEST_F(EvaluateGraspCli, BadInputIsAClearErrorWithStatusTwo) {
-  Result r = run("--mesh " + (dir_ / "missing.obj").string() + " --random 10");
+  Result r = evaluate_grasp("--mesh " + (dir_ / "missing.obj").string() + " --random 10");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("file does not exist"), std::string::npos) << r.output;
 
-  r = run("--mesh " + mesh() + " --summary " + summary(R"({"contacts": []})"));
+  r = evaluate_grasp("--mesh " + mesh() + " --summary " + summary(R"({"contacts": []})"));
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("grasp.contacts: expected an array of 3 contacts"), std::string::npos) << r.output;
 
   std::ofstream(dir_ / "nograsp.json") << R"({"outcome": "failure"})";
-  r = run("--mesh " + mesh() + " --summary " + (dir_ / "nograsp.json").string());
+  r = evaluate_grasp("--mesh " + mesh() + " --summary " + (dir_ / "nograsp.json").string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("has no \"grasp\" object"), std::string::npos) << r.output;
 
   std::ofstream(dir_ / "broken.json") << "{ not json";
-  r = run("--mesh " + mesh() + " --summary " + (dir_ / "broken.json").string());
+  r = evaluate_grasp("--mesh " + mesh() + " --summary " + (dir_ / "broken.json").string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("is not valid JSON"), std::string::npos) << r.output;
 
-  r = run("--mesh " + mesh() + " --random 0");
+  r = evaluate_grasp("--mesh " + mesh() + " --random 0");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("nothing to evaluate"), std::string::npos) << r.output;
 
-  r = run("--mesh " + mesh() + " --random 10 --mesh-pose 1 2");
+  r = evaluate_grasp("--mesh " + mesh() + " --random 10 --mesh-pose 1 2");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--mesh-pose needs 6 numbers"), std::string::npos) << r.output;
 }
 
 TEST_F(EvaluateGraspCli, HelpDocumentsTheSummaryShape) {
-  const Result r = run("--help");
+  const Result r = evaluate_grasp("--help");
   EXPECT_EQ(r.status, 0);
   EXPECT_NE(r.output.find("\"contacts\": [ {\"position\": [x, y, z], \"normal\": [x, y, z]}"), std::string::npos)
       << r.output;

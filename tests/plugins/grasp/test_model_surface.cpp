@@ -8,6 +8,7 @@
 #include <memory>
 #include <numbers>
 
+#include "fba/grasp/angles.hpp"
 #include "fba/grasp/model_surface.hpp"
 #include "fba/grasp/object_surface.hpp"
 #include "fba/geometry/mesh_io.hpp"
@@ -19,12 +20,7 @@
 namespace fba::grasp {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 const Eigen::AlignedBox3d kCube(Eigen::Vector3d::Constant(-0.08), Eigen::Vector3d::Constant(0.08));
-
-double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi;
-}
 
 TEST(ModelSurface, SphereNormalsPointOutwardAndCurvatureIsNearOneOverR) {
   const double r = 0.05;
@@ -35,7 +31,7 @@ TEST(ModelSurface, SphereNormalsPointOutwardAndCurvatureIsNearOneOverR) {
   std::vector<double> angles, curvature;
   for (const auto& x : s.samples) {
     EXPECT_NEAR(x.position.norm(), r, 2 * s.finest_edge);
-    angles.push_back(angle_deg(x.normal, x.position));
+    angles.push_back(angle_between_deg(x.normal, x.position));
     curvature.push_back(x.curvature);
     EXPECT_FALSE(x.uncertain);
   }
@@ -64,7 +60,7 @@ TEST(ModelSurface, BoxFaceNormalsAreTheFaceAxisAndFacesAreFlat) {
     ++on_faces;
     Eigen::Vector3d want = Eigen::Vector3d::Zero();
     want[axis] = x.position[axis] > 0 ? 1 : -1;
-    EXPECT_LT(angle_deg(x.normal, want), 1.0) << x.position.transpose();
+    EXPECT_LT(angle_between_deg(x.normal, want), 1.0) << x.position.transpose();
     curvature.push_back(x.curvature);
   }
   ASSERT_GT(on_faces, 200);
@@ -93,7 +89,7 @@ TEST(ModelSurface, CylinderSideNormalsAreRadial) {
     if (std::abs(x.position.z()) > 0.06 - 2 * s.radius) continue;
     ++side;
     const Eigen::Vector3d radial(x.position.x(), x.position.y(), 0);
-    EXPECT_LT(angle_deg(x.normal, radial), 12.0) << x.position.transpose();
+    EXPECT_LT(angle_between_deg(x.normal, radial), 12.0) << x.position.transpose();
     curvature.push_back(x.curvature);
   }
   EXPECT_GT(side, 300);
@@ -229,7 +225,7 @@ TEST(ModelSurface, ASphereIsPinnedWhereTwoViewsRimsCrossAndNowhereElse) {
     if (!pinned(on_sphere(u), views)) continue;
     ++pinned_count;
     double nearest = 180;
-    for (const auto& f : frontier) nearest = std::min(nearest, angle_deg(u, f));
+    for (const auto& f : frontier) nearest = std::min(nearest, angle_between_deg(u, f));
     EXPECT_LT(nearest, 25.0) << u.transpose();
   }
   EXPECT_GT(pinned_count, 4);
@@ -240,7 +236,7 @@ TEST(ModelSurface, ASphereIsPinnedWhereTwoViewsRimsCrossAndNowhereElse) {
 // model's fitted normal lies between the two cones' and both lines of sight graze it; the cones'
 // tangent planes meet at an angle, which tells the edge from a point both cones touch.
 TEST(ModelSurface, TwoConesCrossingAtAnEdgeOfTheModelDoNotPinIt) {
-  const double k = 20 * kPi / 180;
+  const double k = 20 * std::numbers::pi / 180;
   const SurfaceSample edge{{0.01, 0.02, 0.03}, {0, 0, 1}};  // the crease runs along y; the fit's normal +z between its faces
   const Eigen::Vector3d face_a(std::sin(k), 0, std::cos(k)), face_b(-std::sin(k), 0, std::cos(k));
   // Each line of sight in its cone's plane, 45 degrees from the crease: 83 degrees apart, each 14
@@ -248,8 +244,8 @@ TEST(ModelSurface, TwoConesCrossingAtAnEdgeOfTheModelDoNotPinIt) {
   const Eigen::Vector3d y = Eigen::Vector3d::UnitY();
   const Eigen::Vector3d sight_a = (y + Eigen::Vector3d(std::cos(k), 0, -std::sin(k))).normalized();
   const Eigen::Vector3d sight_b = (y - Eigen::Vector3d(std::cos(k), 0, std::sin(k))).normalized();
-  ASSERT_LT(std::abs(sight_a.dot(edge.normal)), std::sin(15 * kPi / 180));
-  ASSERT_LT(std::abs(sight_b.dot(edge.normal)), std::sin(15 * kPi / 180));
+  ASSERT_LT(std::abs(sight_a.dot(edge.normal)), std::sin(15 * std::numbers::pi / 180));
+  ASSERT_LT(std::abs(sight_b.dot(edge.normal)), std::sin(15 * std::numbers::pi / 180));
   EXPECT_FALSE(pinned(edge, {rim_through(edge.position, sight_a, face_a), rim_through(edge.position, sight_b, face_b)}));
   // The same lines of sight with cones tangent to one surface there: pinned.
   const Eigen::Vector3d sa = (y + Eigen::Vector3d::UnitX()).normalized(), sb = (y - Eigen::Vector3d::UnitX()).normalized();

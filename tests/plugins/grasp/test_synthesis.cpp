@@ -9,6 +9,7 @@
 #include <random>
 
 #include "fba/geometry/mesh_io.hpp"
+#include "fba/grasp/angles.hpp"
 #include "fba/grasp/grasp_quality.hpp"
 #include "fba/grasp/object_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
@@ -74,10 +75,6 @@ SynthesisParams params_for(double spacing) {
   return p;
 }
 
-double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi;
-}
-
 TEST(GraspSynthesis, CylinderBestGraspHasThreeContactsAroundTheAxis) {
   const double h = 0.005;
   auto samples = cylinder(0.035, 0.12, h);
@@ -94,7 +91,7 @@ TEST(GraspSynthesis, CylinderBestGraspHasThreeContactsAroundTheAxis) {
   for (int k = 0; k < 3; ++k) {
     Eigen::Vector3d a = g.contacts[k].position, b = g.contacts[(k + 1) % 3].position;
     a.z() = b.z() = 0;
-    EXPECT_NEAR(angle_deg(a, b), 120.0, 15.0);
+    EXPECT_NEAR(angle_between_deg(a, b), 120.0, 15.0);
   }
   // Approach from above, near the axis: perpendicular to the contacts' plane, which the plane
   // alignment (10 degrees by default) keeps near level on a cylinder's side.
@@ -117,8 +114,8 @@ TEST(GraspSynthesis, BoxBestGraspOpposesAThumbOnOneFaceToTwoFingersOnTheOpposite
   ASSERT_FALSE(r.candidates.empty());
   const Grasp& g = r.candidates.front().grasp;
   const Eigen::Vector3d thumb = g.contacts[0].normal;
-  EXPECT_LT(angle_deg(g.contacts[1].normal, -thumb), 1e-6);
-  EXPECT_LT(angle_deg(g.contacts[2].normal, -thumb), 1e-6);
+  EXPECT_LT(angle_between_deg(g.contacts[1].normal, -thumb), 1e-6);
+  EXPECT_LT(angle_between_deg(g.contacts[2].normal, -thumb), 1e-6);
   EXPECT_NEAR(std::abs(thumb.x()) + std::abs(thumb.y()) + std::abs(thumb.z()), 1.0, 1e-9);  // a face normal
   // The fingers sit apart by at least a finger's width, and each contact well inside its face.
   EXPECT_GE(g.spread, SynthesisParams{}.hand.finger_width);

@@ -9,12 +9,13 @@
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/image_set.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 using namespace fba::vision;
 
 namespace {
 
-const std::string kDino = fba::test::shared_data_dir() + "/middlebury-dino";
+using fba::test::kDino;
 
 std::shared_ptr<const fba::Frame> frame_of(const cv::Mat& image) {
   auto f = std::make_shared<fba::Frame>();

@@ -9,13 +9,14 @@
 #include "fba/vision/image_set.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace fs = std::filesystem;
 using namespace fba::vision;
 
 namespace {
 
-const std::string kDino = fba::test::shared_data_dir() + "/middlebury-dino";
+using fba::test::kDino;
 
 using fba::test::TempDir;
 

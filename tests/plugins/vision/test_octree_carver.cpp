@@ -19,12 +19,13 @@
 #include "fba/vision/reference_carve.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 using namespace fba::vision;
 
 namespace {
 
-const std::string kDino = fba::test::shared_data_dir() + "/middlebury-dino";
+using fba::test::kDino;
 const Eigen::AlignedBox3d kDinoBox(Eigen::Vector3d(-0.061897, -0.018874, -0.057845),
                                    Eigen::Vector3d(0.010897, 0.068227, 0.015495));
 

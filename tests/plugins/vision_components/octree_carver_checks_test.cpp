@@ -14,20 +14,21 @@
 
 #include "support/built_plugins.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 using fba::testing::ComponentHarness;
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
-const std::string kDinoPar = fba::test::shared_data_dir() + "/middlebury-dino/dinoSR_par.txt";
+using fba::test::kDinoPar;
 // The providers' tight box of the dino, in metres.
 const std::vector<double> kDinoBox{-0.061897, -0.018874, -0.057845, 0.010897, 0.068227, 0.015495};
 
 // The first n calibrated dino frames, from vision.image_set.
 std::vector<std::shared_ptr<const fba::Frame>> dino_frames(int n) {
-  ComponentHarness views(registry(), "vision.image_set", {{"file", kDinoPar}, {"limit", std::int64_t(n)}});
+  ComponentHarness views(built_plugins(), "vision.image_set", {{"file", kDinoPar}, {"limit", std::int64_t(n)}});
   views.run();
   std::vector<std::shared_ptr<const fba::Frame>> out;
   for (const auto& p : views.packets("frame")) out.push_back(std::make_shared<const fba::Frame>(p.get<fba::Frame>()));
@@ -43,7 +44,7 @@ fba::Silhouette silhouette(std::shared_ptr<const fba::Frame> frame, cv::Mat mask
 
 // Feeds the silhouettes to a carver with the dino's box, closes its input and runs it to the end.
 std::unique_ptr<ComponentHarness> carve(const std::vector<fba::Silhouette>& views, std::vector<double> bounds = kDinoBox) {
-  auto h = std::make_unique<ComponentHarness>(registry(), "vision.octree_carver",
+  auto h = std::make_unique<ComponentHarness>(built_plugins(), "vision.octree_carver",
                                               fba::testing::Params{{"bounds", bounds}, {"max_depth", 5}, {"occupancy_threshold", 0}});
   for (const auto& s : views) h->push<fba::Silhouette>("silhouette", s);
   h->close("silhouette");
@@ -114,7 +115,7 @@ TEST(OctreeCarverChecks, BoundsOrdersOfMagnitudeOffTheViewingConesFailAskingForM
 // The grasp criterion from regions of interest (grasp synthesis's boxes), with the generic one
 // off: detail to the deepest level goes inside the region and nowhere else.
 TEST(OctreeCarverGraspCriterion, RegionsOfInterestGetTheDetailAndNothingElseDoes) {
-  ComponentHarness h(registry(), "vision.octree_carver",
+  ComponentHarness h(built_plugins(), "vision.octree_carver",
                      {{"bounds", kDinoBox}, {"max_depth", 6}, {"occupancy_threshold", 1}, {"detail_after_views", 0}}, {"regions"});
   fba::RegionsOfInterest roi;
   const Eigen::AlignedBox3d region(Eigen::Vector3d(-0.06, -0.02, -0.06), Eigen::Vector3d(-0.025, 0.07, 0.016));
@@ -160,7 +161,7 @@ std::string last_payload(const ComponentHarness& h, const std::string& name) {
 // stream, has it; the end's own equals the last update's. Detail goes into a region of interest
 // only (as in the test above), so the model has fewer nodes than uniform detail.
 TEST(OctreeCarverDetail, CompareUniformIsReportedAfterEveryUpdateNotOnlyAtTheEnd) {
-  ComponentHarness h(registry(), "vision.octree_carver",
+  ComponentHarness h(built_plugins(), "vision.octree_carver",
                      {{"bounds", kDinoBox}, {"max_depth", 5}, {"occupancy_threshold", 1}, {"detail_after_views", 0},
                       {"compare_uniform", true}},
                      {"regions"});
@@ -192,7 +193,7 @@ TEST(OctreeCarverDetail, CompareUniformIsReportedAfterEveryUpdateNotOnlyAtTheEnd
 
 // Without compare_uniform, `detail` stays an end-of-stream report.
 TEST(OctreeCarverDetail, WithoutCompareUniformDetailComesOnceAtTheEnd) {
-  ComponentHarness h(registry(), "vision.octree_carver",
+  ComponentHarness h(built_plugins(), "vision.octree_carver",
                      {{"bounds", kDinoBox}, {"max_depth", 4}, {"occupancy_threshold", 0}, {"detail_after_views", 0}});
   for (const auto& f : dino_frames(4)) {
     cv::Mat m = cv::Mat::zeros(f->image.rows, f->image.cols, CV_8UC1);

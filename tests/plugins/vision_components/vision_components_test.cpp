@@ -17,16 +17,17 @@
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace fs = std::filesystem;
 using fba::testing::ComponentHarness;
 
 namespace {
 
-const fba::Registry& registry() { return fba::test::built_plugins(); }
+using fba::test::built_plugins;
 
 const std::string kData = fba::test::shared_data_dir();
-const std::string kDinoPar = kData + "/middlebury-dino/dinoSR_par.txt";
+using fba::test::kDinoPar;
 
 bool has_event(const std::vector<fba::Event>& events, const std::string& name) {
   for (const auto& e : events)
@@ -37,7 +38,7 @@ bool has_event(const std::vector<fba::Event>& events, const std::string& name) {
 }  // namespace
 
 TEST(ImageSet, ServesTheGoodViewsInOrderWithTheirCalibration) {
-  ComponentHarness h(registry(), "vision.image_set", {{"file", kDinoPar}});
+  ComponentHarness h(built_plugins(), "vision.image_set", {{"file", kDinoPar}});
   EXPECT_EQ(h.run(), 15);
   EXPECT_TRUE(h.finished());
   const auto& frames = h.packets("frame");
@@ -50,9 +51,9 @@ TEST(ImageSet, ServesTheGoodViewsInOrderWithTheirCalibration) {
 }
 
 TEST(ImageSet, OnRequestServesTheNearestUnservedView) {
-  ComponentHarness h(registry(), "vision.image_set", {{"file", kDinoPar}, {"good_only", false}}, {"request"});
+  ComponentHarness h(built_plugins(), "vision.image_set", {{"file", kDinoPar}, {"good_only", false}}, {"request"});
   EXPECT_EQ(h.run(), 0);  // nothing is served until asked
-  ComponentHarness reference(registry(), "vision.image_set", {{"file", kDinoPar}, {"good_only", false}});
+  ComponentHarness reference(built_plugins(), "vision.image_set", {{"file", kDinoPar}, {"good_only", false}});
   reference.run();
   const auto& all = reference.packets("frame");
   // Ask for exactly where view 9 was taken from, twice: view 9, then its nearest neighbour.
@@ -70,7 +71,7 @@ TEST(ImageSet, OnRequestServesTheNearestUnservedView) {
 }
 
 TEST(ImageSet, AMissingFileIsAConfigurationError) {
-  EXPECT_THROW(ComponentHarness(registry(), "vision.image_set", {{"file", "/nonexistent/set.txt"}}), fba::ConfigError);
+  EXPECT_THROW(ComponentHarness(built_plugins(), "vision.image_set", {{"file", "/nonexistent/set.txt"}}), fba::ConfigError);
 }
 
 // A real video file through OpenCV's VideoCapture, with a calibration file in OpenCV's own
@@ -93,7 +94,7 @@ TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
   }
   // The file backend by name: 'any' also probes USB and FireWire cameras, which is slow and
   // leaks inside those libraries.
-  ComponentHarness h(registry(), "vision.camera",
+  ComponentHarness h(built_plugins(), "vision.camera",
                      {{"source", video}, {"backend", "ffmpeg"}, {"calibration", calibration}}, {"pose"});
   fba::Pose pose;
   pose.world_from_frame.translation() << 0.1, 0.2, 0.3;
@@ -124,7 +125,7 @@ TEST(Camera, PerPoseCaptureGivesOneFramePerPoseReceived) {
     ASSERT_TRUE(writer.isOpened());
     for (int i = 0; i < 6; ++i) writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(40 * i)));
   }
-  ComponentHarness h(registry(), "vision.camera", {{"source", video}, {"backend", "ffmpeg"}, {"capture", "per_pose"}},
+  ComponentHarness h(built_plugins(), "vision.camera", {{"source", video}, {"backend", "ffmpeg"}, {"capture", "per_pose"}},
                      {"pose"});
   EXPECT_TRUE(h.step());  // a frame read, no pose yet: nothing sent
   EXPECT_TRUE(h.packets("frame").empty());
@@ -142,14 +143,14 @@ TEST(Camera, PerPoseCaptureGivesOneFramePerPoseReceived) {
 }
 
 TEST(Camera, AnUnopenableSourceIsAConfigurationError) {
-  EXPECT_THROW(ComponentHarness(registry(), "vision.camera", {{"source", "/nonexistent/video.avi"}, {"backend", "ffmpeg"}}),
+  EXPECT_THROW(ComponentHarness(built_plugins(), "vision.camera", {{"source", "/nonexistent/video.avi"}, {"backend", "ffmpeg"}}),
                fba::ConfigError);
 }
 
 TEST(ContourExtraction, ExtractsTheDinoAndWritesTheOverlay) {
-  ComponentHarness views(registry(), "vision.image_set", {{"file", kDinoPar}, {"limit", 2}});
+  ComponentHarness views(built_plugins(), "vision.image_set", {{"file", kDinoPar}, {"limit", 2}});
   views.run();
-  ComponentHarness h(registry(), "vision.contour_extraction");
+  ComponentHarness h(built_plugins(), "vision.contour_extraction");
   for (const auto& p : views.packets("frame")) h.push_packet("frame", p);
   EXPECT_EQ(h.run(), 2);
   const auto& out = h.packets("silhouette");
@@ -165,15 +166,15 @@ TEST(ContourExtraction, ExtractsTheDinoAndWritesTheOverlay) {
 }
 
 TEST(ContourExtraction, MetricCurvatureOnlyWhenTheDepthIsGiven) {
-  ComponentHarness views(registry(), "vision.image_set", {{"file", kDinoPar}, {"limit", 1}});
+  ComponentHarness views(built_plugins(), "vision.image_set", {{"file", kDinoPar}, {"limit", 1}});
   views.run();
   const auto frame = views.packets("frame").at(0);
-  ComponentHarness plain(registry(), "vision.contour_extraction");
+  ComponentHarness plain(built_plugins(), "vision.contour_extraction");
   plain.push_packet("frame", frame);
   plain.run();
   const auto& a = plain.packets("silhouette").at(0).get<fba::Silhouette>();
   EXPECT_TRUE(a.metric_curvature.empty());
-  ComponentHarness metric(registry(), "vision.contour_extraction", {{"depth_m", 0.6}, {"curvature_scale_px", 10.0}});
+  ComponentHarness metric(built_plugins(), "vision.contour_extraction", {{"depth_m", 0.6}, {"curvature_scale_px", 10.0}});
   metric.push_packet("frame", frame);
   metric.run();
   const auto& b = metric.packets("silhouette").at(0).get<fba::Silhouette>();
@@ -184,10 +185,10 @@ TEST(ContourExtraction, MetricCurvatureOnlyWhenTheDepthIsGiven) {
 }
 
 TEST(ContourExtraction, KeepsTheFramesStampWhateverTheClock) {
-  ComponentHarness views(registry(), "vision.image_set", {{"file", kDinoPar}, {"limit", 1}});
+  ComponentHarness views(built_plugins(), "vision.image_set", {{"file", kDinoPar}, {"limit", 1}});
   views.set_time(1'000'000);
   views.run();
-  ComponentHarness h(registry(), "vision.contour_extraction");
+  ComponentHarness h(built_plugins(), "vision.contour_extraction");
   h.push_packet("frame", views.packets("frame").at(0));
   h.set_time(9'000'000);
   h.run();
@@ -196,7 +197,7 @@ TEST(ContourExtraction, KeepsTheFramesStampWhateverTheClock) {
 }
 
 TEST(ContourExtraction, AnEmptyImageIsAnEventNotAFailure) {
-  ComponentHarness h(registry(), "vision.contour_extraction");
+  ComponentHarness h(built_plugins(), "vision.contour_extraction");
   fba::Frame black;
   black.image = cv::Mat::zeros(480, 640, CV_8UC3);
   h.push<fba::Frame>("frame", black);
@@ -211,7 +212,7 @@ TEST(ContourExtraction, AnEmptyImageIsAnEventNotAFailure) {
 }
 
 TEST(SimCamera, RendersTheMeshFromEveryViewpoint) {
-  ComponentHarness h(registry(), "sim.camera",
+  ComponentHarness h(built_plugins(), "sim.camera",
                      {{"mesh", kData + "/ycb/YcbMustardBottle/model.obj"}, {"views", 4}, {"noise", 2}});
   EXPECT_EQ(h.run(), 4);
   EXPECT_TRUE(h.finished());
@@ -227,7 +228,7 @@ TEST(SimCamera, RendersTheMeshFromEveryViewpoint) {
 }
 
 TEST(SimCamera, RendersFromAPoseItIsGiven) {
-  ComponentHarness h(registry(), "sim.camera", {{"mesh", kData + "/ycb/YcbMasterChefCan/model.obj"}}, {"pose"});
+  ComponentHarness h(built_plugins(), "sim.camera", {{"mesh", kData + "/ycb/YcbMasterChefCan/model.obj"}}, {"pose"});
   fba::Pose far;  // looking along +z from far below the object: nothing in view
   far.world_from_frame.translation() << 0, 0, -50;
   h.push<fba::Pose>("pose", far);
@@ -246,7 +247,7 @@ TEST(Camera, AnInterruptedCameraStopsReadingWithoutReportingTheSourceLost) {
     ASSERT_TRUE(writer.isOpened());
     for (int i = 0; i < 2; ++i) writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(40 * i)));
   }
-  ComponentHarness h(registry(), "vision.camera", {{"source", video}, {"backend", "ffmpeg"}});
+  ComponentHarness h(built_plugins(), "vision.camera", {{"source", video}, {"backend", "ffmpeg"}});
   EXPECT_TRUE(h.step());
   EXPECT_EQ(h.packets("frame").size(), 1u);
   h.interrupt();
@@ -257,7 +258,7 @@ TEST(Camera, AnInterruptedCameraStopsReadingWithoutReportingTheSourceLost) {
 }
 
 TEST(Camera, IsBlockingAndImplementsInterrupt) {
-  const auto camera = registry().find("vision.camera");
+  const auto camera = built_plugins().find("vision.camera");
   ASSERT_TRUE(camera);
   EXPECT_TRUE(camera->spec.is_blocking());  // registered: Registry::add refuses a blocking type without interrupt()
 }
@@ -269,7 +270,7 @@ TEST(OctreeCarver, BoundsOfTheWrongLengthFailTheCheckAtTheValue) {
   options.require_inputs = false;
   try {
     fba::load_task_text("components:\n  carve:\n    type: vision.octree_carver\n    params: { bounds: [1, 2, 3] }\n", "carve.yaml",
-                        fs::current_path(), registry(), options);
+                        fs::current_path(), built_plugins(), options);
     FAIL() << "accepted";
   } catch (const fba::ConfigError& e) {
     ASSERT_EQ(e.diagnostics().size(), 1u);
@@ -286,7 +287,7 @@ TEST(OctreeCarver, ADepthPastTheMemoryBudgetFailsTheCheckWithTheFigure) {
   const auto check = [&](const std::string& params) {
     try {
       fba::load_task_text("components:\n  carve:\n    type: vision.octree_carver\n    params: " + params + "\n", "carve.yaml",
-                          fs::current_path(), registry(), options);
+                          fs::current_path(), built_plugins(), options);
       return std::string("accepted");
     } catch (const fba::ConfigError& e) {
       return e.diagnostics().at(0).str();
@@ -300,15 +301,15 @@ TEST(OctreeCarver, ADepthPastTheMemoryBudgetFailsTheCheckWithTheFigure) {
 }
 
 TEST(OctreeCarver, AnInvertedBoxFailsTheCheck) {
-  EXPECT_THROW(ComponentHarness(registry(), "vision.octree_carver", {{"bounds", std::vector<double>{0, 0, 0, 1, -1, 1}}}),
+  EXPECT_THROW(ComponentHarness(built_plugins(), "vision.octree_carver", {{"bounds", std::vector<double>{0, 0, 0, 1, -1, 1}}}),
                fba::ConfigError);
-  ComponentHarness ok(registry(), "vision.octree_carver", {{"bounds", std::vector<double>{0, 0, 0, 1, 1, 1}}});
+  ComponentHarness ok(built_plugins(), "vision.octree_carver", {{"bounds", std::vector<double>{0, 0, 0, 1, 1, 1}}});
   EXPECT_FALSE(ok.finished());
 }
 
 TEST(SimCamera, ElevationsOutOfOrderFailTheCheck) {
   try {
-    ComponentHarness(registry(), "sim.camera",
+    ComponentHarness(built_plugins(), "sim.camera",
                      {{"mesh", kData + "/ycb/YcbMasterChefCan/model.obj"}, {"min_elevation", 60}, {"max_elevation", 30}});
     FAIL() << "accepted";
   } catch (const fba::ConfigError& e) {
@@ -321,8 +322,8 @@ TEST(SimCamera, ElevationsOutOfOrderFailTheCheck) {
 // A task swaps the real camera for its simulated twin by changing the type alone: the two
 // must declare the same ports with the same types.
 TEST(SimCamera, IsATwinOfTheRealCamera) {
-  const auto real = registry().find("vision.camera");
-  const auto twin = registry().find("sim.camera");
+  const auto real = built_plugins().find("vision.camera");
+  const auto twin = built_plugins().find("sim.camera");
   ASSERT_TRUE(real && twin);
   auto ports = [](const std::vector<fba::PortSpec>& v) {
     std::vector<std::pair<std::string, std::string>> out;
@@ -366,7 +367,7 @@ std::string accuracy_payload(ComponentHarness& h) {
 // The last model is scored once the stream ends, against the mesh's true voxelisation.
 TEST(ModelAccuracy, ScoresTheLastModelAgainstTheMeshsVoxelisation) {
   const fba::test::TempDir dir;
-  ComponentHarness h(registry(), "vision.model_accuracy", {{"mesh", unit_cube_ply(dir)}, {"table_clip", false}});
+  ComponentHarness h(built_plugins(), "vision.model_accuracy", {{"mesh", unit_cube_ply(dir)}, {"table_clip", false}});
   h.push("octree", root_only(fba::NodeState::Empty, 3));
   h.push("octree", root_only(fba::NodeState::Full, 3));
   h.close("octree");
@@ -379,7 +380,7 @@ TEST(ModelAccuracy, ScoresTheLastModelAgainstTheMeshsVoxelisation) {
 
 TEST(ModelAccuracy, AnEmptyModelHasCarvedEverythingAway) {
   const fba::test::TempDir dir;
-  ComponentHarness h(registry(), "vision.model_accuracy", {{"mesh", unit_cube_ply(dir)}, {"table_clip", false}});
+  ComponentHarness h(built_plugins(), "vision.model_accuracy", {{"mesh", unit_cube_ply(dir)}, {"table_clip", false}});
   h.push("octree", root_only(fba::NodeState::Empty, 3));
   h.close("octree");
   h.run();
@@ -389,7 +390,7 @@ TEST(ModelAccuracy, AnEmptyModelHasCarvedEverythingAway) {
 
 TEST(ModelAccuracy, AModelDeeperThanItsLimitIsRefusedWithTheMemoryItWouldTake) {
   const fba::test::TempDir dir;
-  ComponentHarness h(registry(), "vision.model_accuracy", {{"mesh", unit_cube_ply(dir)}, {"max_depth", 2}});
+  ComponentHarness h(built_plugins(), "vision.model_accuracy", {{"mesh", unit_cube_ply(dir)}, {"max_depth", 2}});
   h.push("octree", root_only(fba::NodeState::Full, 3));
   h.close("octree");
   h.run();

@@ -9,6 +9,7 @@
 // slcan_adapter.hpp) and the host side: SlcanBus.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -25,6 +26,9 @@ constexpr char kBell = '\a';
 // The longest valid line (T, 8 id digits, length, 16 data digits, 4 time-stamp digits) is 30
 // characters; anything much longer is noise, dropped without growing the buffer.
 constexpr std::size_t kMaxLine = 64;
+// How long a write to the serial line may block (a full kernel buffer: the other side stopped
+// reading) before it fails: the adapter and its emulator alike.
+constexpr std::chrono::milliseconds kWriteTimeout{500};
 
 // The line for `frame`, with its CR.
 std::string encode(const Frame& frame);

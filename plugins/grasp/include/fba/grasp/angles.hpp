@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <numbers>
 
 #include <Eigen/Core>
 
@@ -12,6 +13,11 @@ namespace fba::grasp {
 // accurate for nearly parallel vectors, where acos of the dot product loses half its digits.
 inline double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+// The same in degrees, for reports, messages and tests.
+inline double angle_between_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return angle_between(a, b) * 180 / std::numbers::pi;
 }
 
 }  // namespace fba::grasp
