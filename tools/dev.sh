@@ -52,10 +52,17 @@ use_ccache() {
 # configure <name> [cmake args...]
 # Each test binary is one CTest test (FBA_TEST_EACH_CASE=OFF, cmake/FbaTests.cmake): a process per
 # case spent more time loading OpenCV's 150 shared libraries than testing.
+# A unity build (CMAKE_UNITY_BUILD): each target's sources compile in batches of eight as one file,
+# so the headers (Eigen, OpenCV, nlohmann/json, spdlog, GoogleTest) are parsed and their templates
+# compiled once a batch, not once a file. On a new machine, with nothing cached, the plain build took
+# 1,120 s of CPU file by file and 720 s in batches. The price is paid when iterating: an edit
+# recompiles its whole batch (a grasp source: 48 s at -O2 rather than 21 s). For a quicker edit-build
+# loop, configure a build of your own with -DCMAKE_UNITY_BUILD=OFF.
 configure() {
   local name=$1
   shift
-  cmake -S "$top" -B "build/$name" -G Ninja "${launcher[@]}" -DFBA_TEST_EACH_CASE=OFF "$@" >"build/$name.configure.log" 2>&1 ||
+  cmake -S "$top" -B "build/$name" -G Ninja "${launcher[@]}" -DFBA_TEST_EACH_CASE=OFF -DCMAKE_UNITY_BUILD=ON "$@" \
+    >"build/$name.configure.log" 2>&1 ||
     { cat "build/$name.configure.log"; exit 1; }
 }
 
