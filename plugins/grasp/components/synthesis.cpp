@@ -231,16 +231,17 @@ class GraspSynthesisFilter final : public fba::Component {
                     fixed(total_of(best)) + criteria(*best) + ", touches a part of the model not yet resolved (threshold " +
                     fixed(threshold_) + ")");
       }
-      reason += "best total " + fixed(total_of(best_resolved));
-      if (best_resolved) reason += criteria(*best_resolved);
-      reason += " < threshold " + fixed(threshold_);
+      // No candidate at all: what removed them, not a best total of nothing.
       if (r.candidates.empty() && r.below_table > 0)
-        reason += " (no candidate the hand can reach: " + std::to_string(r.below_table) + " would put the hand into the table)";
-      else if (r.candidates.empty() && (r.hand_blocked > 0 || r.not_force_closure > 0))
-        reason += " (no candidate the hand can take: " + std::to_string(r.hand_blocked) + " blocked by the model in the hand's way, " +
-                  std::to_string(r.not_force_closure) + " not force closure on the model)";
-      else if (r.candidates.empty()) reason += " (no candidate the hand can reach)";
-      else if (total_of(best) > total_of(best_resolved))
+        return fail(reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
+                    " would put the hand into the table");
+      if (r.candidates.empty() && (r.hand_blocked > 0 || r.not_force_closure > 0))
+        return fail(reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) +
+                    " blocked by the model in the hand's way, " + std::to_string(r.not_force_closure) +
+                    " not force closure on the model");
+      if (r.candidates.empty()) return fail(reason + "no candidate the hand can reach");
+      reason += "best total " + fixed(total_of(best_resolved)) + criteria(*best_resolved) + " < threshold " + fixed(threshold_);
+      if (total_of(best) > total_of(best_resolved))
         reason += " (a candidate of total " + fixed(total_of(best)) + " touches a part of the model not yet resolved)";
       return fail(reason);
     }
