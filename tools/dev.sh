@@ -54,10 +54,10 @@ use_ccache() {
 # case spent more time loading OpenCV's 150 shared libraries than testing.
 # A unity build (CMAKE_UNITY_BUILD): each target's sources compile in batches of eight as one file,
 # so the headers (Eigen, OpenCV, nlohmann/json, spdlog, GoogleTest) are parsed and their templates
-# compiled once a batch, not once a file. On a new machine, with nothing cached, the plain build took
-# 1,120 s of CPU file by file and 720 s in batches. The price is paid when iterating: an edit
-# recompiles its whole batch (a grasp source: 48 s at -O2 rather than 21 s). For a quicker edit-build
-# loop, configure a build of your own with -DCMAKE_UNITY_BUILD=OFF.
+# compiled once a batch, not once a file. With nothing cached (a new machine, 2 cores), the plain
+# build took 607 s file by file and 427 s in batches, and a whole CI run 2,007 s. The price is paid
+# when iterating: an edit recompiles its whole batch (a grasp source: 48 s at -O2 rather than 21 s).
+# For a quicker edit-build loop, configure a build of your own with -DCMAKE_UNITY_BUILD=OFF.
 configure() {
   local name=$1
   shift
