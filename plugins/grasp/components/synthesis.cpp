@@ -223,7 +223,17 @@ class GraspSynthesisFilter final : public fba::Component {
         return " (S1 symmetry " + fixed(c.grasp.scores.symmetry) + ", S3 safety margin " + fixed(c.grasp.scores.safety_margin) +
                ", S4 curvature " + fixed(c.grasp.scores.curvature) + ")";
       };
-      if (!best_resolved && best) {
+      if (r.candidates.empty()) {  // what removed them, not a best total of nothing
+        if (r.below_table > 0)
+          return fail(reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
+                      " would put the hand into the table");
+        if (r.hand_blocked > 0 || r.not_force_closure > 0)
+          return fail(reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) +
+                      " blocked by the model in the hand's way, " + std::to_string(r.not_force_closure) +
+                      " not force closure on the model");
+        return fail(reason + "no candidate the hand can reach");
+      }
+      if (!best_resolved) {
         // Nothing to weigh against the threshold: the model never resolved where the candidates are.
         return fail(reason + "none of the " + std::to_string(r.candidates.size()) +
                     " candidates has its contacts and the surface around them resolved" +
@@ -231,15 +241,6 @@ class GraspSynthesisFilter final : public fba::Component {
                     fixed(total_of(best)) + criteria(*best) + ", touches a part of the model not yet resolved (threshold " +
                     fixed(threshold_) + ")");
       }
-      // No candidate at all: what removed them, not a best total of nothing.
-      if (r.candidates.empty() && r.below_table > 0)
-        return fail(reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
-                    " would put the hand into the table");
-      if (r.candidates.empty() && (r.hand_blocked > 0 || r.not_force_closure > 0))
-        return fail(reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) +
-                    " blocked by the model in the hand's way, " + std::to_string(r.not_force_closure) +
-                    " not force closure on the model");
-      if (r.candidates.empty()) return fail(reason + "no candidate the hand can reach");
       reason += "best total " + fixed(total_of(best_resolved)) + criteria(*best_resolved) + " < threshold " + fixed(threshold_);
       if (total_of(best) > total_of(best_resolved))
         reason += " (a candidate of total " + fixed(total_of(best)) + " touches a part of the model not yet resolved)";
