@@ -9,6 +9,8 @@ namespace fba::test {
 
 inline const std::string kDino = shared_data_dir() + "/middlebury-dino";  // the Middlebury dino images
 inline const std::string kDinoPar = kDino + "/dinoSR_par.txt";             // its calibrated sparse ring
-inline const std::string kCan = shared_data_dir() + "/ycb/YcbMasterChefCan/model.obj";
+// A YCB object's mesh by its folder's name, e.g. "YcbMustardBottle".
+inline std::string ycb_mesh(const std::string& object) { return shared_data_dir() + "/ycb/" + object + "/model.obj"; }
+inline const std::string kCan = ycb_mesh("YcbMasterChefCan");
 
 }  // namespace fba::test

@@ -8,6 +8,7 @@
 #include "support/built_plugins.hpp"
 #include "tasks/fba_run_process.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace {
 
@@ -34,7 +35,7 @@ TEST(GraspTask, TheObjectIsOneParameterOfCameraAndHand) {
               std::string::npos)
         << e.what();
   }
-  const std::string mesh = fba::test::shared_data_dir() + "/ycb/YcbMustardBottle/model.obj";
+  const std::string mesh = fba::test::ycb_mesh("YcbMustardBottle");
   const auto task = fba::load_task(kGrasp, built_plugins(), profile("sim", {"mesh=" + mesh}));
   EXPECT_EQ(std::get<std::string>(task.find("camera")->params.at("mesh")), mesh);
   EXPECT_EQ(std::get<std::string>(task.find("hand")->params.at("mesh")), mesh);

@@ -20,6 +20,7 @@
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/octree_carver.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace {
 
@@ -108,7 +109,7 @@ INSTANTIATE_TEST_SUITE_P(Ycb, CarveSim, ::testing::Values("YcbMustardBottle", "Y
 // scored 0.895 here (0.904 with perfect masks and its own box); see tasks/carve_sim.yaml. Measured
 // at 20 views: mustard 0.944, can 0.941, banana 0.948, cracker box 0.938.
 TEST_P(CarveSim, ModelMatchesTheMesh) {
-  const std::string mesh = fba::test::shared_data_dir() + "/ycb/" + GetParam() + "/model.obj";
+  const std::string mesh = fba::test::ycb_mesh(GetParam());
   fba::LoadOptions o;
   o.overrides = {{"camera.mesh=" + mesh}, {"accuracy.mesh=" + mesh}};
   fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_sim.yaml", built_plugins(), o), deterministic());

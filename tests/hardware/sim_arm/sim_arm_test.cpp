@@ -18,7 +18,7 @@
 #include "support/wrist_camera_arm.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
-#include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 using fba::testing::ComponentHarness;
 
@@ -26,7 +26,7 @@ namespace {
 
 using fba::test::built_plugins;
 
-const std::string kMesh = fba::test::shared_data_dir() + "/ycb/YcbMustardBottle/model.obj";
+const std::string kMesh = fba::test::ycb_mesh("YcbMustardBottle");
 constexpr std::int64_t kPeriodNs = 20'000'000;  // the default rate, 50 Hz
 
 using fba::test::wrist_camera_arm;

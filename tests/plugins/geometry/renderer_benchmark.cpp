@@ -5,13 +5,13 @@
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/renderer.hpp"
 #include "fba/geometry/viewpoints.hpp"
-#include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace fba::geometry {
 namespace {
 
 void BM_RenderYcbMeshAt640x480(benchmark::State& state) {
-  const TriangleMesh mesh = load_mesh(fba::test::shared_data_dir() + "/ycb/YcbMustardBottle/model.obj");
+  const TriangleMesh mesh = load_mesh(fba::test::ycb_mesh("YcbMustardBottle"));
   const auto box = mesh_bounds(mesh);
   const auto cam = make_camera(640, 480, 600, 600, 320, 240,
                                look_at(box.center() + Eigen::Vector3d(0.35, 0.1, 0.2), box.center()));

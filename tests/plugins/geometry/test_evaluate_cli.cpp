@@ -20,6 +20,7 @@
 #include "fba/geometry/viewpoints.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 extern char** environ;
 
@@ -58,8 +59,8 @@ Result fba_evaluate(std::vector<std::string> args) {
   return r;
 }
 
-const std::string kBanana = fba::test::shared_data_dir() + "/ycb/YcbBanana/model.obj";
-const std::string kDinoSet = fba::test::shared_data_dir() + "/middlebury-dino/dinoSR_par.txt";
+const std::string kBanana = fba::test::ycb_mesh("YcbBanana");
+const std::string kDinoSet = fba::test::kDinoPar;
 const std::string kDinoTask = fba::test::source_dir() + "/tasks/carve_dino.yaml";
 
 std::size_t count(const std::string& text, const std::string& what) {

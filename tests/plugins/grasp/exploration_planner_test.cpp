@@ -19,7 +19,7 @@
 
 #include "support/built_plugins.hpp"
 #include "voxel_shapes.hpp"
-#include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 using fba::testing::ComponentHarness;
 
@@ -182,7 +182,7 @@ TEST(ExplorationPlanner, WithoutACentreTheRingIsAroundTheModel) {
 }
 
 TEST(ExplorationPlanner, RecordedCandidatesAreTheImageSetsCameraPoses) {
-  const std::string par = fba::test::shared_data_dir() + "/middlebury-dino/dinoSR_par.txt";
+  const std::string par = fba::test::kDinoPar;
   ComponentHarness h(built_plugins(), "grasp.exploration_planner",
                      {{"views", std::string("recorded")}, {"poses_from", par}, {"initial_views", 1}}, {"start"});
   h.push<std::int64_t>("start", 0);

@@ -11,7 +11,7 @@
 
 #include "fba/grasp/grasp_json.hpp"
 #include "support/built_plugins.hpp"
-#include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace {
 
@@ -22,7 +22,7 @@ std::string loop_task(const std::string& synthesis_params) {
 components:
   views:
     type: vision.image_set
-    params: { file: )" + fba::test::shared_data_dir() + R"(/middlebury-dino/dinoSR_par.txt, good_only: true }
+    params: { file: )" + fba::test::kDinoPar + R"(, good_only: true }
   contours:
     type: vision.contour_extraction
     params: { method: fixed, threshold: 0.19, dilate: 10, erode: 7 }

@@ -19,12 +19,11 @@
 #include "fba/vision/image_set.hpp"
 #include "fba/vision/octree_carver.hpp"
 #include "support/built_plugins.hpp"
-#include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace {
 
 using fba::testing::ComponentHarness;
-const std::string kData = fba::test::shared_data_dir();
 
 using fba::test::built_plugins;
 
@@ -43,7 +42,7 @@ fba::vision::CarverParams carve_params(int depth) {
 }
 
 TEST(GraspSynthesisOnCarvedModels, TheDinoCarvedAtDepth6YieldsAGrasp) {
-  const auto set = fba::vision::ImageSet::load(kData + "/middlebury-dino/dinoSR_par.txt");
+  const auto set = fba::vision::ImageSet::load(fba::test::kDinoPar);
   fba::vision::ExtractionParams extraction;  // the providers' recipe, as tasks/carve_dino.yaml
   extraction.binarise.threshold = 0.19;
   extraction.binarise.dilate_px = 10;
@@ -78,7 +77,7 @@ class GraspSynthesisOnCarvedYcb : public testing::TestWithParam<const char*> {};
 // Twelve views spread over the upper hemisphere, rendered as perfect masks, carved to depth 6;
 // the selected contacts, put on the true mesh, must be force closure.
 TEST_P(GraspSynthesisOnCarvedYcb, TheSelectedGraspIsForceClosureOnTheTrueMesh) {
-  const auto mesh = fba::geometry::load_mesh(std::filesystem::path(kData) / "ycb" / GetParam() / "model.obj");
+  const auto mesh = fba::geometry::load_mesh(fba::test::ycb_mesh(GetParam()));
   const Eigen::AlignedBox3d box = fba::geometry::mesh_bounds(mesh);
   const int width = 320, height = 240;
   const double focal = 300;

@@ -15,6 +15,7 @@
 
 #include "evaluate_grasp.hpp"
 #include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace {
 
@@ -44,7 +45,7 @@ class EvaluateGraspBatch : public testing::Test {
   fs::path dir_;
 };
 
-std::string mustard() { return fba::test::shared_data_dir() + "/ycb/YcbMustardBottle/model.obj"; }
+std::string mustard() { return fba::test::ycb_mesh("YcbMustardBottle"); }
 
 TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailedRunAsARowWithItsReason) {
   const fs::path l = dir_ / "list.yaml";

@@ -11,14 +11,12 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/grasp/object_surface.hpp"
-#include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace fba::grasp {
 namespace {
 
-std::filesystem::path ycb_mesh(const std::string& name) {
-  return std::filesystem::path(fba::test::shared_data_dir()) / "ycb" / name / "model.obj";
-}
+using fba::test::ycb_mesh;
 
 TEST(ObjectSurface, CentreOfMassAndRMaxOfABoxAndASphere) {
   const ObjectSurface box(geometry::make_box({0, 0, 0}, {0.2, 0.1, 0.04}));

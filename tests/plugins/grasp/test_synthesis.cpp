@@ -13,7 +13,7 @@
 #include "fba/grasp/grasp_quality.hpp"
 #include "fba/grasp/object_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
-#include "support/build_paths.hpp"
+#include "support/shared_data.hpp"
 
 namespace fba::grasp {
 namespace {
@@ -541,7 +541,7 @@ struct YcbCase {
 class SynthesisOnYcb : public testing::TestWithParam<YcbCase> {};
 
 TEST_P(SynthesisOnYcb, BestGraspIsForceClosureOnTheTrueSurface) {
-  const auto mesh = geometry::load_mesh(std::filesystem::path(fba::test::shared_data_dir()) / "ycb" / GetParam().mesh / "model.obj");
+  const auto mesh = geometry::load_mesh(fba::test::ycb_mesh(GetParam().mesh));
   const ObjectSurface surface(mesh);
   const SurfaceSampling sampling = sample_for_synthesis(surface, 3000, 11);
   SynthesisParams p;

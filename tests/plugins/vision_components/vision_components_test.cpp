@@ -16,7 +16,6 @@
 
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
-#include "support/build_paths.hpp"
 #include "support/shared_data.hpp"
 
 namespace fs = std::filesystem;
@@ -26,7 +25,6 @@ namespace {
 
 using fba::test::built_plugins;
 
-const std::string kData = fba::test::shared_data_dir();
 using fba::test::kDinoPar;
 
 bool has_event(const std::vector<fba::Event>& events, const std::string& name) {
@@ -83,7 +81,7 @@ TEST(Camera, CapturesAVideoFileWithCalibrationAndPose) {
   {
     cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 5, cv::Size(640, 480));
     ASSERT_TRUE(writer.isOpened());
-    for (int i = 1; i <= 4; ++i) writer.write(cv::imread(kData + "/middlebury-dino/dinoSR000" + std::to_string(i) + ".png"));
+    for (int i = 1; i <= 4; ++i) writer.write(cv::imread(fba::test::kDino + "/dinoSR000" + std::to_string(i) + ".png"));
   }
   const std::string calibration = (dir / "calibration.yaml").string();
   {
@@ -213,7 +211,7 @@ TEST(ContourExtraction, AnEmptyImageIsAnEventNotAFailure) {
 
 TEST(SimCamera, RendersTheMeshFromEveryViewpoint) {
   ComponentHarness h(built_plugins(), "sim.camera",
-                     {{"mesh", kData + "/ycb/YcbMustardBottle/model.obj"}, {"views", 4}, {"noise", 2}});
+                     {{"mesh", fba::test::ycb_mesh("YcbMustardBottle")}, {"views", 4}, {"noise", 2}});
   EXPECT_EQ(h.run(), 4);
   EXPECT_TRUE(h.finished());
   for (const auto& p : h.packets("frame")) {
@@ -228,7 +226,7 @@ TEST(SimCamera, RendersTheMeshFromEveryViewpoint) {
 }
 
 TEST(SimCamera, RendersFromAPoseItIsGiven) {
-  ComponentHarness h(built_plugins(), "sim.camera", {{"mesh", kData + "/ycb/YcbMasterChefCan/model.obj"}}, {"pose"});
+  ComponentHarness h(built_plugins(), "sim.camera", {{"mesh", fba::test::kCan}}, {"pose"});
   fba::Pose far;  // looking along +z from far below the object: nothing in view
   far.world_from_frame.translation() << 0, 0, -50;
   h.push<fba::Pose>("pose", far);
@@ -310,7 +308,7 @@ TEST(OctreeCarver, AnInvertedBoxFailsTheCheck) {
 TEST(SimCamera, ElevationsOutOfOrderFailTheCheck) {
   try {
     ComponentHarness(built_plugins(), "sim.camera",
-                     {{"mesh", kData + "/ycb/YcbMasterChefCan/model.obj"}, {"min_elevation", 60}, {"max_elevation", 30}});
+                     {{"mesh", fba::test::kCan}, {"min_elevation", 60}, {"max_elevation", 30}});
     FAIL() << "accepted";
   } catch (const fba::ConfigError& e) {
     EXPECT_NE(e.diagnostics().at(0).message.find("parameter 'min_elevation' (60) must be <= parameter 'max_elevation' (30)"),
