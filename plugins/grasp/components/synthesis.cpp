@@ -10,6 +10,7 @@
 #include <utility>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <set>
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fba/component.hpp>
+#include <fba/thread_pool.hpp>
 #include <fba/types/grasp.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/regions_of_interest.hpp>
@@ -132,6 +134,10 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);
     params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first
+    // The model's surface and the search borrow the task's threads, as carving does: the loop waits
+    // on each analysis, and the other core would sit idle.
+    fba::ThreadPool& pool = ctx.thread_pool();
+    params_.parallel_for = [&pool](std::size_t n, const std::function<void(std::size_t)>& f) { pool.parallel_for(n, f); };
   }
 
   void process() override {
@@ -160,7 +166,7 @@ class GraspSynthesisFilter final : public fba::Component {
     write_model(model);
     // The model's views are the first silhouettes (the carver takes them in arrival order).
     const std::span<const fba::grasp::SilhouetteRim> rims = std::span(rims_).first(std::min<std::size_t>(rims_.size(), std::size_t(views)));
-    const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_, params_.table_z});
+    const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_, params_.table_z, params_.parallel_for});
     if (surface.samples.empty() && surface.leaves > 0)
       return fail("none of the model's " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
                   " views is joined to the table at z = " + fixed(params_.table_z.value_or(0)) +

@@ -1,15 +1,17 @@
 #include "fba/grasp/model_surface.hpp"
 
 #include "neighbour_grid.hpp"
+#include "parallel.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
-#include <unordered_set>
 
 #include <Eigen/Eigenvalues>
 #include <opencv2/core.hpp>
@@ -44,30 +46,42 @@ OctreeCell leaf_at(const Octree& model, const Eigen::Vector3d& p) {
   return c;
 }
 
-bool occupied_leaf(const OctreeCell& c) { return c.node && c.occupied(); }
+// An occupied leaf's neighbours just beyond its six faces: the leaf at each face's centre (as
+// large as the leaf or larger, it covers the whole face) or, when that one is finer, the leaves at
+// the face's four quarter points. Each by its index among the model's occupied leaves; -1 for an
+// empty leaf or outside the root box.
+struct FaceNeighbours {
+  struct Probe {
+    std::int8_t axis, sign, quarters;  // quarters: the share of the face it covers, in fourths
+    std::int32_t leaf;
+  };
+  std::array<Probe, 24> probes;
+  int count = 0;
+  std::array<std::int32_t, 6> centre;  // the leaf at each face's centre (2 * axis + (sign > 0))
+};
 
-// A leaf's identity: its depth (5 bits) and lattice position (19 bits per axis; model_surface
-// refuses deeper models).
-constexpr int kMaxKeyDepth = 19;
-std::uint64_t leaf_key(const OctreeCell& c) {
-  return (static_cast<std::uint64_t>(c.depth) << 57) | (static_cast<std::uint64_t>(c.x) << 38) |
-         (static_cast<std::uint64_t>(c.y) << 19) | static_cast<std::uint64_t>(c.z);
-}
+// The occupied leaves in the model's walk order, and each one's index by its node.
+struct OccupiedLeaves {
+  std::vector<OctreeCell> cells;
+  std::unordered_map<const OctreeNode*, std::int32_t> index;
+  std::int32_t at(const OctreeCell& c) const {
+    if (!c.node || !c.occupied()) return -1;
+    return index.at(c.node);
+  }
+};
 
-// Calls f(axis, sign, leaf, quarters) for the leaves just beyond each of the cell's six faces: the
-// leaf at the face's centre when it is as large as the cell or larger, as it then covers the whole
-// face (quarters 4; beyond the root box's faces, a cell with a null node); else the leaf at each of
-// the face's four quarter points (quarters 1), which finds the finer neighbours there.
-template <class F>
-void for_face_neighbours(const Octree& model, const OctreeCell& c, F&& f) {
+FaceNeighbours face_neighbours(const Octree& model, const OccupiedLeaves& leaves, const OctreeCell& c) {
+  FaceNeighbours out;
   const double h = c.half_size, eps = 1e-3 * h;
   for (int a = 0; a < 3; ++a) {
     const int u = (a + 1) % 3, v = (a + 2) % 3;
     for (int sign : {-1, 1}) {
       Eigen::Vector3d centre = c.centre;
       centre[a] += sign * (h + eps);
-      if (const OctreeCell n = leaf_at(model, centre); !n.node || n.depth <= c.depth) {
-        f(a, sign, n, 4);
+      const OctreeCell n = leaf_at(model, centre);
+      out.centre[2 * a + (sign > 0)] = leaves.at(n);
+      if (!n.node || n.depth <= c.depth) {
+        out.probes[out.count++] = {std::int8_t(a), std::int8_t(sign), 4, leaves.at(n)};
         continue;
       }
       for (int qu : {-1, 1})
@@ -75,37 +89,10 @@ void for_face_neighbours(const Octree& model, const OctreeCell& c, F&& f) {
           Eigen::Vector3d p = centre;
           p[u] += qu * h / 2;
           p[v] += qv * h / 2;
-          f(a, sign, leaf_at(model, p), 1);
+          out.probes[out.count++] = {std::int8_t(a), std::int8_t(sign), 1, leaves.at(leaf_at(model, p))};
         }
     }
   }
-}
-
-// The occupied leaves an object resting on the table can be (keys as leaf_key): those joined
-// through shared faces to a leaf that reaches down to the table. A pillar the views could not
-// carve stays joined; space above the object that no view saw (carving keeps it: nothing there
-// was seen to be empty), cut off from the object by carved space, does not.
-struct SupportedLeaves {
-  std::unordered_set<std::uint64_t> keys;
-  std::size_t unsupported = 0;
-};
-
-SupportedLeaves supported_leaves(const Octree& model, double table_z) {
-  SupportedLeaves out;
-  std::size_t occupied = 0;
-  std::vector<OctreeCell> queue;
-  model.for_each_occupied_leaf([&](const OctreeCell& c) {
-    ++occupied;
-    if (c.centre.z() - c.half_size <= table_z && out.keys.insert(leaf_key(c)).second) queue.push_back(c);
-  });
-  while (!queue.empty()) {
-    const OctreeCell c = queue.back();
-    queue.pop_back();
-    for_face_neighbours(model, c, [&](int, int, const OctreeCell& n, int) {
-      if (occupied_leaf(n) && out.keys.insert(leaf_key(n)).second) queue.push_back(n);
-    });
-  }
-  out.unsupported = occupied - out.keys.size();
   return out;
 }
 
@@ -122,85 +109,118 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
 
   // Surface leaves and their free faces. A face whose neighbour is finer is probed at its four
   // quarter points just outside it, so a coarse leaf next to finer ones sees a free finer one too.
+  // The neighbours are found once per leaf, at once with a parallel_for.
+  OccupiedLeaves leaves;
+  model.for_each_occupied_leaf([&](const OctreeCell& c) {
+    leaves.index.emplace(c.node, std::int32_t(leaves.cells.size()));
+    leaves.cells.push_back(c);
+  });
+  out.leaves = leaves.cells.size();
+  std::vector<FaceNeighbours> neighbours(leaves.cells.size());
+  for_each_chunk(params.parallel_for, leaves.cells.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) neighbours[i] = face_neighbours(model, leaves, leaves.cells[i]);
+  });
+
+  // The object, with a table: the occupied leaves joined through shared faces to one that reaches
+  // down to it. A pillar the views could not carve stays joined; space above the object that no
+  // view saw (carving keeps it: nothing there was seen to be empty), cut off from the object by
+  // carved space, does not.
+  std::vector<char> object(leaves.cells.size(), params.table_z ? 0 : 1);
+  if (params.table_z) {
+    std::vector<std::int32_t> queue;
+    for (std::size_t i = 0; i < leaves.cells.size(); ++i) {
+      const OctreeCell& c = leaves.cells[i];
+      if (c.centre.z() - c.half_size <= *params.table_z) object[i] = 1, queue.push_back(std::int32_t(i));
+    }
+    while (!queue.empty()) {
+      const FaceNeighbours& f = neighbours[std::size_t(queue.back())];
+      queue.pop_back();
+      for (int k = 0; k < f.count; ++k)
+        if (const std::int32_t j = f.probes[std::size_t(k)].leaf; j >= 0 && !object[std::size_t(j)])
+          object[std::size_t(j)] = 1, queue.push_back(j);
+    }
+  }
+  const std::size_t objects = std::size_t(std::count(object.begin(), object.end(), 1));
+  out.unsupported_leaves = leaves.cells.size() - objects;
+  auto is_object = [&](std::int32_t leaf) { return leaf >= 0 && object[std::size_t(leaf)]; };
+
   struct Raw {
     Eigen::Vector3d position, free_direction;
     bool uncertain;
   };
-  std::vector<Raw> raw;
-  int finest_depth = -1;
-  if (params.table_z && model.max_depth > kMaxKeyDepth)
-    throw std::invalid_argument("model surface: with a table, models up to depth " + std::to_string(kMaxKeyDepth) +
-                                " are supported; found max_depth " + std::to_string(model.max_depth));
-  SupportedLeaves supported;
-  if (params.table_z) supported = supported_leaves(model, *params.table_z);
-  out.unsupported_leaves = supported.unsupported;
-  auto is_object = [&](const OctreeCell& c) {
-    return occupied_leaf(c) && (!params.table_z || supported.keys.contains(leaf_key(c)));
-  };
-  model.for_each_occupied_leaf([&](const OctreeCell& c) {
-    ++out.leaves;
-    if (!is_object(c)) return;
-    finest_depth = std::max(finest_depth, c.depth);
-    const double h = c.half_size, eps = 1e-3 * h;
+  // Each leaf on its own (at once with a parallel_for), kept in the walk's order.
+  std::vector<std::optional<Raw>> surface_leaf(leaves.cells.size());
+  auto examine = [&](std::size_t i) -> std::optional<Raw> {
+    const OctreeCell& c = leaves.cells[i];
+    const FaceNeighbours& f = neighbours[i];
     Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();  // towards the faces no object leaf is beyond
-    for_face_neighbours(model, c, [&](int a, int sign, const OctreeCell& n, int quarters) {
-      if (!is_object(n)) free_direction[a] += sign * quarters / 4.0;
-    });
+    for (int k = 0; k < f.count; ++k) {
+      const auto& probe = f.probes[std::size_t(k)];
+      if (!is_object(probe.leaf)) free_direction[probe.axis] += probe.sign * probe.quarters / 4.0;
+    }
     bool any_free = false;
     for (int a = 0; a < 3; ++a) any_free = any_free || free_direction[a] != 0;
     // Faces free on both sides of an axis cancel there (a wall one leaf thick): such a leaf is
     // surface too, its direction left to the neighbours' fit.
     if (!any_free) {
       bool two_sided = false;
-      for (int a = 0; a < 3 && !two_sided; ++a) {
-        Eigen::Vector3d lo = c.centre, hi = c.centre;
-        lo[a] -= h + eps;
-        hi[a] += h + eps;
-        two_sided = !is_object(leaf_at(model, lo)) && !is_object(leaf_at(model, hi));
-      }
-      if (!two_sided) return;
+      for (int a = 0; a < 3 && !two_sided; ++a) two_sided = !is_object(f.centre[2 * a]) && !is_object(f.centre[2 * a + 1]);
+      if (!two_sided) return std::nullopt;
     }
-    const Eigen::Vector3d position = c.centre + h * free_direction.cwiseMax(-1.0).cwiseMin(1.0);
-    if (params.table_z && position.z() < *params.table_z) return;  // the model's cone below the table
-    raw.push_back({position, free_direction, c.state() == NodeState::Partial && c.depth < model.max_depth});
+    const Eigen::Vector3d position = c.centre + c.half_size * free_direction.cwiseMax(-1.0).cwiseMin(1.0);
+    if (params.table_z && position.z() < *params.table_z) return std::nullopt;  // the model's cone below the table
+    return Raw{position, free_direction, c.state() == NodeState::Partial && c.depth < model.max_depth};
+  };
+  for_each_chunk(params.parallel_for, leaves.cells.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      if (object[i]) surface_leaf[i] = examine(i);
   });
+  // The finest depth among the object's leaves, surface or not.
+  int finest_depth = -1;
+  for (std::size_t i = 0; i < leaves.cells.size(); ++i)
+    if (object[i]) finest_depth = std::max(finest_depth, leaves.cells[i].depth);
+  std::vector<Raw> raw;
+  for (auto& r : surface_leaf)
+    if (r) raw.push_back(*r);
   if (raw.empty()) return out;
   out.finest_edge = size.x() / double(std::int64_t(1) << finest_depth);
   out.radius = params.radius > 0 ? params.radius : 3 * out.finest_edge;
 
   std::vector<SurfaceSample> s(raw.size());
   for (std::size_t i = 0; i < raw.size(); ++i) s[i].position = raw[i].position, s[i].uncertain = raw[i].uncertain;
-  const std::vector<std::vector<std::size_t>> neighbourhoods = NeighbourGrid(s, out.radius).neighbourhoods(true);
+  const std::vector<std::vector<std::size_t>> neighbourhoods = NeighbourGrid(s, out.radius).neighbourhoods(true, params.parallel_for);
   std::vector<SurfaceSample> smoothed = s;
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), direction = Eigen::Vector3d::Zero();
-    const std::vector<std::size_t>& nb = neighbourhoods[i];
-    for (std::size_t j : nb) {
-      mean += s[j].position;
-      direction += raw[j].free_direction;
-    }
-    mean /= double(nb.size());
-    Eigen::Vector3d normal = direction;
-    if (nb.size() >= 6) {
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (std::size_t j : nb) cov += (s[j].position - mean) * (s[j].position - mean).transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-      // A fit only where the neighbours spread in two directions: a line of points has no plane.
-      if (eig.eigenvalues()[1] > 1e-12 * out.radius * out.radius) {
-        normal = eig.eigenvectors().col(0);
-        if (normal.dot(direction) < 0) normal = -normal;
-        if (direction.squaredNorm() == 0) normal = Eigen::Vector3d::Zero();
+  for_each_chunk(params.parallel_for, s.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero(), direction = Eigen::Vector3d::Zero();
+      const std::vector<std::size_t>& nb = neighbourhoods[i];
+      for (std::size_t j : nb) {
+        mean += s[j].position;
+        direction += raw[j].free_direction;
       }
+      mean /= double(nb.size());
+      Eigen::Vector3d normal = direction;
+      if (nb.size() >= 6) {
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (std::size_t j : nb) cov += (s[j].position - mean) * (s[j].position - mean).transpose();
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+        // A fit only where the neighbours spread in two directions: a line of points has no plane.
+        if (eig.eigenvalues()[1] > 1e-12 * out.radius * out.radius) {
+          normal = eig.eigenvectors().col(0);
+          if (normal.dot(direction) < 0) normal = -normal;
+          if (direction.squaredNorm() == 0) normal = Eigen::Vector3d::Zero();
+        }
+      }
+      if (normal.squaredNorm() == 0) normal = raw[i].free_direction;
+      if (normal.squaredNorm() == 0) normal = s[i].position - model.bounds.center();  // a lone voxel: away from the centre
+      if (normal.squaredNorm() == 0) normal = Eigen::Vector3d::UnitZ();
+      normal.normalize();
+      smoothed[i].normal = normal;
+      // Onto the fitted plane: removes the voxel staircase that would read as curvature.
+      smoothed[i].position = s[i].position + (mean - s[i].position).dot(normal) * normal;
     }
-    if (normal.squaredNorm() == 0) normal = raw[i].free_direction;
-    if (normal.squaredNorm() == 0) normal = s[i].position - model.bounds.center();  // a lone voxel: away from the centre
-    if (normal.squaredNorm() == 0) normal = Eigen::Vector3d::UnitZ();
-    normal.normalize();
-    smoothed[i].normal = normal;
-    // Onto the fitted plane: removes the voxel staircase that would read as curvature.
-    smoothed[i].position = s[i].position + (mean - s[i].position).dot(normal) * normal;
-  }
-  estimate_curvature(smoothed, out.radius);
+  });
+  estimate_curvature(smoothed, out.radius, params.parallel_for);
   out.samples = std::move(smoothed);
   return out;
 }

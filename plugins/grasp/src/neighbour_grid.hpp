@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "fba/grasp/synthesis.hpp"
+#include "parallel.hpp"
 
 namespace fba::grasp {
 
@@ -31,27 +32,16 @@ class NeighbourGrid {
 
   // For each sample, the samples within r of it (itself too, or not): the 27 cells around its own
   // in x-major order (x outermost, z innermost), each cell's samples in index order. The cells
-  // around are looked up once per cell, not once per sample.
-  std::vector<std::vector<std::size_t>> neighbourhoods(bool with_self) const {
+  // around are looked up once per cell, not once per sample; the cells are done at once with a
+  // parallel_for (each writes only its own samples' lists).
+  std::vector<std::vector<std::size_t>> neighbourhoods(bool with_self, const ParallelFor& parallel_for = {}) const {
     std::vector<std::vector<std::size_t>> out(samples_.size());
-    std::array<const std::vector<std::size_t>*, 27> around{};
-    for (const auto& [k, members] : cells_) {
-      const Eigen::Vector3i c = cell(samples_[members.front()].position);
-      std::size_t m = 0;
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-            around[m++] = it == cells_.end() ? nullptr : &it->second;
-          }
-      for (std::size_t i : members) {
-        const Eigen::Vector3d& p = samples_[i].position;
-        for (const auto* near : around)
-          if (near)
-            for (std::size_t j : *near)
-              if ((with_self || j != i) && (samples_[j].position - p).squaredNorm() <= r_ * r_) out[i].push_back(j);
-      }
-    }
+    std::vector<const std::vector<std::size_t>*> cells;
+    cells.reserve(cells_.size());
+    for (const auto& [k, members] : cells_) cells.push_back(&members);
+    for_each_chunk(parallel_for, cells.size(), [&](std::size_t begin, std::size_t end) {
+      for (std::size_t ci = begin; ci < end; ++ci) fill(*cells[ci], with_self, out);
+    });
     return out;
   }
 
@@ -62,6 +52,26 @@ class NeighbourGrid {
   }
 
  private:
+  // The neighbourhoods of one cell's members.
+  void fill(const std::vector<std::size_t>& members, bool with_self, std::vector<std::vector<std::size_t>>& out) const {
+    std::array<const std::vector<std::size_t>*, 27> around{};
+    const Eigen::Vector3i c = cell(samples_[members.front()].position);
+    std::size_t m = 0;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+          around[m++] = it == cells_.end() ? nullptr : &it->second;
+        }
+    for (std::size_t i : members) {
+      const Eigen::Vector3d& p = samples_[i].position;
+      for (const auto* near : around)
+        if (near)
+          for (std::size_t j : *near)
+            if ((with_self || j != i) && (samples_[j].position - p).squaredNorm() <= r_ * r_) out[i].push_back(j);
+    }
+  }
+
   Eigen::Vector3i cell(const Eigen::Vector3d& p) const { return (p / r_).array().floor().cast<int>(); }
   static std::uint64_t key(const Eigen::Vector3i& c) {
     return (static_cast<std::uint64_t>(c.x() & 0x1fffff) << 42) | (static_cast<std::uint64_t>(c.y() & 0x1fffff) << 21) |

@@ -3,14 +3,17 @@
 #include "fba/grasp/angles.hpp"
 #include "fba/grasp/grasp_quality.hpp"
 #include "neighbour_grid.hpp"
+#include "parallel.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <queue>
 #include <random>
 #include <string>
@@ -213,23 +216,25 @@ std::optional<std::size_t> hand_path_blocked(const Grasp& g, const HandGeometry&
   return SampleCells(samples, hand.finger_width).hand_path_blocked(g, hand, tolerance);
 }
 
-void estimate_curvature(std::span<SurfaceSample> samples, double radius) {
+void estimate_curvature(std::span<SurfaceSample> samples, double radius, const ParallelFor& parallel_for) {
   require(radius > 0, "curvature radius must be > 0, found " + num(radius));
-  const std::vector<std::vector<std::size_t>> nb = NeighbourGrid(samples, radius).neighbourhoods(false);
+  const std::vector<std::vector<std::size_t>> nb = NeighbourGrid(samples, radius).neighbourhoods(false, parallel_for);
   std::vector<double> k(samples.size(), 0.0);
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Eigen::Vector3d n = samples[i].normal.normalized();
-    double sum = 0;
-    int count = 0;
-    for (std::size_t j : nb[i]) {
-      const Eigen::Vector3d d = samples[j].position - samples[i].position;
-      const double d2 = d.squaredNorm();
-      if (d2 < 1e-6 * radius * radius) continue;  // a duplicate says nothing about the bending
-      sum += -2.0 * d.dot(n) / d2;
-      ++count;
+  for_each_chunk(parallel_for, samples.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3d n = samples[i].normal.normalized();
+      double sum = 0;
+      int count = 0;
+      for (std::size_t j : nb[i]) {
+        const Eigen::Vector3d d = samples[j].position - samples[i].position;
+        const double d2 = d.squaredNorm();
+        if (d2 < 1e-6 * radius * radius) continue;  // a duplicate says nothing about the bending
+        sum += -2.0 * d.dot(n) / d2;
+        ++count;
+      }
+      k[i] = count ? sum / count : 0.0;
     }
-    k[i] = count ? sum / count : 0.0;
-  }
+  });
   for (std::size_t i = 0; i < samples.size(); ++i) samples[i].curvature = k[i];
 }
 
@@ -241,7 +246,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   const double safety_ref = p.safety_reference > 0 ? p.safety_reference : hand.finger_width;
   const std::size_t n = s.size();
   const SampleCells cells(s, hand.finger_width);
-  const std::vector<std::vector<std::size_t>> nb = NeighbourGrid(s, p.neighbour_radius).neighbourhoods(false);
+  const std::vector<std::vector<std::size_t>> nb = NeighbourGrid(s, p.neighbour_radius).neighbourhoods(false, p.parallel_for);
 
   // Regions: connected graspable samples whose normals turn gently.
   const double max_step = p.max_normal_step_deg * kDeg;
@@ -361,8 +366,13 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   auto s4 = [&](std::size_t i) { return std::clamp(0.5 - 0.5 * s[i].curvature / p.curvature_scale, 0.0, 1.0); };
   auto s3 = [&](std::size_t i) { return std::min(1.0, result.boundary_distance[i] / safety_ref); };
 
-  std::vector<GraspCandidate> all;
-  for (std::size_t t : thumbs) {
+  // Each thumb's candidates apart, at once with a parallel_for, then in the thumbs' order: the same
+  // list whatever the threads.
+  std::vector<std::vector<GraspCandidate>> per_thumb(thumbs.size());
+  std::vector<std::size_t> below_table(thumbs.size(), 0);
+  auto search = [&](std::size_t ti) {
+    const std::size_t t = thumbs[ti];
+    std::vector<GraspCandidate>& all = per_thumb[ti];
     const Eigen::Vector3d tp = s[t].position;
     const Eigen::Vector3d tn = -s[t].normal;  // inward: where the thumb pushes
     // Finger positions the thumb can oppose: in reach, facing back towards the thumb.
@@ -426,7 +436,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
           if (g.approach.z() > 1e-9) g.approach = -g.approach;
           const double floor = *p.table_z + p.table_clearance;
           if (hand_lowest_z(g, hand) < floor || hand_lowest_z(g, hand, p.pregrasp_distance) < floor) {
-            ++result.below_table;
+            ++below_table[ti];
             continue;
           }
         }
@@ -442,6 +452,13 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
         all.push_back(std::move(cand));
       }
     }
+  };
+  if (p.parallel_for) p.parallel_for(thumbs.size(), search);
+  else for (std::size_t ti = 0; ti < thumbs.size(); ++ti) search(ti);
+  std::vector<GraspCandidate> all;
+  for (std::size_t ti = 0; ti < thumbs.size(); ++ti) {
+    result.below_table += below_table[ti];
+    std::move(per_thumb[ti].begin(), per_thumb[ti].end(), std::back_inserter(all));
   }
   std::stable_sort(all.begin(), all.end(),
                    [](const auto& a, const auto& b) { return a.grasp.scores.total > b.grasp.scores.total; });
@@ -461,25 +478,52 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   QualityParams quality;
   quality.friction = p.friction;
   if (p.normal_error_deg > 0) quality.friction = std::tan((inscribed_cone_deg(p.friction) - p.normal_error_deg) * kDeg);
+  // The candidates are taken in order, each kept unless it repeats one kept, the hand cannot take
+  // it, or it is not force closure. The hulls (the costly part) are computed ahead, a few at once
+  // with a parallel_for, for the next candidates that repeat none kept so far and the hand can take:
+  // the same choices as one at a time, a hull now and then computed for nothing.
+  auto repeats = [&](const GraspCandidate& c) {
+    return std::any_of(result.candidates.begin(), result.candidates.end(), [&](const auto& k) { return same(c, k); });
+  };
+  std::vector<signed char> blocked(all.size(), -1);  // -1: not checked yet
+  auto hand_blocked = [&](std::size_t i) {
+    if (blocked[i] < 0) blocked[i] = p.path_tolerance > 0 && cells.hand_path_blocked(all[i].grasp, hand, p.path_tolerance);
+    return blocked[i] == 1;
+  };
+  std::vector<std::optional<GraspQuality>> quality_of(all.size());
+  auto compute_ahead = [&](std::size_t first, std::size_t budget) {
+    constexpr std::size_t kAhead = 8;
+    std::vector<std::size_t> next;
+    for (std::size_t j = first; j < all.size() && next.size() < std::min(kAhead, budget); ++j)
+      if (!quality_of[j] && !repeats(all[j]) && !hand_blocked(j)) next.push_back(j);
+    auto compute = [&](std::size_t k) {
+      GraspQuality q;
+      try {
+        q = evaluate_grasp(all[next[k]].grasp.contacts, centre, r_max, quality);
+      } catch (const GraspQualityError&) {
+        q = {};  // degenerate contacts (two coincide): no grasp at all
+      }
+      quality_of[next[k]] = q;
+    };
+    if (p.parallel_for) p.parallel_for(next.size(), compute);
+    else for (std::size_t k = 0; k < next.size(); ++k) compute(k);
+  };
   std::size_t checks = 0;
-  for (auto& c : all) {
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    GraspCandidate& c = all[i];
     if (result.candidates.size() >= p.max_candidates) break;
-    if (std::any_of(result.candidates.begin(), result.candidates.end(), [&](const auto& k) { return same(c, k); })) continue;
+    if (repeats(c)) continue;
     // The hand's way first, on every candidate in turn: a few microseconds each. Counting it in
     // max_checks let the blocked best candidates use up the search (the cracker box: 400 of 400
     // blocked from view 3 to view 8; the first free one at view 3 was the 444th).
-    if (p.path_tolerance > 0 && cells.hand_path_blocked(c.grasp, hand, p.path_tolerance)) {
+    if (hand_blocked(i)) {
       ++result.hand_blocked;
       continue;
     }
     if (p.require_force_closure && r_max > 0) {
       if (checks++ >= p.max_checks) break;
-      GraspQuality q;
-      try {
-        q = evaluate_grasp(c.grasp.contacts, centre, r_max, quality);
-      } catch (const GraspQualityError&) {
-        q = {};  // degenerate contacts (two coincide): no grasp at all
-      }
+      if (!quality_of[i]) compute_ahead(i, p.max_checks - checks + 1);
+      const GraspQuality& q = *quality_of[i];
       if (!q.force_closure || q.epsilon < p.min_model_epsilon) {
         ++result.not_force_closure;
         continue;

@@ -26,6 +26,7 @@ struct ModelSurfaceParams {
   // top of the root box) and the silhouettes' cones under the table. With a table, only the leaves
   // joined through shared faces to one that reaches down to it are the object, and only above it.
   std::optional<double> table_z;
+  ParallelFor parallel_for;  // the leaves' faces, the normals' fits and the neighbourhoods
 };
 
 struct ModelSurface {

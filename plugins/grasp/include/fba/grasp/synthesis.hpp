@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -46,6 +47,11 @@ struct HandGeometry {
   double palm_half_depth = 0.065;
   double palm_thickness = 0.04;
 };
+
+// Runs f(0) .. f(n - 1), in any order and possibly at once, and returns when all are done: in a
+// component, the task's thread pool (ctx.thread_pool().parallel_for); empty: one after another.
+// The results do not depend on it.
+using ParallelFor = std::function<void(std::size_t n, const std::function<void(std::size_t)>& f)>;
 
 struct SynthesisParams {
   HandGeometry hand;
@@ -115,6 +121,7 @@ struct SynthesisParams {
   std::size_t max_thumbs = 80;
   std::size_t max_fingers = 300;
   std::size_t max_candidates = 20;
+  ParallelFor parallel_for;  // the neighbourhoods and the candidates' search, over the thumbs
 };
 
 // A connected patch of graspable samples (not sharp, normals continuous).
@@ -165,6 +172,6 @@ SynthesisResult synthesise(std::span<const SurfaceSample> samples, const Synthes
 // Fills each sample's curvature from its neighbours within radius: the mean over neighbours q of
 // -2 (q - p).n / |q - p|^2, which is the mean curvature on a smooth surface (1/R on a sphere,
 // 1/(2R) on a cylinder) and large across an edge. Samples with no neighbour get 0.
-void estimate_curvature(std::span<SurfaceSample> samples, double radius);
+void estimate_curvature(std::span<SurfaceSample> samples, double radius, const ParallelFor& parallel_for = {});
 
 }  // namespace fba::grasp
