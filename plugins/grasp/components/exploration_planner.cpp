@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -18,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fba/component.hpp>
+#include <fba/thread_pool.hpp>
 #include <fba/geometry/viewpoints.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/pose.hpp>
@@ -101,6 +103,8 @@ class ExplorationPlanner final : public fba::Component {
     params_.half_fov_deg = ctx(kHalfFov);
     params_.min_gain = ctx(kMinGain);
     params_.max_rays = static_cast<std::size_t>(ctx(kMaxRays));
+    fba::ThreadPool& pool = ctx.thread_pool();  // the views are scored at once, on the task's threads
+    params_.parallel_for = [&pool](std::size_t n, const std::function<void(std::size_t)>& f) { pool.parallel_for(n, f); };
     const std::string views = ctx(kViews);
     if (views == "recorded") {
       std::filesystem::path file = ctx(kPosesFrom);

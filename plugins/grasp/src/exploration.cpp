@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <numbers>
 #include <stdexcept>
@@ -96,6 +97,11 @@ std::vector<PointNeed> points_to_pin(const RegionsOfInterest& regions, std::span
   return out;
 }
 
+void for_each_view(const ParallelFor& parallel_for, std::size_t n, const std::function<void(std::size_t)>& f) {
+  if (parallel_for) return parallel_for(n, f);
+  for (std::size_t i = 0; i < n; ++i) f(i);
+}
+
 }  // namespace
 
 std::vector<OctreeCell> uncertain_targets(const Octree& model, const RegionsOfInterest& regions) {
@@ -181,8 +187,10 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
   }
   const double cos_half_fov = std::cos(params.half_fov_deg * std::numbers::pi / 180);
 
-  for (std::size_t v = 0; v < candidates.size(); ++v) {
-    ViewScore s;
+  // Each view's score on its own: at once with a parallel_for.
+  choice.scores.resize(candidates.size());
+  auto score_points = [&](std::size_t v) {
+    ViewScore& s = choice.scores[v];
     s.index = v;
     s.excluded = !excluded.empty() && excluded[v];
     const Eigen::Vector3d eye = candidates[v].translation();
@@ -204,21 +212,22 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
     s.point_gain = needs.empty() ? 0 : 0.9 * most + 0.1 * (double(s.pins) + 0.5 * double(s.first)) / double(needs.size());
     if (current) s.move_angle = angle_between(eye - centre, current->translation() - centre);
     s.cost = params.movement_weight * s.move_angle / std::numbers::pi;
-    choice.scores.push_back(s);
-  }
+  };
+  for_each_view(params.parallel_for, candidates.size(), score_points);
   // By the points when some unvisited view grazes them usefully; else by the uncertain nodes (the
   // costly part, rays through the tree: only then).
   for (const auto& s : choice.scores) choice.by_points |= !s.excluded && s.point_gain >= params.min_gain && s.point_gain > 0;
   if (!choice.by_points)
-    for (auto& s : choice.scores) {
-      const Eigen::Vector3d eye = candidates[s.index].translation();
+    for_each_view(params.parallel_for, candidates.size(), [&](std::size_t v) {
+      ViewScore& s = choice.scores[v];
+      const Eigen::Vector3d eye = candidates[v].translation();
       for (const OctreeCell* t : rays) {
-        if (!in_view(candidates[s.index], t->centre, cos_half_fov)) ++s.outside;
+        if (!in_view(candidates[v], t->centre, cos_half_fov)) ++s.outside;
         else if (occluded(model, eye, *t)) ++s.hidden;
         else ++s.seen;
       }
       s.node_gain = rays.empty() ? 0 : double(s.seen) / double(rays.size());
-    }
+    });
   for (auto& s : choice.scores) {
     s.gain = choice.by_points ? s.point_gain : s.node_gain;
     s.score = s.gain - s.cost;

@@ -15,6 +15,7 @@
 
 #include <Eigen/Geometry>
 
+#include "fba/grasp/synthesis.hpp"
 #include "fba/types/octree.hpp"
 #include "fba/types/regions_of_interest.hpp"
 
@@ -32,6 +33,7 @@ struct ExplorationParams {
   // At most this many target nodes get a ray each (an even stride through them when there are
   // more): the cost is candidates x rays x the depth of the tree.
   std::size_t max_rays = 4096;
+  ParallelFor parallel_for;  // the candidate views scored at once (synthesis.hpp); empty: one after another
 };
 
 // The uncertain nodes still to observe: Partial leaves of the model that meet a region's box.
