@@ -40,10 +40,9 @@ OctreeCell leaf_at(const Octree& model, const Eigen::Vector3d& p) {
       }
     c.node = &model.children(*c.node)[i];
   }
-  c.x = lattice.x(), c.y = lattice.y(), c.z = lattice.z();
-  c.half_size = edge / 2;
-  c.centre = lo + Eigen::Vector3d::Constant(c.half_size);
-  return c;
+  // The walk's own cell: its centre from the lattice, not summed level by level (which differs in
+  // the last bit, and a probe on a boundary can then fall on the other side).
+  return model.cell(c.depth, lattice.x(), lattice.y(), lattice.z(), *c.node);
 }
 
 // An occupied leaf's neighbours just beyond its six faces: the leaf at each face's centre (as
