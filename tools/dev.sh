@@ -141,10 +141,12 @@ case "$cmd" in
       LSAN_OPTIONS=suppressions=$top/tests/lsan.supp \
       run_tests asan -LE "install|benchmark"
 
-    stage "ThreadSanitizer: the runtime's concurrency tests and the hardware drivers' threads"
-    configure tsan "${sanitized[@]}" -DFBA_SANITIZE=thread -DFBA_BUILD_VISION=OFF -DFBA_BUILD_BENCHMARKS=OFF
+    # The grasp library's parallel loops on the task's pool too (fba_grasp_threads_tests): it needs
+    # the vision libraries configured, though only these targets and what they link are built.
+    stage "ThreadSanitizer: the runtime's concurrency tests, the hardware drivers' threads, grasp's parallel loops"
+    configure tsan "${sanitized[@]}" -DFBA_SANITIZE=thread -DFBA_BUILD_BENCHMARKS=OFF
     tsan_tests=(fba_core_tests fba_task_tests fba_can_tests fba_canopen_tests fba_canopen_program_tests
-      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests)
+      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests fba_grasp_threads_tests)
     build tsan --target "${tsan_tests[@]}"
     # In-process tests only: the command-line tests (Cli*, and the random signals' binary) run fba-run
     # as a process and check its crash and signal handling, which by design calls what TSan calls
