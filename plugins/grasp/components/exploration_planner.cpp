@@ -19,8 +19,8 @@
 #include <nlohmann/json.hpp>
 
 #include <fba/component.hpp>
-#include <fba/thread_pool.hpp>
 #include <fba/geometry/viewpoints.hpp>
+#include <fba/thread_pool.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/pose.hpp>
 #include <fba/types/regions_of_interest.hpp>

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <numbers>
 #include <stdexcept>
@@ -10,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "fba/grasp/angles.hpp"
+#include "parallel.hpp"
 
 namespace fba::grasp {
 namespace {
@@ -95,11 +95,6 @@ std::vector<PointNeed> points_to_pin(const RegionsOfInterest& regions, std::span
     if (!pinned) out.push_back(std::move(need));
   }
   return out;
-}
-
-void for_each_view(const ParallelFor& parallel_for, std::size_t n, const std::function<void(std::size_t)>& f) {
-  if (parallel_for) return parallel_for(n, f);
-  for (std::size_t i = 0; i < n; ++i) f(i);
 }
 
 }  // namespace
@@ -213,12 +208,12 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
     if (current) s.move_angle = angle_between(eye - centre, current->translation() - centre);
     s.cost = params.movement_weight * s.move_angle / std::numbers::pi;
   };
-  for_each_view(params.parallel_for, candidates.size(), score_points);
+  for_each_index(params.parallel_for, candidates.size(), score_points);
   // By the points when some unvisited view grazes them usefully; else by the uncertain nodes (the
   // costly part, rays through the tree: only then).
   for (const auto& s : choice.scores) choice.by_points |= !s.excluded && s.point_gain >= params.min_gain && s.point_gain > 0;
   if (!choice.by_points)
-    for_each_view(params.parallel_for, candidates.size(), [&](std::size_t v) {
+    for_each_index(params.parallel_for, candidates.size(), [&](std::size_t v) {
       ViewScore& s = choice.scores[v];
       const Eigen::Vector3d eye = candidates[v].translation();
       for (const OctreeCell* t : rays) {

@@ -453,8 +453,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
       }
     }
   };
-  if (p.parallel_for) p.parallel_for(thumbs.size(), search);
-  else for (std::size_t ti = 0; ti < thumbs.size(); ++ti) search(ti);
+  for_each_index(p.parallel_for, thumbs.size(), search);
   std::vector<GraspCandidate> all;
   for (std::size_t ti = 0; ti < thumbs.size(); ++ti) {
     result.below_table += below_table[ti];
@@ -492,9 +491,9 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   };
   std::vector<std::optional<GraspQuality>> quality_of(all.size());
   auto compute_ahead = [&](std::size_t first, std::size_t budget) {
-    constexpr std::size_t kAhead = 8;
+    const std::size_t ahead = std::min<std::size_t>(p.parallel_for ? 8 : 1, budget);  // one thread: none ahead
     std::vector<std::size_t> next;
-    for (std::size_t j = first; j < all.size() && next.size() < std::min(kAhead, budget); ++j)
+    for (std::size_t j = first; j < all.size() && next.size() < ahead; ++j)
       if (!quality_of[j] && !repeats(all[j]) && !hand_blocked(j)) next.push_back(j);
     auto compute = [&](std::size_t k) {
       GraspQuality q;
@@ -505,8 +504,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
       }
       quality_of[next[k]] = q;
     };
-    if (p.parallel_for) p.parallel_for(next.size(), compute);
-    else for (std::size_t k = 0; k < next.size(); ++k) compute(k);
+    for_each_index(p.parallel_for, next.size(), compute);
   };
   std::size_t checks = 0;
   for (std::size_t i = 0; i < all.size(); ++i) {
