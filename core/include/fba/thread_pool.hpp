@@ -12,6 +12,8 @@
 #include <thread>
 #include <vector>
 
+#include "fba/parallel_for.hpp"
+
 namespace fba {
 
 class ThreadPool {
@@ -26,6 +28,10 @@ class ThreadPool {
   // when all are done. The first exception thrown is rethrown here (the remaining indices are
   // skipped). Safe to call from several threads at once, and from inside fn.
   void parallel_for(std::size_t n, const std::function<void(std::size_t)>& fn);
+  // parallel_for() as the type library code takes; the pool must outlive it.
+  ParallelFor as_parallel_for() {
+    return [this](std::size_t n, const std::function<void(std::size_t)>& fn) { parallel_for(n, fn); };
+  }
   int size() const { return static_cast<int>(workers_.size()); }
 
  private:

@@ -103,8 +103,7 @@ class ExplorationPlanner final : public fba::Component {
     params_.half_fov_deg = ctx(kHalfFov);
     params_.min_gain = ctx(kMinGain);
     params_.max_rays = static_cast<std::size_t>(ctx(kMaxRays));
-    fba::ThreadPool& pool = ctx.thread_pool();  // the views are scored at once, on the task's threads
-    params_.parallel_for = [&pool](std::size_t n, const std::function<void(std::size_t)>& f) { pool.parallel_for(n, f); };
+    params_.parallel_for = ctx.thread_pool().as_parallel_for();  // the views are scored at once
     const std::string views = ctx(kViews);
     if (views == "recorded") {
       std::filesystem::path file = ctx(kPosesFrom);

@@ -136,8 +136,7 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first
     // The model's surface and the search borrow the task's threads, as carving does: the loop waits
     // on each analysis, and the other core would sit idle.
-    fba::ThreadPool& pool = ctx.thread_pool();
-    params_.parallel_for = [&pool](std::size_t n, const std::function<void(std::size_t)>& f) { pool.parallel_for(n, f); };
+    params_.parallel_for = ctx.thread_pool().as_parallel_for();
   }
 
   void process() override {

@@ -253,8 +253,7 @@ class OctreeCarverFilter final : public fba::Component {
     p.memory_budget = static_cast<std::size_t>(ctx(kMemoryBudgetMiB) * 1024 * 1024);
     // Carving borrows the task's threads instead of starting its own: the runtime, rendering
     // and carving share the cores.
-    fba::ThreadPool& pool = ctx.thread_pool();
-    p.parallel_for = [&pool](std::size_t n, const std::function<void(std::size_t)>& f) { pool.parallel_for(n, f); };
+    p.parallel_for = ctx.thread_pool().as_parallel_for();
     return p;
   }
 

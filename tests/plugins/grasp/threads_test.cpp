@@ -30,7 +30,7 @@ Octree can_on_table() {
 TEST(GraspOnTheTasksThreads, TheSurfaceTheCandidatesAndTheViewsScoresAreThoseOfOneThread) {
   const Octree model = can_on_table();
   ThreadPool pool(3);
-  const ParallelFor threads = [&pool](std::size_t n, const std::function<void(std::size_t)>& f) { pool.parallel_for(n, f); };
+  const ParallelFor threads = pool.as_parallel_for();
 
   const ModelSurface one = model_surface(model, {0, 0.0, {}});
   const ModelSurface many = model_surface(model, {0, 0.0, threads});

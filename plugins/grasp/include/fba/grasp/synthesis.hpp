@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 
+#include "fba/parallel_for.hpp"
 #include "fba/types/grasp.hpp"
 
 namespace fba::grasp {
@@ -48,10 +49,9 @@ struct HandGeometry {
   double palm_thickness = 0.04;
 };
 
-// Runs f(0) .. f(n - 1), in any order and possibly at once, and returns when all are done: in a
-// component, the task's thread pool (ctx.thread_pool().parallel_for); empty: one after another.
-// The results do not depend on it.
-using ParallelFor = std::function<void(std::size_t n, const std::function<void(std::size_t)>& f)>;
+// The threads synthesis, the model's surface and exploration run on (fba/parallel_for.hpp): in a
+// component, the task's pool; empty: one after another. The results do not depend on it.
+using fba::ParallelFor;
 
 struct SynthesisParams {
   HandGeometry hand;

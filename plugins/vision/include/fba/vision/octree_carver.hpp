@@ -60,6 +60,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include "fba/parallel_for.hpp"
 #include "fba/types/camera.hpp"
 #include "fba/types/mesh.hpp"
 #include "fba/types/octree.hpp"
@@ -99,10 +100,9 @@ struct CarverParams {
   int detail_after_views = 8;
   int detail_depth = 4;
   int threads = 0;                   // 0 = all cores (ignored when parallel_for is given)
-  // Runs f(0) .. f(n - 1), possibly at once on several threads, and returns when all are done
-  // (rethrowing the first exception of an f). The owner passes its thread pool's; empty: the
-  // carver starts `threads` threads of its own per update.
-  std::function<void(std::size_t n, const std::function<void(std::size_t)>& f)> parallel_for;
+  // The owner's threads (a component: its task's pool); empty: the carver starts `threads`
+  // threads of its own per update.
+  fba::ParallelFor parallel_for;
   // Bytes the model may use: a max_depth whose worst case (every node of every level, plus the
   // copies that versions still being read hold) exceeds it is refused, and the tree's storage
   // never grows beyond it.
