@@ -24,8 +24,13 @@ function(fba_add_plugin name)
     OUTPUT_NAME "fba-${name}"
     CXX_VISIBILITY_PRESET hidden
     VISIBILITY_INLINES_HIDDEN ON)
-  # The build id ties the manifest to this exact build of the .so.
-  target_link_options(${target} PRIVATE "LINKER:--no-undefined" "LINKER:--build-id")
+  # The build id ties the manifest to this exact build of the .so. Under clang's sanitizers the
+  # runtime is linked into the executable only, and a plugin's calls into it resolve when it is
+  # loaded: --no-undefined would refuse them (the plain build still checks every plugin).
+  target_link_options(${target} PRIVATE "LINKER:--build-id")
+  if(NOT (FBA_SANITIZE AND CMAKE_CXX_COMPILER_ID STREQUAL "Clang"))
+    target_link_options(${target} PRIVATE "LINKER:--no-undefined")
+  endif()
   # The manifest: what the plugin offers and its ABI record, read by fba without running the
   # plugin's code. Written after every link; a sanitizer's leak report at the tool's exit is
   # not the plugin's fault, so leak checking is off for it.

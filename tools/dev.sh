@@ -80,7 +80,12 @@ stage() {
 # The sanitizer builds: -O1 -g1, as the sanitizers' documentation advises (-O1 keeps the carving tests
 # fast enough; line tables are all a sanitizer report needs). Against -O2 -g this halves their compile
 # time, which is most of a CI run on a cold cache (task_loader.cpp under ASan: 42 s of CPU against 80 s).
-sanitized=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG")
+# They are compiled by clang, the sanitizers' home, which instruments faster than GCC: with
+# nothing cached the ASan+UBSan build took 649 s (2 cores) against GCC's 925 s, the grasp library's
+# largest batch 70 s of CPU against 104 s; its tests run a little slower (284 s against 233 s).
+# The plain build stays with the system's compiler (GCC on Debian), so CI compiles with both.
+sanitized=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG")
 # The plain build: optimised as a user runs it, with line tables (-g1: backtraces, perf and crash
 # reports name file and line) rather than full debug info, which costs a third more compile time
 # (a grasp component: 15.5 s of CPU at -O2 -g, 10.3 s at -O2 -g1). Configure your own build for gdb.
@@ -156,7 +161,7 @@ case "$cmd" in
       run_tests tsan -R "^($(IFS='|'; echo "${tsan_tests[*]}"))\$"
 
     stage "fuzzing the task loader: every corpus input once, then a bounded exploration"
-    CC=clang CXX=clang++ configure fuzz "${sanitized[@]}" -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_VISION=OFF \
+    configure fuzz "${sanitized[@]}" -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_VISION=OFF \
       -DFBA_SANITIZE=fuzzer-no-link,address,undefined \
       -DFBA_BUILD_BENCHMARKS=OFF
     build fuzz --target fuzz_task_loader
