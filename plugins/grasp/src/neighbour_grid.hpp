@@ -19,7 +19,8 @@ namespace fba::grasp {
 
 class NeighbourGrid {
  public:
-  NeighbourGrid(std::span<const SurfaceSample> s, double r) : samples_(s), r_(r) {
+  NeighbourGrid(std::span<const SurfaceSample> s, double r) : r_(r) {
+    positions_.reserve(s.size());
     for (std::size_t i = 0; i < s.size(); ++i) {
       // Cell indices must fit the key's 21 bits per axis (and an int): metres over a sane cell size.
       // (allFinite first: Eigen's maxCoeff may pass over a NaN.)
@@ -27,6 +28,7 @@ class NeighbourGrid {
         throw std::invalid_argument("surface sample " + std::to_string(i) + " is not finite or lies more than 10^6 grid cells (" +
                                     std::to_string(r) + " m) from the origin; expected metres and a cell size near the sample spacing");
       cells_[key(cell(s[i].position))].push_back(i);
+      positions_.push_back(s[i].position);
     }
   }
 
@@ -35,12 +37,13 @@ class NeighbourGrid {
   // around are looked up once per cell, not once per sample; the cells are done at once with a
   // parallel_for (each writes only its own samples' lists).
   std::vector<std::vector<std::size_t>> neighbourhoods(bool with_self, const ParallelFor& parallel_for = {}) const {
-    std::vector<std::vector<std::size_t>> out(samples_.size());
+    std::vector<std::vector<std::size_t>> out(positions_.size());
     std::vector<const std::vector<std::size_t>*> cells;
     cells.reserve(cells_.size());
     for (const auto& [k, members] : cells_) cells.push_back(&members);
     for_each_chunk(parallel_for, cells.size(), [&](std::size_t begin, std::size_t end) {
-      for (std::size_t ci = begin; ci < end; ++ci) fill(*cells[ci], with_self, out);
+      std::vector<std::size_t> found;
+      for (std::size_t ci = begin; ci < end; ++ci) fill(*cells[ci], with_self, found, out);
     });
     return out;
   }
@@ -52,10 +55,12 @@ class NeighbourGrid {
   }
 
  private:
-  // The neighbourhoods of one cell's members.
-  void fill(const std::vector<std::size_t>& members, bool with_self, std::vector<std::vector<std::size_t>>& out) const {
+  // The neighbourhoods of one cell's members, each gathered in `found` (reused) and then copied
+  // into one allocation of its size.
+  void fill(const std::vector<std::size_t>& members, bool with_self, std::vector<std::size_t>& found,
+            std::vector<std::vector<std::size_t>>& out) const {
     std::array<const std::vector<std::size_t>*, 27> around{};
-    const Eigen::Vector3i c = cell(samples_[members.front()].position);
+    const Eigen::Vector3i c = cell(positions_[members.front()]);
     std::size_t m = 0;
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
@@ -64,11 +69,13 @@ class NeighbourGrid {
           around[m++] = it == cells_.end() ? nullptr : &it->second;
         }
     for (std::size_t i : members) {
-      const Eigen::Vector3d& p = samples_[i].position;
+      const Eigen::Vector3d& p = positions_[i];
+      found.clear();
       for (const auto* near : around)
         if (near)
           for (std::size_t j : *near)
-            if ((with_self || j != i) && (samples_[j].position - p).squaredNorm() <= r_ * r_) out[i].push_back(j);
+            if ((with_self || j != i) && (positions_[j] - p).squaredNorm() <= r_ * r_) found.push_back(j);
+      out[i].assign(found.begin(), found.end());
     }
   }
 
@@ -77,8 +84,9 @@ class NeighbourGrid {
     return (static_cast<std::uint64_t>(c.x() & 0x1fffff) << 42) | (static_cast<std::uint64_t>(c.y() & 0x1fffff) << 21) |
            static_cast<std::uint64_t>(c.z() & 0x1fffff);
   }
-  std::span<const SurfaceSample> samples_;
   double r_;
+  // The samples' positions alone, packed: the search reads nothing else of a sample.
+  std::vector<Eigen::Vector3d> positions_;
   std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
 };
 
