@@ -56,9 +56,10 @@ use_ccache() {
 # so the headers (Eigen, OpenCV, nlohmann/json, spdlog, GoogleTest) are parsed and their templates
 # compiled once a batch, not once a file. With nothing cached (a new machine, 2 cores), the plain
 # build took 607 s file by file and 427 s in batches, and a whole CI run 2,007 s (2,126 s since
-# the TSan stage builds the grasp library too; 1,942 s since clang compiles the sanitizer builds). The price is paid when iterating: an edit
-# recompiles its whole batch (a grasp source: 48 s at -O2 rather than 21 s). For a quicker
-# edit-build loop, configure a build of your own with -DCMAKE_UNITY_BUILD=OFF.
+# the TSan stage builds the grasp library too; 1,942 s since clang compiles the sanitizer builds).
+# The price is paid when iterating: an edit recompiles its whole batch (a grasp source: 48 s at -O2
+# rather than 21 s). For a quicker edit-build loop, configure a build of your own with
+# -DCMAKE_UNITY_BUILD=OFF.
 configure() {
   local name=$1
   shift

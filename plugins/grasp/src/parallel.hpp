@@ -1,6 +1,6 @@
-// Data-parallel loops over a ParallelFor (synthesis.hpp): one call per index for a few costly items
-// (thumbs, views, hulls), chunks for many cheap ones (the task's pool hands out one index at a
-// time under a lock, too costly per surface sample).
+// Data-parallel loops over a ParallelFor (fba/parallel_for.hpp): one call per index for a few
+// costly items (thumbs, views, hulls), chunks for many cheap ones (the task's pool hands out one
+// index at a time under a lock, too costly per surface sample).
 #pragma once
 
 #include <algorithm>
