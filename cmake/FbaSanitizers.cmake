@@ -4,3 +4,18 @@ if(FBA_SANITIZE)
   add_compile_options(${_fba_san_flags})
   add_link_options(${_fba_san_flags})
 endif()
+
+# fba_compute_target(<target>) marks a target whose code does the heavy computing (carving, grasp
+# synthesis, rendering, the quality measure, the runtime's data sets) or a test whose own checks
+# compute (Eigen in a test's file): FBA_COMPUTE_FLAGS is added to its compile options. The sanitizer
+# builds of tools/dev.sh compile at -O0 and these at -O1: optimising is most of an instrumented
+# build's compile time (the core's task-loader batch under ASan+UBSan: 72 s of CPU at -O1, 26 s at
+# -O0), and only these need optimised code for their tests to run in minutes (Eigen at -O0 ran the
+# grasp tests 7 times slower).
+set(FBA_COMPUTE_FLAGS "" CACHE STRING "Compile options added to the computing targets (tools/dev.sh: -O1 in its -O0 sanitizer builds)")
+function(fba_compute_target target)
+  if(FBA_COMPUTE_FLAGS)
+    separate_arguments(flags UNIX_COMMAND "${FBA_COMPUTE_FLAGS}")
+    target_compile_options(${target} PRIVATE ${flags})
+  endif()
+endfunction()

@@ -8,10 +8,13 @@ include(GoogleTest)
 # case that was half of the sanitizer stage's test time (748 s of test time against 365 s).
 option(FBA_TEST_EACH_CASE "Register each GoogleTest case as its own CTest test (OFF: each test binary as one)" ON)
 
-# fba_add_gtest(<target> LABELS <label>... [TIMEOUT <seconds>]): registers a GoogleTest binary with
-# CTest, with its labels (ctest -L) and, per case, its timeout (a binary takes ctest's --timeout).
+# fba_add_gtest(<target> LABELS <label>... [TIMEOUT <seconds>] [COST <seconds>]): registers a
+# GoogleTest binary with CTest, with its labels (ctest -L) and, per case, its timeout (a binary takes
+# ctest's --timeout). COST, for a binary that runs for minutes: ctest starts the costliest first, so
+# that the longest does not start last and run alone while the other cores idle. ctest orders by the
+# times it recorded itself, but a clean checkout (CI's) has none.
 function(fba_add_gtest target)
-  cmake_parse_arguments(ARG "" "TIMEOUT" "LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "TIMEOUT;COST" "LABELS" ${ARGN})
   if(NOT ARG_LABELS)
     message(FATAL_ERROR "fba_add_gtest(${target}): give its LABELS")
   endif()
@@ -31,5 +34,8 @@ function(fba_add_gtest target)
   else()
     add_test(NAME ${target} COMMAND ${target})
     set_tests_properties(${target} PROPERTIES LABELS "${ARG_LABELS}" WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
+    if(ARG_COST)
+      set_tests_properties(${target} PROPERTIES COST ${ARG_COST})
+    endif()
   endif()
 endfunction()

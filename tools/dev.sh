@@ -78,15 +78,16 @@ stage() {
   [ -z "$1" ] || echo "== $1"
 }
 
-# The sanitizer builds: -O1 -g1, as the sanitizers' documentation advises (-O1 keeps the carving tests
-# fast enough; line tables are all a sanitizer report needs). Against -O2 -g this halves their compile
-# time, which is most of a CI run on a cold cache (task_loader.cpp under ASan: 42 s of CPU against 80 s).
-# They are compiled by clang, the sanitizers' home, which instruments faster than GCC: with
-# nothing cached the ASan+UBSan build took 649 s (2 cores) against GCC's 925 s, the grasp library's
-# largest batch 70 s of CPU against 104 s; its tests run a little slower (284 s against 233 s).
+# The sanitizer builds: -O0 -g1, and -O1 for the targets that compute (FBA_COMPUTE_FLAGS; the
+# sanitizers' documentation advises -O1, which keeps the carving and synthesis tests fast enough);
+# line tables are all a sanitizer report needs. Optimising is most of an instrumented build's compile
+# time, which is most of a CI run on a cold cache: with nothing cached, the ASan+UBSan build took
+# 1,188 s of CPU all at -O1, 698 s all at -O0 (the tests then ran the grasp tests 7 times slower).
+# They are compiled by clang, the sanitizers' home, which instruments faster than GCC (the grasp
+# library's largest batch under ASan+UBSan: 70 s of CPU against 104 s).
 # The plain build stays with the system's compiler (GCC on Debian), so CI compiles with both.
 sanitized=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
-  -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG")
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O0 -g1 -DNDEBUG" -DFBA_COMPUTE_FLAGS=-O1)
 # The plain build: optimised as a user runs it, with line tables (-g1: backtraces, perf and crash
 # reports name file and line) rather than full debug info, which costs a third more compile time
 # (a grasp component: 15.5 s of CPU at -O2 -g, 10.3 s at -O2 -g1). Configure your own build for gdb.
@@ -141,8 +142,9 @@ case "$cmd" in
     # The sanitizer builds compile only what their tests run (fba_tests: every target under tests/,
     # with fba-run, fba-evaluate and the plugins as dependencies). Their vision tests carve smaller
     # problems than the plain build's (FBA_TEST_SANITIZED), which keeps the full-size targets.
+    # The task loader's fuzzer is built here too; its seeds replay among the tests (label fuzz).
     stage "AddressSanitizer + UndefinedBehaviorSanitizer"
-    configure asan "${sanitized[@]}" -DFBA_SANITIZE=address,undefined -DFBA_BUILD_BENCHMARKS=OFF
+    configure asan "${sanitized[@]}" -DFBA_SANITIZE=address,undefined -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_BENCHMARKS=OFF
     build asan --target fba_tests
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       LSAN_OPTIONS=suppressions=$top/tests/lsan.supp \
@@ -161,18 +163,12 @@ case "$cmd" in
     GTEST_FILTER='-Cli*' TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
       run_tests tsan -R "^($(IFS='|'; echo "${tsan_tests[*]}"))\$"
 
-    stage "fuzzing the task loader: every corpus input once, then a bounded exploration"
-    configure fuzz "${sanitized[@]}" -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_VISION=OFF \
-      -DFBA_SANITIZE=fuzzer-no-link,address,undefined \
-      -DFBA_BUILD_BENCHMARKS=OFF
-    build fuzz --target fuzz_task_loader
-    # A regression check: every input that ever crashed the loader stays in the corpus.
-    run_tests fuzz -L fuzz
+    stage "fuzzing the task loader: a bounded exploration (the ASan build's fuzzer)"
     # Exploration finds new inputs only now and then, so it cannot decide whether CI passes (that
     # would make CI a coin toss): run.sh saves a finding into tests/fuzz/corpus/ and this prints it,
     # whole, so that it can be committed with its fix; the replay above then keeps it fixed.
-    if ! bash tests/fuzz/run.sh build/fuzz "${FBA_FUZZ_SECONDS:-30}"; then
-      for f in build/fuzz/fuzz-findings/*; do
+    if ! bash tests/fuzz/run.sh build/asan "${FBA_FUZZ_SECONDS:-30}"; then
+      for f in build/asan/fuzz-findings/*; do
         [ -f "$f" ] || continue
         echo "== NEW FUZZ FINDING (commit it as tests/fuzz/corpus/finding-$(basename "$f") with its fix), base64:"
         base64 -w 0 "$f"
