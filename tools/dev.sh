@@ -55,9 +55,7 @@ use_ccache() {
 # A unity build (CMAKE_UNITY_BUILD): each target's sources compile in batches of eight as one file,
 # so the headers (Eigen, OpenCV, nlohmann/json, spdlog, GoogleTest) are parsed and their templates
 # compiled once a batch, not once a file. With nothing cached (a new machine, 2 cores), the plain
-# build took 607 s file by file and 427 s in batches, and a whole CI run 2,007 s (2,126 s since
-# the TSan stage builds the grasp library too; 1,942 s since clang compiles the sanitizer builds;
-# 1,532 s since they compile at -O0 but for the computing targets, below).
+# build took 607 s file by file and 427 s in batches (the whole CI run's figures: below).
 # The price is paid when iterating: an edit recompiles its whole batch (a grasp source: 48 s at -O2
 # rather than 21 s). For a quicker edit-build loop, configure a build of your own with
 # -DCMAKE_UNITY_BUILD=OFF.
