@@ -6,7 +6,7 @@
 #                       concurrency tests under ThreadSanitizer, and the task-loader fuzzer
 # Builds go to build/<config>; FBA_JOBS sets the parallelism (default: all cores). With ccache
 # installed every build goes through it, so a second run recompiles only what changed.
-# FBA_FUZZ_SECONDS (default 30) bounds the fuzzer's exploration.
+# FBA_FUZZ_RUNS (default 18000) bounds the fuzzer's exploration, in inputs run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 top=$PWD
@@ -96,24 +96,30 @@ plain=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -
 
 build() { cmake --build "build/$1" --parallel "$jobs" "${@:2}"; }
 
-# build_behind <name> [args]: starts the next stage's build while this stage's tests run, at the
-# lowest priority, so that it takes only what the tests leave idle: on 2 cores the plain tests use
-# 73% of them (108 s of wall, 158 s of CPU: the hardware tests wait on timeouts, the last binary
-# runs alone), the ASan tests 88%. Its output goes to build/<name>.build.log, printed by
-# wait_build. It runs in a session of its own, so that a failing stage stops it and its compilers.
-behind=""
-build_behind() {
-  setsid -w nice -n 19 cmake --build "build/$1" --parallel "$jobs" "${@:2}" >"build/$1.build.log" 2>&1 &
-  behind=$!
+# behind <log> <command...>: runs the next stage's work (a sanitizer build, the fuzzer) while this
+# stage's tests run, at the lowest priority, so that it takes mostly what the tests leave idle: on 2
+# cores the plain tests use 73% of them (108 s of wall, 158 s of CPU: the hardware tests wait on
+# timeouts, the last binary runs alone), the ASan tests 88%, the TSan tests 72%. Its output goes to
+# <log>, which wait_behind prints. It runs in a session of its own, so that a failing stage stops
+# it and its children.
+behind_pid=""
+behind() {
+  local log=$1
+  shift
+  setsid -w nice -n 19 "$@" >"$log" 2>&1 &
+  behind_pid=$!
 }
-trap '[ -z "$behind" ] || kill -- "-$behind" 2>/dev/null || true' EXIT
-wait_build() {
+trap '[ -z "$behind_pid" ] || kill -- "-$behind_pid" 2>/dev/null || true' EXIT
+# wait_behind <log>: waits for it, prints its output and returns its exit status.
+wait_behind() {
   local rc=0
-  wait "$behind" || rc=$?
-  behind=""
-  cat "build/$1.build.log"
-  ((rc == 0)) || { echo "== the $1 build failed (above)"; exit "$rc"; }
+  wait "$behind_pid" || rc=$?
+  behind_pid=""
+  cat "$1"
+  return "$rc"
 }
+build_behind() { behind "build/$1.build.log" cmake --build "build/$1" --parallel "$jobs" "${@:2}"; }
+wait_build() { wait_behind "build/$1.build.log" || { echo "== the $1 build failed (above)"; exit 1; }; }
 
 # A failing case's output scrolls away among the others' lines; on failure it is printed again at the
 # end, where a CI log's tail shows it: from each failed binary, the output of each failed case (from
@@ -181,6 +187,9 @@ case "$cmd" in
 
     stage "ThreadSanitizer: the runtime's concurrency tests, the hardware drivers' threads, grasp's parallel loops"
     wait_build tsan
+    # The fuzzer explores behind these tests: a bound in inputs run, not seconds, so that its share
+    # of the cores does not change how much it explores (18,000: about 30 s on one core here).
+    behind build/asan/fuzz.log bash tests/fuzz/run.sh build/asan 600 "${FBA_FUZZ_RUNS:-18000}"
     # In-process tests only: the command-line tests (Cli*, and the random signals' binary) run fba-run
     # as a process and check its crash and signal handling, which by design calls what TSan calls
     # signal-unsafe (the best-effort crash report); they run in the plain and ASan stages.
@@ -191,7 +200,7 @@ case "$cmd" in
     # Exploration finds new inputs only now and then, so it cannot decide whether CI passes (that
     # would make CI a coin toss): run.sh saves a finding into tests/fuzz/corpus/ and this prints it,
     # whole, so that it can be committed with its fix; the replay above then keeps it fixed.
-    if ! bash tests/fuzz/run.sh build/asan "${FBA_FUZZ_SECONDS:-30}"; then
+    if ! wait_behind build/asan/fuzz.log; then
       for f in build/asan/fuzz-findings/*; do
         [ -f "$f" ] || continue
         echo "== NEW FUZZ FINDING (commit it as tests/fuzz/corpus/finding-$(basename "$f") with its fix), base64:"

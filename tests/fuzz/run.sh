@@ -1,15 +1,16 @@
 #!/bin/sh
-# Usage: run.sh BUILD_DIR SECONDS
-# Fuzzes the task loader for SECONDS on a scratch copy of the seed corpus (the seeds in git stay
-# as they are). Exits non-zero on a finding; libFuzzer writes its input to BUILD_DIR/fuzz-findings/,
+# Usage: run.sh BUILD_DIR SECONDS [RUNS]
+# Fuzzes the task loader for SECONDS, or until it has run RUNS inputs if that comes first, on a
+# scratch copy of the seed corpus (the seeds in git stay as they are). Exits non-zero on a finding; libFuzzer writes its input to BUILD_DIR/fuzz-findings/,
 # and this script copies it into the seed corpus as a regression case.
 set -eu
-if [ $# -ne 2 ]; then
-  echo "usage: $0 BUILD_DIR SECONDS" >&2
+if [ $# -lt 2 ] || [ $# -gt 3 ]; then
+  echo "usage: $0 BUILD_DIR SECONDS [RUNS]" >&2
   exit 2
 fi
 build=$1
 seconds=$2
+runs=${3:--1}
 here=$(cd "$(dirname "$0")" && pwd)
 fuzzer=$build/bin/fuzz_task_loader
 if [ ! -x "$fuzzer" ]; then
@@ -22,7 +23,7 @@ cp "$here"/corpus/* "$work"/
 mkdir -p "$build/fuzz-findings"
 # -timeout: an input that takes 10 s is a hang, and a finding too.
 status=0
-"$fuzzer" -max_total_time="$seconds" -timeout=10 -dict="$here/yaml.dict" -print_final_stats=1 \
+"$fuzzer" -max_total_time="$seconds" -runs="$runs" -timeout=10 -dict="$here/yaml.dict" -print_final_stats=1 \
   -artifact_prefix="$build/fuzz-findings/" "$work" || status=$?
 # A finding joins the seed corpus, which the ctest fuzz_task_loader_seeds replays on every run:
 # once fixed, it stays fixed. Commit it with the fix.
