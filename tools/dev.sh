@@ -160,8 +160,9 @@ case "$cmd" in
   test)
     install_packages
     use_ccache
-    # Each sanitizer build starts behind the stage before's tests (build_behind), so a stage's time
-    # in the log holds the rest of its build and its tests.
+    # Each sanitizer build starts behind the stage before's tests (build_behind), and the fuzzer
+    # behind the TSan tests, so a stage's time in the log holds the rest of its own work and its
+    # tests; the fuzzing stage is what its exploration outlasts them by.
     stage "plain build and tests"
     configure release "${plain[@]}"
     build release

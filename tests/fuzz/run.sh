@@ -1,8 +1,9 @@
 #!/bin/sh
 # Usage: run.sh BUILD_DIR SECONDS [RUNS]
 # Fuzzes the task loader for SECONDS, or until it has run RUNS inputs if that comes first, on a
-# scratch copy of the seed corpus (the seeds in git stay as they are). Exits non-zero on a finding; libFuzzer writes its input to BUILD_DIR/fuzz-findings/,
-# and this script copies it into the seed corpus as a regression case.
+# scratch copy of the seed corpus (the seeds in git stay as they are). Exits non-zero on a
+# finding; libFuzzer writes its input to BUILD_DIR/fuzz-findings/, and this script copies it into
+# the seed corpus as a regression case.
 set -eu
 if [ $# -lt 2 ] || [ $# -gt 3 ]; then
   echo "usage: $0 BUILD_DIR SECONDS [RUNS]" >&2
