@@ -190,6 +190,8 @@ case "$cmd" in
     wait_build tsan
     # The fuzzer explores behind these tests: a bound in inputs run, not seconds, so that its share
     # of the cores does not change how much it explores (18,000: about 30 s on one core here).
+    [ -z "${FBA_FUZZ_SECONDS:-}" ] ||
+      echo "== warning: FBA_FUZZ_SECONDS=$FBA_FUZZ_SECONDS is no longer read; the bound is FBA_FUZZ_RUNS, inputs (default 18000)"
     behind build/asan/fuzz.log bash tests/fuzz/run.sh build/asan 600 "${FBA_FUZZ_RUNS:-18000}"
     # In-process tests only: the command-line tests (Cli*, and the random signals' binary) run fba-run
     # as a process and check its crash and signal handling, which by design calls what TSan calls
@@ -201,7 +203,10 @@ case "$cmd" in
     # Exploration finds new inputs only now and then, so it cannot decide whether CI passes (that
     # would make CI a coin toss): run.sh saves a finding into tests/fuzz/corpus/ and this prints it,
     # whole, so that it can be committed with its fix; the replay above then keeps it fixed.
-    if ! wait_behind build/asan/fuzz.log; then
+    fuzz_rc=0
+    wait_behind build/asan/fuzz.log || fuzz_rc=$?
+    ((fuzz_rc != 2)) || { echo "== tests/fuzz/run.sh could not start (above)"; exit 2; }  # its usage errors
+    if ((fuzz_rc)); then
       for f in build/asan/fuzz-findings/*; do
         [ -f "$f" ] || continue
         echo "== NEW FUZZ FINDING (commit it as tests/fuzz/corpus/finding-$(basename "$f") with its fix), base64:"

@@ -1,9 +1,10 @@
 #!/bin/sh
 # Usage: run.sh BUILD_DIR SECONDS [RUNS]
 # Fuzzes the task loader for SECONDS, or until it has run RUNS inputs if that comes first, on a
-# scratch copy of the seed corpus (the seeds in git stay as they are). Exits non-zero on a
-# finding; libFuzzer writes its input to BUILD_DIR/fuzz-findings/, and this script copies it into
-# the seed corpus as a regression case.
+# scratch copy of the seed corpus (the seeds in git stay as they are). Exits 2 when it cannot start
+# (its arguments, no fuzzer built), non-zero otherwise on a finding (libFuzzer: 70, 77); libFuzzer
+# writes the input to BUILD_DIR/fuzz-findings/, and this script copies it into the seed corpus as a
+# regression case.
 set -eu
 if [ $# -lt 2 ] || [ $# -gt 3 ]; then
   echo "usage: $0 BUILD_DIR SECONDS [RUNS]" >&2
@@ -12,6 +13,8 @@ fi
 build=$1
 seconds=$2
 runs=${3:--1}
+case "$seconds" in '' | *[!0-9]*) echo "$0: SECONDS: expected a whole number of seconds, found '$seconds'" >&2; exit 2 ;; esac
+case "$runs" in -1) ;; '' | *[!0-9]*) echo "$0: RUNS: expected a whole number of inputs, found '$runs'" >&2; exit 2 ;; esac
 here=$(cd "$(dirname "$0")" && pwd)
 fuzzer=$build/bin/fuzz_task_loader
 if [ ! -x "$fuzzer" ]; then
