@@ -23,6 +23,7 @@
 #include <map>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <set>
 #include <sstream>
 #include <string>
@@ -38,6 +39,7 @@
 #include "object_placement.hpp"
 #include "grasp_evaluation.hpp"
 #include "options.hpp"
+#include "paired_difference.hpp"
 
 extern char** environ;
 
@@ -49,7 +51,7 @@ using Clock = std::chrono::steady_clock;
 
 const char* kBatchHelp = R"(fba-evaluate grasp --batch: the grasp loop over objects and poses, and its targets' table.
 
-  fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR] [--fba-run PATH] [--random 1000]
+  fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR] [--fba-run PATH] [--random 1000] [--dry-run]
 
 Each run of LIST is run once per variant by fba-run, as a child process writing its own folder
 DIR/<variant>/<NN>-<object>/ (summary.json, log.txt). The grasp each run selected is placed on the
@@ -72,8 +74,15 @@ LIST (paths relative to it):
   variants:                            optional (default: one, "task"): each run once per variant
     - { name: loop }
     - { name: ring, set: [planner.views=ring, planner.movement_weight=1000, planner.min_gain=0] }
-  runs:
+  runs:                                the runs, each as given (runs, random_runs or both)
     - { mesh: ../data/ycb/YcbBanana/model.obj, pose: [0.01, 0, 30], set: [...] }
+  random_runs:                         runs at poses drawn at random (after those of runs)
+    meshes: [../data/ycb/YcbBanana/model.obj]
+    per_mesh: 10                       poses per mesh, drawn uniformly within
+    x: [-0.025, 0.025]                 metres (default [0, 0]), rounded to 1 mm
+    y: [-0.025, 0.025]                 metres (default [0, 0]), rounded to 1 mm
+    yaw: [0, 360]                      degrees (default [0, 360]), rounded to 1 degree
+    seed: 2026                         the same seed draws the same poses on any machine
 
 The pose [x, y, yaw] says where the object stands on the table, in the grasps' frame: the mesh
 turned by yaw degrees about z, moved by (x, y) metres and stood on the table at z = 0 (sim.camera's
@@ -83,6 +92,12 @@ the views in the carver's model (vision.octree_carver's `updated` events); nodes
 nodes visited summed over its updates. Components are found by type, not by name. runs.json also
 has each run's last carver `detail` (with carver.compare_uniform=true: model_nodes against the
 uniform carve's uniform_nodes, and saved_share), however the run ended.
+
+With more than one variant the table ends with each variant paired with the first, run by run:
+runs where both, only one or neither selected a grasp; over the runs where both did, the median
+of the epsilon differences on the mesh and of the node differences, each with a 95% bootstrap
+interval (10,000 resamples, --seed): a gap whose interval holds 0 is one the runs' spread explains.
+--dry-run prints each run's fba-run command line (random poses drawn) and runs nothing.
 
 Exit status: 0 when the batch was run and evaluated (whatever the runs' outcomes), 2 for a bad
 list or command line.
@@ -152,6 +167,27 @@ class ListReader {
     fail(n, what + ": expected a number, found " + found(n));
   }
 
+  std::uint64_t whole(const YAML::Node& n, const std::string& what, std::uint64_t lo, std::uint64_t hi) const {
+    std::uint64_t v = 0;
+    if (n.IsScalar()) {
+      const std::string& s = n.Scalar();
+      const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+      if (r.ec == std::errc() && r.ptr == s.data() + s.size() && v >= lo && v <= hi) return v;
+    }
+    fail(n, what + ": expected a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ", found " + found(n));
+  }
+
+  // [lo, hi] with lo <= hi; `fallback` when the key is absent.
+  std::pair<double, double> range(const YAML::Node& map, const char* key, const std::string& what,
+                                  std::pair<double, double> fallback) const {
+    const YAML::Node n = map[key];
+    if (!n) return fallback;
+    if (!n.IsSequence() || n.size() != 2) fail(n, what + ": expected [low, high], found " + found(n));
+    const std::pair<double, double> r{number(n[0], what + " low"), number(n[1], what + " high")};
+    if (r.first > r.second) fail(n, what + ": expected low <= high, found [" + n[0].Scalar() + ", " + n[1].Scalar() + "]");
+    return r;
+  }
+
   std::vector<std::string> texts(const YAML::Node& map, const char* key, const std::string& what) const {
     std::vector<std::string> out;
     const YAML::Node n = map[key];
@@ -194,6 +230,38 @@ void check_placeholders(const ListReader& r, const YAML::Node& at, const std::st
   }
 }
 
+// random_runs: per mesh, per_mesh poses drawn uniformly within the ranges, so that a batch can
+// measure on poses nobody chose. The draw is mt19937_64's top 53 bits (std::uniform_real_distribution
+// differs between standard libraries), rounded to what a list would write by hand.
+void add_random_runs(const ListReader& r, const YAML::Node& rr, std::vector<RunSpec>& runs) {
+  if (!rr.IsMap()) r.fail(rr, "random_runs: expected {meshes, per_mesh, seed, x, y, yaw}, found " + ListReader::found(rr));
+  r.check_keys(rr, {"meshes", "per_mesh", "seed", "x", "y", "yaw"}, "random_runs");
+  for (const char* key : {"meshes", "per_mesh", "seed"})
+    if (!rr[key]) r.fail(rr, std::string("random_runs: expected a key '") + key + "'");
+  const std::vector<std::string> meshes = r.texts(rr, "meshes", "random_runs meshes");
+  if (meshes.empty()) r.fail(rr["meshes"], "random_runs meshes: expected at least one mesh, found an empty list");
+  const std::uint64_t per_mesh = r.whole(rr["per_mesh"], "random_runs per_mesh", 1, 10'000);
+  const std::uint64_t seed = r.whole(rr["seed"], "random_runs seed", 0, std::numeric_limits<std::uint64_t>::max());
+  const auto x = r.range(rr, "x", "random_runs x", {0, 0}), y = r.range(rr, "y", "random_runs y", {0, 0});
+  const auto yaw = r.range(rr, "yaw", "random_runs yaw", {0, 360});
+  std::mt19937_64 rng(seed);
+  // Rounded to 1 / per_unit; divided, not multiplied by a step, so 0.013 prints as 0.013.
+  const auto draw = [&](std::pair<double, double> range, double per_unit) {
+    const double u = static_cast<double>(rng() >> 11) * 0x1.0p-53;  // [0, 1)
+    const double v = std::round((range.first + (range.second - range.first) * u) * per_unit) / per_unit;
+    return std::clamp(v, range.first, range.second);
+  };
+  for (const auto& mesh : meshes)
+    for (std::uint64_t k = 0; k < per_mesh; ++k) {
+      RunSpec s;
+      s.mesh = r.path(mesh).string();
+      s.x = draw(x, 1000);
+      s.y = draw(y, 1000);
+      s.yaw = draw(yaw, 1);
+      runs.push_back(std::move(s));
+    }
+}
+
 BatchList read_list(const std::string& file) {
   BatchList l;
   l.file = fs::absolute(file).lexically_normal();
@@ -207,7 +275,7 @@ BatchList read_list(const std::string& file) {
                                 ": not valid YAML: " + e.msg);
   }
   if (!root.IsMap()) r.fail(root, "expected a mapping with task, pose_set and runs; found " + ListReader::found(root));
-  r.check_keys(root, {"task", "fba_run_args", "timeout_s", "pose_set", "set", "variants", "runs"}, "the list");
+  r.check_keys(root, {"task", "fba_run_args", "timeout_s", "pose_set", "set", "variants", "runs", "random_runs"}, "the list");
   if (!root["task"]) r.fail(root, "expected a key 'task' naming the task file");
   l.task = r.path(r.text(root["task"], "task"));
   if (!fs::is_regular_file(l.task)) r.fail(root["task"], "task: no such file " + l.task.string());
@@ -234,9 +302,10 @@ BatchList read_list(const std::string& file) {
     l.variants.push_back({"task", {}});
   }
   const YAML::Node runs = root["runs"];
-  if (!runs || !runs.IsSequence() || runs.size() == 0)
-    r.fail(runs ? runs : root, "runs: expected a list of {mesh, pose: [x, y, yaw], set: [...]}, found " + ListReader::found(runs));
-  for (const auto& item : runs) {
+  if (runs ? !runs.IsSequence() || runs.size() == 0 : !root["random_runs"])
+    r.fail(runs ? runs : root, "runs: expected a list of {mesh, pose: [x, y, yaw], set: [...]} (or random_runs), found " +
+                                   ListReader::found(runs));
+  for (const auto& item : runs ? runs : YAML::Node(YAML::NodeType::Sequence)) {
     if (!item.IsMap()) r.fail(item, "a run: expected {mesh: ..., pose: [x, y, yaw]}, found " + ListReader::found(item));
     r.check_keys(item, {"mesh", "pose", "set"}, "a run");
     RunSpec s;
@@ -251,6 +320,7 @@ BatchList read_list(const std::string& file) {
     s.set = r.texts(item, "set", "run set");
     l.runs.push_back(std::move(s));
   }
+  if (const YAML::Node rr = root["random_runs"]) add_random_runs(r, rr, l.runs);
   return l;
 }
 
@@ -283,7 +353,6 @@ struct Job {
 // Builds the job's command line.
 void prepare(Job& job, const BatchList& l, const std::string& fba_run) {
   const RunSpec& r = *job.run;
-  fs::create_directories(job.dir);
   std::vector<std::string> sets = l.set;
   for (const auto& t : l.pose_set) {
     std::string s = replace_all(t, "{mesh}", r.mesh);
@@ -298,11 +367,12 @@ void prepare(Job& job, const BatchList& l, const std::string& fba_run) {
   job.argv = {fba_run, l.task.string(), "-o", job.dir.string()};
   job.argv.insert(job.argv.end(), l.fba_run_args.begin(), l.fba_run_args.end());
   for (const auto& s : sets) job.argv.insert(job.argv.end(), {"--set", s});
-  std::ofstream(job.dir / "command.txt") << [&] {
-    std::string line;
-    for (const auto& a : job.argv) line += (line.empty() ? "" : " ") + a;
-    return line + "\n";
-  }();
+}
+
+std::string command_line(const Job& job) {
+  std::string line;
+  for (const auto& a : job.argv) line += (line.empty() ? "" : " ") + a;
+  return line;
 }
 
 void start(Job& job) {
@@ -561,8 +631,59 @@ std::string summary_line(int width, const std::string& variant, const std::strin
   return line;
 }
 
+// Each variant beside the first, run by run (rows are variant by variant, each in the list's run
+// order): which runs selected a grasp, and over the runs where both did, the median difference of
+// epsilon on the mesh and of the nodes processed with their bootstrap intervals.
+std::string paired_block(const BatchList& l, const std::vector<Row>& rows, std::uint64_t seed) {
+  constexpr std::size_t kResamples = 10'000;
+  const std::size_t n = l.runs.size();
+  const std::string& ref = l.variants.front().name;
+  int width = 8;
+  for (const auto& v : l.variants) width = std::max(width, static_cast<int>(v.name.size()));
+  const auto signed_fixed = [](double v, int decimals) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%+.*f", decimals, v);
+    return std::string(buf);
+  };
+  std::ostringstream out;
+  char line[512];
+  out << "\npaired with " << ref << ", run by run (diff: the variant's figure minus " << ref
+      << "'s, median over the runs where both selected a grasp; [95% bootstrap interval]):\n";
+  std::snprintf(line, sizeof line, "%-*s %5s %9s %9s %7s %5s %-28s %6s %6s  %s\n", width, "variant", "both", "only_ref", "only_var",
+                "neither", "pairs", "eps_diff [interval]", "higher", "lower", "nodes_diff [interval]");
+  out << line;
+  for (std::size_t v = 1; v < l.variants.size(); ++v) {
+    std::size_t both = 0, only_ref = 0, only_var = 0, neither = 0;
+    std::vector<double> eps_ref, eps_var, nodes_ref, nodes_var;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Row& a = rows[i];
+      const Row& b = rows[v * n + i];
+      if (a.selected && b.selected) ++both;
+      else if (a.selected) ++only_ref;
+      else if (b.selected) ++only_var;
+      else ++neither;
+      if (!a.selected || !b.selected) continue;
+      if (a.force_closure && b.force_closure) eps_ref.push_back(a.epsilon), eps_var.push_back(b.epsilon);
+      if (a.nodes >= 0 && b.nodes >= 0) nodes_ref.push_back(static_cast<double>(a.nodes)), nodes_var.push_back(static_cast<double>(b.nodes));
+    }
+    const PairedDifference e = paired_difference(eps_ref, eps_var, kResamples, seed);
+    const PairedDifference k = paired_difference(nodes_ref, nodes_var, kResamples, seed);
+    const std::string eps = e.pairs == 0 ? "-"
+                                         : signed_fixed(e.median, 4) + " [" + signed_fixed(e.low, 4) + ", " + signed_fixed(e.high, 4) + "]";
+    const std::string nodes =
+        k.pairs == 0 ? "-" : signed_fixed(k.median, 0) + " [" + signed_fixed(k.low, 0) + ", " + signed_fixed(k.high, 0) + "]";
+    std::snprintf(line, sizeof line, "%-*s %5zu %9zu %9zu %7zu %5zu %-28s %6zu %6zu  %s\n", width, l.variants[v].name.c_str(), both,
+                  only_ref, only_var, neither, e.pairs, eps.c_str(), e.b_higher, e.a_higher, nodes.c_str());
+    out << line;
+  }
+  out << "both, only_ref, only_var, neither: runs where a grasp was selected by both, only " << ref
+      << ", only the variant, neither;\npairs: of both, those evaluated on the mesh; higher, lower: runs where the variant's epsilon is above, below "
+      << ref << "'s.\n";
+  return out.str();
+}
+
 std::string make_table(const BatchList& l, const std::vector<Row>& rows, const std::map<std::string, Baseline>& baselines,
-                       std::size_t random_sets) {
+                       std::size_t random_sets, std::uint64_t seed) {
   std::ostringstream out;
   out << "fba-evaluate grasp --batch " << l.file.filename().string() << ": task " << l.task.filename().string() << ", "
       << l.runs.size() << " runs x " << l.variants.size() << " variant(s); random baseline: " << random_sets
@@ -639,6 +760,7 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
       out << "\n";
     }
   }
+  if (l.variants.size() > 1) out << paired_block(l, rows, seed);
   // How far the model's normals are off the object's at the selected contacts: what grasp.synthesis'
   // normal_error_deg is chosen from. Contacts that moved farther than kOnObject were on space the
   // object does not fill; their normals say nothing about the model's surface.
@@ -732,6 +854,7 @@ int run_grasp_batch(const std::vector<std::string>& args) {
   int jobs = 1;
   std::size_t random_sets = 1000;
   std::uint64_t seed = 1;
+  bool dry_run = false;
   grasp::QualityParams quality;
   po::options_description opts(kBatchHelp);
   opts.add_options()("help,h", "this help")("batch", po::value(&list_file)->required(), "the list of runs (YAML)")(
@@ -739,7 +862,8 @@ int run_grasp_batch(const std::vector<std::string>& args) {
       "output,o", po::value(&out_dir), "folder of the runs and the table; default: a new folder under the temporary folder")(
       "fba-run", po::value(&fba_run)->default_value(fba_run), "the fba-run program")(
       "random", ranged("random", &random_sets, std::size_t{0}, kMaxRandomSets), "random contact sets per mesh (0: none)")(
-      "seed", ranged("seed", &seed, std::uint64_t{0}, std::numeric_limits<std::uint64_t>::max()), "seed of the random sets");
+      "seed", ranged("seed", &seed, std::uint64_t{0}, std::numeric_limits<std::uint64_t>::max()), "seed of the random sets and of the paired comparison's bootstrap")(
+      "dry-run", po::bool_switch(&dry_run), "print each run's fba-run command line and run nothing");
   po::variables_map vm = parse(args, opts);
   if (vm.count("help")) {
     std::cout << opts << "\n";
@@ -753,16 +877,13 @@ int run_grasp_batch(const std::vector<std::string>& args) {
   if (!out_dir.empty() && fs::exists(out_dir) && !fs::is_directory(out_dir))
     throw ArgumentError("--output: expected a folder; found '" + out_dir + "', which is not one");
   const BatchList list = read_list(list_file);
+  if (out_dir.empty() && dry_run) out_dir = (fs::temp_directory_path() / "fba-grasp-batch-XXXXXX").string();
   if (out_dir.empty()) {
     std::string t = (fs::temp_directory_path() / "fba-grasp-batch-XXXXXX").string();
     if (!mkdtemp(t.data())) throw std::runtime_error("cannot create a folder under " + fs::temp_directory_path().string());
     out_dir = t;
   }
   const fs::path out = fs::absolute(out_dir);
-  fs::create_directories(out);
-  std::fprintf(stderr, "fba-evaluate grasp --batch: %zu runs x %zu variant(s) into %s\n", list.runs.size(), list.variants.size(),
-               out.c_str());
-
   std::vector<Job> all;
   for (const auto& v : list.variants)
     for (std::size_t i = 0; i < list.runs.size(); ++i) {
@@ -774,6 +895,16 @@ int run_grasp_batch(const std::vector<std::string>& args) {
       prepare(j, list, fba_run);
       all.push_back(std::move(j));
     }
+  if (dry_run) {
+    for (const auto& j : all) std::cout << command_line(j) << "\n";
+    return 0;
+  }
+  std::fprintf(stderr, "fba-evaluate grasp --batch: %zu runs x %zu variant(s) into %s\n", list.runs.size(), list.variants.size(),
+               out.c_str());
+  for (const auto& j : all) {
+    fs::create_directories(j.dir);
+    std::ofstream(j.dir / "command.txt") << command_line(j) << "\n";
+  }
   run_all(all, jobs, list.timeout_s);
 
   std::vector<Row> rows;
@@ -791,7 +922,7 @@ int run_grasp_batch(const std::vector<std::string>& args) {
       b.error = e.what();
     }
   }
-  const std::string table = make_table(list, rows, baselines, random_sets);
+  const std::string table = make_table(list, rows, baselines, random_sets, seed);
   std::cout << table << std::flush;
   std::ofstream(out / "table.txt") << table;
   std::ofstream(out / "runs.json") << rows_json(rows).dump(2) << "\n";

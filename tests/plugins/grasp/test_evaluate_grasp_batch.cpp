@@ -5,11 +5,14 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -108,7 +111,96 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   // The variants side by side, per object and overall.
   EXPECT_NE(r.output.find("side by side (loop / uniform):"), std::string::npos) << r.output;
   EXPECT_NE(line_starting(r.output, "YcbMustardBottle   "), "") << r.output;
+  // Uniform paired with the loop run by run: each of the two runs counted once; the missing mesh
+  // selected nothing in either.
+  const std::size_t paired = r.output.find("paired with loop, run by run");
+  ASSERT_NE(paired, std::string::npos) << r.output;
+  std::istringstream row(line_starting(r.output.substr(paired), "uniform "));
+  std::string name;
+  std::size_t both = 0, only_ref = 0, only_var = 0, neither = 0, pairs = 0;
+  row >> name >> both >> only_ref >> only_var >> neither >> pairs;
+  ASSERT_TRUE(row) << r.output;
+  EXPECT_EQ(both + only_ref + only_var + neither, 2u) << r.output;
+  EXPECT_GE(neither, 1u) << r.output;
+  EXPECT_LE(pairs, both) << r.output;
   EXPECT_TRUE(fs::exists(out / "table.txt"));
+}
+
+// The poses a dry run would give fba-run: object_x, object_y, object_yaw of each command line.
+std::vector<std::array<double, 3>> dry_run_poses(const std::string& output) {
+  std::vector<std::array<double, 3>> poses;
+  std::istringstream in(output);
+  for (std::string line; std::getline(in, line);) {
+    std::array<double, 3> p{};
+    int found = 0;
+    for (const auto& [key, slot] : {std::pair{"object_x=", 0}, {"object_y=", 1}, {"object_yaw=", 2}}) {
+      const std::size_t at = line.find(key);
+      if (at == std::string::npos) continue;
+      p[slot] = std::stod(line.substr(at + std::string(key).size()));
+      ++found;
+    }
+    if (found == 3) poses.push_back(p);
+  }
+  return poses;
+}
+
+TEST_F(EvaluateGraspBatch, RandomRunsDrawTheSamePosesFromTheSameSeedWithinTheirRangesAfterTheListedRuns) {
+  const fs::path l = dir_ / "list.yaml";
+  const auto write = [&](int seed) {
+    std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
+                     << "pose_set:\n  - mesh={mesh}\n  - object_x={x}\n  - object_y={y}\n  - object_yaw={yaw}\n"
+                     << "runs:\n  - { mesh: " << mustard() << ", pose: [0.5, 0.5, 7] }\n"
+                     << "random_runs:\n  meshes: [" << mustard() << ", " << mustard() << "]\n  per_mesh: 20\n"
+                     << "  x: [-0.01, 0.01]\n  y: [0.02, 0.03]\n  yaw: [90, 180]\n  seed: " << seed << "\n";
+  };
+  write(7);
+  const Result a = evaluate_grasp("--batch " + l.string() + " --dry-run -o " + (dir_ / "out").string());
+  ASSERT_EQ(a.status, 0) << a.output;
+  const auto poses = dry_run_poses(a.output);
+  ASSERT_EQ(poses.size(), 41u) << a.output;
+  EXPECT_EQ(poses[0], (std::array<double, 3>{0.5, 0.5, 7})) << a.output;
+  double lowest_x = 1, highest_x = -1;
+  for (std::size_t i = 1; i < poses.size(); ++i) {
+    const auto& [x, y, yaw] = poses[i];
+    EXPECT_GE(x, -0.01);
+    EXPECT_LE(x, 0.01);
+    EXPECT_GE(y, 0.02);
+    EXPECT_LE(y, 0.03);
+    EXPECT_GE(yaw, 90);
+    EXPECT_LE(yaw, 180);
+    // Rounded to a millimetre and a degree, as a list written by hand would have them.
+    EXPECT_NEAR(x * 1000, std::round(x * 1000), 1e-9) << x;
+    EXPECT_EQ(yaw, std::round(yaw));
+    lowest_x = std::min(lowest_x, x);
+    highest_x = std::max(highest_x, x);
+  }
+  EXPECT_GT(highest_x - lowest_x, 0.01) << "40 draws should spread over most of the range\n" << a.output;
+  // Nothing run, nothing written.
+  EXPECT_EQ(a.output.find("fba-evaluate grasp --batch:"), std::string::npos) << a.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+
+  const Result again = evaluate_grasp("--batch " + l.string() + " --dry-run");
+  EXPECT_EQ(dry_run_poses(again.output), poses);
+  write(8);
+  const Result other = evaluate_grasp("--batch " + l.string() + " --dry-run");
+  EXPECT_NE(dry_run_poses(other.output), poses);
+}
+
+TEST_F(EvaluateGraspBatch, BadRandomRunsAreAClearErrorWithTheirPlace) {
+  const fs::path l = dir_ / "list.yaml";
+  const std::string head = "task: " + fba::test::tasks_dir() + "/grasp.yaml\nrandom_runs:\n  meshes: [m.obj]\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {"  per_mesh: 0\n  seed: 1\n", "list.yaml:4:13: random_runs per_mesh: expected a whole number from 1 to 10000, found '0'"},
+      {"  per_mesh: 3\n", "list.yaml:3:3: random_runs: expected a key 'seed'"},
+      {"  per_mesh: 3\n  seed: 1\n  x: [0.02, 0.01]\n", "list.yaml:6:6: random_runs x: expected low <= high, found [0.02, 0.01]"},
+      {"  per_mesh: 3\n  seed: 1\n  z: [0, 1]\n", "list.yaml:6:3: random_runs: unknown key 'z'"},
+      {"  per_mesh: 3\n  seed: -1\n", "random_runs seed: expected a whole number"}};
+  for (const auto& [tail, message] : cases) {
+    std::ofstream(l) << head << tail;
+    const Result r = evaluate_grasp("--batch " + l.string() + " --dry-run");
+    EXPECT_EQ(r.status, 2) << tail << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << tail << r.output;
+  }
 }
 
 TEST_F(EvaluateGraspBatch, AMeshTheTaskCannotLoadIsARowWithFbaRunsReason) {
