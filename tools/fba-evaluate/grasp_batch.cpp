@@ -94,7 +94,8 @@ has each run's last carver `detail` (with carver.compare_uniform=true: model_nod
 uniform carve's uniform_nodes, and saved_share), however the run ended.
 
 With more than one variant the table ends with each variant paired with the first, run by run:
-runs where both, only one or neither selected a grasp; over the runs where both did, the median
+runs where both, only one or neither selected a grasp (with the exact McNemar test's p on the
+runs only one did); over the runs where both did, the median
 of the epsilon differences on the mesh and of the node differences, each with a 95% bootstrap
 interval (10,000 resamples, --seed): a gap whose interval holds 0 is one the runs' spread explains.
 --dry-run prints each run's fba-run command line (random poses drawn) and runs nothing.
@@ -649,8 +650,8 @@ std::string paired_block(const BatchList& l, const std::vector<Row>& rows, std::
   char line[512];
   out << "\npaired with " << ref << ", run by run (diff: the variant's figure minus " << ref
       << "'s, median over the runs where both selected a grasp; [95% bootstrap interval]):\n";
-  std::snprintf(line, sizeof line, "%-*s %5s %9s %9s %7s %5s %-28s %6s %6s  %s\n", width, "variant", "both", "only_ref", "only_var",
-                "neither", "pairs", "eps_diff [interval]", "higher", "lower", "nodes_diff [interval]");
+  std::snprintf(line, sizeof line, "%-*s %5s %9s %9s %7s %6s %5s %-28s %6s %6s  %s\n", width, "variant", "both", "only_ref", "only_var",
+                "neither", "p_sel", "pairs", "eps_diff [interval]", "higher", "lower", "nodes_diff [interval]");
   out << line;
   for (std::size_t v = 1; v < l.variants.size(); ++v) {
     std::size_t both = 0, only_ref = 0, only_var = 0, neither = 0;
@@ -672,12 +673,15 @@ std::string paired_block(const BatchList& l, const std::vector<Row>& rows, std::
                                          : signed_fixed(e.median, 4) + " [" + signed_fixed(e.low, 4) + ", " + signed_fixed(e.high, 4) + "]";
     const std::string nodes =
         k.pairs == 0 ? "-" : signed_fixed(k.median, 0) + " [" + signed_fixed(k.low, 0) + ", " + signed_fixed(k.high, 0) + "]";
-    std::snprintf(line, sizeof line, "%-*s %5zu %9zu %9zu %7zu %5zu %-28s %6zu %6zu  %s\n", width, l.variants[v].name.c_str(), both,
-                  only_ref, only_var, neither, e.pairs, eps.c_str(), e.b_higher, e.a_higher, nodes.c_str());
+    std::snprintf(line, sizeof line, "%-*s %5zu %9zu %9zu %7zu %6.3f %5zu %-28s %6zu %6zu  %s\n", width, l.variants[v].name.c_str(),
+                  both, only_ref, only_var, neither, mcnemar_p(only_ref, only_var), e.pairs, eps.c_str(), e.b_higher, e.a_higher,
+                  nodes.c_str());
     out << line;
   }
   out << "both, only_ref, only_var, neither: runs where a grasp was selected by both, only " << ref
-      << ", only the variant, neither;\npairs: of both, those evaluated on the mesh; higher, lower: runs where the variant's epsilon is above, below "
+      << ", only the variant, neither;\np_sel: the exact McNemar test's p on only_ref against only_var (small: the two select "
+         "on different shares of runs);\npairs: of both, those evaluated on the mesh; higher, lower: runs where the variant's epsilon "
+         "is above, below "
       << ref << "'s.\n";
   return out.str();
 }

@@ -1,5 +1,7 @@
 #include "paired_difference.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -36,6 +38,16 @@ PairedDifference paired_difference(const std::vector<double>& a, const std::vect
   d.low = grasp::quantile(medians, 0.025);
   d.high = grasp::quantile(medians, 0.975);
   return d;
+}
+
+double mcnemar_p(std::size_t only_a, std::size_t only_b) {
+  const std::size_t n = only_a + only_b, k = std::min(only_a, only_b);
+  if (n == 0) return 1;
+  // 2 * P(X <= k) for X ~ Binomial(n, 1/2), the terms in logs (n may be large).
+  double tail = 0;
+  for (std::size_t i = 0; i <= k; ++i)
+    tail += std::exp(std::lgamma(n + 1.0) - std::lgamma(i + 1.0) - std::lgamma(n - i + 1.0) - n * std::log(2.0));
+  return std::min(1.0, 2 * tail);
 }
 
 }  // namespace fba::evaluate

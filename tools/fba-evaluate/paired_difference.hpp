@@ -22,4 +22,9 @@ struct PairedDifference {
 PairedDifference paired_difference(const std::vector<double>& a, const std::vector<double>& b, std::size_t resamples,
                                    std::uint64_t seed);
 
+// Whether two variants select a grasp on the same runs equally often: the exact two-sided McNemar
+// test on the runs where only one did (only_a, only_b), the chance of a split at least that uneven
+// if either were as likely to be the one. 1 when no run tells them apart.
+double mcnemar_p(std::size_t only_a, std::size_t only_b);
+
 }  // namespace fba::evaluate

@@ -11,6 +11,7 @@
 
 namespace {
 
+using fba::evaluate::mcnemar_p;
 using fba::evaluate::paired_difference;
 
 TEST(PairedDifference, TheSameShiftOnEveryRunIsThatShiftWithNoSpread) {
@@ -75,6 +76,20 @@ TEST(PairedDifference, FiguresForDifferentRunsAreRefused) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("found 2 and 1"), std::string::npos) << e.what();
   }
+}
+
+TEST(McNemar, TheExactTestOnTheRunsOnlyOneVariantSelectedOnGivesTheBinomialTail) {
+  // 1 against 5 of 6: 2 * (1 + 6) / 64.
+  EXPECT_NEAR(mcnemar_p(1, 5), 14.0 / 64, 1e-12);
+  EXPECT_NEAR(mcnemar_p(5, 1), 14.0 / 64, 1e-12);
+  // 0 against 6: 2 / 64, the smallest p six runs can give.
+  EXPECT_NEAR(mcnemar_p(0, 6), 2.0 / 64, 1e-12);
+  // An even split, or no run telling them apart: nothing against "as likely".
+  EXPECT_EQ(mcnemar_p(3, 3), 1.0);
+  EXPECT_EQ(mcnemar_p(0, 0), 1.0);
+  // Large counts stay finite: 400 against 600 is far from even.
+  EXPECT_LT(mcnemar_p(400, 600), 1e-9);
+  EXPECT_GT(mcnemar_p(400, 600), 0.0);
 }
 
 }  // namespace

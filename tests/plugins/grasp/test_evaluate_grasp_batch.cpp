@@ -118,8 +118,11 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   std::istringstream row(line_starting(r.output.substr(paired), "uniform "));
   std::string name;
   std::size_t both = 0, only_ref = 0, only_var = 0, neither = 0, pairs = 0;
-  row >> name >> both >> only_ref >> only_var >> neither >> pairs;
+  double p_selected = -1;
+  row >> name >> both >> only_ref >> only_var >> neither >> p_selected >> pairs;
   ASSERT_TRUE(row) << r.output;
+  EXPECT_GE(p_selected, 0.0) << r.output;
+  EXPECT_LE(p_selected, 1.0) << r.output;
   EXPECT_EQ(both + only_ref + only_var + neither, 2u) << r.output;
   EXPECT_GE(neither, 1u) << r.output;
   EXPECT_LE(pairs, both) << r.output;
