@@ -510,11 +510,22 @@ struct Reference {
   std::string name;
 };
 
+// A task's or a profile's parameter: a name, or names joined by dots that group parameters under
+// one (`scene.mesh`, `scene.yaw`: set as --set scene.mesh=...).
+bool is_valid_param_name(std::string_view name) {
+  for (std::size_t begin = 0;;) {
+    const std::size_t dot = name.find('.', begin);
+    if (!is_valid_name(name.substr(begin, dot == std::string_view::npos ? dot : dot - begin))) return false;
+    if (dot == std::string_view::npos) return true;
+    begin = dot + 1;
+  }
+}
+
 std::vector<Reference> references_in(const std::string& s) {
   std::vector<Reference> out;
   for (std::size_t i = s.find("${"); i != std::string::npos; i = s.find("${", i + 1)) {
     std::size_t j = i + 2;
-    while (j < s.size() && (std::isalnum(static_cast<unsigned char>(s[j])) || s[j] == '_')) ++j;
+    while (j < s.size() && (std::isalnum(static_cast<unsigned char>(s[j])) || s[j] == '_' || s[j] == '.')) ++j;
     if (j > i + 2 && j < s.size() && s[j] == '}') out.push_back({i, j + 1 - i, s.substr(i + 2, j - i - 2)});
   }
   return out;
@@ -586,8 +597,14 @@ class Loader {
     collect_param_users(root["components"], bindings);
     expand(root, src, "", bindings, task, {});
     check_profile_bindings(root, src, task);
-    for (const auto& [key, o] : overrides_)
-      if (!o.used) error(o.where, "--set " + key + ": the task has no component '" + o.comp + "' with a parameter '" + o.param + "'");
+    for (const auto& [key, o] : overrides_) {
+      if (o.used) continue;
+      std::vector<std::string> group;  // task parameters of the group the key names (scene.foo: scene.mesh, ...)
+      for (const auto& tp : task.params)
+        if (tp.name.starts_with(o.comp + ".")) group.push_back(tp.name);
+      if (!group.empty()) error(o.where, "--set " + key + ": the task has no parameter '" + key + "'; its group '" + o.comp + "' has " + list_of(group));
+      else error(o.where, "--set " + key + ": the task has no component '" + o.comp + "' with a parameter '" + o.param + "'");
+    }
     // Nothing to run would leave the executor waiting for work that never comes.
     if (diags_.empty() && task.components.empty())
       error(at(src, root["components"] ? root["components"] : root), "the task has no components; list at least one under 'components:'");
@@ -826,10 +843,10 @@ class Loader {
   // defaults. They are the bindings of ${name} in the task's components and the profile's.
   Bindings task_params(const YAML::Node& root, const Source& src, TaskConfig& task) {
     std::vector<Diagnostic> d;
-    auto decls = param_decls(root["params"], src, "a task", d);
+    auto decls = param_decls(root["params"], src, "a task", true, d);
     const std::size_t from_task = decls.size();
     if (profile_.loaded)
-      for (auto& x : param_decls(std::as_const(profile_.root)["params"], profile_.src, "a profile", d)) decls.push_back(std::move(x));
+      for (auto& x : param_decls(std::as_const(profile_.root)["params"], profile_.src, "a profile", true, d)) decls.push_back(std::move(x));
     for (auto& x : d) error(x.where, x.message);
     for (const YAML::Node& params : {root["params"], profile_.loaded ? std::as_const(profile_.root)["params"] : YAML::Node()})
       if (params && params.IsMap())
@@ -843,6 +860,14 @@ class Loader {
       if (auto [first, fresh] = declared.emplace(ps.name, where); !fresh) {
         error(where, "parameter '" + ps.name + "' is declared by the task already (at " + first->second.str() +
                          "); a profile's parameters add to the task's, under names of their own");
+        continue;
+      }
+      // --set group.name=... must mean this parameter and nothing else.
+      if (const auto dot = ps.name.rfind('.'); dot != std::string::npos && root["components"] && root["components"].IsMap() &&
+                                               root["components"][ps.name.substr(0, dot)]) {
+        error(where, "parameter '" + ps.name + "' has the form of component '" + ps.name.substr(0, dot) + "''s parameter '" +
+                         ps.name.substr(dot + 1) + "', and --set " + ps.name + "=... could mean either; name its group apart from the components");
+        failed_params_.insert(ps.name);
         continue;
       }
       TaskParam tp{ps.name, ps.type, {}, i < from_task ? "default" : "profile default", ps.doc, where};
@@ -1024,8 +1049,10 @@ class Loader {
   }
 
   // The parameters a composite, a task or a profile declares: `name: {type, default, min, max, doc}`.
+  // grouped: names may join words with dots (a task's and a profile's; a composite's parameters are
+  // set as instance.parameter, where a dot would read as another component's).
   std::vector<std::pair<ParamSpec, Location>> param_decls(const YAML::Node& params, const Source& src, const std::string& owner,
-                                                          std::vector<Diagnostic>& d) {
+                                                          bool grouped, std::vector<Diagnostic>& d) {
     std::vector<std::pair<ParamSpec, Location>> out;
     if (!params) return out;
     auto err = [&](const YAML::Node& n, std::string m) { d.push_back(Diagnostic{at(src, n), std::move(m)}); };
@@ -1036,7 +1063,9 @@ class Loader {
     for (auto it = params.begin(); it != params.end(); ++it) {
       const std::string pname = it->first.IsScalar() ? it->first.Scalar() : "";
       const YAML::Node p = it->second;
-      if (!is_valid_name(pname)) err(it->first, "parameter name '" + pname + "' must be letters, digits and '_'");
+      if (grouped ? !is_valid_param_name(pname) : !is_valid_name(pname))
+        err(it->first, "parameter name '" + pname + "' must be letters, digits and '_'" +
+                           std::string(grouped ? " (words joined by '.' make a group: scene.mesh)" : ""));
       if (!p.IsMap() || !p["type"] || !p["type"].IsScalar()) {
         err(p, "parameter '" + pname + "' needs {type: bool|int|double|string|path|list, default: ..., doc: ...}");
         continue;
@@ -1098,7 +1127,7 @@ class Loader {
     std::string type_name = name && name.IsScalar() ? name.Scalar() : "";
     if (type_name.empty()) err(name ? name : root, "'composite:' needs the composite's type name");
     Spec spec = Spec::composite(type_name.empty() ? "invalid" : type_name, root["doc"] && root["doc"].IsScalar() ? root["doc"].Scalar() : "");
-    for (const auto& [ps, _] : param_decls(root["params"], src, "a composite", d)) {
+    for (const auto& [ps, _] : param_decls(root["params"], src, "a composite", false, d)) {
       spec.param(ps.name, ps.type, ps.default_value, ps.doc);
       if (ps.min || ps.max) spec.range(ps.min, ps.max);
     }

@@ -369,6 +369,24 @@ components:
   EXPECT_NE(e.find("ticker.yaml:12:45: error: capacity must be in [1, 1000000]; found 4294967296"), std::string::npos) << e;
 }
 
+// A composite's parameters are set as instance.parameter: a dotted name there would read as
+// another component's, so only a task's and a profile's parameters may be grouped with dots.
+TEST(Loader, ACompositesParameterNameHasNoDot) {
+  TempDir dir;
+  dir.write("ticker.yaml", R"(composite: x.ticker
+params:
+  src.count: { type: int, default: 1 }
+outputs:
+  out: src.out
+components:
+  src: { type: examples.counter }
+)");
+  const auto task = dir.write("t.yaml", "include: ticker.yaml\ncomponents:\n  t: { type: x.ticker }\n");
+  const std::string e = errors_of_file(task);
+  EXPECT_NE(e.find("ticker.yaml:3:3: error: parameter name 'src.count' must be letters, digits and '_'"), std::string::npos) << e;
+  EXPECT_EQ(e.find("make a group"), std::string::npos) << e;
+}
+
 TEST(Loader, OverridesGoThroughTheSameChecksWithSetAsTheirPlace) {
   fba::LoadOptions o;
   o.overrides = {{"source.count=3"}, {"source.count=4"}};

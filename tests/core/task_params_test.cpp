@@ -179,6 +179,63 @@ connections: [ source.out -> sink.in ]
   EXPECT_EQ(std::get<std::int64_t>(task.find("source")->params.at("count")), 9);
 }
 
+// scene.mesh, scene.x: one group of parameters, set and used by the whole dotted name.
+const char* kGroupTask = R"(
+params:
+  run.count: { type: int, default: 5, min: 1 }
+  run.cap: { type: int, default: 4 }
+components:
+  source: { type: examples.counter, params: { count: "${run.count}" } }
+  sink: { type: examples.sink, params: { expected: "${run.count}" } }
+connections:
+  - { from: source.out, to: sink.in, capacity: "${run.cap}" }
+)";
+
+TEST(TaskParams, WordsJoinedByDotsGroupThemAndAreSetByTheWholeName) {
+  const auto task = load(kGroupTask, with_sets({"run.count=7"}));
+  EXPECT_EQ(std::get<std::int64_t>(task.find("source")->params.at("count")), 7);
+  EXPECT_EQ(std::get<std::int64_t>(task.find("sink")->params.at("expected")), 7);
+  EXPECT_EQ(task.connections.at(0).capacity, 4u);
+  ASSERT_EQ(task.params.size(), 2u);
+  EXPECT_EQ(task.params[0].name, "run.count");
+  EXPECT_EQ(task.params[0].source, "--set");
+  // A member the group does not have: the group's members, not "no component 'run'".
+  const std::string e = errors_of(kGroupTask, with_sets({"run.size=3"}));
+  EXPECT_NE(e.find("--set run.size=3: error: --set run.size: the task has no parameter 'run.size'; its group 'run' has run.count, run.cap"),
+            std::string::npos)
+      << e;
+  // The shared parameter's message names the whole name to set.
+  const std::string shared = errors_of(kGroupTask, with_sets({"sink.expected=2"}));
+  EXPECT_NE(shared.find("sink.expected comes from the task parameter 'run.count' (also source.count); set it with --set run.count=..."),
+            std::string::npos)
+      << shared;
+}
+
+TEST(TaskParams, AGroupNamedAfterAComponentOrABadDottedNameIsRefusedAtItsPlace) {
+  // --set sink.expected=... would mean either.
+  const std::string clash = errors_of(R"(
+params:
+  sink.expected: { type: int, default: 5 }
+components:
+  source: { type: examples.counter }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)");
+  EXPECT_NE(clash.find("test.yaml:3:3: error: parameter 'sink.expected' has the form of component 'sink''s parameter 'expected'"),
+            std::string::npos)
+      << clash;
+  for (const char* name : {"run..count", ".count", "run.", "run.co-unt"}) {
+    const std::string bad = errors_of(std::string("\nparams:\n  \"") + name + R"(": { type: int, default: 5 }
+components:
+  source: { type: examples.counter }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)");
+    EXPECT_NE(bad.find("test.yaml:3:3: error: parameter name '" + std::string(name) + "' must be letters, digits and '_'"), std::string::npos)
+        << name << "\n" << bad;
+  }
+}
+
 TEST(Profiles, BindTheSlotsToTypesAndTheirParams) {
   TempDir dir;
   const auto file = dir.write("task.yaml", kSlotTask);
