@@ -31,12 +31,12 @@ TEST(GraspTask, TheObjectIsOneParameterOfCameraAndHand) {
     fba::load_task(kGrasp, built_plugins(), profile("sim", {"camera.mesh=" + fba::test::tasks_dir() + "/grasp.yaml"}));
     FAIL() << "loaded";
   } catch (const fba::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("camera.mesh comes from the task parameter 'mesh' (also hand.mesh); set it with --set mesh=..."),
+    EXPECT_NE(std::string(e.what()).find("camera.mesh comes from the task parameter 'scene.mesh' (also hand.mesh); set it with --set scene.mesh=..."),
               std::string::npos)
         << e.what();
   }
   const std::string mesh = fba::test::ycb_mesh("YcbMustardBottle");
-  const auto task = fba::load_task(kGrasp, built_plugins(), profile("sim", {"mesh=" + mesh}));
+  const auto task = fba::load_task(kGrasp, built_plugins(), profile("sim", {"scene.mesh=" + mesh}));
   EXPECT_EQ(std::get<std::string>(task.find("camera")->params.at("mesh")), mesh);
   EXPECT_EQ(std::get<std::string>(task.find("hand")->params.at("mesh")), mesh);
 }
@@ -44,7 +44,7 @@ TEST(GraspTask, TheObjectIsOneParameterOfCameraAndHand) {
 TEST(GraspTask, CheckShowsTheParametersAndEachSlotsTypeAndInterface) {
   const auto r = fba::test::fba_run({kGrasp, "--check", "--profile", "sim", "--set", "depth=7"});
   ASSERT_EQ(r.status, 0) << r.output;
-  for (const char* line : {"parameter depth = 7  (int, --set)\n", "parameter mesh = ", "  (path, profile default)\n", "profile sim (",
+  for (const char* line : {"parameter depth = 7  (int, --set)\n", "parameter scene.mesh = ", "  (path, profile default)\n", "profile sim (",
                            "slot arm: sim.arm\n", "slot camera: sim.camera\n    inputs:  pose (fba.Pose, optional)\n    outputs: frame (fba.Frame)\n",
                            "slot hand: sim.hand\n    inputs:  grasp (fba.Grasp)\n    outputs: result (fba.GraspExecution)\n"
                            "    events:  dropped, held, error, finished\n"})

@@ -68,8 +68,8 @@ LIST (paths relative to it):
   timeout_s: 600                       optional: a run still going after this is stopped (SIGTERM,
                                        SIGKILL 20 s later) and is a row "timed out"
   pose_set:                            how a run's object and pose reach the task, as --set
-    - mesh={mesh}                      overrides; {mesh}: the mesh's absolute path, {x} {y}
-    - object_yaw={yaw}                 (metres) {yaw} (degrees): the run's pose
+    - scene.mesh={mesh}                overrides; {mesh}: the mesh's absolute path, {x} {y}
+    - scene.yaw={yaw}                  (metres) {yaw} (degrees): the run's pose
   set: [synthesis.max_views=10]        optional: overrides for every run
   variants:                            optional (default: one, "task"): each run once per variant
     - { name: loop }

@@ -55,7 +55,7 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   // Depth 4 and at most 3 views: quick; whether a grasp is found there does not matter here.
   std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
                    << "fba_run_args: [-e, deterministic]\n"
-                   << "pose_set:\n  - mesh={mesh}\n  - object_yaw={yaw}\n"
+                   << "pose_set:\n  - scene.mesh={mesh}\n  - scene.yaw={yaw}\n"
                    << "set: [carver.max_depth=4, synthesis.max_views=3]\n"
                    << "variants:\n  - { name: loop, set: [carver.compare_uniform=true] }\n"
                    << "  - { name: uniform, set: [carver.occupancy_threshold=0] }\n"
@@ -82,7 +82,7 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   const std::string failed = line_starting(r.output, "loop     no-such-mesh.obj");
   EXPECT_NE(failed.find("no summary"), std::string::npos) << r.output;
   EXPECT_NE(failed.find("exit 2"), std::string::npos) << r.output;
-  EXPECT_NE(failed.find("parameter 'mesh'"), std::string::npos) << r.output;
+  EXPECT_NE(failed.find("parameter 'scene.mesh'"), std::string::npos) << r.output;
 
   std::ifstream in(out / "runs.json");
   const auto runs = nlohmann::json::parse(in, nullptr, false);
@@ -129,14 +129,14 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   EXPECT_TRUE(fs::exists(out / "table.txt"));
 }
 
-// The poses a dry run would give fba-run: object_x, object_y, object_yaw of each command line.
+// The poses a dry run would give fba-run: scene.x, scene.y, scene.yaw of each command line.
 std::vector<std::array<double, 3>> dry_run_poses(const std::string& output) {
   std::vector<std::array<double, 3>> poses;
   std::istringstream in(output);
   for (std::string line; std::getline(in, line);) {
     std::array<double, 3> p{};
     int found = 0;
-    for (const auto& [key, slot] : {std::pair{"object_x=", 0}, {"object_y=", 1}, {"object_yaw=", 2}}) {
+    for (const auto& [key, slot] : {std::pair{"scene.x=", 0}, {"scene.y=", 1}, {"scene.yaw=", 2}}) {
       const std::size_t at = line.find(key);
       if (at == std::string::npos) continue;
       p[slot] = std::stod(line.substr(at + std::string(key).size()));
@@ -151,7 +151,7 @@ TEST_F(EvaluateGraspBatch, RandomRunsDrawTheSamePosesFromTheSameSeedWithinTheirR
   const fs::path l = dir_ / "list.yaml";
   const auto write = [&](int seed) {
     std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
-                     << "pose_set:\n  - mesh={mesh}\n  - object_x={x}\n  - object_y={y}\n  - object_yaw={yaw}\n"
+                     << "pose_set:\n  - scene.mesh={mesh}\n  - scene.x={x}\n  - scene.y={y}\n  - scene.yaw={yaw}\n"
                      << "runs:\n  - { mesh: " << mustard() << ", pose: [0.5, 0.5, 7] }\n"
                      << "random_runs:\n  meshes: [" << mustard() << ", " << mustard() << "]\n  per_mesh: 20\n"
                      << "  x: [-0.01, 0.01]\n  y: [0.02, 0.03]\n  yaw: [90, 180]\n  seed: " << seed << "\n";
