@@ -95,9 +95,9 @@ uniform carve's uniform_nodes, and saved_share), however the run ended.
 
 With more than one variant the table ends with each variant paired with the first, run by run:
 runs where both, only one or neither selected a grasp (with the exact McNemar test's p on the
-runs only one did); over the runs where both did, the median
-of the epsilon differences on the mesh and of the node differences, each with a 95% bootstrap
-interval (10,000 resamples, --seed): a gap whose interval holds 0 is one the runs' spread explains.
+runs only one did); the median of the epsilon differences on the mesh over the runs where both
+did, and of the node differences over every run, each with a 95% bootstrap interval (10,000
+resamples, --seed): a gap whose interval holds 0 is one the runs' spread explains.
 --dry-run prints each run's fba-run command line (random poses drawn) and runs nothing.
 
 Exit status: 0 when the batch was run and evaluated (whatever the runs' outcomes), 2 for a bad
@@ -633,8 +633,8 @@ std::string summary_line(int width, const std::string& variant, const std::strin
 }
 
 // Each variant beside the first, run by run (rows are variant by variant, each in the list's run
-// order): which runs selected a grasp, and over the runs where both did, the median difference of
-// epsilon on the mesh and of the nodes processed with their bootstrap intervals.
+// order): which runs selected a grasp; the median difference of epsilon on the mesh over the runs
+// where both did, and of the nodes processed over every run, with their bootstrap intervals.
 std::string paired_block(const BatchList& l, const std::vector<Row>& rows, std::uint64_t seed) {
   constexpr std::size_t kResamples = 10'000;
   const std::size_t n = l.runs.size();
@@ -649,7 +649,7 @@ std::string paired_block(const BatchList& l, const std::vector<Row>& rows, std::
   std::ostringstream out;
   char line[512];
   out << "\npaired with " << ref << ", run by run (diff: the variant's figure minus " << ref
-      << "'s, median over the runs where both selected a grasp; [95% bootstrap interval]):\n";
+      << "'s, median over the runs where both selected a grasp for epsilon, over every run for nodes; [95% bootstrap interval]):\n";
   std::snprintf(line, sizeof line, "%-*s %5s %9s %9s %7s %6s %5s %-28s %6s %6s  %s\n", width, "variant", "both", "only_ref", "only_var",
                 "neither", "p_sel", "pairs", "eps_diff [interval]", "higher", "lower", "nodes_diff [interval]");
   out << line;
@@ -663,9 +663,9 @@ std::string paired_block(const BatchList& l, const std::vector<Row>& rows, std::
       else if (a.selected) ++only_ref;
       else if (b.selected) ++only_var;
       else ++neither;
-      if (!a.selected || !b.selected) continue;
-      if (a.force_closure && b.force_closure) eps_ref.push_back(a.epsilon), eps_var.push_back(b.epsilon);
+      // Nodes are spent whether or not a grasp comes of them: every run that counted them.
       if (a.nodes >= 0 && b.nodes >= 0) nodes_ref.push_back(static_cast<double>(a.nodes)), nodes_var.push_back(static_cast<double>(b.nodes));
+      if (a.selected && b.selected && a.force_closure && b.force_closure) eps_ref.push_back(a.epsilon), eps_var.push_back(b.epsilon);
     }
     const PairedDifference e = paired_difference(eps_ref, eps_var, kResamples, seed);
     const PairedDifference k = paired_difference(nodes_ref, nodes_var, kResamples, seed);
