@@ -159,22 +159,12 @@ class ListReader {
   }
 
   double number(const YAML::Node& n, const std::string& what) const {
-    double v = 0;
-    if (n.IsScalar()) {
-      const std::string& s = n.Scalar();
-      const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-      if (r.ec == std::errc() && r.ptr == s.data() + s.size() && std::isfinite(v)) return v;
-    }
+    if (const auto v = parsed<double>(n); v && std::isfinite(*v)) return *v;
     fail(n, what + ": expected a number, found " + found(n));
   }
 
   std::uint64_t whole(const YAML::Node& n, const std::string& what, std::uint64_t lo, std::uint64_t hi) const {
-    std::uint64_t v = 0;
-    if (n.IsScalar()) {
-      const std::string& s = n.Scalar();
-      const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-      if (r.ec == std::errc() && r.ptr == s.data() + s.size() && v >= lo && v <= hi) return v;
-    }
+    if (const auto v = parsed<std::uint64_t>(n); v && *v >= lo && *v <= hi) return *v;
     fail(n, what + ": expected a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ", found " + found(n));
   }
 
@@ -215,6 +205,17 @@ class ListReader {
   }
 
  private:
+  // The whole scalar as a T, or nullopt.
+  template <class T>
+  static std::optional<T> parsed(const YAML::Node& n) {
+    if (!n.IsScalar()) return std::nullopt;
+    const std::string& s = n.Scalar();
+    T v{};
+    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (r.ec != std::errc() || r.ptr != s.data() + s.size()) return std::nullopt;
+    return v;
+  }
+
   fs::path file_;
 };
 
@@ -252,15 +253,17 @@ void add_random_runs(const ListReader& r, const YAML::Node& rr, std::vector<RunS
     const double v = std::round((range.first + (range.second - range.first) * u) * per_unit) / per_unit;
     return std::clamp(v, range.first, range.second);
   };
-  for (const auto& mesh : meshes)
+  for (const auto& mesh : meshes) {
+    const std::string path = r.path(mesh).string();
     for (std::uint64_t k = 0; k < per_mesh; ++k) {
       RunSpec s;
-      s.mesh = r.path(mesh).string();
+      s.mesh = path;
       s.x = draw(x, 1000);
       s.y = draw(y, 1000);
       s.yaw = draw(yaw, 1);
       runs.push_back(std::move(s));
     }
+  }
 }
 
 BatchList read_list(const std::string& file) {
@@ -306,7 +309,7 @@ BatchList read_list(const std::string& file) {
   if (runs ? !runs.IsSequence() || runs.size() == 0 : !root["random_runs"])
     r.fail(runs ? runs : root, "runs: expected a list of {mesh, pose: [x, y, yaw], set: [...]} (or random_runs), found " +
                                    ListReader::found(runs));
-  for (const auto& item : runs ? runs : YAML::Node(YAML::NodeType::Sequence)) {
+  for (const auto& item : runs) {  // an absent 'runs' is an empty sequence here (random_runs only)
     if (!item.IsMap()) r.fail(item, "a run: expected {mesh: ..., pose: [x, y, yaw]}, found " + ListReader::found(item));
     r.check_keys(item, {"mesh", "pose", "set"}, "a run");
     RunSpec s;
