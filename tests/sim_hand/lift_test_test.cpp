@@ -12,7 +12,7 @@
 #include "lift_test.hpp"
 #include "ring_grasp.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace {
 

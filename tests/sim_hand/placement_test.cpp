@@ -15,7 +15,7 @@
 #include "object_placement.hpp"
 #include "support/built_plugins.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include "support/built_plugins.hpp"
 #include "tasks/fba_run_process.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace {
 

@@ -20,7 +20,7 @@
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/octree_carver.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace {
 

@@ -6,7 +6,7 @@
 // silhouette: the carved ones (self-consistency) and, as accuracy against masks the carve never
 // saw, silhouettes made another way (Otsu's threshold instead of the fixed 0.19, same clean-up).
 //
-//   fba-carve-benchmark [shared-data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX] [--detail VIEWS,DEPTH]
+//   fba-carve-benchmark [data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX] [--detail VIEWS,DEPTH]
 #include <time.h>
 
 #include <algorithm>
@@ -74,7 +74,7 @@ std::vector<int> option_list(const std::string& name, const std::string& text, d
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string data = fba::test::shared_data_dir();
+  std::string data = fba::test::data_dir();
   int repeat = 5, threads = 0;
   std::vector<int> depths{6, 7, 8};
   double tolerance = CarverParams{}.silhouette_tolerance;
@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
     else if (a == "--depths" && i + 1 < argc) depths = option_list(a, argv[++i], 1, 10);
     else if (a.rfind("-", 0) == 0) {
       const bool help = a == "--help" || a == "-h";
-      std::fprintf(help ? stdout : stderr, "usage: fba-carve-benchmark [shared-data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX] [--detail VIEWS,DEPTH]\n");
+      std::fprintf(help ? stdout : stderr, "usage: fba-carve-benchmark [data-dir] [--repeat N] [--threads N] [--depths 6,7,8] [--tolerance PX] [--detail VIEWS,DEPTH]\n");
       if (!help) std::fprintf(stderr, "unknown or incomplete option '%s'\n", a.c_str());
       return help ? 0 : 2;
     } else {

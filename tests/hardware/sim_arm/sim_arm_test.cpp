@@ -18,7 +18,7 @@
 #include "support/wrist_camera_arm.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 using fba::testing::ComponentHarness;
 

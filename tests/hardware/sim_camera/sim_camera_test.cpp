@@ -10,7 +10,7 @@
 
 #include "support/built_plugins.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace {
 

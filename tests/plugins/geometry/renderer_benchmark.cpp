@@ -5,7 +5,7 @@
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/renderer.hpp"
 #include "fba/geometry/viewpoints.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace fba::geometry {
 namespace {

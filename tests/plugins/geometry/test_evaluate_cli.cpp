@@ -20,7 +20,7 @@
 #include "fba/geometry/viewpoints.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 extern char** environ;
 

@@ -9,10 +9,10 @@
 
 namespace fba::geometry::test {
 
-inline std::filesystem::path shared_data() { return fba::test::shared_data_dir(); }
+inline std::filesystem::path data() { return fba::test::data_dir(); }
 
 inline std::filesystem::path ycb_mesh(const std::string& name) {
-  return shared_data() / "ycb" / name / "model.obj";
+  return data() / "ycb" / name / "model.obj";
 }
 
 inline const char* const kYcbNames[] = {"YcbMustardBottle", "YcbMasterChefCan", "YcbBanana",

@@ -19,7 +19,7 @@
 
 #include "support/built_plugins.hpp"
 #include "voxel_shapes.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 using fba::testing::ComponentHarness;
 

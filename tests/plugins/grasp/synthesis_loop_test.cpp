@@ -11,7 +11,7 @@
 
 #include "fba/grasp/grasp_json.hpp"
 #include "support/built_plugins.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace {
 

@@ -19,7 +19,7 @@
 #include "fba/vision/image_set.hpp"
 #include "fba/vision/octree_carver.hpp"
 #include "support/built_plugins.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace {
 

@@ -18,7 +18,7 @@
 
 #include "evaluate_grasp.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace {
 

@@ -1,5 +1,5 @@
 // Contacts on a true object surface, its centre of mass, and the random baseline against the
-// independent figures measured on the YCB meshes (../shared/data/README.md).
+// independent figures measured on the YCB meshes (data/README.md).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +11,7 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/grasp/object_surface.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace fba::grasp {
 namespace {
@@ -123,7 +123,7 @@ TEST(ObjectSurface, SamplesAreUniformByArea) {
   EXPECT_NEAR(static_cast<double>(top_or_bottom) / n, expected, 0.014);
 }
 
-// The independent Python check in ../shared/data/README.md: share of random three-contact sets
+// The independent Python check in data/README.md: share of random three-contact sets
 // that are force closure, and the 99th percentile of epsilon, per YCB mesh.
 struct Independent {
   const char* mesh;

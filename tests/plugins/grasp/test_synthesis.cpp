@@ -13,7 +13,7 @@
 #include "fba/grasp/grasp_quality.hpp"
 #include "fba/grasp/object_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace fba::grasp {
 namespace {
@@ -535,7 +535,7 @@ TEST(GraspSynthesis, BadInputIsAClearError) {
 // the independent quality measure.
 struct YcbCase {
   const char* mesh;
-  double random_p99;  // independent figure from ../shared/data/README.md; 0: none published
+  double random_p99;  // independent figure from data/README.md; 0: none published
 };
 
 class SynthesisOnYcb : public testing::TestWithParam<YcbCase> {};

@@ -9,7 +9,7 @@
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/image_set.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 using namespace fba::vision;
 

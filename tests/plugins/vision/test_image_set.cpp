@@ -9,7 +9,7 @@
 #include "fba/vision/image_set.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace fs = std::filesystem;
 using namespace fba::vision;

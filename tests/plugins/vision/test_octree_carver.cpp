@@ -19,7 +19,7 @@
 #include "fba/vision/reference_carve.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 using namespace fba::vision;
 

@@ -16,7 +16,7 @@
 
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
-#include "support/shared_data.hpp"
+#include "support/data_sets.hpp"
 
 namespace fs = std::filesystem;
 using fba::testing::ComponentHarness;
