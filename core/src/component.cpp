@@ -104,6 +104,7 @@ void Context::emit_event(std::string_view name, std::string payload) { node_.emi
 
 void Context::finish() { node_.finish_requested = true; }
 std::int64_t Context::now_ns() const { return node_.graph.now_ns(); }
+std::stop_token Context::stop_token() const { return node_.graph.stop_token(); }
 spdlog::logger& Context::log() const { return *node_.logger; }
 const std::filesystem::path& Context::output_dir() const { return node_.graph.options.output_dir; }
 const std::filesystem::path& Context::task_dir() const { return node_.graph.task_dir; }

@@ -48,7 +48,7 @@ struct Live {
   }
   // Per second since the previous dump, or since the start without one.
   double rate(std::uint64_t count, std::uint64_t before) const {
-    const double dt = now->wall_s - (earlier ? earlier->wall_s : 0.0);
+    const double dt = now->run_s() - (earlier ? earlier->run_s() : 0.0);
     return dt > 0 ? static_cast<double>(count - std::min(count, before)) / dt : 0.0;
   }
 };

@@ -515,6 +515,12 @@ void Node::on_finish() {
 // Graph
 
 Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std::move(opts)) {
+  // While constructing, a caller's stop reaches the constructors through the stop token and
+  // construct() ends the construction; after it, the stop is a stop of the run.
+  external_stop_.emplace(options.stop, std::function<void()>([this] {
+    stop_source_.request_stop();
+    if (constructed_.load()) request_stop(Outcome::Interrupted, "stop requested");
+  }));
   task_dir = config.file.empty() ? std::filesystem::current_path() : config.file.parent_path();
   std::map<std::string, Node*> by_name;
   for (const auto& c : config.components) {
@@ -603,7 +609,9 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
 }
 
 void Graph::construct() {
+  constructing_since = std::chrono::steady_clock::now();
   for (auto& n : nodes) {
+    if (stop_source_.stop_requested()) break;
     std::string error;
     try {
       n->construct();
@@ -617,31 +625,53 @@ void Graph::construct() {
       error = "it threw a non-exception (not derived from std::exception) from its constructor";
     }
     if (error.empty()) continue;
+    if (stop_source_.stop_requested()) {
+      // A constructor cut short by the stop (a device wait that gave up): not a configuration error.
+      n->logger->info("construction stopped: {}", error);
+      break;
+    }
     // The actuators created so far may already hold a device: they go to their safe state, and
     // the results go with the error (the summary lists them as after a run).
-    Watchdog safe;
-    std::vector<SafeStateResult> safe_states;
-    std::vector<std::pair<std::size_t, std::shared_ptr<SafeStateResult>>> started;  // index in safe_states, result
-    for (auto& a : nodes) {
-      if (a->spec.kind() != Kind::Actuator) continue;
-      safe_states.push_back({a->config.name, "not constructed", {}});
-      if (!a->current_component()) continue;
-      auto r = std::make_shared<SafeStateResult>();
-      started.emplace_back(safe_states.size() - 1, r);
-      safe.start([a = a.get(), r] { *r = a->safe_state(); });
-    }
-    safe.wait_until(std::chrono::steady_clock::now() +
-                    std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                        std::chrono::duration<double>(std::max(0.0, options.stop_grace_s))));
-    for (std::size_t k = 0; k < started.size(); ++k) {
-      auto& result = safe_states[started[k].first];
-      if (safe.returned(k)) result = *started[k].second;
-      else result = safe_state_not_returned(result.component);
-    }
+    construct_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - constructing_since).count();
     throw ConstructionError({Diagnostic{n->config.where, "component '" + n->config.name + "' (" + n->spec.type_name() +
                                                              ") refused its configuration: " + error}},
-                            std::move(safe_states));
+                            safe_states_after_construction());
   }
+  construct_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - constructing_since).count();
+  constructed_.store(true);
+  // Stopped while constructing: the components not constructed stay so, and run() only takes the
+  // safe states of those that were.
+  if (stop_source_.stop_requested()) {
+    std::string last;
+    for (auto& n : nodes)
+      if (!n->current_component()) {
+        last = "component '" + n->config.name + "' (" + n->spec.type_name() + ")";
+        break;
+      }
+    request_stop(Outcome::Interrupted, last.empty() ? "stop requested while constructing"
+                                                    : "stop requested while constructing " + last);
+  }
+}
+
+std::vector<SafeStateResult> Graph::safe_states_after_construction() {
+  Watchdog safe;
+  std::vector<SafeStateResult> safe_states;
+  std::vector<std::pair<std::size_t, std::shared_ptr<SafeStateResult>>> started_calls;  // index in safe_states, result
+  for (auto& a : nodes) {
+    if (a->spec.kind() != Kind::Actuator) continue;
+    safe_states.push_back({a->config.name, "not constructed", {}});
+    if (!a->current_component()) continue;
+    auto r = std::make_shared<SafeStateResult>();
+    started_calls.emplace_back(safe_states.size() - 1, r);
+    safe.start([a = a.get(), r] { *r = a->safe_state(); });
+  }
+  safe.wait_until(std::chrono::steady_clock::now() + grace());
+  for (std::size_t k = 0; k < started_calls.size(); ++k) {
+    auto& result = safe_states[started_calls[k].first];
+    if (safe.returned(k)) result = *started_calls[k].second;
+    else result = safe_state_not_returned(result.component);
+  }
+  return safe_states;
 }
 
 Graph::~Graph() {
@@ -835,6 +865,7 @@ void Graph::check_idle() {
 }
 
 void Graph::request_stop(Outcome outcome, const std::string& reason, std::shared_ptr<const Event> event) {
+  stop_source_.request_stop();  // before the flag: a component that sees stopping() sees its token requested
   {
     std::lock_guard lock(result_mutex_);
     if (stopping_.load()) return;
@@ -906,19 +937,24 @@ RunResult Graph::run() {
   if (ran_) throw std::logic_error("a task runs once");
   ran_ = true;
   started = std::chrono::steady_clock::now();
+  if (constructing_since == std::chrono::steady_clock::time_point{}) constructing_since = started;
   running_since_set_.store(true, std::memory_order_release);
-  for (auto& n : nodes)
-    if (n->periodic()) {
-      n->ticking.store(true);
-      live_periodic.fetch_add(1);
-    }
-  for (auto& n : nodes) notify(n.get());
+  // Stopped before it started (while constructing): nothing runs, some components may not exist.
+  if (!stopping()) {
+    for (auto& n : nodes)
+      if (n->periodic()) {
+        n->ticking.store(true);
+        live_periodic.fetch_add(1);
+      }
+    for (auto& n : nodes) notify(n.get());
+  }
   executor_->run();  // returns once the graph is stopping
   const std::vector<StuckCall> stuck = stop();
 
   std::lock_guard lock(result_mutex_);
   RunResult r = result_;
-  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  r.wall_s = wall_s_now();
+  r.construct_s = construct_s;
   r.events.reserve(events_.size());
   for (std::size_t i = 0; i < events_.size(); ++i) {
     r.events.push_back(*events_[i]);
@@ -979,7 +1015,10 @@ std::uint64_t Graph::collect_stats(RunResult& r) {
 
 RunResult Graph::snapshot() {
   RunResult r;
-  r.wall_s = running_since_set_.load(std::memory_order_acquire) ? std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() : 0.0;
+  if (running_since_set_.load(std::memory_order_acquire)) {
+    r.wall_s = wall_s_now();
+    r.construct_s = construct_s;
+  }
   collect_stats(r);
   // The calls running now and each actuator's safe state so far: what an exit that does not wait
   // (a second Ctrl-C) leaves behind, for its summary.
@@ -994,10 +1033,18 @@ RunResult Graph::snapshot() {
   return r;
 }
 
+std::chrono::steady_clock::duration Graph::grace() const {
+  const double s = std::min(std::max(0.0, options.stop_grace_s), kMaxDurationS);  // NaN: 0
+  return std::chrono::nanoseconds(static_cast<std::int64_t>(s * 1e9));
+}
+
+double Graph::wall_s_now() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - constructing_since).count();
+}
+
 std::vector<StuckCall> Graph::stop() {
   using Clock = std::chrono::steady_clock;
-  const auto grace =
-      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, options.stop_grace_s)));
+  const auto grace = this->grace();
   // Ask running (and blocking) components to return. interrupt() may block too: each call gets
   // a thread of its own, so a stuck one is only reported.
   Watchdog interrupts;
@@ -1013,6 +1060,7 @@ std::vector<StuckCall> Graph::stop() {
   // does not overlap its process()), without waiting for the other components' threads: one of
   // them may be stuck, and a second Ctrl-C meanwhile would leave the actuators unsafe. In
   // parallel, each under its own watchdog; one still in its own call at the deadline gets it then.
+  // One whose spec allows it (Spec::concurrent_safe_state) gets it at once, beside its call.
   Watchdog safe;
   std::vector<Node*> actuators;
   std::vector<std::shared_ptr<SafeStateResult>> results;
@@ -1037,7 +1085,8 @@ std::vector<StuckCall> Graph::stop() {
       // holds it, and a strand that starts now sees the stop first.
       const int state = actuators[i]->state.load(std::memory_order_seq_cst);
       const bool in_call = state == Node::Running || state == Node::RunningNotified;
-      if (!even_running && (in_call || (interrupt_of[i] != SIZE_MAX && !interrupts.returned(interrupt_of[i])))) continue;
+      const bool at_once = actuators[i]->spec.has_concurrent_safe_state();
+      if (!even_running && !at_once && (in_call || (interrupt_of[i] != SIZE_MAX && !interrupts.returned(interrupt_of[i])))) continue;
       watch[i] = started_safe++;
       safe.start([n = actuators[i], r = results[i]] { *r = n->safe_state(); });
     }

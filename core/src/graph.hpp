@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stop_token>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -248,6 +249,8 @@ class Graph {
   void check_idle();
   void request_stop(Outcome outcome, const std::string& reason, std::shared_ptr<const Event> event = {});
   bool stopping() const { return stopping_.load(std::memory_order_acquire); }
+  // Requested by request_stop() and by RunOptions::stop: what Context::stop_token() hands out.
+  std::stop_token stop_token() const { return stop_source_.get_token(); }
   std::int64_t now_ns() const { return executor_->now_ns(); }
   // Logs at warn level what the run waits for when nothing has been produced for a while.
   void warn_stall(double quiet_s);
@@ -285,7 +288,9 @@ class Graph {
   // Threads were left behind in a component call: the graph must outlive them, so the Task
   // leaks it on purpose rather than destroy what they use.
   std::atomic<bool> abandoned{false};
-  std::chrono::steady_clock::time_point started;
+  std::chrono::steady_clock::time_point constructing_since;  // set by construct(), before `started`
+  std::chrono::steady_clock::time_point started;              // run() began
+  double construct_s = 0;
   double timeout_s = 0;
   int worker_threads = 2;
 
@@ -296,7 +301,17 @@ class Graph {
   // After the executor stopped: interrupts, joins within the grace, and safe states; returns
   // the calls that did not return.
   std::vector<StuckCall> stop();
+  // After a constructor refused its configuration: the constructed actuators' safe states, one
+  // result per actuator of the task.
+  std::vector<SafeStateResult> safe_states_after_construction();
+  // The stop grace, saturated where adding it to the clock would overflow (kMaxDurationS: never).
+  std::chrono::steady_clock::duration grace() const;
   std::atomic<bool> stopping_{false};
+  std::stop_source stop_source_;
+  std::atomic<bool> constructed_{false};
+  std::optional<std::stop_callback<std::function<void()>>> external_stop_;  // RunOptions::stop
+  // The whole wall time so far: from construct() (or run(), for a graph never constructed).
+  double wall_s_now() const;
   PiMutex result_mutex_;  // events are recorded from workers
   RunResult result_;
   // Each event is stored once; the final event is one of them (or, past the list's bound, its own).

@@ -44,13 +44,16 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
     }
     j["params"] = params;
   }
+  if (!r.run_id.empty()) j["run_id"] = r.run_id;
   j["outcome"] = to_string(r.outcome);
   j["exit_code"] = r.exit_code();
   j["reason"] = r.reason;
   if (!r.phase.empty()) j["phase"] = r.phase;
   if (r.signal > 0) j["signal"] = r.signal;
   if (r.forced) j["forced"] = true;
+  if (!r.artefacts.empty()) j["artefacts"] = r.artefacts;
   j["wall_time_s"] = r.wall_s;
+  j["construct_time_s"] = r.construct_s;
   // The process's peak resident memory so far (the whole fba-run process when it writes this).
   if (rusage u{}; getrusage(RUSAGE_SELF, &u) == 0) j["peak_resident_mib"] = static_cast<double>(u.ru_maxrss) / 1024.0;
   j["lost_to_restarts"] = r.lost_to_restarts;
@@ -63,7 +66,7 @@ std::string summary_json(const RunResult& r, const TaskConfig& task) {
     j["final_event"] = fe;
   }
   json comps = json::object();
-  const double wall = r.wall_s > 0 ? r.wall_s : 1e-9;
+  const double wall = r.run_s() > 0 ? r.run_s() : 1e-9;
   for (const auto& c : r.components) {
     json cj{{"type", c.type},
             {"kind", to_string(c.kind)},

@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <limits>
+#include <stop_token>
 #include <condition_variable>
 #include <mutex>
 #include <stdexcept>
@@ -206,6 +208,64 @@ class OverlapChecked final : public fba::Component {
   std::atomic<bool> in_process_{false};
 };
 
+// Declares that its safe state may run beside process() (a quick stop on its own bus message):
+// process() waits, whatever interrupt says, until safe_state() ran, and records whether it saw
+// that happen while it was still inside its call. Were the stop to wait for process() to return,
+// process() would wait out its bound and see nothing.
+std::atomic<int> g_concurrent_safe_entered{0};
+std::atomic<bool> g_concurrent_safe_seen_in_process{false};
+
+class ConcurrentSafeState final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::actuator("test.concurrent_safe_state", "Its safe state runs beside a process() that waits for it.")
+        .add(kIn)
+        .concurrent_safe_state();
+  }
+  static constexpr fba::In<std::int64_t> kIn{"in", "anything"};
+  explicit ConcurrentSafeState(fba::Context&) {}
+  void process() override {
+    g_concurrent_safe_entered.fetch_add(1);
+    std::unique_lock lock(mutex_);
+    cv_.wait_for(lock, std::chrono::seconds(20), [this] { return safe_; });
+    if (safe_) g_concurrent_safe_seen_in_process.store(true);
+  }
+  void safe_state() override {
+    std::lock_guard lock(mutex_);
+    safe_ = true;
+    cv_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool safe_ = false;
+};
+
+// Its constructor waits on the device (here: for the stop) for as long as a hand's activation
+// may take; a stop cuts it short through the context's stop token.
+std::atomic<int> g_slow_constructions{0};
+std::atomic<bool> g_slow_construction_saw_stop{false};
+
+class SlowConstructor final : public fba::Component {
+ public:
+  static fba::Spec spec() {
+    return fba::Spec::actuator("test.slow_constructor", "Its constructor waits for the stop, up to 60 s.").add(kIn);
+  }
+  static constexpr fba::OptionalIn<std::int64_t> kIn{"in", "anything"};
+  explicit SlowConstructor(fba::Context& ctx) {
+    g_slow_constructions.fetch_add(1);
+    std::mutex mutex;
+    std::condition_variable_any cv;
+    std::unique_lock lock(mutex);
+    const std::stop_token stop = ctx.stop_token();
+    cv.wait_for(lock, stop, std::chrono::seconds(60), [] { return false; });
+    g_slow_construction_saw_stop.store(stop.stop_requested());
+    if (stop.stop_requested()) throw std::runtime_error("activation stopped");
+  }
+  void process() override {}
+};
+
 // Free-running, produces nothing, never finishes.
 class Idle final : public fba::Component {
  public:
@@ -229,6 +289,8 @@ FBA_COMPONENT(AlwaysFails);
 FBA_COMPONENT(Idle);
 FBA_COMPONENT(InterruptThenSafe);
 FBA_COMPONENT(OverlapChecked);
+FBA_COMPONENT(ConcurrentSafeState);
+FBA_COMPONENT(SlowConstructor);
 
 namespace {
 
@@ -339,6 +401,85 @@ connections: [ src.out -> act.in ]
     stopper.join();
     ASSERT_NE(safe_state_of(r, "act"), nullptr);
     EXPECT_EQ(safe_state_of(r, "act")->status, "reached") << safe_state_of(r, "act")->message;
+  }
+}
+
+// An actuator whose spec declares concurrent_safe_state() gets its safe state at once, while its
+// process() still runs, instead of after the call returns (the issue: SIGTERM reached a sleeping
+// sink's safe state only after the grace).
+TEST_P(Shutdown, AnActuatorWithAConcurrentSafeStateGetsItDuringItsCall) {
+  g_concurrent_safe_seen_in_process = false;
+  fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 1000000000 } }
+  act: { type: test.concurrent_safe_state }
+connections: [ src.out -> act.in ]
+)"),
+                 options(GetParam(), 60));
+  auto stopper = stop_when(task, g_concurrent_safe_entered, g_concurrent_safe_entered.load());
+  const auto r = task.run();
+  stopper.join();
+  EXPECT_TRUE(g_concurrent_safe_seen_in_process.load());
+  ASSERT_NE(safe_state_of(r, "act"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "act")->status, "reached");
+  EXPECT_TRUE(r.stuck.empty()) << r.reason;
+}
+
+// A stop while a constructor waits on its device reaches that constructor (Context::stop_token),
+// leaves the later components unconstructed, and the run ends interrupted with the safe states of
+// those constructed, its time counted from the first constructor.
+TEST(Shutdown, AStopDuringConstructionCutsTheConstructorShortAndTakesTheSafeStates) {
+  g_slow_construction_saw_stop = false;
+  const int safe_before = g_safe_states.load();
+  const int constructions = g_slow_constructions.load();
+  std::stop_source stop;
+  fba::RunOptions o = options(ExecutorKind::Threaded, 30);
+  o.stop = stop.get_token();
+  std::thread stopper([&] {
+    while (g_slow_constructions.load() == constructions) std::this_thread::yield();
+    stop.request_stop();
+  });
+  fba::Task task(load(R"(
+components:
+  first: { type: test.counted_actuator }
+  slow: { type: test.slow_constructor }
+  last: { type: test.counted_actuator }
+)"),
+                 o);
+  stopper.join();
+  EXPECT_TRUE(g_slow_construction_saw_stop.load());
+  const auto r = task.run();
+  EXPECT_EQ(r.outcome, Outcome::Interrupted) << r.reason;
+  EXPECT_NE(r.reason.find("while constructing component 'slow' (test.slow_constructor)"), std::string::npos) << r.reason;
+  ASSERT_NE(safe_state_of(r, "first"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "first")->status, "reached");
+  ASSERT_NE(safe_state_of(r, "slow"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "slow")->status, "not constructed");
+  ASSERT_NE(safe_state_of(r, "last"), nullptr);
+  EXPECT_EQ(safe_state_of(r, "last")->status, "not constructed");
+  EXPECT_EQ(g_safe_states.load(), safe_before + 1);
+  EXPECT_GT(r.construct_s, 0.0);
+  EXPECT_GE(r.wall_s, r.construct_s);
+}
+
+// A grace too long for the clock (about 9.2e9 s and more overflowed the nanoseconds) still waits
+// for the safe states instead of acting as no grace at all.
+TEST_P(Shutdown, AStopGraceBeyondTheClocksRangeStillWaitsForTheSafeStates) {
+  for (const double grace : {1e10, 1e300, std::numeric_limits<double>::infinity()}) {
+    fba::Task task(load(R"(
+components:
+  src: { type: examples.counter, params: { count: 1000000000 } }
+  stuck: { type: test.stuck_until_safe }
+  act: { type: test.counted_actuator }
+connections: [ src.out -> stuck.in, src.out -> act.in ]
+)"),
+                   options(GetParam(), grace));
+    auto stopper = stop_when(task, g_stuck_entered, g_stuck_entered.load());
+    const auto r = task.run();
+    stopper.join();
+    ASSERT_NE(safe_state_of(r, "act"), nullptr) << grace;
+    EXPECT_EQ(safe_state_of(r, "act")->status, "reached") << grace;
+    EXPECT_TRUE(r.stuck.empty()) << grace << ": " << r.reason;
   }
 }
 

@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
+#include <stop_token>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -181,6 +182,11 @@ class Context {
   void report(std::string_view name, std::string json);
   // A sensor has produced its last sample.
   void finish();
+  // Requested once the task is asked to stop (a signal, a stop event, a failure, a time-out), during
+  // construction too: a constructor or a call that waits on a device polls it, or waits on it
+  // (std::condition_variable_any, std::stop_callback), so that a stop never waits out a device's
+  // time-out.
+  std::stop_token stop_token() const;
   // Current time on the executor's clock (virtual under the deterministic executor).
   std::int64_t now_ns() const;
   spdlog::logger& log() const;

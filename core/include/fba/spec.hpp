@@ -293,6 +293,10 @@ class Spec {
   // The component may block in process() (device I/O): it gets a thread of its own, and must
   // implement Component::interrupt() (checked when it registers).
   Spec& blocking() { blocking_ = true; return *this; }
+  // Actuators: safe_state() may run while process() runs (a quick stop is a bus message of its
+  // own, sent beside the motion), so a stop calls it at once instead of after process() returns.
+  // The component then guards what process() and safe_state() share.
+  Spec& concurrent_safe_state() { concurrent_safe_state_ = true; return *this; }
 
   Kind kind() const { return kind_; }
   const std::string& type_name() const { return type_name_; }
@@ -305,6 +309,7 @@ class Spec {
   const std::vector<std::pair<std::string, std::string>>& transitions() const { return transitions_; }
   const Trigger& default_trigger() const { return trigger_; }
   bool is_blocking() const { return blocking_; }
+  bool has_concurrent_safe_state() const { return concurrent_safe_state_; }
 
   const PortSpec* find_input(std::string_view name) const;
   const PortSpec* find_output(std::string_view name) const;
@@ -350,6 +355,7 @@ class Spec {
   std::vector<std::pair<std::string, std::string>> transitions_;
   Trigger trigger_;
   bool blocking_ = false;
+  bool concurrent_safe_state_ = false;
 };
 
 }  // namespace fba

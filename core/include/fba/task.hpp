@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <stop_token>
 #include <string>
 #include <utility>
 #include <vector>
@@ -42,6 +43,10 @@ struct RunOptions {
   double stop_grace_s = 5;
   // A warning names what the run waits for when no component has produced anything this long.
   double stall_warning_s = 10;
+  // A stop requested through this token (fba-run's signal watcher) stops the task in order, also
+  // while its components are being constructed: the constructor running then sees it through
+  // Context::stop_token(), the rest are not constructed, and run() only takes the safe states.
+  std::stop_token stop;
 };
 
 // The time a component spent in one of its stages (Stages).
@@ -102,7 +107,9 @@ struct RunResult {
   std::string reason;
   std::optional<Event> final_event;
   std::optional<std::size_t> final_event_index;  // its place in `events`, when it is listed there
-  double wall_s = 0;
+  double wall_s = 0;       // from the first constructor to the end of the stop
+  double construct_s = 0;  // of which in the components' constructors
+  double run_s() const { return wall_s - construct_s; }  // what rates are counted over
   std::vector<ComponentStats> components;
   std::vector<ConnectionStats> connections;
   std::vector<Event> events;  // every event emitted, in order (bounded: the first 10000)
@@ -112,6 +119,8 @@ struct RunResult {
   std::string phase;                   // where fba-run was when it ended: loading, constructing, running
   int signal = 0;                      // the signal that interrupted the run, if any: its exit status is 128 + signal
   bool forced = false;                 // a second signal ended the run without waiting for the stop
+  std::string run_id;                  // who ran it (fba-run's --run-id), so a summary names its run
+  std::vector<std::string> artefacts;  // the files this run wrote into its output folder (fba-run lists them)
   int exit_code() const {
     return outcome == Outcome::Interrupted && signal > 0 ? 128 + signal : fba::exit_code(outcome);
   }
