@@ -21,9 +21,11 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <thread>
 
 #include <boost/program_options.hpp>
+#include <nlohmann/json.hpp>
 
 #include "fba/message_text.hpp"
 #include "fba/log.hpp"
@@ -44,13 +46,46 @@ int usage_error(const std::string& message) {
   return kConfigError;
 }
 
-const char* signal_name(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal"; }
+// "SIGHUP", "SIGRTMIN+3": for messages (sigabbrev_np names the classic ones only).
+std::string signal_name(int sig) {
+  if (sig >= SIGRTMIN && sig <= SIGRTMAX) return sig == SIGRTMIN ? "SIGRTMIN" : "SIGRTMIN+" + std::to_string(sig - SIGRTMIN);
+  const char* abbrev = sigabbrev_np(sig);
+  return abbrev ? std::string("SIG") + abbrev : "signal " + std::to_string(sig);
+}
+
+// Every signal whose default action ends the process and that is delivered to the process as a
+// whole rather than raised by a faulting instruction: each ends the run in order, as SIGINT does
+// (safe states, summary, exit 128 + N). SIGUSR1 writes the live graph instead. The faults
+// (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP, SIGSYS) have the crash handler, which
+// passes one sent by kill(2) on to the watcher.
+std::vector<int> stop_signals() {
+  std::vector<int> v{SIGHUP,  SIGINT,  SIGQUIT, SIGUSR1, SIGUSR2,   SIGPIPE, SIGALRM, SIGTERM,
+                     SIGSTKFLT, SIGXCPU, SIGXFSZ, SIGVTALRM, SIGPROF, SIGIO,   SIGPWR};
+  for (int sig = SIGRTMIN; sig <= SIGRTMAX; ++sig) v.push_back(sig);
+  return v;
+}
+const int kFaultSignals[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP, SIGSYS};
+
+// A signal whose disposition is not the default when fba-run starts is left as it is: one ignored
+// by whoever started it (nohup ignores SIGHUP) stays ignored, one a preloaded tool handles
+// (a profiler's SIGPROF) stays its.
+bool at_default(int sig) {
+  struct sigaction old {};
+  return sigaction(sig, nullptr, &old) == 0 && !(old.sa_flags & SA_SIGINFO) && old.sa_handler == SIG_DFL;
+}
+sigset_t taken_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (int sig : stop_signals())
+    if (at_default(sig)) sigaddset(&set, sig);
+  return set;
+}
 
 // What the watcher, the exit handler and the crash handler need to know about the run.
 struct State {
   std::mutex mutex;                           // orders the task's publication against the first signal
   std::atomic<const char*> phase{"loading"};  // loading, constructing, running
-  std::atomic<int> signal{0};                 // the first SIGINT or SIGTERM
+  std::atomic<int> signal{0};                 // the first stop signal
   std::atomic<const char*> signal_phase{nullptr};
   std::atomic<int> signals{0};
   std::atomic<fba::Task*> task{nullptr};  // set once constructed
@@ -62,10 +97,50 @@ struct State {
   std::thread watcher;
   fs::path live_dot;                // graph-live.dot in --output-dir, written on SIGUSR1 and by --dot-every
   std::atomic<double> dot_every{0};  // seconds between live dumps; 0 for none
+  std::stop_source stop;             // the task's RunOptions::stop: reaches constructors too
+  std::string run_id;                // summary.json's run_id: which run wrote it
+  std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
+  // A fault signal sent by kill(2), passed on by the crash handler to the watcher.
+  std::atomic<int> forwarded{0};
+  std::atomic<pid_t> forwarded_pid{0};
 };
 State& state() {
   static State* s = new State;  // alive for the exit handler
   return *s;
+}
+
+// The files under the output folder written since summary.json's placeholder (start_summary), by
+// path relative to the folder: what this run made, as against what an earlier run left there.
+// Bounded: a folder of a million files is not listed whole.
+std::vector<std::string> artefacts_since(const fs::path& summary) {
+  std::vector<std::string> found;
+  std::error_code ec;
+  const auto since = fs::last_write_time(summary, ec);
+  if (ec) return found;
+  const fs::path dir = summary.parent_path();
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end && found.size() < 10000; it.increment(ec)) {
+    std::error_code e;
+    if (!it->is_regular_file(e) || it->path() == summary) continue;
+    if (const auto t = it->last_write_time(e); !e && t >= since) found.push_back(fs::relative(it->path(), dir, e).string());
+  }
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+// Replaces whatever summary.json an earlier run left in the output folder, before anything can
+// fail, with one that says this run has started: a run that dies without a word (SIGKILL) leaves
+// "running", never an older run's outcome. Its time is the mark artefacts_since() compares with.
+std::string start_summary() {
+  auto& st = state();
+  const nlohmann::json j{{"run_id", st.run_id}, {"task_file", st.config.file.string()}, {"outcome", "running"}};
+  const std::string text = j.dump(2) + "\n";
+  std::FILE* f = std::fopen(st.summary.c_str(), "w");
+  if (!f) return st.summary.string() + ": " + std::strerror(errno);
+  bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  ok = std::fflush(f) == 0 && ok;
+  const int error = errno;
+  ok = std::fclose(f) == 0 && ok;
+  return ok ? std::string() : st.summary.string() + ": " + std::strerror(error ? error : errno);
 }
 
 // Writes summary.json (or `to`); returns the error, or empty.
@@ -73,7 +148,10 @@ std::string write_summary(const fba::RunResult& result, fs::path to = {}) {
   auto& st = state();
   if (st.summary.empty()) return {};
   if (to.empty()) to = st.summary;
-  const std::string text = fba::summary_json(result, st.config);
+  fba::RunResult r = result;
+  r.run_id = st.run_id;
+  r.artefacts = artefacts_since(st.summary);
+  const std::string text = fba::summary_json(r, st.config);
   std::FILE* f = std::fopen(to.c_str(), "w");
   if (!f) return to.string() + ": " + std::strerror(errno);
   const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size();
@@ -91,6 +169,7 @@ fba::RunResult early_result(fba::Outcome outcome, const std::string& reason) {
   r.outcome = outcome;
   r.reason = reason;
   r.phase = state().phase.load();
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - state().started).count();
   if (outcome == fba::Outcome::Interrupted) r.signal = state().signal.load();
   return r;
 }
@@ -109,7 +188,7 @@ bool interrupted_early(int& status) {
   auto& st = state();
   const int sig = st.signal.load();
   if (sig == 0) return false;
-  const std::string reason = std::string("interrupted by ") + signal_name(sig) + " while " + st.signal_phase.load();
+  const std::string reason = "interrupted by " + signal_name(sig) + " while " + st.signal_phase.load();
   const auto r = early_result(fba::Outcome::Interrupted, reason);
   const std::string error = write_summary(r);
   std::cerr << "fba-run: interrupted: " << reason << "\n";
@@ -165,13 +244,13 @@ void report_forced_exit(int sig) {
       safe_states = task->safe_states_so_far();
     }
     std::fprintf(stderr, "fba-run: second %s while stopping: exiting now without waiting; safe states: %s\n",
-                 signal_name(sig), safe_states.c_str());
+                 signal_name(sig).c_str(), safe_states.c_str());
     r.outcome = fba::Outcome::Interrupted;
     const char* first_phase = st.signal_phase.load();
     r.phase = first_phase ? first_phase : st.phase.load();
     r.signal = sig;
     r.forced = true;
-    r.reason = std::string("interrupted by ") + signal_name(st.signal.load()) + " while " + r.phase + "; a second " +
+    r.reason = "interrupted by " + signal_name(st.signal.load()) + " while " + r.phase + "; a second " +
                signal_name(sig) + " forced the exit before the stop was over";
     if (!st.summary.empty()) {
       std::string error;
@@ -189,12 +268,21 @@ void report_forced_exit(int sig) {
   }).detach();
   if (done->get_future().wait_for(kForcedSummaryWait) != std::future_status::ready)
     std::fprintf(stderr, "fba-run: second %s: the summary was not written within %lld s; exiting without it\n",
-                 signal_name(sig), static_cast<long long>(kForcedSummaryWait.count()));
+                 signal_name(sig).c_str(), static_cast<long long>(kForcedSummaryWait.count()));
 }
 
-// Sent by main to its own watcher when the run is over, so that the watcher need not wait out its
-// tick (which every --check would otherwise pay).
+// Sent by main to its own watcher (pthread_kill) when the run is over, so that the watcher need not
+// wait out its tick (which every --check would otherwise pay).
 constexpr int kWakeSignal = SIGUSR2;
+
+// Whether a signal the watcher took asks for nothing: main's wake-up, or the kernel's notice to a
+// writer of this process that its pipe's reader went away (SIGPIPE) or that a file grew past its
+// limit (SIGXFSZ), which the write's own error reports where it was made. Each comes from this
+// process itself; the same signals sent by another process are stop requests.
+bool not_a_request(const siginfo_t& info) {
+  const int sig = info.si_signo;
+  return info.si_pid == getpid() && (sig == kWakeSignal || sig == SIGPIPE || sig == SIGXFSZ);
+}
 
 void watch_signals(sigset_t signals) {
   auto& st = state();
@@ -210,10 +298,16 @@ void watch_signals(sigset_t signals) {
       next_dump = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                           std::chrono::duration<double>(every));
     }
-    siginfo_t info;
-    if (sigtimedwait(&signals, &info, &tick) <= 0) continue;
+    siginfo_t info{};
+    if (const int forwarded = st.forwarded.exchange(0)) {
+      info.si_signo = forwarded;
+      info.si_code = SI_USER;
+      info.si_pid = st.forwarded_pid.load();
+    } else if (sigtimedwait(&signals, &info, &tick) <= 0) {
+      continue;
+    }
     const int sig = info.si_signo;
-    if (sig == kWakeSignal) continue;  // main is done: look at `watching` again
+    if (not_a_request(info)) continue;  // main is done (look at `watching` again), or a write's notice
     if (sig == SIGUSR1) {
       dump_live_graph(previous_dump);
       continue;
@@ -237,9 +331,9 @@ void watch_signals(sigset_t signals) {
     std::lock_guard lock(st.mutex);
     st.signal_phase.store(st.phase.load());
     st.signal.store(sig);
-    std::fprintf(stderr, "fba-run: %s received: stopping in order (a second one forces the exit)\n", signal_name(sig));
-    if (fba::Task* task = st.task.load())
-      task->request_stop(fba::Outcome::Interrupted, std::string("interrupted by ") + signal_name(sig));
+    std::fprintf(stderr, "fba-run: %s received: stopping in order (a second one forces the exit)\n", signal_name(sig).c_str());
+    if (fba::Task* task = st.task.load()) task->request_stop(fba::Outcome::Interrupted, "interrupted by " + signal_name(sig));
+    st.stop.request_stop();  // a constructor waiting on a device gives up
   }
 }
 
@@ -273,15 +367,22 @@ void say(const char* s) {
   (void)written;  // nothing more to do if stderr is gone
 }
 
-// SIGSEGV, SIGBUS, SIGFPE, SIGILL: name what ran, attempt the safe states, write what can be
+// SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP, SIGSYS: name what ran, attempt the safe states, write what can be
 // written, exit 3. Best effort: after a crash the process may be too damaged for any of it.
-void on_crash(int sig, siginfo_t*, void*) {
+void on_crash(int sig, siginfo_t* info, void*) {
+  // Sent by another process (kill -SEGV): a request to stop, not a fault; the watcher takes it.
+  if (info && (info->si_code == SI_USER || info->si_code == SI_QUEUE) && info->si_pid != getpid()) {
+    state().forwarded_pid.store(info->si_pid);
+    state().forwarded.store(sig);
+    return;
+  }
   static std::atomic<bool> once{false};
   if (once.exchange(true)) _exit(kRuntimeError);  // crashed again while reporting
   const fba::ActiveCall call = fba::active_call();
   const char* plugin = fba::plugin_being_loaded();
   say("fba-run: fatal signal ");
-  say(sig == SIGSEGV ? "SIGSEGV" : sig == SIGBUS ? "SIGBUS" : sig == SIGFPE ? "SIGFPE" : "SIGILL");
+  say(sig == SIGSEGV ? "SIGSEGV" : sig == SIGBUS ? "SIGBUS" : sig == SIGFPE ? "SIGFPE" : sig == SIGILL ? "SIGILL"
+      : sig == SIGABRT ? "SIGABRT" : sig == SIGTRAP ? "SIGTRAP" : "SIGSYS");
   if (call.component) {
     say(" in component '");
     say(call.component);
@@ -326,7 +427,7 @@ void install_crash_handlers() {
   sa.sa_sigaction = on_crash;
   sa.sa_flags = SA_SIGINFO | SA_ONSTACK;
   sigemptyset(&sa.sa_mask);
-  for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL}) sigaction(sig, &sa, nullptr);
+  for (int sig : kFaultSignals) sigaction(sig, &sa, nullptr);
 }
 
 // --check with a profile: the other profiles beside the task, each loaded (without --set) and its
@@ -358,15 +459,34 @@ void compare_profiles(const fba::TaskConfig& config, const fba::Registry& regist
   }
 }
 
+// A number of seconds as written: a value too large for a double (1e400) is infinity, as "inf" is.
+bool parse_seconds(const std::string& text, double& out) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size()) return false;
+  if (errno == ERANGE && std::abs(v) < 1) return false;  // underflow: not what anyone meant
+  out = v;
+  return true;
+}
+
+std::string random_run_id() {
+  std::random_device random;
+  char id[17];
+  std::snprintf(id, sizeof id, "%08x%08x", random(), random());
+  return id;
+}
+
 int run(int argc, char** argv) {
   auto& st = state();
   po::options_description visible(
       "Usage: fba-run [options] TASK.yaml\n\nRuns a task. Exit status: 0 success, 1 failure event, 2 configuration "
       "error, "
       "3 runtime error (also a timeout, a component that did not return after the stop, a summary that could not be "
-      "written), 130 interrupted by SIGINT, 143 by SIGTERM.\n\nOptions");
+      "written), 128+N interrupted by signal N (130 SIGINT, 143 SIGTERM, 129 SIGHUP, ...).\n\nOptions");
   std::vector<std::string> sets, plugin_dirs;
-  std::string output_dir, executor, profile, log_level = "info";
+  std::string output_dir, executor, profile, log_level = "info", timeout_text = "0", stop_grace_text, run_id;
   double timeout = 0;
   double stop_grace = fba::RunOptions{}.stop_grace_s;
   double dot_every = 0;
@@ -382,9 +502,13 @@ int run(int argc, char** argv) {
       "bind the task's device slots with this profile: NAME (profiles/NAME.yaml beside the task) or a file")(
       "plugin-path,p", po::value(&plugin_dirs)->composing(), "add a plugin folder (repeatable; also FBA_PLUGIN_PATH)")(
       "output-dir,o", po::value(&output_dir), "write the run's artefacts (summary.json, images, models) here")(
-      "timeout,t", po::value(&timeout), "stop the run after this many seconds (exit 3)")(
-      "stop-grace", po::value(&stop_grace),
-      "seconds that components get to return after a stop, and each actuator's safe state (default 5)")(
+      "run-id", po::value(&run_id),
+      "name this run in summary.json (run_id), so a caller can tell its run's summary from an older one (default: a "
+      "random id)")(
+      "timeout,t", po::value(&timeout_text), "stop the run after this many seconds (exit 3; 0, inf or over 9e9: no limit)")(
+      "stop-grace", po::value(&stop_grace_text),
+      "seconds that components get to return after a stop, and each actuator's safe state (default 5; inf or over 9e9: "
+      "wait for ever)")(
       "executor,e", po::value(&executor), "threaded or deterministic (overrides the task file)")(
       "threads", po::value(&threads), "worker threads of the threaded executor, 0 to 256 (default: the task file's, else one per core)")(
       "log-level", po::value(&log_level), "trace, debug, info, warn, error, critical, off");
@@ -411,37 +535,58 @@ int run(int argc, char** argv) {
     return 0;
   }
   if (!vm.count("task")) return usage_error("no task file given");
-  // NaN compares false with everything: said, not taken as "no limit". Infinity and values beyond
-  // the clock's range mean no limit (docs/task-files.md, limits).
-  if (!(timeout >= 0)) return usage_error("--timeout must be a number of seconds >= 0 (0: none); found " + fba::number_text(timeout));
-  if (threads < 0 || threads > fba::kMaxThreads)
-    return usage_error("--threads must be in [0, " + std::to_string(fba::kMaxThreads) + "] (0: the task file's, else one per core); found " +
-                       std::to_string(threads));
-  if (!(stop_grace >= 0 && std::isfinite(stop_grace)))
-    return usage_error("--stop-grace must be a finite number of seconds >= 0");
-  if (!(dot_every >= 0 && dot_every <= 1e6)) return usage_error("--dot-every must be between 0 and 1e6 seconds");
-  if (dot_every > 0 && output_dir.empty()) return usage_error("--dot-every needs --output-dir (graph-live.dot is written there)");
-  fba::RunOptions options;
-  if (!executor.empty()) {
-    if (executor == "threaded") options.executor = fba::ExecutorKind::Threaded;
-    else if (executor == "deterministic") options.executor = fba::ExecutorKind::Deterministic;
-    else return usage_error("--executor must be threaded or deterministic, not '" + executor + "'");
-  }
-  try {
-    fba::set_log_level(log_level);
-  } catch (const std::exception& e) {
-    return usage_error(e.what());
-  }
+  if (vm.count("output-dir") && output_dir.empty()) return usage_error("--output-dir is empty: give a folder");
   const fs::path task_file = vm["task"].as<std::string>();
   st.config.file = task_file;
+  st.run_id = run_id.empty() ? random_run_id() : run_id;
+  fba::RunOptions options;
+  // The output folder first, so that every end from here on writes its summary there, this
+  // run's (an earlier run's summary is replaced before anything can fail).
   if (!output_dir.empty()) {
     std::error_code ec;
     fs::create_directories(output_dir, ec);
     if (ec) return usage_error("cannot create --output-dir '" + output_dir + "': " + ec.message());
     options.output_dir = fs::absolute(output_dir);
-    std::lock_guard lock(st.mutex);  // a second signal's summary may be written at any moment
-    st.summary = options.output_dir / "summary.json";
-    st.live_dot = options.output_dir / "graph-live.dot";
+    {
+      std::lock_guard lock(st.mutex);  // a second signal's summary may be written at any moment
+      st.summary = options.output_dir / "summary.json";
+      st.live_dot = options.output_dir / "graph-live.dot";
+    }
+    if (const std::string error = start_summary(); !error.empty()) {
+      std::cerr << "fba-run: could not write the summary " << error << "\n";
+      return kRuntimeError;
+    }
+  }
+  // A mistake on the command line or in the task: said, written into the summary, exit 2.
+  auto refuse = [&](const std::string& message, bool usage = true) {
+    if (usage) usage_error(message);
+    else std::cerr << message << "\n";
+    const std::string error = write_summary(early_result(fba::Outcome::ConfigError, message));
+    if (!error.empty()) std::cerr << "fba-run: could not write the summary " << error << "\n";
+    return kConfigError;
+  };
+  // NaN compares false with everything: said, not taken as "no limit". Infinity and values beyond
+  // the clock's range (1e400 as well as inf) mean no limit (docs/task-files.md, limits).
+  if (!parse_seconds(timeout_text, timeout) || !(timeout >= 0))
+    return refuse("--timeout must be a number of seconds >= 0 (0: none); found '" + timeout_text + "'");
+  if (!stop_grace_text.empty() && (!parse_seconds(stop_grace_text, stop_grace) || !(stop_grace >= 0)))
+    return refuse("--stop-grace must be a number of seconds >= 0; found '" + stop_grace_text + "'");
+  if (vm.count("profile") && profile.empty())
+    return refuse("--profile is empty: give a profile's name (profiles/NAME.yaml beside the task) or a file");
+  if (threads < 0 || threads > fba::kMaxThreads)
+    return refuse("--threads must be in [0, " + std::to_string(fba::kMaxThreads) + "] (0: the task file's, else one per core); found " +
+                       std::to_string(threads));
+  if (!(dot_every >= 0 && dot_every <= 1e6)) return refuse("--dot-every must be between 0 and 1e6 seconds");
+  if (dot_every > 0 && output_dir.empty()) return refuse("--dot-every needs --output-dir (graph-live.dot is written there)");
+  if (!executor.empty()) {
+    if (executor == "threaded") options.executor = fba::ExecutorKind::Threaded;
+    else if (executor == "deterministic") options.executor = fba::ExecutorKind::Deterministic;
+    else return refuse("--executor must be threaded or deterministic, not '" + executor + "'");
+  }
+  try {
+    fba::set_log_level(log_level);
+  } catch (const std::exception& e) {
+    return refuse(e.what());
   }
   int status = 0;
   if (interrupted_early(status)) return status;
@@ -449,7 +594,7 @@ int run(int argc, char** argv) {
   fba::Registry registry;
   std::vector<fs::path> extra(plugin_dirs.begin(), plugin_dirs.end());
   for (const auto& d : extra)
-    if (!fs::is_directory(d)) return usage_error("--plugin-path '" + d.string() + "' is not a folder");
+    if (!fs::is_directory(d)) return refuse("--plugin-path '" + d.string() + "' is not a folder");
   // Reads the plugins' manifests only; a plugin is loaded when the task uses one of its types, so a
   // broken plugin fails only the tasks that need it (load_task says so); here it is a warning.
   for (const auto& e : registry.load_path(fba::plugin_search_path(extra)))
@@ -463,11 +608,11 @@ int run(int argc, char** argv) {
   try {
     config = fba::load_task(task_file, registry, load);
   } catch (const fba::ConfigError& e) {
-    for (const auto& d : e.diagnostics()) std::cerr << d.str() << "\n";
-    return kConfigError;
+    std::string reason;
+    for (const auto& d : e.diagnostics()) reason += (reason.empty() ? "" : "\n") + d.str();
+    return refuse(reason, false);
   } catch (const fba::PluginError& e) {
-    std::cerr << task_file.string() << ": the task needs plugin " << e.file() << ", which cannot be used: " << e.reason() << "\n";
-    return kConfigError;
+    return refuse(task_file.string() + ": the task needs plugin " + e.file() + ", which cannot be used: " + e.reason(), false);
   }
   if (vm.count("dot")) {
     std::cout << fba::to_dot(config);
@@ -495,6 +640,7 @@ int run(int argc, char** argv) {
   options.threads = threads;
   options.timeout_s = timeout;
   options.stop_grace_s = stop_grace;
+  options.stop = st.stop.get_token();
 
   st.phase.store("constructing");
   std::unique_ptr<fba::Task> task;
@@ -506,20 +652,25 @@ int run(int argc, char** argv) {
       std::cerr << d.str() << "\n";
       reason += (reason.empty() ? "" : "; ") + d.str();
     }
-    if (interrupted_early(status)) return status;
     fba::RunResult r = early_result(fba::Outcome::ConfigError, reason);
+    if (const int sig = st.signal.load()) {  // the user's stop is what a calling script must see
+      r = early_result(fba::Outcome::Interrupted, "interrupted by " + signal_name(sig) + " while constructing; " + reason);
+      r.phase = st.signal_phase.load();
+      status = r.exit_code();
+    } else {
+      status = kConfigError;
+    }
     if (const auto* c = dynamic_cast<const fba::ConstructionError*>(&e)) r.safe_states = c->safe_states();
     const std::string error = write_summary(r);
     if (!error.empty()) std::cerr << "fba-run: could not write the summary " << error << "\n";
-    return kConfigError;
+    return status;
   }
   {
     // A signal during construction still stops in order: run() then only takes the safe states.
     std::lock_guard lock(st.mutex);
     st.task.store(task.get());
     if (const int sig = st.signal.load())
-      task->request_stop(fba::Outcome::Interrupted,
-                         std::string("interrupted by ") + signal_name(sig) + " while " + st.signal_phase.load());
+      task->request_stop(fba::Outcome::Interrupted, "interrupted by " + signal_name(sig) + " while " + st.signal_phase.load());
     else
       st.phase.store("running");
   }
@@ -535,6 +686,9 @@ int run(int argc, char** argv) {
   }
   result.phase = st.signal_phase.load() ? st.signal_phase.load() : st.phase.load();
   result.signal = st.signal.load();  // also when the stop it asked for ended in another outcome
+  // Stopped while constructing, the runtime names the constructor it cut short; the signal too.
+  if (result.signal && result.outcome == fba::Outcome::Interrupted && result.reason.rfind("interrupted by ", 0) != 0)
+    result.reason = "interrupted by " + signal_name(result.signal) + ": " + result.reason;
   status = result.exit_code();
   const std::string error = write_summary(result);
   std::cerr << "fba-run: " << fba::to_string(result.outcome) << ": " << fba::escape_controls(result.reason);
@@ -559,15 +713,18 @@ int run(int argc, char** argv) {
   return status;
 }
 
-// Before any shared library's initialiser: SIGINT and SIGTERM wait for the watcher from the
+// Before any shared library's initialiser: the stop signals wait for the watcher from the
 // program's first instruction (only the dynamic loader's own start comes earlier).
+// The fault signals are unblocked (a supervisor may have blocked them all): a kill -SEGV pending
+// since exec then reaches the crash handler, which passes it on as a stop request.
 void block_stop_signals_early(int, char**, char**) {
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGUSR1);  // a live-graph request must not kill a run that is still loading
+  const sigset_t signals = taken_signals();
   sigprocmask(SIG_BLOCK, &signals, nullptr);
+  install_crash_handlers();
+  sigset_t faults;
+  sigemptyset(&faults);
+  for (int sig : kFaultSignals) sigaddset(&faults, sig);
+  sigprocmask(SIG_UNBLOCK, &faults, nullptr);
 }
 [[gnu::section(".preinit_array"), gnu::used]] void (*const block_stop_signals_entry)(int, char**,
                                                                                      char**) = block_stop_signals_early;
@@ -575,18 +732,13 @@ void block_stop_signals_early(int, char**, char**) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // First thing, before any plugin or thread exists: SIGINT and SIGTERM are taken by one
-  // thread with sigwait (every thread inherits the mask), so a signal at any moment stops the
-  // run in order; no work happens in a signal handler.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGUSR1);  // write graph-live.dot
+  // First thing, before any plugin or thread exists: the stop signals are taken by one thread
+  // with sigtimedwait (every thread inherits the mask), so a signal at any moment stops the run
+  // in order; no work happens in a signal handler. Those blocked already (by .preinit_array) keep their default disposition, so this is the same set.
+  sigset_t signals = taken_signals();
   sigaddset(&signals, kWakeSignal);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  signal(SIGPIPE, SIG_IGN);  // a reader that went away is an EPIPE error, handled where written
-  install_crash_handlers();
+  install_crash_handlers();  // again: a sanitizer's runtime may have put its own in since
   std::atexit(on_unexpected_exit);
   auto& st = state();
   st.watcher = std::thread(watch_signals, signals);

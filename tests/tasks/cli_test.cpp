@@ -117,13 +117,37 @@ TEST(Cli, ATimeoutThatIsNotANumberIsRefused) {
   const auto r = fba_run({task("chain.yaml"), "--timeout", "nan"});
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--timeout must be a number of seconds >= 0"), std::string::npos) << r.output;
-  // The value found is shown as given, not rounded to six decimals ("-0.250000", or "-0.000000"
+  // The value found is shown as written, not rounded to six decimals ("-0.250000", or "-0.000000"
   // for a value that is not zero).
   const auto small = fba_run({task("chain.yaml"), "--timeout", "-0.25"});
   EXPECT_EQ(small.status, 2) << small.output;
-  EXPECT_NE(small.output.find("(0: none); found -0.25\n"), std::string::npos) << small.output;
+  EXPECT_NE(small.output.find("(0: none); found '-0.25'\n"), std::string::npos) << small.output;
   const auto tiny = fba_run({task("chain.yaml"), "--timeout", "-1e-9"});
-  EXPECT_NE(tiny.output.find("found -1e-09\n"), std::string::npos) << tiny.output;
+  EXPECT_NE(tiny.output.find("found '-1e-9'\n"), std::string::npos) << tiny.output;
+}
+
+// A number too large for a double is as much "no limit" as inf, which is taken: 1e400 was refused
+// by the option parser. A stop grace too long for the clock likewise waits for ever (it overflowed
+// the nanoseconds and acted as no grace at all: tests/core/shutdown_test.cpp).
+TEST(Cli, TimesTooLargeForADoubleAreNoLimitLikeInfinity) {
+  for (const char* option : {"--timeout", "--stop-grace"})
+    for (const char* value : {"1e400", "inf", "1e10"}) {
+      const auto r = fba_run({task("chain.yaml"), option, value});
+      EXPECT_EQ(r.status, 0) << option << " " << value << ":\n" << r.output;
+    }
+  const auto r = fba_run({task("chain.yaml"), "--stop-grace", "-1"});
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--stop-grace must be a number of seconds >= 0; found '-1'"), std::string::npos) << r.output;
+}
+
+// An empty --output-dir or --profile is a mistake, not "none" or "the default".
+TEST(Cli, AnEmptyOutputDirOrProfileIsRefused) {
+  const auto out = fba_run({task("chain.yaml"), "-o", ""});
+  EXPECT_EQ(out.status, 2) << out.output;
+  EXPECT_NE(out.output.find("--output-dir is empty"), std::string::npos) << out.output;
+  const auto profile = fba_run({task("chain.yaml"), "--profile", ""});
+  EXPECT_EQ(profile.status, 2) << profile.output;
+  EXPECT_NE(profile.output.find("--profile is empty"), std::string::npos) << profile.output;
 }
 
 // An option is refused as the option, before anything loads: it was checked only when the task
@@ -491,6 +515,40 @@ TEST(Cli, OutputDirHoldsTheSummary) {
   for (const char* key : {"\"outcome\": \"success\"", "\"final_event\"", "\"name\": \"done\"", "\"wall_time_s\"", "\"first\"",
                           "\"samples_out_per_s\""})
     EXPECT_NE(ss.str().find(key), std::string::npos) << key;
+}
+
+// A run never leaves an earlier run's summary looking like its own: a run that fails at
+// configuration in a folder where another succeeded writes its own (exit 2, configuration_error),
+// every summary names its run (--run-id), and lists the files the run wrote beside it, not those
+// left from before.
+TEST(Cli, EveryEndWritesItsOwnSummaryNamingItsRunAndItsFiles) {
+  const fs::path out = temp_dir("stale-summary");
+  ASSERT_EQ(fba_run({task("chain.yaml"), "-o", out.string(), "--run-id", "first", "--dot-every", "100"}).status, 0);
+  auto summary = nlohmann::json::parse(read_file(out / "summary.json"));
+  EXPECT_EQ(summary["run_id"], "first");
+  EXPECT_EQ(summary["outcome"], "success");
+  EXPECT_EQ(summary["artefacts"], nlohmann::json::array({"graph-live.dot"})) << summary.dump();
+
+  const auto failed = fba_run({task("chain.yaml"), "-o", out.string(), "--run-id", "second", "--set", "source.count=-4"});
+  ASSERT_EQ(failed.status, 2) << failed.output;
+  summary = nlohmann::json::parse(read_file(out / "summary.json"));
+  EXPECT_EQ(summary["run_id"], "second");
+  EXPECT_EQ(summary["outcome"], "configuration_error");
+  EXPECT_EQ(summary["exit_code"], 2);
+  EXPECT_NE(summary["reason"].get<std::string>().find("source.count"), std::string::npos) << summary.dump();
+  EXPECT_FALSE(summary.contains("artefacts")) << summary.dump();  // graph-live.dot is the first run's
+
+  // A mistake on the command line, once the folder is known, is written down too.
+  ASSERT_EQ(fba_run({task("chain.yaml"), "-o", out.string(), "--run-id", "third", "--executor", "fast"}).status, 2);
+  summary = nlohmann::json::parse(read_file(out / "summary.json"));
+  EXPECT_EQ(summary["run_id"], "third");
+  EXPECT_NE(summary["reason"].get<std::string>().find("--executor must be threaded or deterministic"), std::string::npos);
+
+  // Without --run-id, each run gets an id of its own.
+  ASSERT_EQ(fba_run({task("chain.yaml"), "-o", out.string()}).status, 0);
+  const std::string id = nlohmann::json::parse(read_file(out / "summary.json"))["run_id"];
+  ASSERT_EQ(fba_run({task("chain.yaml"), "-o", out.string()}).status, 0);
+  EXPECT_NE(nlohmann::json::parse(read_file(out / "summary.json"))["run_id"], id);
 }
 
 TEST(Cli, PluginPathFlagAndVariableAddFolders) {

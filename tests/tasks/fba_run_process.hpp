@@ -46,10 +46,20 @@ inline fs::path temp_dir(const std::string& name) { return fba::test::TempDir::u
 // The test plugin that misbehaves on request (plugins/misbehaving), never installed.
 inline std::string misbehaving_plugins() { return fba::test::binary_dir() + "/tests/plugins/misbehaving/plugins"; }
 
+// Every signal that can be caught and whose default action ends the process (signal(7): Term and
+// Core), SIGUSR1 aside (fba-run's live-graph request): each must end a run in order, 128 + N.
+inline std::vector<int> terminating_signals() {
+  std::vector<int> v{SIGHUP,    SIGINT,  SIGQUIT, SIGILL,  SIGTRAP,   SIGABRT, SIGBUS, SIGFPE,
+                     SIGSEGV,   SIGUSR2, SIGPIPE, SIGALRM, SIGTERM,   SIGSTKFLT, SIGXCPU, SIGXFSZ,
+                     SIGVTALRM, SIGPROF, SIGIO,   SIGPWR,  SIGSYS};
+  for (int sig = SIGRTMIN; sig <= SIGRTMAX; ++sig) v.push_back(sig);
+  return v;
+}
+
 // A running fba-run, its output going to a file.
 class Process {
  public:
-  // `signals_blocked`: SIGINT and SIGTERM blocked from exec, as a supervisor can start its
+  // `signals_blocked`: the terminating signals blocked from exec, as a supervisor can start its
   // child. Before fba-run's first instruction the dynamic loader runs for a few milliseconds,
   // and a signal there ends any program by the default action; fba-run blocks them itself from
   // its first instruction on (.preinit_array), so this only closes the loader's window.
@@ -75,8 +85,7 @@ class Process {
     if (signals_blocked) {
       sigset_t mask;
       sigemptyset(&mask);
-      sigaddset(&mask, SIGINT);
-      sigaddset(&mask, SIGTERM);
+      for (int sig : terminating_signals()) sigaddset(&mask, sig);
       posix_spawnattr_setsigmask(&attr, &mask);
       posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
     }

@@ -1,9 +1,12 @@
-// A signal at any moment of a run, from fba-run's start to its steady state, ends in order:
-// 130 for SIGINT, 143 for SIGTERM, and a valid summary.json that says so.
+// A signal at any moment of a run, from fba-run's start to its steady state, ends in order: every
+// catchable signal whose default action ends the process (SIGHUP from a closed terminal, SIGQUIT,
+// SIGALRM, a SIGSEGV sent by kill...) exits 128 + N with a valid summary.json that says so.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
+#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -21,7 +24,7 @@ components:
 connections: [ src.out -> act.in ]
 )";
 
-TEST(RandomSignal, HundredRunsSignalledAtRandomMomentsAllEndInOrder) {
+TEST(RandomSignal, EveryTerminatingSignalAtRandomMomentsEndsTheRunInOrder) {
   const fs::path dir = temp_dir("random-signal");
   const fs::path task = dir / "task.yaml";
   std::ofstream(task) << kTask;
@@ -32,17 +35,21 @@ TEST(RandomSignal, HundredRunsSignalledAtRandomMomentsAllEndInOrder) {
   std::uniform_real_distribution<double> log_delay(std::log(10.0), std::log(400'000.0));
   auto delay_us = [&](std::mt19937& r) { return static_cast<long>(std::exp(log_delay(r))); };
   int in_loading = 0, in_running = 0;
-  for (int i = 0; i < 100; ++i) {
-    const int sig = random() % 2 ? SIGINT : SIGTERM;
+  const std::vector<int> signals = terminating_signals();
+  std::set<int> sent;
+  for (int i = 0; i < 150; ++i) {
+    // Each signal at least once (the first rounds take them in turn), then drawn at random.
+    const int sig = i < static_cast<int>(signals.size()) ? signals[i] : signals[random() % signals.size()];
+    sent.insert(sig);
     const auto delay = std::chrono::microseconds(delay_us(random));
     const fs::path out = dir / std::to_string(i);
     Process p({task.string(), "--plugin-path", misbehaving_plugins(), "--output-dir", out.string()}, {}, true);
     std::this_thread::sleep_for(delay);
     p.signal(sig);
     const auto r = p.wait();
-    const std::string what = "run " + std::to_string(i) + ", " + (sig == SIGINT ? "SIGINT" : "SIGTERM") + " after " +
-                             std::to_string(delay.count()) + " us:\n" + r.output;
-    ASSERT_EQ(r.status, sig == SIGINT ? 130 : 143) << what;
+    const std::string what = "run " + std::to_string(i) + ", signal " + std::to_string(sig) + " (" + strsignal(sig) +
+                             ") after " + std::to_string(delay.count()) + " us:\n" + r.output;
+    ASSERT_EQ(r.status, 128 + sig) << what;
     const auto summary = nlohmann::json::parse(read_file(out / "summary.json"), nullptr, false);
     ASSERT_TRUE(summary.is_object()) << what;
     EXPECT_EQ(summary["outcome"], "interrupted") << what;
@@ -56,6 +63,7 @@ TEST(RandomSignal, HundredRunsSignalledAtRandomMomentsAllEndInOrder) {
       ++in_loading;
     }
   }
+  EXPECT_EQ(sent.size(), signals.size());
   std::cout << "signals during loading or construction: " << in_loading << ", while running: " << in_running << "\n";
 }
 
