@@ -37,6 +37,7 @@ json spec_object(const Spec& s) {
   j["trigger"] = to_string(s.default_trigger().policy);
   if (s.default_trigger().policy == TriggerPolicy::Periodic) j["period_s"] = s.default_trigger().period_s;
   j["blocking"] = s.is_blocking();
+  if (s.kind() == Kind::Actuator) j["concurrent_safe_state"] = s.has_concurrent_safe_state();
   j["inputs"] = json::array();
   for (const auto& p : s.inputs()) j["inputs"].push_back(port_json(p, true));
   j["outputs"] = json::array();

@@ -170,6 +170,7 @@ void Spec::validate() const {
   if (kind_ == Kind::Filter && (inputs_.empty() || outputs_.empty())) fail("a filter needs inputs and outputs");
   // An actuator may report its device's state (an arm's joints) on outputs; it is the kind told to go safe.
   if (kind_ == Kind::Actuator && inputs_.empty()) fail("an actuator needs inputs (the commands it acts on)");
+  if (kind_ != Kind::Actuator && concurrent_safe_state_) fail("concurrent_safe_state() is for actuators: only they have a safe state");
   std::set<std::string> pnames;
   for (const auto& p : params_) {
     if (!is_valid_name(p.name)) fail("parameter name '" + p.name + "' must be letters, digits and '_'");

@@ -32,6 +32,12 @@ TEST(Spec, ActuatorNeedsInputsAndMayReportOnOutputs) {
   EXPECT_EQ(validation_error(Spec::actuator("t.a", "").add(kIn, kOut)), "");  // an arm publishing its joint states
 }
 
+TEST(Spec, OnlyAnActuatorDeclaresAConcurrentSafeState) {
+  EXPECT_EQ(validation_error(Spec::actuator("t.a", "").add(kIn).concurrent_safe_state()), "");
+  EXPECT_NE(validation_error(Spec::filter("t.f", "").add(kIn, kOut).concurrent_safe_state()).find("is for actuators"),
+            std::string::npos);
+}
+
 TEST(Spec, OutLikeTakesTheTypeOfItsInput) {
   constexpr fba::OutLike kSame{"out", kAny, ""};
   const auto s = Spec::filter("t.f", "").add(kAny, kSame);

@@ -40,7 +40,9 @@ std::string value_text(const json& v) {
 void print_type(const json& t) {
   std::cout << t["type"].get<std::string>() << " (" << t["kind"].get<std::string>() << ")\n  " << t["doc"].get<std::string>()
             << "\n  from: " << t["origin"].get<std::string>() << "\n  trigger: " << t["trigger"].get<std::string>()
-            << (t.value("blocking", false) ? ", own thread (blocking)" : "") << "\n";
+            << (t.value("blocking", false) ? ", own thread (blocking)" : "")
+            << (t.value("concurrent_safe_state", false) ? "\n  safe state: at once on a stop, beside a running process()" : "")
+            << "\n";
   auto ports = [](const char* title, const json& v, bool input) {
     std::cout << "\n  " << title << ":\n";
     if (v.empty()) std::cout << "    (none)\n";
