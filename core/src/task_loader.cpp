@@ -21,6 +21,7 @@
 #include "fba/message_text.hpp"
 #include "fba/task.hpp"
 #include "fba/task_config.hpp"
+#include "overrides.hpp"
 
 namespace fba {
 
@@ -504,12 +505,6 @@ void check_mappings(const YAML::Node& root, const Source& src, std::vector<Diagn
   check_mappings(root, src, d, seen);
 }
 
-// A `${name}` reference to a task or composite parameter (name: letters, digits, '_') in a value.
-struct Reference {
-  std::size_t pos, len;  // of the whole `${name}`
-  std::string name;
-};
-
 // A task's or a profile's parameter: a name, or names joined by dots that group parameters under
 // one (`scene.mesh`, `scene.yaw`: set as --set scene.mesh=...).
 bool is_valid_param_name(std::string_view name) {
@@ -519,16 +514,6 @@ bool is_valid_param_name(std::string_view name) {
     if (dot == std::string_view::npos) return true;
     begin = dot + 1;
   }
-}
-
-std::vector<Reference> references_in(const std::string& s) {
-  std::vector<Reference> out;
-  for (std::size_t i = s.find("${"); i != std::string::npos; i = s.find("${", i + 1)) {
-    std::size_t j = i + 2;
-    while (j < s.size() && (std::isalnum(static_cast<unsigned char>(s[j])) || s[j] == '_' || s[j] == '.')) ++j;
-    if (j > i + 2 && j < s.size() && s[j] == '}') out.push_back({i, j + 1 - i, s.substr(i + 2, j - i - 2)});
-  }
-  return out;
 }
 
 std::string list_of(const std::vector<std::string>& v) {
@@ -568,8 +553,12 @@ using Bindings = std::map<std::string, Value>;
 class Loader {
  public:
   Loader(const Registry& registry, const LoadOptions& options)
-      : registry_(registry), require_inputs_(options.require_inputs), profile_option_(options.profile) {
-    for (const auto& o : options.overrides) parse_override(o);
+      : registry_(registry),
+        require_inputs_(options.require_inputs),
+        overrides_(options.overrides),
+        profile_option_(options.profile),
+        profile_given_(options.profile_given) {
+    for (const auto& d : overrides_.errors()) error(d.where, d.message);
   }
 
   TaskConfig load(const YAML::Node& root, const Source& src, const fs::path& file) {
@@ -594,16 +583,16 @@ class Loader {
     load_profile(root, src, task);
     const Bindings bindings = task_params(root, src, task);
     task_bindings_ = &bindings;
-    collect_param_users(root["components"], bindings);
     expand(root, src, "", bindings, task, {});
     check_profile_bindings(root, src, task);
-    for (const auto& [key, o] : overrides_) {
-      if (o.used) continue;
+    for (const SetOption* o : overrides_.unused()) {
       std::vector<std::string> group;  // task parameters of the group the key names (scene.foo: scene.mesh, ...)
       for (const auto& tp : task.params)
-        if (tp.name.starts_with(o.comp + ".")) group.push_back(tp.name);
-      if (!group.empty()) error(o.where, "--set " + key + ": the task has no parameter '" + key + "'; its group '" + o.comp + "' has " + list_of(group));
-      else error(o.where, "--set " + key + ": the task has no component '" + o.comp + "' with a parameter '" + o.param + "'");
+        if (tp.name.starts_with(o->owner + ".")) group.push_back(tp.name);
+      if (!group.empty())
+        error(o->where(), "--set " + o->target + ": the task has no parameter '" + o->target + "'; its group '" + o->owner + "' has " + list_of(group));
+      else
+        error(o->where(), "--set " + o->target + ": the task has no component '" + o->owner + "' with a parameter '" + o->param + "'");
     }
     // Nothing to run would leave the executor waiting for work that never comes.
     if (diags_.empty() && task.components.empty())
@@ -620,13 +609,6 @@ class Loader {
   static Spec composite_spec(const CompositeDef& def, const Registry& registry, std::vector<Diagnostic>& diags);
 
  private:
-  struct OverrideEntry {
-    std::string comp, param;
-    YAML::Node value;
-    Location where;
-    bool used = false;
-  };
-
   // A lossless queue of this many samples is already more memory than most hosts should give one
   // connection; more is a mistake (an extra zero) rather than a design.
   static constexpr std::int64_t kMaxCapacity = 1000000;
@@ -639,7 +621,13 @@ class Loader {
   // gets a screenful and the total, not thousands of lines.
   static constexpr std::size_t kMaxShown = 100;
 
-  void error(Location where, std::string message) {
+  // An error about a value that takes a task parameter given by --set is said at the --set, with
+  // the place in the file: the value typed is what the user must change.
+  void error(Location where, std::string message, bool blame_set = true) {
+    if (const auto b = blame_set ? overrides_.blame(where) : std::nullopt) {
+      message += " (" + b->use + ")";
+      where = b->set;
+    }
     if (diags_.size() < kMaxShown) diags_.push_back(Diagnostic{std::move(where), std::move(message)});
     else if (more_++ == 0) first_hidden_ = std::move(where);
   }
@@ -666,35 +654,6 @@ class Loader {
       error(own[kMaxDedicatedThreads]->where, "at most " + std::to_string(kMaxDedicatedThreads) +
                                                  " components can have a thread of their own ('thread: dedicated', or a blocking type); found " +
                                                  std::to_string(own.size()));
-  }
-
-  void parse_override(const Override& o) {
-    Location where{"--set " + o.text, 0, 0};
-    const auto eq = o.text.find('=');
-    const auto dot = eq == std::string::npos ? eq : o.text.rfind('.', eq);
-    const bool task_param = eq != std::string::npos && dot == std::string::npos;  // name=value
-    if (eq == std::string::npos || (task_param && !is_valid_name(o.text.substr(0, eq))) ||
-        (!task_param && (dot == 0 || dot + 1 >= eq))) {
-      error(where, "expected component.parameter=value, or parameter=value for a task parameter");
-      return;
-    }
-    OverrideEntry e;
-    e.comp = task_param ? "" : o.text.substr(0, dot);
-    e.param = task_param ? o.text.substr(0, eq) : o.text.substr(dot + 1, eq - dot - 1);
-    try {
-      e.value = YAML::Load(o.text.substr(eq + 1));
-    } catch (const YAML::Exception& ex) {
-      error(where, "the value is not valid YAML: " + ex.msg);
-      return;
-    }
-    e.where = where;
-    report_mappings(e.value, Source{where.file, {}, false});
-    const std::string key = task_param ? e.param : e.comp + "." + e.param;
-    if (auto it = overrides_.find(key); it != overrides_.end()) {
-      error(where, "'" + key + "' is set twice on the command line (also by " + it->second.where.file + ")");
-      return;
-    }
-    overrides_[key] = std::move(e);
   }
 
   void check_keys(const YAML::Node& map, const Source& src, const std::vector<std::string>& allowed) {
@@ -853,6 +812,10 @@ class Loader {
         for (auto it = params.begin(); it != params.end(); ++it)
           if (it->first.IsScalar() && std::none_of(decls.begin(), decls.end(), [&](const auto& x) { return x.first.name == it->first.Scalar(); }))
             failed_params_.insert(it->first.Scalar());  // a declaration with errors (reported)
+    std::set<std::string> names_declared;
+    for (const auto& [ps, _] : decls) names_declared.insert(ps.name);
+    collect_uses(root, src, names_declared);
+    if (profile_.loaded) collect_uses(profile_.root, profile_.src, names_declared);
     Bindings b;
     std::map<std::string, Location> declared;
     for (std::size_t i = 0; i < decls.size(); ++i) {
@@ -871,16 +834,18 @@ class Loader {
         continue;
       }
       TaskParam tp{ps.name, ps.type, {}, i < from_task ? "default" : "profile default", ps.doc, where};
-      if (auto o = overrides_.find(ps.name); o != overrides_.end()) {
-        o->second.used = true;
-        const Source cli{o->second.where.file, fs::current_path(), false, "the working folder"};
-        const auto v = param_value(ps, o->second.value, cli, {});
+      if (const SetOption* o = overrides_.for_task_param(ps.name)) {
+        const std::size_t before = diags_.size();
+        const auto v = set_value(*o, ps);
+        for (std::size_t k = before; k < diags_.size(); ++k)
+          diags_[k].message += " (" + (o->target == ps.name ? "" : o->target + " is ${" + ps.name + "}, ") + "declared at " + where.str() + ")";
         if (!v) {
           failed_params_.insert(ps.name);
           continue;
         }
         tp.value = *v;
-        tp.source = "--set";
+        // Set through the component parameter that is its only use: said, as that is what was typed.
+        tp.source = o->target == ps.name ? "--set" : "--set " + o->target;
       } else if (ps.default_value) {
         tp.value = *ps.default_value;
       } else {
@@ -893,56 +858,65 @@ class Loader {
     }
     std::vector<std::string> names;
     for (const auto& [n, _] : declared) names.push_back(n);
-    for (auto& [key, o] : overrides_)
-      if (o.comp.empty() && !o.used) {
-        o.used = true;
-        error(o.where, "--set " + key + ": the task has no parameter '" + key + "'; its parameters: " + list_of(names) +
-                           " (a component's parameter is set with --set component.parameter=value)");
+    for (const SetOption* o : overrides_.unused())
+      if (o->owner.empty()) {
+        overrides_.mark_used(*o);
+        error(o->where(), "--set " + o->target + ": the task has no parameter '" + o->target + "'; its parameters: " + list_of(names) +
+                              " (a component's parameter is set with --set component.parameter=value)");
       }
     return b;
   }
 
-  // Which component parameters of the task (and its profile) take each task parameter.
-  void collect_param_users(const YAML::Node& comps, const Bindings& b) {
-    if (!comps || !comps.IsMap()) return;
-    for (auto it = comps.begin(); it != comps.end(); ++it) {
-      if (!it->first.IsScalar() || !it->second.IsMap()) continue;
-      const std::string name = it->first.Scalar();
-      YAML::Node c;
-      c.reset(it->second);
-      if (std::as_const(c)["profile"]) {
-        const auto bound = profile_entry(name);
-        if (!bound) continue;
-        c.reset(bound->second);
-      }
-      if (!c.IsMap() || !std::as_const(c)["params"]) continue;
-      const YAML::Node params = std::as_const(c)["params"];
-      if (!params.IsMap()) continue;
-      for (auto p = params.begin(); p != params.end(); ++p) {
-        if (!p->first.IsScalar() || !p->second.IsScalar()) continue;
-        for (const auto& r : references_in(p->second.Scalar()))
-          if (b.count(r.name)) param_users_[r.name].push_back(name + "." + p->first.Scalar());
-      }
-    }
+  // A --set's value for parameter `ps`, checked as a value in the file would be; a relative path
+  // means the working folder, as in the shell that gave it.
+  std::optional<Value> set_value(const SetOption& o, const ParamSpec& ps) {
+    const Source cli{o.where().file, fs::current_path(), false, "the working folder"};
+    if (taken_as_written(ps.type)) return param_value(ps, YAML::Node(o.value), cli, {});
+    std::vector<Diagnostic> d;
+    const auto node = parse_yaml(o.value, cli.shown, d);
+    for (const auto& x : d) error(o.where(), "the value is not valid YAML: " + x.message);
+    if (!node) return std::nullopt;
+    report_mappings(*node, cli);
+    return param_value(ps, *node, cli, {});
   }
 
-  // Setting one user of a shared task parameter would split what the task means to be one value
-  // (the camera's object and the hand's): such a --set is refused, naming the parameter to set.
-  std::string shared_task_param(const std::string& full, const std::string& param, const YAML::Node& params) const {
-    if (full.find('/') != std::string::npos || !params || !params.IsMap()) return {};
-    const YAML::Node v = params[param];
-    if (!v || !v.IsScalar()) return {};
-    const std::string self = full + "." + param;
-    for (const auto& r : references_in(v.Scalar())) {
-      const auto users = param_users_.find(r.name);
-      if (users == param_users_.end() || users->second.size() < 2) continue;
-      std::vector<std::string> others;
-      for (const auto& u : users->second)
-        if (u != self) others.push_back(u);
-      return self + " comes from the task parameter '" + users->first + "' (also " + list_of(others) + "); set it with --set " +
-             users->first + "=...";
+  // Every value of the task's (or the profile's) components and connections that refers to the
+  // task parameters `declared`: what each --set may mean depends on where they are used.
+  void collect_uses(const YAML::Node& root, const Source& src, const std::set<std::string>& declared) {
+    std::set<std::tuple<int, int, bool>> seen;
+    if (const YAML::Node comps = root["components"]; comps && comps.IsMap())
+      for (auto c = comps.begin(); c != comps.end(); ++c) {
+        if (!c->first.IsScalar() || !c->second.IsMap()) continue;
+        for (auto k = c->second.begin(); k != c->second.end(); ++k) {
+          if (!k->first.IsScalar()) continue;
+          if (k->first.Scalar() != "params" || !k->second.IsMap()) {
+            note_uses(k->second, src, k->first.Scalar(), declared, seen);
+            continue;
+          }
+          for (auto p = k->second.begin(); p != k->second.end(); ++p)
+            if (p->first.IsScalar() && p->second.IsScalar())
+              note_uses(p->second, src, c->first.Scalar() + "." + p->first.Scalar(), declared, seen, true);
+        }
+      }
+    if (const YAML::Node conns = root["connections"]) note_uses(conns, src, "a connection", declared, seen);
+  }
+
+  void note_uses(const YAML::Node& n, const Source& src, const std::string& what, const std::set<std::string>& declared,
+                 std::set<std::tuple<int, int, bool>>& seen, bool component_param = false) {
+    if (n.IsScalar()) {
+      const auto refs = references_in(n.Scalar());
+      ParamUse u{what, component_param, n.Scalar(), at(src, n), {}, refs.size() == 1 && refs[0].len == n.Scalar().size()};
+      for (const auto& r : refs)
+        if (declared.count(r.name)) u.names.push_back(r.name);
+      if (!u.names.empty()) overrides_.add_use(std::move(u));
+      return;
     }
-    return {};
+    // Walked once per node, as an alias can multiply a tree.
+    if (!(n.IsMap() || n.IsSequence()) || !seen.insert({n.Mark().line, n.Mark().column, n.IsMap()}).second) return;
+    if (n.IsSequence())
+      for (const auto& e : n) note_uses(e, src, what, declared, seen);
+    else
+      for (auto it = n.begin(); it != n.end(); ++it) note_uses(it->second, src, it->first.IsScalar() ? it->first.Scalar() : what, declared, seen);
   }
 
   // A profile binds the task's slots and nothing else.
@@ -1210,7 +1184,7 @@ class Loader {
     if (refs.size() == 1 && refs[0].len == s.size()) {
       auto it = b.find(refs[0].name);
       if (it == b.end()) {
-        if (!failed_params_.count(refs[0].name)) error(at(src, n), unknown_reference(refs[0].name, b));
+        if (!failed_params_.count(refs[0].name)) error(at(src, n), unknown_reference(refs[0].name, b), false);
         return std::nullopt;
       }
       whole = true;
@@ -1224,7 +1198,7 @@ class Loader {
       out.append(s, begin, r.pos - begin);
       auto it = b.find(r.name);
       if (it == b.end()) {
-        if (!failed_params_.count(r.name)) error(at(src, n), unknown_reference(r.name, b));
+        if (!failed_params_.count(r.name)) error(at(src, n), unknown_reference(r.name, b), false);
         unknown = true;
       } else {
         out += to_string(it->second);
@@ -1388,17 +1362,11 @@ class Loader {
       }
     }
     for (const auto& ps : spec.params()) {
-      auto o = overrides_.find(full + "." + ps.name);
-      if (o != overrides_.end()) {
-        o->second.used = true;
-        if (const std::string shared = shared_task_param(full, ps.name, params); !shared.empty()) {
-          error(o->second.where, shared);
-        } else {
-          // On the command line a relative path means what the shell means: the working folder.
-          const Source cli{o->second.where.file, fs::current_path(), false, "the working folder"};
-          if (auto v = param_value(ps, o->second.value, cli, {})) out[ps.name] = *v;
-          given.insert(ps.name);
-        }
+      const auto set = overrides_.for_component_param(full + "." + ps.name);
+      if (!set.refusal.empty()) error(set.option->where(), set.refusal);
+      if (set.apply) {
+        if (auto v = set_value(*set.option, ps)) out[ps.name] = *v;
+        given.insert(ps.name);
       }
       if (given.count(ps.name)) continue;
       if (ps.default_value) out[ps.name] = *ps.default_value;
@@ -1926,7 +1894,7 @@ class Loader {
   std::vector<Diagnostic> diags_;
   std::size_t more_ = 0;   // errors beyond kMaxShown
   Location first_hidden_;  // where the first of them is
-  std::map<std::string, OverrideEntry> overrides_;
+  Overrides overrides_;
   std::map<std::string, std::shared_ptr<const TypeEntry>, std::less<>> local_types_;
   std::set<std::string> included_;
   std::set<std::string> broken_types_;  // composites whose definition has errors (reported)
@@ -1939,8 +1907,8 @@ class Loader {
     YAML::Node root, components;
   };
   std::string profile_option_;
+  bool profile_given_ = false;
   Profile profile_;
-  std::map<std::string, std::vector<std::string>> param_users_;  // task parameter -> "component.param" using it
   const Bindings* task_bindings_ = nullptr;  // the task's (not a composite's): names them in messages
   std::set<std::string> failed_params_;  // task parameters without a value (reported): their uses are not reported again
 };

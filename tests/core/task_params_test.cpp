@@ -11,6 +11,7 @@
 #include <fba/task_config.hpp>
 #include <nlohmann/json.hpp>
 
+#include "support/temp_dir.hpp"
 #include "test_components.hpp"
 
 namespace {
@@ -119,10 +120,12 @@ TEST(TaskParams, SetByNameWithoutADot) {
 
 TEST(TaskParams, ValuesAreCheckedByTheRulesOfALiteral) {
   // The parameter's own range, at the --set.
-  EXPECT_NE(errors_of(kParamTask, with_sets({"n=0"})).find("--set n=0: error: parameter 'n' must be in [1, inf]; found 0"), std::string::npos);
-  // The capacity's range, at the place that uses the parameter.
+  EXPECT_NE(errors_of(kParamTask, with_sets({"n=0"})).find("--set n=0: error: parameter 'n' must be in [1, inf]; found 0 (declared at test.yaml:3:3)"),
+            std::string::npos);
+  // The capacity's range, checked where the parameter is used, said at the --set that gave the value.
   const std::string e = errors_of(kParamTask, with_sets({"cap=0"}));
-  EXPECT_NE(e.find("test.yaml:9:48: error: capacity must be in [1, 1000000]; found 0"), std::string::npos) << e;
+  EXPECT_NE(e.find("--set cap=0: error: capacity must be in [1, 1000000]; found 0 (capacity is ${cap} at test.yaml:9:48)"), std::string::npos)
+      << e;
   // The type of the component parameter it is substituted into.
   const std::string t = errors_of(R"(
 params: { label: { type: string, default: many } }
@@ -177,6 +180,127 @@ components:
 connections: [ source.out -> sink.in ]
 )", with_sets({"source.count=9"}));
   EXPECT_EQ(std::get<std::int64_t>(task.find("source")->params.at("count")), 9);
+}
+
+// Through its only use, the --set sets the task parameter: --check and summary.json show the value
+// that runs, and the parameter's own declaration still holds.
+TEST(TaskParams, SettingTheOnlyUseOfATaskParameterSetsTheParameter) {
+  const char* yaml = R"(
+params: { n: { type: int, default: 5, min: 1 } }
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)";
+  const auto task = load(yaml, with_sets({"source.count=9"}));
+  ASSERT_EQ(task.params.size(), 1u);
+  EXPECT_EQ(std::get<std::int64_t>(task.params[0].value), 9);
+  EXPECT_EQ(task.params[0].source, "--set source.count");
+  const auto summary = nlohmann::json::parse(fba::summary_json(fba::RunResult{}, task));
+  EXPECT_EQ(summary["params"]["n"]["value"], 9);
+  EXPECT_EQ(summary["params"]["n"]["source"], "--set source.count");
+  const std::string e = errors_of(yaml, with_sets({"source.count=0"}));
+  EXPECT_NE(e.find("--set source.count=0: error: parameter 'n' must be in [1, inf]; found 0 (source.count is ${n}, declared at test.yaml:2:11)"),
+            std::string::npos)
+      << e;
+}
+
+// --set depth=3 --set carver.max_depth=8 ran the carver at 8 while --check and summary.json said 3.
+TEST(TaskParams, ASetOfATaskParameterAndOneOfAComponentParameterItFeedsConflict) {
+  const std::string sole = errors_of(R"(
+params: { n: { type: int, default: 5 } }
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)", with_sets({"n=3", "source.count=8"}));
+  EXPECT_NE(sole.find("--set source.count=8: error: --set source.count=8 conflicts with --set n=3: source.count is ${n} (test.yaml:4:54); "
+                      "set one of them"),
+            std::string::npos)
+      << sole;
+  const std::string shared = errors_of(kParamTask, with_sets({"sink.expected=9", "n=3"}));
+  EXPECT_NE(shared.find("--set sink.expected=9: error: --set sink.expected=9 conflicts with --set n=3: sink.expected is ${n} (test.yaml:7:52)"),
+            std::string::npos)
+      << shared;
+}
+
+TEST(TaskParams, AComponentParameterMadeFromATaskParameterIsSetThroughIt) {
+  const std::string e = errors_of(R"(
+params: { what: { type: string, default: disk } }
+components:
+  source: { type: examples.counter }
+  bad: { type: examples.faulty, params: { message: "${what} failed" } }
+connections: [ source.out -> bad.in ]
+)", with_sets({"bad.message=all is well"}));
+  EXPECT_NE(e.find("--set bad.message=all is well: error: bad.message is '${what} failed' (test.yaml:5:52), made from the task parameter what; "
+                   "set it with --set what=..."),
+            std::string::npos)
+      << e;
+}
+
+// The value typed is what must change: an error it causes where the file uses it is said at the --set.
+TEST(TaskParams, AnErrorCausedByASetValueIsSaidAtTheSet) {
+  const char* yaml = R"(
+params: { d: { type: double, default: 1 } }
+components:
+  source: { type: examples.counter }
+  sink: { type: examples.sink, params: { delay: "${d}" } }
+connections: [ source.out -> sink.in ]
+)";
+  const std::string direct = errors_of(yaml, with_sets({"d=20"}));
+  EXPECT_NE(direct.find("--set d=20: error: parameter 'delay' must be in [0, 10]; found 20 (sink.delay is ${d} at test.yaml:5:49)"),
+            std::string::npos)
+      << direct;
+  EXPECT_EQ(direct.find("test.yaml:5:49: error"), std::string::npos) << direct;
+  const std::string through = errors_of(yaml, with_sets({"sink.delay=20"}));
+  EXPECT_NE(through.find("--set sink.delay=20: error: parameter 'delay' must be in [0, 10]; found 20 (sink.delay is ${d} at test.yaml:5:49)"),
+            std::string::npos)
+      << through;
+  // A value from the file is still said at the file.
+  const std::string file = errors_of(R"(
+params: { d: { type: double, default: 20 } }
+components:
+  source: { type: examples.counter }
+  sink: { type: examples.sink, params: { delay: "${d}" } }
+connections: [ source.out -> sink.in ]
+)");
+  EXPECT_NE(file.find("test.yaml:5:49: error: parameter 'delay' must be in [0, 10]; found 20"), std::string::npos) << file;
+}
+
+// `--set "scene.mesh=/d/banana.obj #mustard.obj"` loaded /d/banana.obj: the '#' was read as a YAML comment.
+TEST(TaskParams, ASetValueForAStringOrAPathIsTakenAsWrittenWhole) {
+  const char* chain = R"(
+components:
+  source: { type: examples.counter, params: { count: 2 } }
+  bad: { type: examples.faulty }
+  sink: { type: examples.sink }
+connections: [ source.out -> bad.in, bad.out -> sink.in ]
+)";
+  auto message = [&](const std::string& set) { return std::get<std::string>(load(chain, with_sets({set})).find("bad")->params.at("message")); };
+  EXPECT_EQ(message("bad.message=disk #2 failed"), "disk #2 failed");
+  EXPECT_EQ(message("bad.message=\"quoted\""), "\"quoted\"");  // the shell's quotes are gone; these are the value's
+  EXPECT_EQ(message("bad.message= [1, 2]"), " [1, 2]");
+  EXPECT_EQ(message("bad.message="), "");
+  // Numbers, bools and lists are read as YAML, as before.
+  EXPECT_EQ(std::get<std::int64_t>(load(chain, with_sets({"source.count=3 # three"})).find("source")->params.at("count")), 3);
+  EXPECT_NE(errors_of(chain, with_sets({"bad.fail_after=[1]"})).find("--set bad.fail_after=[1]: error: parameter 'fail_after' expects a int; found a list"),
+            std::string::npos);
+  // A path: whole, with '#', spaces or a newline in it; the newline shown as \n in a message.
+  const fba::test::TempDir dir;
+  const char* reader = R"(
+params: { data: { type: path } }
+components:
+  reader: { type: test.reader, params: { file: "${data}" } }
+)";
+  for (const std::string name : {"banana.obj #mustard.obj", "two\nlines.obj"}) {
+    const std::string path = dir.file(name, "v 0 0 0\n");
+    const auto task = load(reader, with_sets({"data=" + path}));
+    EXPECT_EQ(std::get<std::string>(task.params.at(0).value), path);
+    EXPECT_EQ(std::get<std::string>(task.find("reader")->params.at("file")), path);
+  }
+  const std::string missing = (dir.path() / "no\nsuch.obj").string();
+  const std::string e = errors_of(reader, with_sets({"data=" + missing}));
+  EXPECT_NE(e.find("error: parameter 'data': path '" + dir.path().string() + "/no\\nsuch.obj' does not exist"), std::string::npos) << e;
 }
 
 // scene.mesh, scene.x: one group of parameters, set and used by the whole dotted name.
@@ -393,4 +517,20 @@ components:
   EXPECT_THROW(fba::slot_interface(pass, "sink"), std::out_of_range);  // a component, not a slot
   const std::string text = fba::describe(fba::slot_interface(pass, "pass"));
   EXPECT_EQ(text, "    inputs:  in (any)\n    outputs: out (like input 'in')\n    events:  error, finished\n");
+}
+
+// The profile's source.count and the task's sink.expected both take n.
+TEST(Profiles, ASetOfAProfileComponentsParameterFollowsTheSameRules) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", kSlotTask);
+  const auto profile = dir.write("profiles/pass.yaml", kPassProfile);
+  const std::string conflict = load_errors(file, with_sets({"n=4", "source.count=5"}, "pass"));
+  EXPECT_NE(conflict.find("--set source.count=5: error: --set source.count=5 conflicts with --set n=4: source.count is ${n} (" +
+                          profile.string() + ":4:54); set one of them"),
+            std::string::npos)
+      << conflict;
+  const std::string shared = load_errors(file, with_sets({"source.count=5"}, "pass"));
+  EXPECT_NE(shared.find("--set source.count=5: error: source.count comes from the task parameter 'n' (also sink.expected); set it with --set n=..."),
+            std::string::npos)
+      << shared;
 }

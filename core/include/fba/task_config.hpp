@@ -140,8 +140,8 @@ std::vector<std::string> interface_differences(const Interface& a, const Interfa
 // Indented lines for --check: inputs, outputs and events.
 std::string describe(const Interface& i);
 
-// "component.param=value", or "name=value" for a task parameter; the value is read as YAML (so
-// lists and numbers work).
+// "component.param=value", or "name=value" for a task parameter. A string or path parameter takes
+// the value as written; any other reads it as YAML (so lists and numbers work).
 struct Override {
   std::string text;
 };
@@ -150,8 +150,12 @@ struct LoadOptions {
   std::vector<Override> overrides;
   bool require_inputs = true;  // the component harness feeds inputs itself
   // The profile binding the task's slots: a name (profiles/NAME.yaml beside the task) or a path
-  // (with a '/' or ending in .yaml; relative to the working folder). Empty: the task's `profile:`.
+  // (with a '/' or ending in .yaml; relative to the working folder). Empty: the task's `profile:`,
+  // unless profile_given.
   std::string profile;
+  // --profile was on the command line: an empty name there is a mistake (an unset variable), not
+  // the task's own profile, and is refused.
+  bool profile_given = false;
 };
 
 // Parses, expands composites and checks everything; throws ConfigError listing every problem.
