@@ -736,14 +736,22 @@ class Loader {
     Location where{"--profile " + name, 0, 0};
     fs::path base = fs::current_path();  // a path on the command line means what the shell means
     std::string shown_base;
-    if (name.empty() && root["profile"]) {
+    const auto available = available_profiles(src.dir);
+    const bool from_file = name.empty() && !profile_given_ && root["profile"];
+    if (from_file) {
       name = scalar(root["profile"], src, "profile");
       where = at(src, root["profile"]);
       base = src.dir;
       shown_base = fs::path(src.shown).parent_path().string();
     }
+    // An empty name is a mistake (an unset shell variable), not a request for the default profile.
+    if (name.empty() && (profile_given_ || (from_file && root["profile"].IsScalar()))) {
+      error(from_file ? where : Location{"--profile ''", 0, 0},
+            std::string(from_file ? "'profile:'" : "--profile") + " expects a profile's name (profiles/NAME.yaml beside the task) or a file; "
+            "found an empty name; profiles next to the task: " + list_of(available));
+      return;
+    }
     const auto slots = slot_names(root["components"]);
-    const auto available = available_profiles(src.dir);
     if (name.empty()) {
       if (!slots.empty())
         error(at(src, root["components"]), "the task has device slots (" + list_of(slots) +
@@ -968,7 +976,10 @@ class Loader {
     }
     for (const auto& item : items) {
       const std::string rel = scalar(item, src, "an include");
-      if (rel.empty()) continue;
+      if (rel.empty()) {
+        if (item.IsScalar()) error(at(src, item), "an include names a composite file, relative to this file's folder; found an empty name");
+        continue;
+      }
       const fs::path path = (src.dir / rel).lexically_normal();
       std::string problem;
       const std::string text = read_text(path, problem);
@@ -1061,6 +1072,11 @@ class Loader {
       for (const char* bound : {"min", "max"}) {
         const YAML::Node b = p[bound];
         if (!b) continue;
+        if (ps.type != ParamType::Int && ps.type != ParamType::Double && ps.type != ParamType::DoubleList) {
+          err(b, std::string(bound) + " applies to int and double parameters (and to every number of a list); '" + pname + "' is a " +
+                     to_string(ps.type) + " parameter");
+          continue;
+        }
         double x = 0;
         if (!b.IsScalar() || !parse_double(b.Scalar(), x)) {
           err(b, "parameter '" + pname + "': " + bound + " must be a finite number; found " +

@@ -446,3 +446,36 @@ TEST(Loader, RawControlBytesAreEscapedInMessages) {
   const auto e = errors_of("components:\n  a: { type: \"ex\\0am\\x1bple\" }\n");
   EXPECT_NE(e.find("unknown component type 'ex\\x00am\\x1bple'"), std::string::npos) << e;
 }
+
+TEST(Loader, AnEmptyIncludeNameIsRefusedAtItsPlace) {
+  for (const std::string include : {"include: ''", "include: [composites/none.yaml, \"\"]"}) {
+    const auto e = errors_of(include + kChain);
+    EXPECT_NE(e.find("an include names a composite file, relative to this file's folder; found an empty name"), std::string::npos)
+        << include << "\n" << e;
+  }
+  const auto e = errors_of(std::string("include: ''") + kChain);
+  EXPECT_NE(e.find("test.yaml:1:10: error: an include names"), std::string::npos) << e;
+}
+
+// A bound on a string, bool or path was ignored: the declaration seemed to limit what it did not.
+TEST(Loader, MinAndMaxApplyToNumbersAndListsOnly) {
+  const auto e = errors_of(R"(
+params:
+  on: { type: bool, default: true, max: 1 }
+  where: { type: path, default: ., min: 0 }
+  n: { type: int, default: 3, min: 1, max: 5 }
+  gains: { type: list, default: [1, 2], max: 5 }
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)");
+  EXPECT_NE(e.find("test.yaml:3:41: error: max applies to int and double parameters (and to every number of a list); 'on' is a bool parameter"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("test.yaml:4:41: error: min applies to int and double parameters (and to every number of a list); 'where' is a path parameter"),
+            std::string::npos)
+      << e;
+  EXPECT_EQ(e.find("'n'"), std::string::npos) << e;
+  EXPECT_EQ(e.find("'gains'"), std::string::npos) << e;
+}

@@ -534,3 +534,23 @@ TEST(Profiles, ASetOfAProfileComponentsParameterFollowsTheSameRules) {
             std::string::npos)
       << shared;
 }
+
+// `--profile ''` (an unset shell variable) ran the task's default profile.
+TEST(Profiles, AnEmptyProfileNameIsRefused) {
+  TempDir dir;
+  const auto file = dir.write("task.yaml", std::string(kSlotTask) + "profile: pass\n");
+  dir.write("profiles/pass.yaml", kPassProfile);
+  auto given_empty = with_sets({});
+  given_empty.profile_given = true;
+  const std::string e = load_errors(file, given_empty);
+  EXPECT_NE(e.find("--profile '': error: --profile expects a profile's name (profiles/NAME.yaml beside the task) or a file; found an empty "
+                   "name; profiles next to the task: pass"),
+            std::string::npos)
+      << e;
+  EXPECT_EQ(e.find("slot"), std::string::npos) << e;  // one error, not one per slot
+  // Without --profile, the task's own.
+  EXPECT_EQ(fba::load_task(file, fba::test::registry(), with_sets({})).profile, "pass");
+  const auto empty_key = dir.write("empty.yaml", std::string(kSlotTask) + "profile: ''\n");
+  const std::string k = load_errors(empty_key);
+  EXPECT_NE(k.find("empty.yaml:12:10: error: 'profile:' expects a profile's name"), std::string::npos) << k;
+}
