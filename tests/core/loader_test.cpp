@@ -447,6 +447,12 @@ TEST(Loader, RawControlBytesAreEscapedInMessages) {
   EXPECT_NE(e.find("unknown component type 'ex\\x00am\\x1bple'"), std::string::npos) << e;
 }
 
+// A newline in a name is shown as \n, so that the name printed is the name given.
+TEST(Loader, NewlinesTabsAndReturnsAreEscapedAsInC) {
+  const auto e = errors_of("components:\n  a: { type: \"ex\\nam\\tp\\rle\" }\n");
+  EXPECT_NE(e.find("unknown component type 'ex\\nam\\tp\\rle'"), std::string::npos) << e;
+}
+
 TEST(Loader, AnEmptyIncludeNameIsRefusedAtItsPlace) {
   for (const std::string include : {"include: ''", "include: [composites/none.yaml, \"\"]"}) {
     const auto e = errors_of(include + kChain);
