@@ -30,9 +30,9 @@ class OctreeCarverFilter final : public fba::Component {
   static constexpr fba::OptionalIn<fba::RegionsOfInterest> kRegions{
       "regions", "where grasping needs detail (the grasp-specific criterion)"};
   static constexpr fba::Out<fba::Octree> kOctree{"octree", "the model after each update (immutable)"};
-  // 11 at most: depth 12's worst case (1.3 TB) is past the largest memory_budget_mib, so it could
-  // only ever be refused; 10 and 11 need the budget raised (the refusal gives the figure).
-  static constexpr auto kMaxDepth = fba::Param<int>("max_depth", 6, "deepest level of the octree (the root is level 0)").range(1, 11);
+  // 9 at most: depth 10's worst case is more than the octree can address (OctreeNode::kMaxBlocks),
+  // whatever memory_budget_mib says, so it could only be refused, or fail mid-run.
+  static constexpr auto kMaxDepth = fba::Param<int>("max_depth", 6, "deepest level of the octree (the root is level 0)").range(1, 9);
   static constexpr auto kMinNodeSize = fba::Param<double>("min_node_size", 0.0, "metres: nodes this small or smaller are not split").at_least(0);
   static constexpr auto kOccupancyThreshold = fba::Param<double>(
       "occupancy_threshold", 0.5,
