@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -20,6 +21,12 @@ namespace fba::geometry {
 namespace {
 
 std::string describe(const std::filesystem::path& path) { return "mesh '" + path.string() + "'"; }
+
+std::string mebibytes(std::uintmax_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f MiB", static_cast<double>(bytes) / (1 << 20));
+  return text;
+}
 
 // assimp's OBJ reader only logs a missing material library (to a global logger we do not want
 // to own), so look for it ourselves and report it as a warning the caller can show.
@@ -44,8 +51,10 @@ void check_obj_material_libraries(const std::filesystem::path& path,
 
 struct PositionHash {
   std::size_t operator()(const Eigen::Vector3f& p) const {
+    // -0 and 0 are equal positions, so they must hash alike: adding 0 makes -0 into 0.
+    const Eigen::Vector3f q = p.array() + 0.0f;
     std::uint32_t bits[3];
-    std::memcpy(bits, p.data(), sizeof bits);
+    std::memcpy(bits, q.data(), sizeof bits);
     std::size_t h = bits[0];
     h = h * 1000003u ^ bits[1];
     h = h * 1000003u ^ bits[2];
@@ -382,6 +391,10 @@ MeshLoadResult load_mesh_with_warnings(const std::filesystem::path& path) {
     throw MeshLoadError("cannot load " + describe(path) + ": file does not exist");
   if (!std::filesystem::is_regular_file(path, ec))
     throw MeshLoadError("cannot load " + describe(path) + ": not a regular file");
+  if (const std::uintmax_t size = std::filesystem::file_size(path, ec); !ec && size > kMaxMeshFileBytes)
+    throw MeshLoadError("cannot load " + describe(path) + ": the file is " + mebibytes(size) + " (" + std::to_string(size) +
+                        " bytes), more than the " + mebibytes(kMaxMeshFileBytes) +
+                        " a mesh file may have (reading takes several times its size in memory); decimate it to fewer triangles");
   {
     std::ifstream probe(path, std::ios::binary);
     if (!probe) throw MeshLoadError("cannot load " + describe(path) + ": file cannot be opened");
@@ -399,16 +412,17 @@ MeshLoadResult load_mesh_with_warnings(const std::filesystem::path& path) {
   check_obj_material_libraries(path, result.warnings);
 
   Assimp::Importer importer;
-  // Drop everything but positions before joining, so vertices split only by normals or texture
-  // coordinates (UV seams) become one again and the surface stays closed.
+  // Only positions are kept. Vertices are welded below by exact position, so that those split by
+  // normals or texture coordinates (UV seams) become one again and the surface stays closed;
+  // assimp's JoinIdenticalVertices would also join near ones, and take more memory than the
+  // reading itself on a large file.
   importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS,
                               aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS |
                                   aiComponent_COLORS | aiComponent_TEXCOORDS |
                                   aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
                                   aiComponent_TEXTURES | aiComponent_LIGHTS |
                                   aiComponent_CAMERAS | aiComponent_MATERIALS);
-  const unsigned flags = aiProcess_RemoveComponent | aiProcess_Triangulate |
-                         aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
+  const unsigned flags = aiProcess_RemoveComponent | aiProcess_Triangulate | aiProcess_PreTransformVertices |
                          aiProcess_SortByPType;
   const aiScene* scene = importer.ReadFile(path.string(), flags);
   if (!scene) {

@@ -1,5 +1,7 @@
+#include <filesystem>
 #include <fstream>
 #include <map>
+#include <string>
 #include <utility>
 
 #include <gtest/gtest.h>
@@ -90,6 +92,39 @@ TEST(MeshIo, EmptyFileThrows) {
 TEST(MeshIo, DirectoryThrows) {
   TempDir dir;
   EXPECT_THROW(load_mesh(dir.path()), MeshLoadError);
+}
+
+// Refused from its size alone: the file is sparse, and reading it would take its whole size.
+TEST(MeshIo, AFileOverTheSizeLimitIsRefusedNamingItsSizeAndTheLimit) {
+  TempDir dir;
+  const auto path = dir.path() / "huge.obj";
+  std::ofstream(path).close();
+  std::filesystem::resize_file(path, kMaxMeshFileBytes + 1);
+  try {
+    load_mesh(path);
+    FAIL() << "no exception";
+  } catch (const MeshLoadError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("huge.obj"), std::string::npos) << what;
+    EXPECT_NE(what.find("the file is 128.0 MiB (" + std::to_string(kMaxMeshFileBytes + 1) + " bytes)"), std::string::npos) << what;
+    EXPECT_NE(what.find("more than the 128.0 MiB a mesh file may have"), std::string::npos) << what;
+  }
+}
+
+// Copies of a vertex are one, written as -0 or 0 alike (the tetrahedron is closed); a vertex a
+// hair apart is another.
+TEST(MeshIo, VerticesAreWeldedByExactPositionOnly) {
+  TempDir dir;
+  const std::string closed = dir.file("closed.obj",
+                                      "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nv -0.0 0 0\nv 0.1 0 0\n"
+                                      "f 1 3 2\nf 5 2 4\nf 1 4 3\nf 6 3 4\n");
+  const TriangleMesh mesh = load_mesh(closed);
+  EXPECT_EQ(mesh.vertices.size(), 4u);
+  EXPECT_TRUE(closed_and_consistently_oriented(mesh));
+  const std::string apart = dir.file("apart.obj",
+                                     "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nv 0.0000001 0 0\n"
+                                     "f 1 3 2\nf 5 2 4\nf 1 4 3\nf 2 3 4\n");
+  EXPECT_EQ(load_mesh(apart).vertices.size(), 5u);
 }
 
 TEST(MeshIo, WritePlyRoundTripsGeometry) {

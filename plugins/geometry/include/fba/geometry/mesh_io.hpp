@@ -1,6 +1,7 @@
 // Loading and saving triangle meshes, and simple whole-mesh measures.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -25,11 +26,18 @@ struct MeshLoadResult {
   std::vector<std::string> warnings;
 };
 
+// The largest mesh file loaded: a larger one is refused before it is read. Reading takes several
+// times the file's size in memory (assimp's OBJ reader the most), and the limit keeps that under a
+// gigabyte; a mesh that large has far more triangles than rendering or physics can use, and is
+// better decimated before.
+inline constexpr std::uintmax_t kMaxMeshFileBytes = std::uintmax_t{128} << 20;  // 128 MiB
+
 // Loads any format assimp reads (OBJ, STL, OFF, glTF, ...) and PLY (read here, with the header's
 // counts checked against the file's size; ASCII and both binary forms). Faces are triangulated, node
 // transforms applied, and vertices welded by exact position (normals and texture coordinates
 // are dropped, so UV seams do not split the surface: the result is closed if the file's surface
-// is). Degenerate triangles (a repeated vertex) are dropped. Throws MeshLoadError.
+// is). Degenerate triangles (a repeated vertex) are dropped. Throws MeshLoadError, also for a
+// file larger than kMaxMeshFileBytes (naming its size and the limit).
 MeshLoadResult load_mesh_with_warnings(const std::filesystem::path& path);
 
 // As load_mesh_with_warnings, discarding the warnings.
