@@ -15,6 +15,7 @@
 
 #include <Eigen/Geometry>
 
+#include "fba/geometry/decimate.hpp"
 #include "hand_model.hpp"
 
 namespace fba::sim_hand {
@@ -87,6 +88,7 @@ const std::string& LiftTest::hand_model() {
 struct LiftTest::Impl {
   LiftTestParams params;
   TriangleMesh object;
+  std::string physics_note;
   mjModel* m = nullptr;
   mjData* d = nullptr;
 
@@ -215,10 +217,15 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
   </worldbody>
 )", centre.x(), centre.y(), centre.z(), params.mass));
 
+  const geometry::Decimated physics = geometry::decimate(s.object, kPhysicsTriangles);
+  if (physics.cell > 0)
+    s.physics_note = fmt::format("the object's {} triangles were decimated to {} for MuJoCo (at most {}), by vertex clustering on a "
+                                 "{:.2f} mm grid",
+                                 s.object.triangles.size(), physics.mesh.triangles.size(), kPhysicsTriangles, physics.cell * 1e3);
   std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
   mj_defaultVFS(vfs.get());
   add_file(*vfs, "scene.xml", scene);
-  add_file(*vfs, "object.stl", binary_stl(s.object, centre));
+  add_file(*vfs, "object.stl", binary_stl(physics.mesh, centre));
   char error[1024] = "";
   s.m = mj_loadXML("scene.xml", vfs.get(), error, sizeof error);
   if (!s.m) throw LiftTestError(std::string("lift test: MuJoCo does not compile the scene: ") + error);
@@ -260,6 +267,7 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
 LiftTest::~LiftTest() = default;
 
 const TriangleMesh& LiftTest::object() const { return impl_->object; }
+const std::string& LiftTest::physics_note() const { return impl_->physics_note; }
 double LiftTest::simulated_s() const { return static_cast<double>(impl_->steps) * impl_->m->opt.timestep; }
 long LiftTest::steps() const { return impl_->steps; }
 

@@ -7,6 +7,7 @@
 // Simulated time alone decides (the step count), never the wall clock.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -42,6 +43,13 @@ struct LiftTestParams {
   double contact_tolerance = 0.025;
 };
 
+// The most triangles MuJoCo is given: a finer object is decimated to this for the physics by
+// vertex clustering (geometry::decimate), whose grid is then a small share of a hand-sized object;
+// its convex hull, which MuJoCo collides with, moves by less than a cube of the grid. MuJoCo's
+// compile time grows faster than the triangle count, and its STL reader takes at most 200,000.
+// object() keeps every triangle.
+inline constexpr std::size_t kPhysicsTriangles = 50000;
+
 // `mesh` is in the mesh file's frame; see ObjectPlacement. The hand model is the one in
 // hardware/robots (built in); `hand_mjcf`, when given, replaces it (MJCF text with the same
 // body, joint and actuator names). Throws LiftTestError.
@@ -66,6 +74,9 @@ class LiftTest {
 
   // The object as placed, world frame: for computing contacts on it.
   const TriangleMesh& object() const;
+  // What MuJoCo was given instead of the object's mesh, with the triangle counts: empty when it
+  // was given the mesh as it is (kPhysicsTriangles).
+  const std::string& physics_note() const;
   // Simulated seconds and physics steps of the last run.
   double simulated_s() const;
   long steps() const;

@@ -69,6 +69,7 @@ class SimHand final : public fba::Component {
     if (ctx(kWorld) == "table") table_shift_ = 0;
     ctx.log().info("{}: {} triangles on the table at ({:.3f}, {:.3f}), yaw {:.1f} deg, {}", ctx(kMesh).stem().string(),
                    test_.object().triangles.size(), ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw), ctx(kObjectRest));
+    if (!test_.physics_note().empty()) ctx.log().info("{}: {}", ctx(kMesh).stem().string(), test_.physics_note());
   }
 
   // Opens the hand and ends the simulation, as the real hand opens on its way out of a run.

@@ -13,6 +13,8 @@
 #include "ring_grasp.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
+#include "support/mesh_files.hpp"
+#include "support/temp_dir.hpp"
 
 namespace {
 
@@ -172,6 +174,25 @@ TEST(LiftTest, NonFiniteGraspIsRefused) {
   g.approach.setZero();
   EXPECT_THROW(test.run(g), std::invalid_argument);
 }
+
+// MuJoCo's STL reader takes at most 200,000 faces: a finer object is decimated for the physics,
+// which says so with the counts, and the lift test runs on it.
+TEST(LiftTest, AnObjectOverMuJoCosFaceLimitIsDecimatedForThePhysicsAndHeld) {
+  fba::test::TempDir dir;
+  const auto obj = dir.path() / "fine_sphere.obj";
+  fba::test::write_obj(fba::geometry::make_uv_sphere({0, 0, 0.04}, 0.04, 400, 300), obj);
+  const fba::TriangleMesh mesh = fba::geometry::load_mesh(obj);
+  ASSERT_EQ(mesh.triangles.size(), 239200u);
+  LiftTest test(mesh, {});
+  EXPECT_EQ(test.object().triangles.size(), 239200u);  // contacts are computed on every triangle
+  const std::string note = test.physics_note();
+  EXPECT_EQ(note.rfind("the object's 239200 triangles were decimated to ", 0), 0u) << note;
+  EXPECT_NE(note.find("for MuJoCo (at most 50000)"), std::string::npos) << note;
+  const auto r = test.run(fba::sim_hand::ring_grasp(test.object(), mid_height(test.object()), 0));
+  EXPECT_TRUE(r.held) << r.reason;
+}
+
+TEST(LiftTest, AnObjectWithinTheBoundIsGivenToMuJoCoAsItIs) { EXPECT_EQ(LiftTest(can(), {}).physics_note(), ""); }
 
 TEST(LiftTest, EmptyMeshIsAClearError) {
   try {

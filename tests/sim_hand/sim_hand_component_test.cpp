@@ -19,6 +19,7 @@
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
+#include "support/mesh_files.hpp"
 
 namespace {
 
@@ -53,6 +54,22 @@ TEST(SimHand, GoodGraspHoldsAndSaysSo) {
   EXPECT_EQ(payload["held"], true);
   EXPECT_EQ(payload["contacts"].size(), results[0].contacts.size());
   EXPECT_DOUBLE_EQ(payload["slip_m"].get<double>(), results[0].slip_m);
+}
+
+// An OBJ beyond MuJoCo's 200,000 faces: before, MuJoCo refused the scene ("perhaps this is an
+// ASCII file?"); the hand now holds the object.
+TEST(SimHand, AMeshOverMuJoCosFaceLimitIsGrasped) {
+  fba::test::TempDir dir;
+  const auto obj = dir.path() / "fine_sphere.obj";
+  const auto sphere = fba::geometry::make_uv_sphere({0, 0, 0.04}, 0.04, 400, 300);
+  ASSERT_GT(sphere.triangles.size(), 200000u);
+  fba::test::write_obj(sphere, obj);
+  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", obj.string()}});
+  h.push<fba::Grasp>("grasp", fba::sim_hand::ring_grasp(sphere, 0.04, 0));
+  h.run();
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_TRUE(results[0].held) << results[0].reason;
 }
 
 TEST(SimHand, InTheMeshFrameGraspsAndContactsAreInTheMeshFilesCoordinates) {
