@@ -1,6 +1,7 @@
 // fba-evaluate grasp: the quality of a grasp on the true object surface (force closure and the
 // Ferrari-Canny epsilon), compared with random contact sets and with synthesis on perfect samples.
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -54,7 +55,8 @@ summary.json's "grasp" object (world frame, metres; the mesh is in world frame t
   }
 
 A run's summary.json from fba-run is read too: the grasp is then the one a component reported
-(grasp.synthesis's results.grasp, this JSON).
+(grasp.synthesis's results.grasp, this JSON). --summary must be a regular file (a FIFO is refused,
+as reading one waits for a writer); a mesh that is not closed is refused with its boundary edges.
 
 Exit status: 0 when evaluated (with --summary: the grasp is force closure), 1 when the grasp
 is not force closure, 2 for bad input (a mesh that does not load, a malformed summary).
@@ -85,8 +87,36 @@ Eigen::Isometry3d parse_pose(const std::vector<double>& v) {
 
 }  // namespace
 
-TriangleMesh load_posed(const std::string& path, const Eigen::Isometry3d& pose) {
+std::size_t boundary_edges(const TriangleMesh& mesh) {
+  // Each edge as its two vertex indices, smaller first; an edge that occurs once is on a boundary.
+  std::vector<std::uint64_t> edges;
+  edges.reserve(3 * mesh.triangles.size());
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const auto a = static_cast<std::uint32_t>(t[k]), b = static_cast<std::uint32_t>(t[(k + 1) % 3]);
+      edges.push_back(std::uint64_t{std::min(a, b)} << 32 | std::max(a, b));
+    }
+  std::sort(edges.begin(), edges.end());
+  std::size_t once = 0;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i + 1;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    once += j - i == 1;
+    i = j;
+  }
+  return once;
+}
+
+TriangleMesh load_closed_mesh(const std::string& path) {
   TriangleMesh m = geometry::load_mesh(path);
+  if (const std::size_t open = boundary_edges(m))
+    throw std::invalid_argument("mesh '" + path + "': expected a closed surface (the grasp measure needs its volume and centre of mass); found " +
+                                std::to_string(open) + " boundary edge" + (open == 1 ? "" : "s") + " (edges of one triangle only)");
+  return m;
+}
+
+TriangleMesh load_posed(const std::string& path, const Eigen::Isometry3d& pose) {
+  TriangleMesh m = load_closed_mesh(path);
   for (auto& v : m.vertices) v = (pose * v.cast<double>()).cast<float>();
   return m;
 }
@@ -98,18 +128,6 @@ Eigen::Isometry3d table_pose(double x, double y, double yaw_deg) {
   return t;
 }
 
-std::optional<Grasp> summary_grasp(const nlohmann::json& j, const std::string& path) {
-  if (!j.is_object()) return std::nullopt;
-  if (j.contains("grasp")) return grasp::grasp_from_json(j["grasp"], path + ": grasp");
-  // fba-run's own summary: the grasp a component reported (grasp.synthesis: results.grasp). The
-  // results are complete where the event list stops at its first 10000 events.
-  if (!j.contains("components") || !j["components"].is_object()) return std::nullopt;
-  for (const auto& [name, c] : j["components"].items())
-    if (c.is_object() && c.contains("results") && c["results"].is_object() && c["results"].contains("grasp"))
-      return grasp::grasp_from_json(c["results"]["grasp"], path + ": components." + name + ".results.grasp");
-  return std::nullopt;
-}
-
 std::string object_name(const std::string& mesh) {
   const std::filesystem::path p(mesh);
   return p.stem() == "model" && p.has_parent_path() ? p.parent_path().filename().string() : p.filename().string();
@@ -117,22 +135,7 @@ std::string object_name(const std::string& mesh) {
 
 namespace {
 
-Grasp read_summary_grasp(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument("cannot read summary '" + path + "'");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw std::invalid_argument("summary '" + path + "' is not valid JSON: " + e.what());
-  }
-  if (auto g = summary_grasp(j, path)) return *g;
-  throw std::invalid_argument("summary '" + path +
-                              "' has no \"grasp\" object and no component reported one (see fba-evaluate grasp --help)");
-}
-
-int evaluate_summary(const Options& o, const grasp::ObjectSurface& surface) {
-  const Grasp g = read_summary_grasp(o.summary);
+int evaluate_summary(const Options& o, const Grasp& g, const grasp::ObjectSurface& surface) {
   std::array<GraspContact, 3> placed;
   for (int k = 0; k < 3; ++k) {
     const auto p = surface.place(g.contacts[k]);
@@ -218,11 +221,15 @@ int run_grasp(const std::vector<std::string>& args) {
   const Eigen::Isometry3d pose = parse_pose(o.mesh_pose);
 
   if (!o.summary.empty()) {
+    const Grasp g = read_summary_grasp(o.summary, "--summary");
     const grasp::ObjectSurface surface(load_posed(o.meshes[0], pose));
     std::printf("mesh %s: volume %.3g m^3, r_max %.4f m, friction %.2f, %d cone edges\n", o.meshes[0].c_str(),
                 surface.volume(), surface.r_max(), o.quality.friction, o.quality.cone_edges);
-    return evaluate_summary(o, surface);
+    return evaluate_summary(o, g, surface);
   }
+  // Every mesh loaded and checked before the first line of the table.
+  std::vector<grasp::ObjectSurface> surfaces;
+  for (const auto& m : o.meshes) surfaces.emplace_back(load_posed(m, pose));
   std::printf("friction %.2f, %d cone edges, seed %llu", o.quality.friction, o.quality.cone_edges,
               static_cast<unsigned long long>(o.seed));
   if (o.random) std::printf(", %zu random sets", o.random);
@@ -231,7 +238,7 @@ int run_grasp(const std::vector<std::string>& args) {
   if (o.random) std::printf(" %10s %9s", "random FC", "rand p99");
   if (o.synthesise) std::printf(" %8s %9s %6s %7s %10s %9s", "best FC", "best eps", "score", "top", "top FC", "top med");
   std::printf("\n");
-  for (const auto& m : o.meshes) table_row(o, m, grasp::ObjectSurface(load_posed(m, pose)));
+  for (std::size_t i = 0; i < o.meshes.size(); ++i) table_row(o, o.meshes[i], surfaces[i]);
   return 0;
 }
 

@@ -1,5 +1,5 @@
-// What the grasp subcommand's single and batch modes share: the grasp in a run's summary.json,
-// an object's name, and the true mesh placed where the run stood it.
+// What the grasp subcommand's single and batch modes share: the grasp in a run's summary.json
+// (run_summary.hpp), an object's name, and the true mesh, checked closed, placed where the run stood it.
 #pragma once
 
 #include <cstddef>
@@ -13,6 +13,7 @@
 
 #include "fba/types/grasp.hpp"
 #include "fba/types/mesh.hpp"
+#include "run_summary.hpp"
 
 namespace fba::evaluate {
 
@@ -23,15 +24,18 @@ constexpr std::size_t kMaxSamples = 1'000'000;
 constexpr double kMaxFriction = 10.0;
 constexpr int kMaxConeEdges = 64;
 
-// The grasp in a parsed summary.json: its "grasp" object, else the grasp a component reported
-// (fba-run's summary: components.NAME.results.grasp). nullopt when it has neither; throws
-// std::invalid_argument, naming `path` and the member, for a grasp that is malformed.
-std::optional<Grasp> summary_grasp(const nlohmann::json& summary, const std::string& path);
-
 // "YcbBanana" for .../YcbBanana/model.obj, else the file's name.
 std::string object_name(const std::string& mesh);
 
-// The mesh file with every vertex moved by pose.
+// The edges of only one triangle: 0 for a closed surface.
+std::size_t boundary_edges(const TriangleMesh& mesh);
+
+// The mesh file, which must be closed: the measure needs the solid's volume and centre of mass,
+// which an open surface does not have. Throws geometry::MeshLoadError, or std::invalid_argument
+// naming the file and how many boundary edges it has.
+TriangleMesh load_closed_mesh(const std::string& path);
+
+// The closed mesh file with every vertex moved by pose.
 TriangleMesh load_posed(const std::string& path, const Eigen::Isometry3d& pose);
 
 // A pose on the table as sim.hand takes it: turned by yaw_deg about z, then moved by (x, y).

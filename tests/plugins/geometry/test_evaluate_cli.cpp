@@ -3,6 +3,7 @@
 // and a message naming it), and negative numbers are values, not options.
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <cstring>
@@ -20,6 +21,7 @@
 #include "fba/geometry/viewpoints.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
+#include "support/child_process.hpp"
 #include "support/data_sets.hpp"
 
 extern char** environ;
@@ -276,6 +278,41 @@ TEST(EvaluateCli, ModelImagesWithTheSetsOwnMasksAreScoredAgainstThem) {
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("by the set's own masks"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("reprojection IoU: min 1.0000  mean 1.0000  over 1 views"), std::string::npos) << r.output;
+}
+
+// The grasp measure needs the solid's volume and centre of mass, which an open surface does not
+// have: a mesh that is not closed is refused, with how many edges are of one triangle only.
+TEST(EvaluateCli, GraspRefusesAMeshThatIsNotClosed) {
+  const fba::test::TempDir dir;
+  fba::TriangleMesh open = fba::geometry::make_box({-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05});
+  open.triangles.resize(open.triangles.size() - 2);  // a face of the box left open: its four edges
+  const std::string path = dir.file("open.ply");
+  fba::geometry::write_ply(open, path);
+  const std::string says = "mesh '" + path + "': expected a closed surface (the grasp measure needs its volume and centre of mass); found 4 boundary edges";
+  // Before any work: no row for the banana, which is closed, before the open mesh is refused.
+  const Result r = fba_evaluate({"grasp", "--mesh", kBanana, path, "--random", "10"});
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("YcbBanana"), std::string::npos) << r.output;
+  expect_refused({"grasp", "--mesh", path, "--synthesise", "--samples", "100"}, says);
+  const std::string summary = dir.file("summary.json", R"({"grasp": {"contacts": [
+      {"position": [-0.05, 0, 0], "normal": [1, 0, 0]}, {"position": [0.05, 0.02, 0], "normal": [-1, 0, 0]},
+      {"position": [0.05, -0.02, 0], "normal": [-1, 0, 0]}]}})");
+  expect_refused({"grasp", "--mesh", path, "--summary", summary}, says);
+}
+
+// Opening a FIFO for reading waits for a writer, maybe forever: --summary must be a regular file.
+TEST(EvaluateCli, GraspRefusesASummaryThatIsNotARegularFile) {
+  const fba::test::TempDir dir;
+  const std::string fifo = dir.file("summary.fifo");
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  fba::test::Child evaluate({fba::test::program("fba-evaluate"), "grasp", "--mesh", kBanana, "--summary", fifo});
+  const int status = evaluate.wait(0);  // -1: it hung
+  const std::string output = evaluate.read_until("");
+  EXPECT_EQ(status, 2) << output;
+  EXPECT_NE(output.find("--summary: expected a regular file; '" + fifo + "' is a FIFO"), std::string::npos) << output;
+  expect_refused({"grasp", "--mesh", kBanana, "--summary", dir.path().string()}, "--summary: expected a regular file; '" +
+                                                                                    dir.path().string() + "' is a folder");
 }
 
 }  // namespace
