@@ -42,6 +42,31 @@ std::string fixed(double v) {
   return buf;
 }
 
+std::string box_text(const Eigen::AlignedBox3d& b) {
+  return "[" + fixed(b.min().x()) + ", " + fixed(b.min().y()) + ", " + fixed(b.min().z()) + ", " + fixed(b.max().x()) + ", " +
+         fixed(b.max().y()) + ", " + fixed(b.max().z()) + "]";
+}
+
+// The faces of the model's root box that its occupied leaves touch, as "x = 0.130 and z = 0.240";
+// empty when none does.
+std::string bounds_reached(const fba::Octree& model) {
+  bool at[6] = {};  // -x, -y, -z, +x, +y, +z
+  model.for_each_occupied_leaf([&](const fba::OctreeCell& c) {
+    const int last = (1 << c.depth) - 1;
+    const int corner[3] = {c.x, c.y, c.z};
+    for (int a = 0; a < 3; ++a) {
+      at[a] |= corner[a] == 0;
+      at[a + 3] |= corner[a] == last;
+    }
+  });
+  std::vector<std::string> faces;
+  for (int f = 0; f < 6; ++f)
+    if (at[f]) faces.push_back(std::string(1, "xyz"[f % 3]) + " = " + fixed(f < 3 ? model.bounds.min()[f] : model.bounds.max()[f - 3]));
+  std::string text;
+  for (std::size_t i = 0; i < faces.size(); ++i) text += (i == 0 ? "" : i + 1 == faces.size() ? " and " : ", ") + faces[i];
+  return text;
+}
+
 class GraspSynthesisFilter final : public fba::Component {
  public:
   static constexpr fba::In<fba::Octree> kOctree{"octree", "the model after each update (connect with buffer: latest to skip models a newer one replaced)"};
@@ -166,13 +191,22 @@ class GraspSynthesisFilter final : public fba::Component {
     // The model's views are the first silhouettes (the carver takes them in arrival order).
     const std::span<const fba::grasp::SilhouetteRim> rims = std::span(rims_).first(std::min<std::size_t>(rims_.size(), std::size_t(views)));
     const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_, params_.table_z, params_.parallel_for});
-    if (surface.samples.empty() && surface.leaves > 0)
+    if (surface.samples.empty() && surface.leaves > 0) {
+      const std::string table = "none of its " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
+                                " views is joined to the table at z = " + fixed(params_.table_z.value_or(0));
+      // An object outside the workspace is seen through it: the views' cones cross the root box
+      // and end on its faces, away from the table.
+      if (const std::string faces = bounds_reached(model); !faces.empty())
+        return fail("the carved model reaches the workspace's bounds at " + faces + " (the carver's root box " + box_text(model.bounds) +
+                    "), and " + table + ": the object may be larger than or outside the workspace");
       return fail("none of the model's " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
                   " views is joined to the table at z = " + fixed(params_.table_z.value_or(0)) +
                   ": the object rests on it (check table_z, and the carver's bounds reach down to it)");
+    }
     if (surface.samples.empty())
       return fail("the model is empty after " + std::to_string(views) +
-                  " views: no occupied leaf to grasp (no target in the silhouettes, or a root box that misses the object)");
+                  " views: no occupied leaf to grasp (no target in the silhouettes, or the object outside the workspace, the carver's "
+                  "root box " + box_text(model.bounds) + ")");
     fba::grasp::ModelSurface observed = surface;
     if (rim_deg_ > 0 && !rims.empty()) fba::grasp::mark_unobserved(observed.samples, rims, surface.finest_edge, rim_deg_, rim_separation_deg_);
     fba::grasp::SynthesisParams p = params_;

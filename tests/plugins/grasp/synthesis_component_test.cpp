@@ -106,6 +106,26 @@ TEST(GraspSynthesisComponent, AModelNotJoinedToTheTableFailsNamingTheTable) {
   EXPECT_TRUE(h.failure().empty()) << h.failure();
 }
 
+// An object outside the workspace is seen through it: the views' cones end on the root box's
+// faces, away from the table. The reason names the faces and the workspace.
+TEST(GraspSynthesisComponent, AModelReachingTheWorkspacesBoundsAwayFromTheTableSaysTheObjectMayBeOutsideIt) {
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"table_z", std::vector<double>{-0.08}}});
+  h.push<fba::Octree>("octree", gt::voxelise(gt::box_sdf({0.07, 0, 0.03}, {0.04, 0.04, 0.04}), kCube, 5, {}, 3));
+  h.run();
+  const auto failed = named(h.events(), "grasp_synthesis_failed");
+  ASSERT_EQ(failed.size(), 1u);
+  EXPECT_EQ(failed[0].payload.rfind("the carved model reaches the workspace's bounds at x = 0.080 (the carver's root box [-0.080, -0.080, "
+                                    "-0.080, 0.080, 0.080, 0.080]), and none of its ",
+                                    0),
+            0u)
+      << failed[0].payload;
+  EXPECT_NE(failed[0].payload.find("after 3 views is joined to the table at z = -0.080: the object may be larger than or outside the "
+                                   "workspace"),
+            std::string::npos)
+      << failed[0].payload;
+  EXPECT_TRUE(h.failure().empty()) << h.failure();
+}
+
 TEST(GraspSynthesisComponent, AModelWithoutATreeYetIsWaitedFor) {
   ComponentHarness h(built_plugins(), "grasp.synthesis");
   fba::Octree none;
