@@ -71,7 +71,8 @@ LIST (paths relative to it):
     - scene.mesh={mesh}                overrides; {mesh}: the mesh's absolute path, {x} {y}
     - scene.yaw={yaw}                  (metres) {yaw} (degrees): the run's pose
   set: [synthesis.max_views=10]        optional: overrides for every run
-  variants:                            optional (default: one, "task"): each run once per variant
+  variants:                            optional (default: one, "task"): each run once per variant;
+                                       a name is a plain folder name (no '/', not '.' or '..')
     - { name: loop }
     - { name: ring, set: [planner.views=ring, planner.movement_weight=1000, planner.min_gain=0] }
   runs:                                the runs, each as given (runs, random_runs or both)
@@ -83,6 +84,9 @@ LIST (paths relative to it):
     y: [-0.025, 0.025]                 metres (default [0, 0]), rounded to 1 mm
     yaw: [0, 360]                      degrees (default [0, 360]), rounded to 1 degree
     seed: 2026                         the same seed draws the same poses on any machine
+A key given twice in a mapping is refused, and a batch has at most 100000 runs (times variants).
+The meshes must be closed (the measure needs the solid's centre of mass); one that is not is refused
+before any run.
 
 The pose [x, y, yaw] says where the object stands on the table, in the grasps' frame: the mesh
 turned by yaw degrees about z, moved by (x, y) metres and stood on the table at z = 0 (sim.camera's
@@ -107,6 +111,7 @@ Options)";
 
 struct RunSpec {
   std::string mesh;  // absolute
+  std::string where;  // the mesh's place in the list, file:line:column
   double x = 0, y = 0, yaw = 0;
   std::vector<std::string> set;
 };
@@ -118,7 +123,7 @@ TriangleMesh placed_on_table(const RunSpec& r) {
   p.x = r.x;
   p.y = r.y;
   p.yaw = r.yaw * std::numbers::pi / 180;
-  return sim_hand::place_on_table(geometry::load_mesh(r.mesh), p);
+  return sim_hand::place_on_table(load_closed_mesh(r.mesh), p);
 }
 
 struct Variant {
@@ -139,18 +144,38 @@ class ListReader {
  public:
   explicit ListReader(fs::path file) : file_(std::move(file)) {}
 
-  [[noreturn]] void fail(const YAML::Node& at, const std::string& what) const {
-    std::string where = file_.string();
-    if (at.IsDefined() && at.Mark().line >= 0)
-      where += ":" + std::to_string(at.Mark().line + 1) + ":" + std::to_string(at.Mark().column + 1);
-    throw std::invalid_argument(where + ": " + what);
+  // file:line:column of the node (the file alone for a node the file does not have).
+  std::string where(const YAML::Node& at) const {
+    std::string w = file_.string();
+    if (at.IsDefined() && at.Mark().line >= 0) w += ":" + std::to_string(at.Mark().line + 1) + ":" + std::to_string(at.Mark().column + 1);
+    return w;
   }
+
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& what) const { throw std::invalid_argument(where(at) + ": " + what); }
 
   static std::string found(const YAML::Node& n) {
     if (n.IsScalar()) return "'" + n.Scalar() + "'";
-    if (n.IsSequence()) return "a list";
-    if (n.IsMap()) return "a mapping";
+    if (n.IsSequence()) return n.size() == 0 ? "an empty list" : "a list of " + std::to_string(n.size());
+    if (n.IsMap()) return n.size() == 0 ? "an empty mapping" : "a mapping";
     return "nothing";
+  }
+
+  // yaml-cpp keeps both of two equal keys and answers a lookup with the first: the second would
+  // be ignored silently, so every mapping of the list is checked for one.
+  void check_no_duplicate_keys(const YAML::Node& n) const {
+    if (n.IsSequence())
+      for (const auto& item : n) check_no_duplicate_keys(item);
+    if (!n.IsMap()) return;
+    std::map<std::string, YAML::Node> seen;
+    for (const auto& kv : n) {
+      if (kv.first.IsScalar()) {
+        const auto [first, fresh] = seen.emplace(kv.first.Scalar(), kv.first);
+        if (!fresh)
+          fail(kv.first, "duplicate key '" + kv.first.Scalar() + "': expected each key once, found it at " + where(first->second) +
+                             " already");
+      }
+      check_no_duplicate_keys(kv.second);
+    }
   }
 
   std::string text(const YAML::Node& n, const std::string& what) const {
@@ -219,23 +244,31 @@ class ListReader {
   fs::path file_;
 };
 
-// The placeholders pose_set may use; any other {word} is a mistake in the list.
+// The placeholders pose_set may use; any other {word}, or a '{' that no '}' closes, is a mistake in
+// the list (it would reach fba-run as it is).
 void check_placeholders(const ListReader& r, const YAML::Node& at, const std::string& s) {
   static const std::set<std::string> known = {"mesh", "x", "y", "yaw"};
   for (std::size_t i = s.find('{'); i != std::string::npos; i = s.find('{', i + 1)) {
+    if (s.find('}', i) == std::string::npos)
+      r.fail(at, "pose_set: expected a placeholder closed by '}' ({mesh}, {x}, {y} or {yaw}); found '" + s.substr(i) + "' unclosed at character " +
+                     std::to_string(i + 1) + " of '" + s + "'");
     std::size_t j = i + 1;
     while (j < s.size() && (std::isalpha(static_cast<unsigned char>(s[j])) || s[j] == '_')) ++j;
-    if (j == i + 1 || j == s.size() || s[j] != '}') continue;  // not a {word}
+    if (j == i + 1 || j == s.size() || s[j] != '}') continue;  // not a {word}: a value's own braces
     const std::string word = s.substr(i + 1, j - i - 1);
     if (!known.count(word))
       r.fail(at, "pose_set: unknown placeholder {" + word + "} in '" + s + "'; expected {mesh}, {x}, {y} or {yaw}");
   }
 }
 
+// The most runs (times variants) a batch may have: at a minute a run, 100,000 runs are 70 days on
+// one core; beyond it a list is a mistake, and its runs would be allocated before the first started.
+constexpr std::uint64_t kMaxBatchRuns = 100'000;
+
 // random_runs: per mesh, per_mesh poses drawn uniformly within the ranges, so that a batch can
 // measure on poses nobody chose. The draw is mt19937_64's top 53 bits (std::uniform_real_distribution
 // differs between standard libraries), rounded to what a list would write by hand.
-void add_random_runs(const ListReader& r, const YAML::Node& rr, std::vector<RunSpec>& runs) {
+void add_random_runs(const ListReader& r, const YAML::Node& rr, std::size_t variants, std::vector<RunSpec>& runs) {
   if (!rr.IsMap()) r.fail(rr, "random_runs: expected {meshes, per_mesh, seed, x, y, yaw}, found " + ListReader::found(rr));
   r.check_keys(rr, {"meshes", "per_mesh", "seed", "x", "y", "yaw"}, "random_runs");
   for (const char* key : {"meshes", "per_mesh", "seed"})
@@ -243,6 +276,13 @@ void add_random_runs(const ListReader& r, const YAML::Node& rr, std::vector<RunS
   const std::vector<std::string> meshes = r.texts(rr, "meshes", "random_runs meshes");
   if (meshes.empty()) r.fail(rr["meshes"], "random_runs meshes: expected at least one mesh, found an empty list");
   const std::uint64_t per_mesh = r.whole(rr["per_mesh"], "random_runs per_mesh", 1, 10'000);
+  // Counted before any is made (per_mesh and the variants are bounded: no list that fits in memory
+  // overflows the product).
+  if (const std::uint64_t total = (runs.size() + meshes.size() * per_mesh) * variants; total > kMaxBatchRuns)
+    r.fail(rr["per_mesh"], "random_runs: expected at most " + std::to_string(kMaxBatchRuns) + " runs in a batch; found (" +
+                               std::to_string(meshes.size()) + " meshes x " + std::to_string(per_mesh) + " poses + " +
+                               std::to_string(runs.size()) + " listed runs) x " + std::to_string(variants) + " variant(s) = " +
+                               std::to_string(total) + " runs");
   const std::uint64_t seed = r.whole(rr["seed"], "random_runs seed", 0, std::numeric_limits<std::uint64_t>::max());
   const auto x = r.range(rr, "x", "random_runs x", {0, 0}), y = r.range(rr, "y", "random_runs y", {0, 0});
   const auto yaw = r.range(rr, "yaw", "random_runs yaw", {0, 360});
@@ -253,11 +293,12 @@ void add_random_runs(const ListReader& r, const YAML::Node& rr, std::vector<RunS
     const double v = std::round((range.first + (range.second - range.first) * u) * per_unit) / per_unit;
     return std::clamp(v, range.first, range.second);
   };
-  for (const auto& mesh : meshes) {
-    const std::string path = r.path(mesh).string();
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    const std::string path = r.path(meshes[m]).string(), where = r.where(rr["meshes"][m]);
     for (std::uint64_t k = 0; k < per_mesh; ++k) {
       RunSpec s;
       s.mesh = path;
+      s.where = where;
       s.x = draw(x, 1000);
       s.y = draw(y, 1000);
       s.yaw = draw(yaw, 1);
@@ -279,6 +320,7 @@ BatchList read_list(const std::string& file) {
                                 ": not valid YAML: " + e.msg);
   }
   if (!root.IsMap()) r.fail(root, "expected a mapping with task, pose_set and runs; found " + ListReader::found(root));
+  r.check_no_duplicate_keys(root);
   r.check_keys(root, {"task", "fba_run_args", "timeout_s", "pose_set", "set", "variants", "runs", "random_runs"}, "the list");
   if (!root["task"]) r.fail(root, "expected a key 'task' naming the task file");
   l.task = r.path(r.text(root["task"], "task"));
@@ -293,11 +335,14 @@ BatchList read_list(const std::string& file) {
   l.set = r.texts(root, "set", "set");
   if (const YAML::Node v = root["variants"]) {
     if (!v.IsSequence() || v.size() == 0) r.fail(v, "variants: expected a list of {name, set}, found " + ListReader::found(v));
+    if (v.size() > kMaxBatchRuns) r.fail(v, "variants: expected at most " + std::to_string(kMaxBatchRuns) + ", found " + std::to_string(v.size()));
     for (const auto& item : v) {
       if (!item.IsMap()) r.fail(item, "variants: expected {name: ..., set: [...]}, found " + ListReader::found(item));
       r.check_keys(item, {"name", "set"}, "a variant");
       Variant var{r.text(item["name"], "variant name"), r.texts(item, "set", "variant set")};
-      if (var.name.find_first_of("/ ") != std::string::npos) r.fail(item["name"], "variant name: expected no '/' or space (it names a folder)");
+      // It names the variant's folder under -o: a plain name, which cannot lead out of it.
+      if (var.name.find_first_of("/ ") != std::string::npos || var.name == "." || var.name == "..")
+        r.fail(item["name"], "variant name: expected a plain folder name (no '/' or space, not '.' or '..'); found '" + var.name + "'");
       for (const auto& other : l.variants)
         if (other.name == var.name) r.fail(item["name"], "variant '" + var.name + "' is given twice");
       l.variants.push_back(std::move(var));
@@ -306,15 +351,21 @@ BatchList read_list(const std::string& file) {
     l.variants.push_back({"task", {}});
   }
   const YAML::Node runs = root["runs"];
-  if (runs ? !runs.IsSequence() || runs.size() == 0 : !root["random_runs"])
-    r.fail(runs ? runs : root, "runs: expected a list of {mesh, pose: [x, y, yaw], set: [...]} (or random_runs), found " +
-                                   ListReader::found(runs));
+  if (!runs && !root["random_runs"]) r.fail(root, "expected a key 'runs' (a list of {mesh, pose: [x, y, yaw]}) or 'random_runs'; found neither");
+  if (runs && !runs.IsSequence())
+    r.fail(runs, "runs: expected a list of {mesh, pose: [x, y, yaw], set: [...]}, found " + ListReader::found(runs));
+  if (runs && runs.size() == 0 && !root["random_runs"])
+    r.fail(runs, "runs: expected at least one run {mesh, pose: [x, y, yaw]} (or random_runs), found an empty list");
+  if (runs && runs.size() * l.variants.size() > kMaxBatchRuns)
+    r.fail(runs, "runs: expected at most " + std::to_string(kMaxBatchRuns) + " runs in a batch; found " + std::to_string(runs.size()) +
+                     " runs x " + std::to_string(l.variants.size()) + " variant(s)");
   for (const auto& item : runs) {  // an absent 'runs' is an empty sequence here (random_runs only)
     if (!item.IsMap()) r.fail(item, "a run: expected {mesh: ..., pose: [x, y, yaw]}, found " + ListReader::found(item));
     r.check_keys(item, {"mesh", "pose", "set"}, "a run");
     RunSpec s;
     if (!item["mesh"]) r.fail(item, "a run: expected a key 'mesh'");
     s.mesh = r.path(r.text(item["mesh"], "mesh")).string();  // a missing file is that run's row, not the batch's end
+    s.where = r.where(item["mesh"]);
     if (const YAML::Node p = item["pose"]) {
       if (!p.IsSequence() || p.size() != 3) r.fail(p, "pose: expected [x, y, yaw] (metres, metres, degrees), found " + ListReader::found(p));
       s.x = r.number(p[0], "pose x");
@@ -324,7 +375,7 @@ BatchList read_list(const std::string& file) {
     s.set = r.texts(item, "set", "run set");
     l.runs.push_back(std::move(s));
   }
-  if (const YAML::Node rr = root["random_runs"]) add_random_runs(r, rr, l.runs);
+  if (const YAML::Node rr = root["random_runs"]) add_random_runs(r, rr, l.variants.size(), l.runs);
   return l;
 }
 
@@ -884,6 +935,18 @@ int run_grasp_batch(const std::vector<std::string>& args) {
   if (!out_dir.empty() && fs::exists(out_dir) && !fs::is_directory(out_dir))
     throw ArgumentError("--output: expected a folder; found '" + out_dir + "', which is not one");
   const BatchList list = read_list(list_file);
+  // A mesh that is not closed cannot be evaluated: refused before the runs, not after them. One
+  // that does not load is left to its runs, whose rows give fba-run's reason.
+  std::set<std::string> checked;
+  for (const auto& r : list.runs) {
+    if (!checked.insert(r.mesh).second || !fs::is_regular_file(r.mesh)) continue;
+    try {
+      load_closed_mesh(r.mesh);
+    } catch (const geometry::MeshLoadError&) {
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(r.where + ": " + e.what());
+    }
+  }
   if (out_dir.empty() && dry_run) out_dir = (fs::temp_directory_path() / "fba-grasp-batch-XXXXXX").string();
   if (out_dir.empty()) {
     std::string t = (fs::temp_directory_path() / "fba-grasp-batch-XXXXXX").string();
@@ -924,7 +987,7 @@ int run_grasp_batch(const std::vector<std::string>& args) {
     if (baselines.count(r.mesh) || random_sets == 0) continue;
     Baseline& b = baselines[r.mesh];
     try {
-      b.figures = grasp::random_baseline(grasp::ObjectSurface(geometry::load_mesh(r.mesh)), random_sets, seed, quality);
+      b.figures = grasp::random_baseline(grasp::ObjectSurface(load_closed_mesh(r.mesh)), random_sets, seed, quality);
     } catch (const std::exception& e) {
       b.error = e.what();
     }

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "evaluate_grasp.hpp"
+#include "fba/geometry/mesh_io.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
 
@@ -27,14 +28,7 @@ namespace fs = std::filesystem;
 using Result = fba::test::CommandResult;
 
 using fba::test::evaluate_grasp;
-
-// The line of `text` that starts with `start`, or "".
-std::string line_starting(const std::string& text, const std::string& start) {
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind(start, 0) == 0) return line;
-  return "";
-}
+using fba::test::line_starting;
 
 class EvaluateGraspBatch : public testing::Test {
  protected:
@@ -272,6 +266,59 @@ TEST_F(EvaluateGraspBatch, ABadListIsAClearErrorWithItsPlace) {
   r = evaluate_grasp("--batch " + (dir_ / "absent.yaml").string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("is not a readable file"), std::string::npos) << r.output;
+}
+
+// Mistakes in a list, each refused before anything runs with its place and what was expected.
+TEST_F(EvaluateGraspBatch, ListMistakesAreRefusedWithTheirPlaceBeforeAnyRun) {
+  const fs::path l = dir_ / "list.yaml";
+  const std::string task = "task: " + fba::test::tasks_dir() + "/grasp.yaml\n";
+  const std::string runs = "runs:\n  - { mesh: " + mustard() + " }\n";
+  std::string meshes;  // 20 meshes, 10000 poses each: more runs than a batch may have
+  for (int i = 0; i < 20; ++i) meshes += std::string(i ? ", " : "") + "m" + std::to_string(i) + ".obj";
+  const std::pair<std::string, std::string> cases[] = {
+      // A variant's name is its folder under -o: '..' would write beside it.
+      {task + runs + "variants:\n  - { name: .. }\n",
+       "list.yaml:5:13: variant name: expected a plain folder name (no '/' or space, not '.' or '..'); found '..'"},
+      {task + runs + "variants:\n  - { name: . }\n", "list.yaml:5:13: variant name: expected a plain folder name"},
+      {task + runs + "variants:\n  - { name: a/b }\n", "list.yaml:5:13: variant name: expected a plain folder name"},
+      // yaml-cpp would take the first of two equal keys and drop the second silently.
+      {task + task + runs, "list.yaml:2:1: duplicate key 'task': expected each key once, found it at " + l.string() + ":1:1 already"},
+      {task + "runs:\n  - { mesh: a.obj, pose: [0, 0, 0], mesh: b.obj }\n", "list.yaml:3:37: duplicate key 'mesh': expected each key once, found it at " + l.string() + ":3:7 already"},
+      {task + runs + "random_runs:\n  meshes: [m.obj]\n  per_mesh: 1\n  seed: 1\n  seed: 2\n", "list.yaml:8:3: duplicate key 'seed'"},
+      {task + runs + "pose_set:\n  - scene.x={x\n",
+       "list.yaml:5:5: pose_set: expected a placeholder closed by '}' ({mesh}, {x}, {y} or {yaw}); found '{x' unclosed at character 9 of "
+       "'scene.x={x'"},
+      {task + "runs: []\n", "list.yaml:2:7: runs: expected at least one run {mesh, pose: [x, y, yaw]} (or random_runs), found an empty list"},
+      {task + "runs: {mesh: m.obj}\n", "list.yaml:2:7: runs: expected a list of {mesh, pose: [x, y, yaw], set: [...]}, found a mapping"},
+      {task, "list.yaml:1:1: expected a key 'runs' (a list of {mesh, pose: [x, y, yaw]}) or 'random_runs'; found neither"},
+      {task + runs + "random_runs:\n  meshes: [" + meshes + "]\n  per_mesh: 10000\n  seed: 1\n",
+       "list.yaml:6:13: random_runs: expected at most 100000 runs in a batch; found (20 meshes x 10000 poses + 1 listed runs) x 1 "
+       "variant(s) = 200001 runs"}};
+  for (const auto& [list, message] : cases) {
+    std::ofstream(l) << list;
+    const Result r = evaluate_grasp("--batch " + l.string() + " --dry-run");
+    EXPECT_EQ(r.status, 2) << list << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << list << r.output;
+  }
+}
+
+// The grasp measure needs a closed mesh: an open one in a list is refused at its place before the
+// runs, not found out after them.
+TEST_F(EvaluateGraspBatch, AnOpenMeshIsRefusedAtItsPlaceBeforeAnyRun) {
+  fba::TriangleMesh open = fba::geometry::make_box({-0.03, -0.03, 0}, {0.03, 0.03, 0.1});
+  open.triangles.pop_back();  // one face of the box half open: three edges of one triangle only
+  fba::geometry::write_ply(open, dir_ / "open.ply");
+  const fs::path l = dir_ / "list.yaml";
+  std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
+                   << "runs:\n  - { mesh: " << mustard() << " }\n  - { mesh: open.ply, pose: [0, 0, 90] }\n";
+  const fs::path out = dir_ / "out";
+  const Result r = evaluate_grasp("--batch " + l.string() + " --random 0 -o " + out.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("list.yaml:4:13: mesh '" + (dir_ / "open.ply").string() +
+                          "': expected a closed surface (the grasp measure needs its volume and centre of mass); found 3 boundary edges"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(out)) << "nothing runs";
 }
 
 }  // namespace
