@@ -40,6 +40,7 @@
 #include "grasp_evaluation.hpp"
 #include "options.hpp"
 #include "paired_difference.hpp"
+#include "run_summary.hpp"
 
 extern char** environ;
 
@@ -54,7 +55,9 @@ const char* kBatchHelp = R"(fba-evaluate grasp --batch: the grasp loop over obje
   fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR] [--fba-run PATH] [--random 1000] [--dry-run]
 
 Each run of LIST is run once per variant by fba-run, as a child process writing its own folder
-DIR/<variant>/<NN>-<object>/ (summary.json, log.txt). The grasp each run selected is placed on the
+DIR/<variant>/<NN>-<object>/ (summary.json, log.txt, command.txt), with a --run-id of its own that
+fba-run writes into summary.json: a summary.json without it (an earlier run's) is refused, the run
+is a row "no summary" saying so. The grasp each run selected is placed on the
 true mesh, stood where the run stood it, and evaluated (force closure, Ferrari-Canny epsilon:
 friction 0.5, 8 cone edges, torque / r_max); each mesh gets --random random contact sets for
 comparison. The table (also DIR/table.txt; every run's figures in DIR/runs.json) gives per
@@ -396,6 +399,7 @@ struct Job {
   const Variant* variant = nullptr;
   std::string object;
   fs::path dir;
+  std::string run_id;  // given to fba-run, which writes it into summary.json: an older run's summary is not this run's
   std::vector<std::string> argv;
   std::string setup_error;  // the run could not be started: why
   pid_t pid = -1;
@@ -419,7 +423,7 @@ void prepare(Job& job, const BatchList& l, const std::string& fba_run) {
   }
   sets.insert(sets.end(), job.variant->set.begin(), job.variant->set.end());
   sets.insert(sets.end(), r.set.begin(), r.set.end());
-  job.argv = {fba_run, l.task.string(), "-o", job.dir.string()};
+  job.argv = {fba_run, l.task.string(), "-o", job.dir.string(), "--run-id", job.run_id};
   job.argv.insert(job.argv.end(), l.fba_run_args.begin(), l.fba_run_args.end());
   for (const auto& s : sets) job.argv.insert(job.argv.end(), {"--set", s});
 }
@@ -553,14 +557,28 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
   std::string ended;
   if (WIFSIGNALED(j.status)) ended = std::string("killed by signal ") + std::to_string(WTERMSIG(j.status)) + " (" + strsignal(WTERMSIG(j.status)) + ")";
   if (j.term_sent) ended = "timed out (stopped after the list's timeout_s)" + (ended.empty() ? "" : "; " + ended);
+  // Only this run's own summary counts: one left by an earlier run (the batch removed it, but a
+  // run that fails early might not write its own) carries another run_id.
   const fs::path summary = j.dir / "summary.json";
   nlohmann::json s;
-  if (std::ifstream in(summary); in) s = nlohmann::json::parse(in, nullptr, false);
-  if (!s.is_object()) {
+  std::string refused;
+  if (!fs::exists(summary)) {
+    refused = "no summary.json";
+  } else if (!fs::is_regular_file(summary)) {  // opening a FIFO would wait for a writer
+    refused = "summary.json is " + file_kind(summary) + ", not a regular file";
+  } else {
+    std::ifstream in(summary);
+    s = nlohmann::json::parse(in, nullptr, false);
+    if (!s.is_object()) refused = "summary.json is not a JSON object";
+    else if (!s.contains("run_id") || !s["run_id"].is_string()) refused = "summary.json is not this run's: no run_id, expected " + j.run_id;
+    else if (s["run_id"] != j.run_id) refused = "summary.json is not this run's: run_id " + s["run_id"].get<std::string>() + ", expected " + j.run_id;
+    else if (s.value("outcome", "") == "running") refused = "summary.json still says running (fba-run ended before writing its outcome)";
+  }
+  if (!refused.empty()) {
     row.outcome = j.term_sent ? "timed out" : WIFSIGNALED(j.status) ? "crashed" : "no summary";
     row.wall_s = j.elapsed_s;
     const std::string said = last_line(j.dir / "log.txt");
-    row.reason = (ended.empty() ? "exit " + std::to_string(WEXITSTATUS(j.status)) : ended) + ", no summary.json; " +
+    row.reason = (ended.empty() ? "exit " + std::to_string(WEXITSTATUS(j.status)) : ended) + ", " + refused + "; " +
                  (said.empty() ? std::string("log.txt is empty") : "fba-run said: " + said);
     return row;
   }
@@ -954,6 +972,9 @@ int run_grasp_batch(const std::vector<std::string>& args) {
     out_dir = t;
   }
   const fs::path out = fs::absolute(out_dir);
+  // Each run's id: this batch's random token and the run's number, unique across batches too.
+  char token[16];
+  std::snprintf(token, sizeof token, "%08x", static_cast<unsigned>(std::random_device{}()));
   std::vector<Job> all;
   for (const auto& v : list.variants)
     for (std::size_t i = 0; i < list.runs.size(); ++i) {
@@ -962,6 +983,7 @@ int run_grasp_batch(const std::vector<std::string>& args) {
       j.variant = &v;
       j.object = object_name(list.runs[i].mesh);
       j.dir = out / v.name / folder_name(i, j.object);
+      j.run_id = std::string(token) + "-" + std::to_string(all.size() + 1);
       prepare(j, list, fba_run);
       all.push_back(std::move(j));
     }
@@ -973,6 +995,7 @@ int run_grasp_batch(const std::vector<std::string>& args) {
                out.c_str());
   for (const auto& j : all) {
     fs::create_directories(j.dir);
+    fs::remove(j.dir / "summary.json");  // an earlier run's, which must not pass for this run's
     std::ofstream(j.dir / "command.txt") << command_line(j) << "\n";
   }
   run_all(all, jobs, list.timeout_s);

@@ -1,7 +1,9 @@
 // `fba-evaluate grasp <args>` as a user runs it, to its end: its exit status and what it printed;
-// and the line of its output that starts so.
+// and what the batch tests share: stand-ins for fba-run, and what a run's folder says.
 #pragma once
 
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 
@@ -12,6 +14,25 @@ namespace fba::test {
 
 inline CommandResult evaluate_grasp(const std::string& args) {
   return run_command("'" + program("fba-evaluate") + "' grasp " + args);
+}
+
+// A stand-in for fba-run: a shell script that finds its output folder and run id in its arguments
+// ($dir and $id, as the batch passes them: -o DIR --run-id ID) and then does `body`.
+inline std::filesystem::path write_fba_run_stand_in(const std::filesystem::path& file, const std::string& body) {
+  std::ofstream(file) << "#!/bin/sh\n"
+                      << "while [ $# -gt 0 ]; do case \"$1\" in -o) dir=$2; shift;; --run-id) id=$2; shift;; esac; shift; done\n"
+                      << body << "\n";
+  std::filesystem::permissions(file, std::filesystem::perms::owner_all);
+  return file;
+}
+
+// The --run-id the batch gave the run whose folder is `run_dir` (its command.txt), or "".
+inline std::string given_run_id(const std::filesystem::path& run_dir) {
+  std::ifstream in(run_dir / "command.txt");
+  std::string word;
+  while (in >> word)
+    if (word == "--run-id" && in >> word) return word;
+  return "";
 }
 
 // The line of `text` that starts with `start`, or "".

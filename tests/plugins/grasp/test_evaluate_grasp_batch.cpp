@@ -28,7 +28,9 @@ namespace fs = std::filesystem;
 using Result = fba::test::CommandResult;
 
 using fba::test::evaluate_grasp;
+using fba::test::given_run_id;
 using fba::test::line_starting;
+using fba::test::write_fba_run_stand_in;
 
 class EvaluateGraspBatch : public testing::Test {
  protected:
@@ -69,13 +71,19 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   ASSERT_FALSE(ran.empty()) << r.output;
   EXPECT_TRUE(ran.find("success") != std::string::npos || ran.find("failure") != std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(out / "loop" / "01-YcbMustardBottle" / "summary.json"));
+  // fba-run wrote the run id the batch gave it, by which the batch knows the summary is this run's.
+  {
+    std::ifstream in(out / "loop" / "01-YcbMustardBottle" / "summary.json");
+    const auto summary = nlohmann::json::parse(in, nullptr, false);
+    EXPECT_NE(given_run_id(out / "loop" / "01-YcbMustardBottle"), "");
+    EXPECT_EQ(summary.value("run_id", "?"), given_run_id(out / "loop" / "01-YcbMustardBottle")) << r.output;
+  }
   const std::string mustard_summary = line_starting(r.output, "loop     YcbMustardBottle      1 ");
   EXPECT_FALSE(mustard_summary.empty()) << r.output;
   EXPECT_NE(line_starting(r.output, "uniform  all                   2 "), "") << r.output;
-  // The missing mesh is a row with fba-run's reason, not the end of the batch.
+  // The missing mesh is a row with fba-run's outcome and reason (its summary.json), not the end of the batch.
   const std::string failed = line_starting(r.output, "loop     no-such-mesh.obj");
-  EXPECT_NE(failed.find("no summary"), std::string::npos) << r.output;
-  EXPECT_NE(failed.find("exit 2"), std::string::npos) << r.output;
+  EXPECT_NE(failed.find("configuration_error"), std::string::npos) << r.output;
   EXPECT_NE(failed.find("parameter 'scene.mesh'"), std::string::npos) << r.output;
 
   std::ifstream in(out / "runs.json");
@@ -88,7 +96,7 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   ASSERT_TRUE(runs[0].contains("detail")) << runs[0].dump(2);
   EXPECT_GT(runs[0]["detail"].value("uniform_nodes", 0), 0) << runs[0].dump(2);
   EXPECT_TRUE(runs[0]["detail"].contains("saved_share")) << runs[0].dump(2);
-  EXPECT_EQ(runs[1]["outcome"], "no summary");
+  EXPECT_EQ(runs[1]["outcome"], "configuration_error");
   // A selected grasp's contacts as placed on the mesh, and the normals' error over the variant.
   if (runs[0].value("selected", false)) {
     ASSERT_EQ(runs[0]["contacts"].size(), 3u) << runs[0].dump(2);
@@ -209,14 +217,14 @@ TEST_F(EvaluateGraspBatch, AMeshTheTaskCannotLoadIsARowWithFbaRunsReason) {
   const Result r = evaluate_grasp("--batch " + l.string() + " --random 0 -o " + (dir_ / "out").string());
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string row = line_starting(r.output, "task     missing.obj");
-  EXPECT_NE(row.find("no summary"), std::string::npos) << r.output;
-  EXPECT_NE(row.find("exit 2"), std::string::npos) << r.output;
-  // The whole reason is in runs.json (the table clips it to a line), with fba-run's own words.
+  EXPECT_NE(row.find("configuration_error"), std::string::npos) << r.output;
+  // The whole reason is in runs.json (the table clips it to a line), with fba-run's own words (the
+  // reason in its summary.json, which it writes at a configuration error too).
   std::ifstream in(dir_ / "out" / "runs.json");
   const auto runs = nlohmann::json::parse(in, nullptr, false);
   ASSERT_TRUE(runs.is_array() && runs.size() == 1u) << r.output;
   const std::string reason = runs[0].value("reason", "");
-  EXPECT_NE(reason.find("fba-run said: --set "), std::string::npos) << reason << "\n" << r.output;
+  EXPECT_EQ(reason.rfind("--set scene.mesh=", 0), 0u) << reason << "\n" << r.output;
   EXPECT_NE(reason.find("missing.obj"), std::string::npos) << reason << "\n" << r.output;
 }
 
@@ -240,6 +248,54 @@ TEST_F(EvaluateGraspBatch, AHungOrCrashedRunIsARowAndTheBatchGoesOn) {
   row = line_starting(r.output, "task     YcbMustardBottle   0 0 0");
   EXPECT_NE(row.find("crashed"), std::string::npos) << r.output;
   EXPECT_NE(row.find("killed by signal 11"), std::string::npos) << row;
+}
+
+// A run's summary.json is taken only when it carries the run id the batch gave the run: a run that
+// failed before writing one is not reported with the summary an earlier run left in its folder.
+TEST_F(EvaluateGraspBatch, ARunIsReportedWithItsOwnSummaryOnlyNeverAnOlderRunsOrAnothers) {
+  const fs::path l = dir_ / "list.yaml";
+  std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
+                   << "runs:\n  - { mesh: " << mustard() << " }\n";
+  const fs::path run = dir_ / "out" / "task" / "01-YcbMustardBottle";
+  const std::string row_start = "task     YcbMustardBottle   0 0 0";
+  const auto stale_success = [&] {
+    fs::create_directories(run);
+    std::ofstream(run / "summary.json") << R"({"run_id": "an-older-run", "outcome": "success", "reason": "held"})";
+  };
+  const auto batch = [&](const fs::path& fba_run) {
+    return evaluate_grasp("--batch " + l.string() + " --random 0 --fba-run " + fba_run.string() + " -o " + (dir_ / "out").string());
+  };
+  // A run that fails without writing a summary, where an older run's success is.
+  stale_success();
+  Result r = batch(write_fba_run_stand_in(dir_ / "fails.sh", "echo 'fba-run: the task does not load' >&2; exit 2"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::string row = line_starting(r.output, row_start);
+  EXPECT_NE(row.find("no summary"), std::string::npos) << r.output;
+  EXPECT_NE(row.find("exit 2, no summary.json; fba-run said: fba-run: the task does not load"), std::string::npos) << row;
+  EXPECT_EQ(row.find("success"), std::string::npos) << row;
+
+  // A summary written by something else than this run (another run id), and one without a run id.
+  r = batch(write_fba_run_stand_in(dir_ / "other.sh", R"(printf '{"run_id": "someone-else", "outcome": "success"}' > "$dir/summary.json")"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  row = line_starting(r.output, row_start);
+  EXPECT_NE(row.find("no summary"), std::string::npos) << r.output;
+  EXPECT_NE(row.find("summary.json is not this run's: run_id someone-else, expected " + given_run_id(run)), std::string::npos) << row;
+  r = batch(write_fba_run_stand_in(dir_ / "no-id.sh", R"(printf '{"outcome": "success"}' > "$dir/summary.json")"));
+  row = line_starting(r.output, row_start);
+  EXPECT_NE(row.find("summary.json is not this run's: no run_id, expected " + given_run_id(run)), std::string::npos) << row;
+
+  // Its own summary, with the id it was given: taken, whatever the folder held before.
+  stale_success();
+  r = batch(write_fba_run_stand_in(dir_ / "own.sh", R"(printf '{"run_id": "%s", "outcome": "failure", "reason": "no grasp"}' "$id" > "$dir/summary.json")"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  row = line_starting(r.output, row_start);
+  EXPECT_NE(row.find("failure"), std::string::npos) << r.output;
+  EXPECT_NE(row.find("no grasp"), std::string::npos) << r.output;
+  // Each batch gives its runs ids of their own, so a summary of an earlier batch in the same folder
+  // is not this run's either.
+  const std::string first = given_run_id(run);
+  batch(dir_ / "own.sh");
+  EXPECT_NE(given_run_id(run), first);
 }
 
 TEST_F(EvaluateGraspBatch, ABadListIsAClearErrorWithItsPlace) {
