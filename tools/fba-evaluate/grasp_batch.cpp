@@ -9,11 +9,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -107,8 +109,12 @@ did, and of the node differences over every run, each with a 95% bootstrap inter
 resamples, --seed): a gap whose interval holds 0 is one the runs' spread explains.
 --dry-run prints each run's fba-run command line (random poses drawn) and runs nothing.
 
+SIGTERM, SIGINT or SIGHUP to the batch stops it: the running runs get the same signal (and SIGKILL
+20 s later), the runs not started are rows "not run", and the table and runs.json are written for
+the runs that finished.
+
 Exit status: 0 when the batch was run and evaluated (whatever the runs' outcomes), 2 for a bad
-list or command line.
+list or command line, 128 + the signal when it was stopped by one.
 
 Options)";
 
@@ -401,10 +407,11 @@ struct Job {
   fs::path dir;
   std::string run_id;  // given to fba-run, which writes it into summary.json: an older run's summary is not this run's
   std::vector<std::string> argv;
-  std::string setup_error;  // the run could not be started: why
+  std::string setup_error;  // the run could not be started, or was not: why
   pid_t pid = -1;
   Clock::time_point started;
   bool term_sent = false, kill_sent = false;
+  int stopped_by = 0;  // the signal that stopped the batch, passed on to this run while it ran
   int status = 0;
   double elapsed_s = 0, cpu_s = 0;
 };
@@ -453,15 +460,63 @@ void start(Job& job) {
   }
 }
 
-// Runs the jobs, at most `parallel` at a time; each line of progress on stderr.
+// The first SIGTERM, SIGINT or SIGHUP to the batch: runs_all then stops its runs, and the table
+// is written for those that finished.
+volatile std::sig_atomic_t stop_signal = 0;
+
+void on_stop_signal(int sig) {
+  if (!stop_signal) stop_signal = sig;
+}
+
+// A signal ignored when the batch started (nohup's SIGHUP) stays ignored.
+void catch_stop_signals() {
+  for (int sig : {SIGTERM, SIGINT, SIGHUP}) {
+    struct sigaction old {};
+    sigaction(sig, nullptr, &old);
+    if (old.sa_handler == SIG_IGN) continue;
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(sig, &sa, nullptr);
+  }
+}
+
+std::string signal_name(int sig) {
+  return sig == SIGTERM ? "SIGTERM" : sig == SIGINT ? "SIGINT" : sig == SIGHUP ? "SIGHUP" : "signal " + std::to_string(sig);
+}
+
+// How long a run stopped in order (a timeout, the batch's own stop) has to write its summary
+// before it is killed.
+constexpr double kStopGraceS = 20;
+
+// Runs the jobs, at most `parallel` at a time; each line of progress on stderr. When the batch is
+// signalled, the running jobs get the same signal and kStopGraceS to end, then SIGKILL; the jobs
+// not started are not run. Returns with no child left.
 void run_all(std::vector<Job>& jobs, int parallel, double timeout_s) {
   std::size_t next = 0, running = 0, done = 0;
   std::map<pid_t, Job*> by_pid;
   auto progress = [&](const Job& j, const std::string& what) {
     std::fprintf(stderr, "[%zu/%zu] %s %s: %s\n", done, jobs.size(), j.variant->name.c_str(), j.dir.filename().c_str(), what.c_str());
   };
-  while (done < jobs.size()) {
-    while (running < static_cast<std::size_t>(parallel) && next < jobs.size()) {
+  // Reaps one child that ended, if any; false when none had.
+  auto reap = [&](int flags) {
+    int status = 0;
+    rusage usage{};
+    const pid_t pid = wait4(-1, &status, flags, &usage);
+    if (pid < 0 && errno != EINTR && errno != ECHILD) throw std::runtime_error(std::string("waiting for fba-run: ") + std::strerror(errno));
+    if (pid <= 0 || !by_pid.count(pid)) return false;
+    Job& j = *by_pid[pid];
+    by_pid.erase(pid);
+    --running;
+    ++done;
+    j.status = status;
+    j.elapsed_s = std::chrono::duration<double>(Clock::now() - j.started).count();
+    j.cpu_s = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+    progress(j, WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : "signal " + std::to_string(WTERMSIG(status)));
+    return true;
+  };
+  while (done < jobs.size() && !stop_signal) {
+    while (running < static_cast<std::size_t>(parallel) && next < jobs.size() && !stop_signal) {
       Job& j = jobs[next++];
       if (j.setup_error.empty()) start(j);
       if (!j.setup_error.empty()) {
@@ -473,34 +528,39 @@ void run_all(std::vector<Job>& jobs, int parallel, double timeout_s) {
       ++running;
     }
     if (running == 0) continue;
-    int status = 0;
-    rusage usage{};
-    const pid_t pid = wait4(-1, &status, WNOHANG, &usage);
-    if (pid > 0 && by_pid.count(pid)) {
-      Job& j = *by_pid[pid];
-      by_pid.erase(pid);
-      --running;
-      ++done;
-      j.status = status;
-      j.elapsed_s = std::chrono::duration<double>(Clock::now() - j.started).count();
-      j.cpu_s = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-      progress(j, WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : "signal " + std::to_string(WTERMSIG(status)));
-      continue;
-    }
-    if (pid < 0 && errno != EINTR && errno != ECHILD) throw std::runtime_error(std::string("waiting for fba-run: ") + std::strerror(errno));
+    if (reap(WNOHANG)) continue;
     // A run past its time is asked to stop in order (it then writes its summary), then killed.
     for (auto& [p, j] : by_pid) {
       const double age = std::chrono::duration<double>(Clock::now() - j->started).count();
       if (age > timeout_s && !j->term_sent) {
         kill(p, SIGTERM);
         j->term_sent = true;
-      } else if (age > timeout_s + 20 && !j->kill_sent) {
+      } else if (age > timeout_s + kStopGraceS && !j->kill_sent) {
         kill(p, SIGKILL);
         j->kill_sent = true;
       }
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
+  if (!stop_signal) return;
+  const int sig = stop_signal;
+  const std::string name = signal_name(sig);
+  std::fprintf(stderr, "fba-evaluate grasp --batch: %s: stopping %zu running run(s)\n", name.c_str(), running);
+  for (auto& [p, j] : by_pid) {
+    kill(p, sig);
+    j->stopped_by = sig;
+  }
+  const auto stopping = Clock::now();
+  while (running > 0 && std::chrono::duration<double>(Clock::now() - stopping).count() < kStopGraceS)
+    if (!reap(WNOHANG)) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  for (auto& [p, j] : by_pid) {
+    kill(p, SIGKILL);
+    j->kill_sent = true;
+  }
+  while (running > 0)
+    if (!reap(0) && errno == ECHILD) break;
+  for (std::size_t i = next; i < jobs.size(); ++i)
+    jobs[i].setup_error = "the batch was stopped by " + name + " before this run started";
 }
 
 // What one run gave.
@@ -549,7 +609,7 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
   row.pose = shortest(j.run->x) + " " + shortest(j.run->y) + " " + shortest(j.run->yaw);
   row.dir = j.dir.string();
   if (!j.setup_error.empty()) {
-    row.outcome = "not run";
+    row.outcome = "not run";  // could not start, or the batch was stopped first
     row.reason = j.setup_error;
     return row;
   }
@@ -557,6 +617,8 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
   std::string ended;
   if (WIFSIGNALED(j.status)) ended = std::string("killed by signal ") + std::to_string(WTERMSIG(j.status)) + " (" + strsignal(WTERMSIG(j.status)) + ")";
   if (j.term_sent) ended = "timed out (stopped after the list's timeout_s)" + (ended.empty() ? "" : "; " + ended);
+  if (j.stopped_by)
+    ended = "interrupted (the batch was stopped by " + signal_name(j.stopped_by) + ", which it passed on)" + (ended.empty() ? "" : "; " + ended);
   // Only this run's own summary counts: one left by an earlier run (the batch removed it, but a
   // run that fails early might not write its own) carries another run_id.
   const fs::path summary = j.dir / "summary.json";
@@ -575,7 +637,7 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
     else if (s.value("outcome", "") == "running") refused = "summary.json still says running (fba-run ended before writing its outcome)";
   }
   if (!refused.empty()) {
-    row.outcome = j.term_sent ? "timed out" : WIFSIGNALED(j.status) ? "crashed" : "no summary";
+    row.outcome = j.stopped_by ? "interrupted" : j.term_sent ? "timed out" : WIFSIGNALED(j.status) ? "crashed" : "no summary";
     row.wall_s = j.elapsed_s;
     const std::string said = last_line(j.dir / "log.txt");
     row.reason = (ended.empty() ? "exit " + std::to_string(WEXITSTATUS(j.status)) : ended) + ", " + refused + "; " +
@@ -758,12 +820,15 @@ std::string paired_block(const BatchList& l, const std::vector<Row>& rows, std::
   return out.str();
 }
 
+// `stopped`: how the batch was stopped before its end, if it was.
 std::string make_table(const BatchList& l, const std::vector<Row>& rows, const std::map<std::string, Baseline>& baselines,
-                       std::size_t random_sets, std::uint64_t seed) {
+                       std::size_t random_sets, std::uint64_t seed, const std::string& stopped) {
   std::ostringstream out;
   out << "fba-evaluate grasp --batch " << l.file.filename().string() << ": task " << l.task.filename().string() << ", "
       << l.runs.size() << " runs x " << l.variants.size() << " variant(s); random baseline: " << random_sets
-      << " contact sets per mesh\n\n";
+      << " contact sets per mesh\n";
+  if (!stopped.empty()) out << stopped << "\n";
+  out << "\n";
   // The variant column as wide as the longest name (8 at least).
   int width = 8;
   for (const auto& v : l.variants) width = std::max(width, static_cast<int>(v.name.size()));
@@ -993,6 +1058,7 @@ int run_grasp_batch(const std::vector<std::string>& args) {
   }
   std::fprintf(stderr, "fba-evaluate grasp --batch: %zu runs x %zu variant(s) into %s\n", list.runs.size(), list.variants.size(),
                out.c_str());
+  catch_stop_signals();
   for (const auto& j : all) {
     fs::create_directories(j.dir);
     fs::remove(j.dir / "summary.json");  // an earlier run's, which must not pass for this run's
@@ -1005,9 +1071,10 @@ int run_grasp_batch(const std::vector<std::string>& args) {
   // Per mesh, as the file has it: force closure and epsilon do not change when the whole object
   // and its contacts move together (the pyramids turn with the grasp), so one baseline serves
   // every pose.
+  // A stopped batch skips them: it was asked to end.
   std::map<std::string, Baseline> baselines;
   for (const auto& r : list.runs) {
-    if (baselines.count(r.mesh) || random_sets == 0) continue;
+    if (baselines.count(r.mesh) || random_sets == 0 || stop_signal) continue;
     Baseline& b = baselines[r.mesh];
     try {
       b.figures = grasp::random_baseline(grasp::ObjectSurface(load_closed_mesh(r.mesh)), random_sets, seed, quality);
@@ -1015,11 +1082,20 @@ int run_grasp_batch(const std::vector<std::string>& args) {
       b.error = e.what();
     }
   }
-  const std::string table = make_table(list, rows, baselines, random_sets, seed);
+  std::string stopped;
+  if (const int sig = stop_signal) {
+    const auto finished = std::count_if(all.begin(), all.end(), [](const Job& j) { return j.pid > 0 && !j.stopped_by; });
+    stopped = "stopped by " + signal_name(sig) + ": " + std::to_string(finished) + " of " + std::to_string(all.size()) +
+              " runs finished; the others are rows 'interrupted' (stopped while running) or 'not run'" +
+              (baselines.size() < checked.size() && random_sets > 0 ? "; random baselines not all computed" : "");
+  }
+  const std::string table = make_table(list, rows, baselines, random_sets, seed, stopped);
   std::cout << table << std::flush;
   std::ofstream(out / "table.txt") << table;
   std::ofstream(out / "runs.json") << rows_json(rows).dump(2) << "\n";
-  return 0;
+  if (!stopped.empty()) std::fprintf(stderr, "fba-evaluate grasp --batch: %s\n", stopped.c_str());
+  // As a program killed by the signal would end, after the table.
+  return stop_signal ? 128 + stop_signal : 0;
 }
 
 }  // namespace fba::evaluate

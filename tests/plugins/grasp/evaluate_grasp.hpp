@@ -2,10 +2,12 @@
 // and what the batch tests share: stand-ins for fba-run, and what a run's folder says.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "support/build_paths.hpp"
 #include "support/run_command.hpp"
@@ -33,6 +35,16 @@ inline std::string given_run_id(const std::filesystem::path& run_dir) {
   while (in >> word)
     if (word == "--run-id" && in >> word) return word;
   return "";
+}
+
+// Whether `file` exists within `limit`, looked for every 10 ms (a hang detector, not a speed check).
+inline bool wait_for_file(const std::filesystem::path& file, std::chrono::milliseconds limit = std::chrono::seconds(60)) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (!std::filesystem::exists(file)) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return true;
 }
 
 // The line of `text` that starts with `start`, or "".

@@ -1,6 +1,7 @@
 // fba-evaluate grasp --batch from the shell: tasks/grasp.yaml run by fba-run on a small list,
 // the table with the issue's columns, and a run that cannot start its task as a row with the reason.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,6 +19,7 @@
 
 #include "evaluate_grasp.hpp"
 #include "fba/geometry/mesh_io.hpp"
+#include "support/child_process.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
 
@@ -375,6 +377,62 @@ TEST_F(EvaluateGraspBatch, AnOpenMeshIsRefusedAtItsPlaceBeforeAnyRun) {
             std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(out)) << "nothing runs";
+}
+
+// SIGTERM, SIGINT or SIGHUP to the batch: its running runs get the same signal and end, the runs
+// not started are not run, and the table is written for the runs that finished. The stand-in for
+// fba-run finishes the first run at once and waits in the others, writing its pid for the check.
+TEST_F(EvaluateGraspBatch, ASignalStopsTheRunningRunsAndWritesTheTableOfTheFinishedOnes) {
+  const fs::path stand_in = write_fba_run_stand_in(dir_ / "fba-run.sh", R"(echo $$ > "$dir/pid"
+case "$dir" in */01-*) printf '{"run_id": "%s", "outcome": "success"}' "$id" > "$dir/summary.json"; exit 0;; esac
+exec sleep 600)");
+  const fs::path l = dir_ / "list.yaml";
+  std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\nruns:\n"
+                   << "  - { mesh: " << mustard() << " }\n  - { mesh: " << mustard() << " }\n"
+                   << "  - { mesh: " << mustard() << " }\n  - { mesh: " << mustard() << " }\n";
+  for (const int sig : {SIGTERM, SIGINT, SIGHUP}) {
+    // A signal this test was started ignoring (a background job's SIGINT, nohup's SIGHUP) is
+    // ignored by the batch too, as it should be: nothing to test with it.
+    struct sigaction now {};
+    sigaction(sig, nullptr, &now);
+    if (now.sa_handler == SIG_IGN) continue;
+    SCOPED_TRACE(strsignal(sig));
+    const fs::path out = dir_ / ("out-" + std::to_string(sig));
+    fba::test::Child batch({fba::test::program("fba-evaluate"), "grasp", "--batch", l.string(), "--jobs", "2", "--random", "0",
+                            "--fba-run", stand_in.string(), "-o", out.string()});
+    // Signalled once the first run has ended and the batch has started the next two.
+    const std::string progress = batch.read_until("01-YcbMustardBottle: exit 0");
+    ASSERT_NE(progress.find("01-YcbMustardBottle: exit 0"), std::string::npos) << progress;
+    ASSERT_TRUE(fba::test::wait_for_file(out / "task" / "02-YcbMustardBottle" / "pid")) << progress;
+    ASSERT_TRUE(fba::test::wait_for_file(out / "task" / "03-YcbMustardBottle" / "pid")) << progress;
+    const int status = batch.wait(sig);
+    const std::string output = batch.read_until("");
+    EXPECT_EQ(status, 128 + sig) << output;
+    // No run outlives the batch: it waited for each (a child not reaped would still be there).
+    for (const char* run : {"02-YcbMustardBottle", "03-YcbMustardBottle"}) {
+      pid_t pid = 0;
+      std::ifstream(out / "task" / run / "pid") >> pid;
+      ASSERT_GT(pid, 0) << run;
+      EXPECT_NE(kill(pid, 0), 0) << run << " (pid " << pid << ") outlived the batch";
+      if (kill(pid, 0) == 0) kill(pid, SIGKILL);  // not left running after a failure
+    }
+    // The table of the finished run, the others marked, also in table.txt and runs.json.
+    EXPECT_NE(line_starting(output, "task     YcbMustardBottle   0 0 0").find("success"), std::string::npos) << output;
+    EXPECT_NE(output.find("stopped by " + std::string(sig == SIGTERM ? "SIGTERM" : sig == SIGINT ? "SIGINT" : "SIGHUP") +
+                          ": 1 of 4 runs finished"),
+              std::string::npos)
+        << output;
+    std::ifstream in(out / "runs.json");
+    const auto runs = nlohmann::json::parse(in, nullptr, false);
+    ASSERT_TRUE(runs.is_array() && runs.size() == 4u) << output;
+    EXPECT_EQ(runs[0]["outcome"], "success");
+    EXPECT_EQ(runs[1]["outcome"], "interrupted");
+    EXPECT_NE(runs[1]["reason"].get<std::string>().find("interrupted (the batch was stopped by"), std::string::npos) << runs[1];
+    EXPECT_EQ(runs[2]["outcome"], "interrupted");
+    EXPECT_EQ(runs[3]["outcome"], "not run");
+    EXPECT_NE(runs[3]["reason"].get<std::string>().find("the batch was stopped by"), std::string::npos) << runs[3];
+    EXPECT_TRUE(fs::exists(out / "table.txt"));
+  }
 }
 
 }  // namespace
