@@ -1,9 +1,14 @@
 // sim.camera: the simulated twin of a camera. Renders an object mesh (OBJ, PLY, STL...) from
 // the pose it receives, or from a ring or an even spread of viewpoints over the upper
 // hemisphere, with the given intrinsics: a shaded object on a background, optional noise.
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <fba/component.hpp>
+#include <fba/message_text.hpp>
 #include <fba/types/frame.hpp>
 #include <fba/types/pose.hpp>
 
@@ -35,6 +40,12 @@ class SimCamera final : public fba::Component {
                               "the world the object is rendered in: 'mesh', the mesh file's own coordinates (turned and moved by "
                               "object_rest, object_yaw, object_x, object_y, not raised), or 'table', where it rests on z = 0 (as sim.hand)")
           .choices({"mesh", "table"});
+  static inline const auto kWorkspace =
+      fba::Param<std::vector<double>>(
+          "workspace", {},
+          "[xmin, ymin, zmin, xmax, ymax, zmax]: where the task looks for the object (the carver's bounds), metres in the world "
+          "the object is rendered in; an object larger than it or whose centre lies outside it is refused. Empty: not checked")
+          .size({0, 6});
   static constexpr auto kWidth = fba::Param<int>("width", 640, "image width, pixels").range(16, 8192);
   static constexpr auto kHeight = fba::Param<int>("height", 480, "image height, pixels").range(16, 8192);
   static constexpr auto kFx = fba::Param<double>("fx", 600.0, "focal length, pixels").at_least(1);
@@ -57,10 +68,16 @@ class SimCamera final : public fba::Component {
 
   static fba::Spec spec() {
     return fba::Spec::sensor("sim.camera", "Renders an object mesh as a calibrated camera would see it (the twin of vision.camera).")
-        .add(kPose, kFrame, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kWorld, kWidth, kHeight, kFx, kFy, kViewpoints, kViews,
-             kMinElevation, kMaxElevation, kDistance,
+        .add(kPose, kFrame, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kWorld, kWorkspace, kWidth, kHeight, kFx, kFy, kViewpoints,
+             kViews, kMinElevation, kMaxElevation, kDistance,
              kObjectGrey, kBackgroundGrey, kNoise, kSeed, kLost)
-        .add(kMinElevation <= kMaxElevation);
+        .add(kMinElevation <= kMaxElevation)
+        .check(kWorkspace, [](const fba::ParamValues& p) {
+          const auto b = p(kWorkspace);
+          if (!b.empty() && !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
+            return std::string("workspace must be [xmin, ymin, zmin, xmax, ymax, zmax] with each min < its max");
+          return std::string();
+        });
   }
 
   explicit SimCamera(fba::Context& ctx) : ctx_(ctx), mesh_name_(ctx(kMesh).stem().string()) {
@@ -71,6 +88,8 @@ class SimCamera final : public fba::Component {
     mesh_ = fba::sim_hand::place_in_mesh_frame(loaded.mesh, placement, raise);
     if (ctx(kWorld) == "table")
       for (auto& v : mesh_.vertices) v.z() += static_cast<float>(raise);
+    if (const auto b = ctx(kWorkspace); !b.empty())
+      check_workspace(ctx, Eigen::AlignedBox3d(Eigen::Vector3d(b[0], b[1], b[2]), Eigen::Vector3d(b[3], b[4], b[5])));
     const int w = ctx(kWidth), h = ctx(kHeight);
     const double fx = ctx(kFx), fy = ctx(kFy) > 0 ? ctx(kFy) : fx;
     camera_ = fba::geometry::make_camera(w, h, fx, fy, (w - 1) / 2.0, (h - 1) / 2.0);
@@ -116,6 +135,36 @@ class SimCamera final : public fba::Component {
   }
 
  private:
+  // The object must stand where the task looks for it: elsewhere the views miss it or the carver
+  // cuts it off, and the run would end on a symptom (no contour in an image, a model not joined to
+  // the table) instead of the cause. Partly outside, it is carved cut off there: a warning.
+  void check_workspace(fba::Context& ctx, const Eigen::AlignedBox3d& workspace) const {
+    const Eigen::AlignedBox3d object = fba::geometry::mesh_bounds(mesh_);
+    const Eigen::Vector3d size = object.sizes(), room = workspace.sizes();
+    const bool too_large = (size.array() > room.array()).any();
+    if (too_large || !workspace.contains(object.center())) {
+      std::string why = too_large ? "it is larger than the workspace" : "its centre lies outside the workspace";
+      // A mesh in millimetres is a thousand times too large, and then fits once divided.
+      if (too_large && (size.array() / 1000 <= room.array()).all())
+        why += "; divided by 1000 it would be " + sides(size / 1000) + ": the mesh may be in millimetres while metres are expected";
+      throw std::runtime_error("the object '" + mesh_name_ + "' is outside the workspace: expected it within " + corners(workspace) +
+                               " (" + sides(room) + ", in the '" + ctx(kWorld) + "' world), found it " + sides(size) + " centred at " +
+                               point(object.center()) + " (object_x " + fba::number_text(ctx(kObjectX)) + ", object_y " +
+                               fba::number_text(ctx(kObjectY)) + "): " + why);
+    }
+    const double beyond = std::max((object.max() - workspace.max()).maxCoeff(), (workspace.min() - object.min()).maxCoeff());
+    if (beyond > 0)
+      ctx.log().warn("the object '{}' ({} centred at {}) reaches {:.3f} m beyond the workspace {}: the model is carved cut off there",
+                     mesh_name_, sides(size), point(object.center()), beyond, corners(workspace));
+  }
+
+  static std::string sides(const Eigen::Vector3d& s) { return fmt::format("{:.3f} x {:.3f} x {:.3f} m", s.x(), s.y(), s.z()); }
+  static std::string point(const Eigen::Vector3d& p) { return fmt::format("({:.3f}, {:.3f}, {:.3f})", p.x(), p.y(), p.z()); }
+  static std::string corners(const Eigen::AlignedBox3d& b) {
+    return fmt::format("[{:.3f}, {:.3f}, {:.3f}, {:.3f}, {:.3f}, {:.3f}]", b.min().x(), b.min().y(), b.min().z(), b.max().x(), b.max().y(),
+                       b.max().z());
+  }
+
   fba::Context& ctx_;
   const std::string mesh_name_;
   fba::TriangleMesh mesh_;
