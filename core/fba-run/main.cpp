@@ -571,8 +571,6 @@ int run(int argc, char** argv) {
     return refuse("--timeout must be a number of seconds >= 0 (0: none); found '" + timeout_text + "'");
   if (!stop_grace_text.empty() && (!parse_seconds(stop_grace_text, stop_grace) || !(stop_grace >= 0)))
     return refuse("--stop-grace must be a number of seconds >= 0; found '" + stop_grace_text + "'");
-  if (vm.count("profile") && profile.empty())
-    return refuse("--profile is empty: give a profile's name (profiles/NAME.yaml beside the task) or a file");
   if (threads < 0 || threads > fba::kMaxThreads)
     return refuse("--threads must be in [0, " + std::to_string(fba::kMaxThreads) + "] (0: the task file's, else one per core); found " +
                        std::to_string(threads));
@@ -604,6 +602,7 @@ int run(int argc, char** argv) {
   fba::LoadOptions load;
   for (const auto& s : sets) load.overrides.push_back({s});
   load.profile = profile;
+  load.profile_given = vm.count("profile") > 0;  // an empty name is refused, not the default
   fba::TaskConfig config;
   try {
     config = fba::load_task(task_file, registry, load);

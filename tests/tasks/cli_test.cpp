@@ -147,7 +147,8 @@ TEST(Cli, AnEmptyOutputDirOrProfileIsRefused) {
   EXPECT_NE(out.output.find("--output-dir is empty"), std::string::npos) << out.output;
   const auto profile = fba_run({task("chain.yaml"), "--profile", ""});
   EXPECT_EQ(profile.status, 2) << profile.output;
-  EXPECT_NE(profile.output.find("--profile is empty"), std::string::npos) << profile.output;
+  EXPECT_NE(profile.output.find("--profile expects a profile's name (profiles/NAME.yaml beside the task) or a file; found an empty name"), std::string::npos)
+      << profile.output;
 }
 
 // An option is refused as the option, before anything loads: it was checked only when the task

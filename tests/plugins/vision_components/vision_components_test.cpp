@@ -278,7 +278,8 @@ TEST(OctreeCarver, BoundsOfTheWrongLengthFailTheCheckAtTheValue) {
 }
 
 // A depth the memory budget cannot hold fails the check, with the figure, not when the carver is
-// built mid-run; 12 is past any budget, so the range stops at 11.
+// built mid-run; 10 is past what the octree can address (OctreeNode::kMaxBlocks) whatever the
+// budget, so the range stops at 9.
 TEST(OctreeCarver, ADepthPastTheMemoryBudgetFailsTheCheckWithTheFigure) {
   fba::LoadOptions options;
   options.require_inputs = false;
@@ -291,11 +292,11 @@ TEST(OctreeCarver, ADepthPastTheMemoryBudgetFailsTheCheckWithTheFigure) {
       return e.diagnostics().at(0).str();
     }
   };
-  EXPECT_EQ(check("{ max_depth: 10 }"),
-            "carve.yaml:4:26: error: component 'carve' (vision.octree_carver): max_depth 10 may need up to 18724 MiB, more than "
-            "memory_budget_mib (4096); raise it or lower max_depth");
-  EXPECT_EQ(check("{ max_depth: 10, memory_budget_mib: 20000 }"), "accepted");
-  EXPECT_NE(check("{ max_depth: 12, memory_budget_mib: 1048576 }").find("must be in [1, 11]"), std::string::npos);
+  EXPECT_EQ(check("{ max_depth: 9, memory_budget_mib: 1000 }"),
+            "carve.yaml:4:26: error: component 'carve' (vision.octree_carver): max_depth 9 may need up to 2340 MiB, more than "
+            "memory_budget_mib (1000); raise it or lower max_depth");
+  EXPECT_EQ(check("{ max_depth: 9 }"), "accepted");
+  EXPECT_EQ(check("{ max_depth: 10, memory_budget_mib: 20000 }"), "carve.yaml:4:26: error: parameter 'max_depth' must be in [1, 9]; found 10");
 }
 
 TEST(OctreeCarver, AnInvertedBoxFailsTheCheck) {
