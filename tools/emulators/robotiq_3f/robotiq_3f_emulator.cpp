@@ -17,6 +17,7 @@ constexpr const char* kUsage = R"(usage: fba-robotiq-3f-emulator [options]
   --slave N               Modbus slave id (default 9)
   --link PATH             also make PATH a symbolic link to the pseudo-terminal (replaced if it is a link)
   --activation-s S        how long activation takes, seconds (default 1)
+  --never-activate        activation starts and never ends (a hand that cannot activate)
   --object-width M        the object's extent from the thumb's side to the fingers', metres (default 0.06)
   --object-length M       its extent along the spread, finger B to C, metres (default: the width, a cylinder)
   --object-offset M       the object's centre from the hand's, towards the thumb (finger A), metres (default 0)
@@ -49,6 +50,10 @@ int main(int argc, char** argv) {
     }
     if (a == "--no-object") {
       options.object = false;
+      continue;
+    }
+    if (a == "--never-activate") {
+      options.activates = false;
       continue;
     }
     if (i + 1 >= args.size()) kCli.fail(a.empty() ? "an empty argument" : "'" + a + "' needs a value or is unknown");

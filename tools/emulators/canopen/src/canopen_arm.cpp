@@ -275,6 +275,16 @@ std::uint64_t CanopenArmEmulator::sdo_downloads(int id) const {
   return node(id).sdo_downloads;
 }
 
+bool CanopenArmEmulator::silent(int id) const {
+  std::lock_guard lock(mutex_);
+  return node(id).silent;
+}
+
+std::vector<can::Frame> CanopenArmEmulator::heard() const {
+  std::lock_guard lock(mutex_);
+  return {heard_.begin(), heard_.end()};
+}
+
 std::string CanopenArmEmulator::run() {
   try {
     {
@@ -298,7 +308,11 @@ std::string CanopenArmEmulator::run() {
       }
       const auto frame = bus_.receive(std::chrono::milliseconds(2));
       std::lock_guard lock(mutex_);
-      if (frame) handle(*frame);
+      if (frame) {
+        heard_.push_back(*frame);
+        if (heard_.size() > kHeardKept) heard_.pop_front();
+        handle(*frame);
+      }
       update(Clock::now());
     }
   } catch (const can::BusError& e) {

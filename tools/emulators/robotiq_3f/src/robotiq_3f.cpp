@@ -119,22 +119,21 @@ void Robotiq3fEmulator::handle(const std::uint8_t* request, int length) {
       mapping_->tab_registers[kStatusAddress - kCommandAddress + i] = status[i];
     }
   }
+  if (!read) {
+    for (int i = 0; i < count; ++i)
+      command_[address - base + i] =
+          static_cast<std::uint16_t>(request[header + 6 + 2 * i] << 8 | request[header + 7 + 2 * i]);
+    commands_.push_back({command_, state_});
+    if (commands_.size() > kCommandsKept) commands_.pop_front();
+  }
   if (corrupt_ != 0) {
     if (corrupt_ > 0) --corrupt_;
-    if (!read) {  // the command arrived; only its answer is spoilt
-      for (int i = 0; i < count; ++i)
-        command_[address - base + i] =
-            static_cast<std::uint16_t>(request[header + 6 + 2 * i] << 8 | request[header + 7 + 2 * i]);
-      apply_command(command_);
-    }
+    if (!read) apply_command(command_);  // the command arrived; only its answer is spoilt
     send_corrupted(request);
     return;
   }
   modbus_reply(ctx_, request, length, mapping_);
-  if (!read) {
-    for (int i = 0; i < kRegisters; ++i) command_[i] = mapping_->tab_registers[i];
-    apply_command(command_);
-  }
+  if (!read) apply_command(command_);
 }
 
 // The answer libmodbus would send, with its CRC turned upside down.
@@ -212,11 +211,11 @@ void Robotiq3fEmulator::update(std::chrono::steady_clock::time_point now) {
   last_update_ = now;
   State& s = state_;
   const double half = options_.max_aperture / 2;
-  auto units_per_s = [&](int speed) {
-    return 255.0 * (0.022 + 0.088 * speed / 255.0) / half;
-  };                 // 22 to 110 mm/s at the tip
+  auto units_per_s = [&](int speed) {  // 22 to 110 mm/s at the tip
+    return options_.speed_scale * 255.0 * (0.022 + 0.088 * speed / 255.0) / half;
+  };
   if (s.imc == 1) {  // activation: fingers open, scissor to the mode's place
-    activation_left_ -= dt;
+    if (options_.activates) activation_left_ -= dt;
     if (activation_left_ > 0) return;
     for (int axis : {kA, kB, kC}) s.axes[axis] = Axis{0, 0, s.axes[axis].speed, s.axes[axis].force, 3};
     s.axes[kS] = Axis{scissor_for_mode(s.mode), static_cast<int>(scissor_for_mode(s.mode)), 255, 0, 3};
@@ -337,6 +336,11 @@ void Robotiq3fEmulator::disconnect() {
 Robotiq3fEmulator::State Robotiq3fEmulator::state() const {
   std::lock_guard lock(mutex_);
   return state_;
+}
+
+std::vector<Robotiq3fEmulator::CommandSeen> Robotiq3fEmulator::commands() const {
+  std::lock_guard lock(mutex_);
+  return {commands_.begin(), commands_.end()};
 }
 
 }  // namespace fba::emulators

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
@@ -55,6 +56,12 @@ class CanopenArmEmulator {
   // How many SDO downloads (writes) the node has heard: a driver's commands.
   std::uint64_t sdo_downloads(int node) const;
   std::uint64_t syncs_seen() const { return syncs_; }
+  // Whether silence(node) has taken effect.
+  bool silent(int node) const;
+  // The frames it heard, oldest first (the last kHeardKept): the order in which a driver's requests
+  // reached the drives.
+  static constexpr std::size_t kHeardKept = 4096;
+  std::vector<can::Frame> heard() const;
 
   struct Node;
 
@@ -70,6 +77,7 @@ class CanopenArmEmulator {
   std::map<int, std::unique_ptr<Node>> nodes_;
   mutable std::mutex mutex_;  // guards the nodes and the requests below
   std::vector<std::function<void()>> requests_;
+  std::deque<can::Frame> heard_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> syncs_{0};
   bool disconnect_ = false;

@@ -20,6 +20,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -35,6 +36,8 @@ namespace fba::emulators {
 struct Robotiq3fOptions {
   int slave_id = 9;
   double activation_s = 1.0;    // how long activation takes
+  bool activates = true;        // false: activation starts and never ends (gIMC stays 1)
+  double speed_scale = 1.0;     // the fingers' speed as a share of the real hand's (slow: long motions)
   double max_aperture = 0.155;  // metres, thumb to fingers, fully open
   double max_spread = 0.12;     // metres, finger B to finger C, scissor at 0
   bool object = true;
@@ -80,6 +83,16 @@ class Robotiq3fEmulator {
     std::uint64_t requests = 0;  // requests answered
   };
   State state() const;
+  // A command as it arrived, with the gripper's state just before: the order in which a driver's
+  // commands reached the hand, and what the fingers were doing then.
+  struct CommandSeen {
+    std::array<std::uint16_t, 8> registers{};  // from 1000 (0x03E8), as written
+    State before;
+    bool go() const { return (registers[0] >> 8) & 0x08; }
+    int request_a() const { return registers[1] & 0xFF; }  // byte 3: finger A's (or all fingers') position
+  };
+  static constexpr std::size_t kCommandsKept = 1024;
+  std::vector<CommandSeen> commands() const;  // oldest first, the last kCommandsKept
 
  private:
   void handle(const std::uint8_t* request, int length);
@@ -97,6 +110,7 @@ class Robotiq3fEmulator {
   mutable std::mutex mutex_;  // guards the state and the fault requests below
   State state_;
   std::array<std::uint16_t, 8> command_{};
+  std::deque<CommandSeen> commands_;
   double activation_left_ = 0;
   bool individual_fingers_ = false, individual_scissor_ = false;
   bool silent_ = false, disconnect_ = false;
