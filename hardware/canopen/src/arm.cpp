@@ -60,14 +60,14 @@ std::int32_t CanopenArm::to_counts(std::size_t i, double value) const {
 }
 
 std::vector<std::string> CanopenArm::quick_stop_all() {
+  std::vector<SdoWrite> writes;
+  for (const ArmJoint& j : joints_)
+    writes.push_back({j.node, cia402::od::kControlword, 0,
+                      {static_cast<std::uint8_t>(cia402::cw::kQuickStop), cia402::cw::kQuickStop >> 8}});
+  const std::vector<std::string> errors = master_.download_all(writes);
   std::vector<std::string> failures;
-  for (std::size_t i = 0; i < drives_.size(); ++i) {
-    try {
-      drives_[i].quick_stop();
-    } catch (const std::exception& e) {
-      failures.push_back(fmt::format("{}: {}", joint_name(joints_[i]), e.what()));
-    }
-  }
+  for (std::size_t i = 0; i < joints_.size(); ++i)
+    if (!errors[i].empty()) failures.push_back(fmt::format("{}: {}", joint_name(joints_[i]), errors[i]));
   return failures;
 }
 
@@ -85,6 +85,8 @@ auto CanopenArm::guarded(F&& f) -> decltype(f()) {
     throw;
   } catch (const ArmStopped&) {
     throw;
+  } catch (const Interrupted& e) {  // not a fault: whoever interrupted stops the arm
+    throw ArmStopped(0, fmt::format("arm stopped: {}", e.what()));
   } catch (const NodeFault& e) {
     reason = e.what();
     node = e.fault.node;

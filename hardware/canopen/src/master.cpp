@@ -43,49 +43,85 @@ void Master::check_size(int node, std::uint16_t index, std::uint8_t sub, std::si
     throw Error(fmt::format("node {}: object {} has {} bytes, expected {}", node, object(index, sub), got, expected));
 }
 
+void Master::send(const can::Frame& frame) {
+  if (interrupted_)
+    throw Interrupted(fmt::format("{}: not sent: the master was interrupted (the application is stopping)", bus_.name()));
+  bus_.send(frame);
+}
+
 void Master::nmt(NmtCommand command, int node) {
   check_node(node, true);
+  std::lock_guard lock(mutex_);
   if (command == NmtCommand::reset_node || command == NmtCommand::reset_communication) {
     if (node != 0)
       resets_asked_.insert(node);
     else
       for (const auto& [n, state] : states_) resets_asked_.insert(n);
   }
-  bus_.send(can::make_frame(kNmtId, {static_cast<std::uint8_t>(command), static_cast<std::uint8_t>(node)}));
+  send(can::make_frame(kNmtId, {static_cast<std::uint8_t>(command), static_cast<std::uint8_t>(node)}));
 }
 
 bool Master::known(int node) const { return states_.count(node) != 0; }
 
 NmtState Master::state(int node) const {
+  std::lock_guard lock(mutex_);
   const auto it = states_.find(node);
   return it == states_.end() ? NmtState::unknown : it->second;
 }
 
-void Master::send_sync() { bus_.send(can::make_frame(kSyncId, {})); }
+void Master::send_sync() {
+  std::lock_guard lock(mutex_);
+  send(can::make_frame(kSyncId, {}));
+}
 
 void Master::watch_heartbeat(int node, std::chrono::milliseconds timeout) {
   check_node(node, false);
+  std::lock_guard lock(mutex_);
   heartbeats_[node] = HeartbeatWatch{timeout, Clock::now(), false};
 }
 
+std::vector<Fault> Master::faults() const {
+  std::lock_guard lock(mutex_);
+  return faults_;
+}
+
+std::vector<Emergency> Master::emergencies() const {
+  std::lock_guard lock(mutex_);
+  return emergencies_;
+}
+
 void Master::clear_faults(int node) {
+  std::lock_guard lock(mutex_);
   std::erase_if(faults_, [node](const Fault& f) { return f.node == node; });
 }
 
 void Master::throw_if_faulted(int node) const {
+  std::lock_guard lock(mutex_);
   for (const Fault& f : faults_)
     if (f.node == node) throw NodeFault(f);
 }
 
+std::uint64_t Master::discarded() const {
+  std::lock_guard lock(mutex_);
+  return bus_.discarded();
+}
+
+std::string Master::last_discard_reason() const {
+  std::lock_guard lock(mutex_);
+  return bus_.last_discard_reason();
+}
+
 std::optional<PdoSample> Master::tpdo(int node, int number) const {
+  std::lock_guard lock(mutex_);
   const auto it = tpdos_.find({node, number});
   if (it == tpdos_.end()) return std::nullopt;
   return it->second;
 }
 
-void Master::step(Clock::time_point deadline) {
-  if (interrupted_)
+void Master::step(Clock::time_point deadline, bool interruptible) {
+  if (interruptible && interrupted_)
     throw Interrupted(fmt::format("{}: the wait was interrupted (the application is stopping)", bus_.name()));
+  std::lock_guard lock(mutex_);
   auto now = Clock::now();
   auto until = std::min(deadline, now + kTick);
   if (options_.sync_period.count() > 0) until = std::min(until, next_sync_);
@@ -100,8 +136,8 @@ void Master::step(Clock::time_point deadline) {
     dispatch(*frame);
   }
   now = Clock::now();
-  if (options_.sync_period.count() > 0 && now >= next_sync_) {
-    send_sync();
+  if (options_.sync_period.count() > 0 && now >= next_sync_ && !interrupted_) {
+    bus_.send(can::make_frame(kSyncId, {}));
     next_sync_ = std::max(next_sync_ + options_.sync_period, now);  // no burst to catch up after a stall
   }
   check_heartbeats(now);
@@ -164,8 +200,15 @@ void Master::dispatch(const can::Frame& frame) {
     if (e.code != 0x0000)  // 0x0000 says an earlier error is reset
       if (faults_.size() < kMaxKept)
         faults_.push_back({Fault::Kind::emergency, node, fmt::format("node {}: {}", node, e.describe())});
-  } else if (function == kSdoTxBase && node == sdo_node_ && frame.dlc == 8) {
-    sdo_reply_ = frame;
+  } else if (function == kSdoTxBase && frame.dlc == 8) {
+    // To the oldest request of that object still waiting; an answer to a request already given up
+    // matches none and is dropped.
+    const auto index = static_cast<std::uint16_t>(frame.data[1] | frame.data[2] << 8);
+    for (SdoWait* w : sdo_waits_)
+      if (w->node == node && w->index == index && w->sub == frame.data[3] && !w->reply) {
+        w->reply = frame;
+        break;
+      }
   } else {
     for (int n = 0; n < 4; ++n)
       if (frame.id == kTpdoBase[n] + static_cast<std::uint32_t>(node)) {
@@ -177,44 +220,104 @@ void Master::dispatch(const can::Frame& frame) {
   }
 }
 
-can::Frame Master::sdo_exchange(int node, std::uint16_t index, std::uint8_t sub, const can::Frame& request,
-                                const char* what) {
-  sdo_node_ = node;
-  sdo_reply_.reset();
-  bus_.send(request);
-  const auto deadline = Clock::now() + options_.sdo_timeout;
-  for (;;) {
-    if (sdo_reply_) {
-      const can::Frame reply = *sdo_reply_;
-      sdo_reply_.reset();
-      const auto reply_index = static_cast<std::uint16_t>(reply.data[1] | reply.data[2] << 8);
-      if (reply_index != index || reply.data[3] != sub) continue;  // a late answer to an earlier request
-      sdo_node_ = 0;
-      if (reply.data[0] == sdo::kAbort) {
-        const std::uint32_t code = le32(reply, 4);
-        throw SdoAbort(node, index, sub, code,
-                       fmt::format("node {}: SDO {} of {} aborted with 0x{:08X} ({})", node, what, object(index, sub),
-                                   code, sdo_abort_name(code)));
-      }
-      return reply;
+void Master::exchange(std::span<SdoWait> waits, std::span<const can::Frame> requests, bool interruptible) {
+  struct Registered {  // the waits leave the list however the exchange ends
+    Master& m;
+    std::span<SdoWait> waits;
+    ~Registered() {
+      std::lock_guard lock(m.mutex_);
+      for (SdoWait& w : waits) std::erase(m.sdo_waits_, &w);
     }
-    if (Clock::now() >= deadline) break;
-    step(deadline);
+  } registered{*this, waits};
+  {
+    std::lock_guard lock(mutex_);
+    for (std::size_t i = 0; i < waits.size(); ++i) {
+      sdo_waits_.push_back(&waits[i]);
+      if (interruptible)
+        send(requests[i]);
+      else
+        bus_.send(requests[i]);
+    }
   }
-  sdo_node_ = 0;
-  // Tell the server the transfer is over, as CiA 301 asks of a client that gives up.
-  can::Frame abort =
-      can::make_frame(kSdoRxBase + static_cast<std::uint32_t>(node),
-                      {sdo::kAbort, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub, 0x00,
-                       0x00, 0x04, 0x05});  // 0x05040000 SDO protocol timed out
-  bus_.send(abort);
+  const auto deadline = Clock::now() + options_.sdo_timeout;
+  auto answered = [&] {
+    std::lock_guard lock(mutex_);
+    return std::all_of(waits.begin(), waits.end(), [](const SdoWait& w) { return w.reply.has_value(); });
+  };
+  while (!answered() && Clock::now() < deadline) step(deadline, interruptible);
+  std::lock_guard lock(mutex_);
+  for (const SdoWait& w : waits)
+    if (!w.reply)
+      bus_.send(can::make_frame(kSdoRxBase + static_cast<std::uint32_t>(w.node),
+                                {sdo::kAbort, static_cast<std::uint8_t>(w.index), static_cast<std::uint8_t>(w.index >> 8),
+                                 w.sub, 0x00, 0x00, 0x04, 0x05}));  // 0x05040000 SDO protocol timed out
+}
+
+std::string Master::no_answer(int node, std::uint16_t index, std::uint8_t sub, const char* what) const {
+  std::lock_guard lock(mutex_);
   std::string why = fmt::format("node {}: no answer to the SDO {} of {} within {} ms", node, what, object(index, sub),
                                 options_.sdo_timeout.count());
   if (auto it = heartbeats_.find(node); it != heartbeats_.end() && it->second.lost)
     why += " (its heartbeat is lost too)";
-  else if (state(node) == NmtState::unknown)
+  else if (!known(node))
     why += " (nothing has been heard from this node: is it on the bus, with this id?)";
-  throw SdoTimeout(node, why);
+  return why;
+}
+
+SdoAbort Master::abort_of(const can::Frame& reply, int node, std::uint16_t index, std::uint8_t sub, const char* what) {
+  const std::uint32_t code = le32(reply, 4);
+  return SdoAbort(node, index, sub, code,
+                  fmt::format("node {}: SDO {} of {} aborted with 0x{:08X} ({})", node, what, object(index, sub), code,
+                              sdo_abort_name(code)));
+}
+
+can::Frame Master::sdo_exchange(int node, std::uint16_t index, std::uint8_t sub, const can::Frame& request,
+                                const char* what) {
+  SdoWait wait{node, index, sub, std::nullopt};
+  exchange({&wait, 1}, {&request, 1}, true);
+  if (!wait.reply) throw SdoTimeout(node, no_answer(node, index, sub, what));
+  if (wait.reply->data[0] == sdo::kAbort) throw abort_of(*wait.reply, node, index, sub, what);
+  return *wait.reply;
+}
+
+std::vector<std::string> Master::download_all(std::span<const SdoWrite> writes) {
+  std::vector<SdoWait> waits;
+  std::vector<can::Frame> requests;
+  std::set<int> nodes;
+  for (const SdoWrite& w : writes) {
+    check_node(w.node, false);
+    if (!nodes.insert(w.node).second)
+      throw std::invalid_argument(fmt::format("node {}: given two SDO downloads at once; one at a time", w.node));
+    if (w.data.empty() || w.data.size() > 4)
+      throw std::invalid_argument(fmt::format("node {}: an expedited SDO download of {} carries 1 to 4 bytes, not {}",
+                                              w.node, object(w.index, w.sub), w.data.size()));
+    can::Frame request = can::make_frame(
+        kSdoRxBase + static_cast<std::uint32_t>(w.node),
+        {sdo::expedited(sdo::kDownloadRequest, static_cast<int>(w.data.size())), static_cast<std::uint8_t>(w.index),
+         static_cast<std::uint8_t>(w.index >> 8), w.sub, 0, 0, 0, 0});
+    std::copy(w.data.begin(), w.data.end(), request.data.begin() + 4);
+    waits.push_back({w.node, w.index, w.sub, std::nullopt});
+    requests.push_back(request);
+  }
+  std::vector<std::string> out(writes.size());
+  try {
+    exchange(waits, requests, false);
+  } catch (const std::exception& e) {  // the line is gone: every write not confirmed by then failed with it
+    for (std::size_t i = 0; i < waits.size(); ++i)
+      if (!waits[i].reply) out[i] = e.what();
+  }
+  for (std::size_t i = 0; i < waits.size(); ++i) {
+    const SdoWait& w = waits[i];
+    if (!out[i].empty()) continue;
+    if (!w.reply)
+      out[i] = no_answer(w.node, w.index, w.sub, "download");
+    else if (w.reply->data[0] == sdo::kAbort)
+      out[i] = abort_of(*w.reply, w.node, w.index, w.sub, "download").what();
+    else if (w.reply->data[0] != sdo::kDownloadResponse)
+      out[i] = fmt::format("node {}: the SDO download of {} was answered with command byte 0x{:02X}, expected 0x60",
+                           w.node, object(w.index, w.sub), w.reply->data[0]);
+  }
+  return out;
 }
 
 void Master::sdo_download(int node, std::uint16_t index, std::uint8_t sub, std::span<const std::uint8_t> data) {
@@ -244,6 +347,7 @@ std::vector<std::uint8_t> Master::sdo_upload(int node, std::uint16_t index, std:
     throw Error(fmt::format("node {}: the SDO upload of {} was answered with command byte 0x{:02X}, expected 0x4n",
                             node, object(index, sub), command));
   if (!(command & sdo::kExpedited)) {
+    std::lock_guard lock(mutex_);
     bus_.send(can::make_frame(kSdoRxBase + static_cast<std::uint32_t>(node),
                               {sdo::kAbort, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8),
                                sub, 0x01, 0x00, 0x04, 0x05}));  // 0x05040001 command specifier not valid
@@ -304,7 +408,8 @@ void Master::send_rpdo(int node, int number, std::span<const std::uint8_t> data)
   f.id = kRpdoBase[number - 1] + static_cast<std::uint32_t>(node);
   f.dlc = static_cast<std::uint8_t>(data.size());
   std::copy(data.begin(), data.end(), f.data.begin());
-  bus_.send(f);
+  std::lock_guard lock(mutex_);
+  send(f);
 }
 
 }  // namespace fba::canopen

@@ -3,7 +3,9 @@
 // scaled to drive counts, every command checked against the joint limits before anything is sent,
 // synchronised profile position moves, and one fault policy: whatever faults (an EMCY, a drive
 // fault, a lost heartbeat, the line), every joint that can still hear is quick-stopped, and the
-// error names the joint, its node and the reason.
+// error names the joint, its node and the reason. Master::interrupt() is not a fault: a wait it
+// ends throws ArmStopped at once, and whoever interrupted stops the arm (quick_stop_all(), from any
+// thread, while the master is interrupted too).
 #pragma once
 
 #include <chrono>
@@ -85,8 +87,10 @@ class CanopenArm {
   void wait(std::chrono::milliseconds duration);
   // Joint positions from the drives' actual positions (ArmStopped if a drive cannot be read).
   std::vector<double> positions();
-  // Sends quick stop to every joint, each independently of the others' failures; returns the
-  // failures (empty when every joint got it).
+  // Sends quick stop to every joint at once (every request before any answer is awaited, so one
+  // silent drive does not hold back the others), then waits one SDO timeout for the confirmations.
+  // Returns the joints that did not confirm, each with its node and why (empty when every joint
+  // did). Safe from another thread while one drives the arm, and while the master is interrupted.
   std::vector<std::string> quick_stop_all();
 
  private:

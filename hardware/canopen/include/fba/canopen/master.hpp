@@ -1,8 +1,10 @@
 // A CANopen (CiA 301) master on a CanBus: NMT, expedited SDO with timeouts and named abort codes,
 // PDO mapping (configured through SDO) and exchange, a SYNC producer, heartbeat consumption and
-// EMCY. Single-threaded by design: every call processes the traffic that arrives while it waits
-// (heartbeats, EMCY, PDOs), and spin_for() does so when nothing else is asked, so there is no
-// thread to stop and no lock to take. Nothing waits longer than its timeout.
+// EMCY. It has no thread of its own: every call processes the traffic that arrives while it waits
+// (heartbeats, EMCY, PDOs), and spin_for() does so when nothing else is asked. Nothing waits longer
+// than its timeout. One thread drives the devices; another may stop them meanwhile (interrupt(),
+// then download_all()): every call holds the master's lock for one frame or one step of a wait
+// (a few milliseconds), so a stop goes out between two of the other thread's steps.
 #pragma once
 
 #include <array>
@@ -12,6 +14,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <span>
@@ -101,6 +104,14 @@ struct PdoSample {
   std::uint64_t count = 0;  // how many have arrived
 };
 
+// One expedited SDO download of download_all().
+struct SdoWrite {
+  int node = 0;
+  std::uint16_t index = 0;
+  std::uint8_t sub = 0;
+  std::vector<std::uint8_t> data;  // 1 to 4 bytes
+};
+
 struct MasterOptions {
   std::chrono::milliseconds sdo_timeout{200};
   std::chrono::milliseconds sync_period{0};  // 0: no SYNC producer
@@ -118,6 +129,8 @@ class Master {
   NmtState state(int node) const;
 
   // Expedited SDO (1-4 bytes). Throw SdoAbort, SdoTimeout, or can::BusError if the line is gone.
+  // A node answers one SDO at a time, but each node is a server of its own: calls to different
+  // nodes may overlap (from different threads).
   void sdo_download(int node, std::uint16_t index, std::uint8_t sub, std::span<const std::uint8_t> data);
   std::vector<std::uint8_t> sdo_upload(int node, std::uint16_t index, std::uint8_t sub);
   template <std::integral T>
@@ -136,6 +149,13 @@ class Master {
     for (std::size_t i = 0; i < sizeof(T); ++i) v |= static_cast<std::uint64_t>(bytes[i]) << (8 * i);
     return static_cast<T>(v);
   }
+
+  // Expedited SDO downloads to several nodes (one each) at once, the way a stop goes out: every
+  // request is sent before any answer is awaited, then one wait of the SDO timeout for all the
+  // answers, so a silent node costs one timeout, not one for each node behind it. Returns, per
+  // write, "" when the node confirmed it, else why not (an abort by name, no answer, the line
+  // gone). Runs while interrupted too: it is what the stop sends.
+  std::vector<std::string> download_all(std::span<const SdoWrite> writes);
 
   // PDO mapping through SDO, the CiA 301 way: invalidate the PDO, set its transmission type, clear
   // the mapping, write the entries, set their count, validate it on its default COB-ID.
@@ -161,14 +181,19 @@ class Master {
   // Faults recorded so far, oldest first; a node's faults stay until clear_faults(node). EMCY
   // faults and records stop at 1000 (the records keep the latest), so a babbling node cannot
   // exhaust memory.
-  const std::vector<Fault>& faults() const { return faults_; }
+  std::vector<Fault> faults() const;
   void clear_faults(int node);
   // Throws NodeFault with the node's first fault, if it has one.
   void throw_if_faulted(int node) const;
-  const std::vector<Emergency>& emergencies() const { return emergencies_; }
+  std::vector<Emergency> emergencies() const;
+
+  // The bus's skipped input (CanBus::discarded, last_discard_reason), read under the master's lock.
+  std::uint64_t discarded() const;
+  std::string last_discard_reason() const;
 
   // From any thread: every wait in progress or to come throws Interrupted at its next step (within
-  // a few milliseconds) until resume(); frames are still sent, so a quick stop still goes out.
+  // a few milliseconds), and nothing more is sent but download_all()'s requests, until resume():
+  // the thread that drives the devices can no longer undo a stop.
   void interrupt() { interrupted_ = true; }
   void resume() { interrupted_ = false; }
   bool interrupted() const { return interrupted_; }
@@ -180,13 +205,31 @@ class Master {
     bool lost = false;
   };
 
+  // An SDO request in flight, and its answer once dispatch() has matched one to it.
+  struct SdoWait {
+    int node;
+    std::uint16_t index;
+    std::uint8_t sub;
+    std::optional<can::Frame> reply;
+  };
+
   // Waits for one frame until `deadline` (at most until the next SYNC or heartbeat check) and
-  // processes it; then produces a due SYNC and checks heartbeats.
-  void step(Clock::time_point deadline);
+  // processes it; then produces a due SYNC and checks heartbeats. An interruptible step throws
+  // Interrupted once interrupt() was called.
+  void step(Clock::time_point deadline, bool interruptible = true);
   void dispatch(const can::Frame& frame);
   void check_heartbeats(Clock::time_point now);
   bool known(int node) const;
+  // Sends a frame, unless interrupted (then Interrupted).
+  void send(const can::Frame& frame);
+  // Sends every requests[i] before awaiting any answer, then waits until each has its answer in
+  // waits[i].reply or the SDO timeout passes; a request left unanswered is aborted on the line, as
+  // CiA 301 asks of a client that gives up. An interruptible exchange ends with Interrupted once
+  // interrupt() was called; the other goes on regardless.
+  void exchange(std::span<SdoWait> waits, std::span<const can::Frame> requests, bool interruptible);
   can::Frame sdo_exchange(int node, std::uint16_t index, std::uint8_t sub, const can::Frame& request, const char* what);
+  std::string no_answer(int node, std::uint16_t index, std::uint8_t sub, const char* what) const;
+  static SdoAbort abort_of(const can::Frame& reply, int node, std::uint16_t index, std::uint8_t sub, const char* what);
   void configure_pdo(int node, int number, const PdoConfig& config, bool transmit);
   static void check_node(int node, bool broadcast_allowed);
   static void check_size(int node, std::uint16_t index, std::uint8_t sub, std::size_t got, std::size_t expected);
@@ -200,10 +243,11 @@ class Master {
   std::vector<Fault> faults_;
   std::vector<Emergency> emergencies_;
   Clock::time_point next_sync_;
-  // The SDO in flight: its server's node id, and the answer once it arrives.
-  int sdo_node_ = 0;
-  std::optional<can::Frame> sdo_reply_;
+  std::vector<SdoWait*> sdo_waits_;  // the SDO requests in flight, oldest first
   std::atomic<bool> interrupted_{false};
+  // Held for one frame, one step of a wait, or one look at the state; recursive, as a wait's
+  // condition reads the state through the public calls.
+  mutable std::recursive_mutex mutex_;
 };
 
 }  // namespace fba::canopen
