@@ -6,6 +6,7 @@
 #include <atomic>
 #include <mutex>
 #include <random>
+#include <stop_token>
 #include <string>
 #include <thread>
 #include <vector>
@@ -241,6 +242,26 @@ TEST(SlcanPty, AnAdapterThatDoesNotAnswerIsAClearErrorNotAHang) {
     FAIL() << "opened a line with no adapter";
   } catch (const BusError& e) {
     EXPECT_NE(std::string(e.what()).find("no answer to 'C'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(pty.slave_path), std::string::npos) << e.what();
+  }
+}
+
+// A task stopping while its adapter is awaited (a driver's constructor opens the line): the wait
+// for the adapter's answers ends at the stop, not at their time-out.
+TEST(SlcanPty, AStopWhileTheAdapterIsAwaitedEndsTheOpeningAtOnce) {
+  auto pty = fba::can::open_pty();  // nobody answers
+  std::stop_source stop;
+  std::jthread stopper([&] {
+    // Once the host has written its first CRs, it waits for the answers.
+    char c = 0;
+    while (::read(pty.master.get(), &c, 1) != 1) std::this_thread::sleep_for(1ms);
+    stop.request_stop();
+  });
+  try {
+    slcan::SlcanBus host(pty.slave_path, {.reply_timeout = 600s, .stop = stop.get_token()});
+    FAIL() << "opened a line with no adapter";
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("opening the adapter stopped"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(pty.slave_path), std::string::npos) << e.what();
   }
 }

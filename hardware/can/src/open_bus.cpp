@@ -7,12 +7,13 @@
 
 namespace fba::can {
 
-std::unique_ptr<CanBus> open_bus(const std::string& spec, int bitrate) {
+std::unique_ptr<CanBus> open_bus(const std::string& spec, int bitrate, std::stop_token stop) {
   if (spec.rfind("slcan:", 0) == 0) {
     const std::string device = spec.substr(6);
     if (device.empty()) throw std::invalid_argument("CAN bus 'slcan:' names no serial device (slcan:/dev/ttyUSB0)");
     slcan::Options options;
     options.bitrate = bitrate;
+    options.stop = std::move(stop);
     return std::make_unique<slcan::SlcanBus>(device, options);
   }
   const std::string interface = spec.rfind("socketcan:", 0) == 0 ? spec.substr(10) : spec;

@@ -188,7 +188,7 @@ std::optional<LineReader::Token> LineReader::next() {
   return t;
 }
 
-SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("slcan:" + device) {
+SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("slcan:" + device), stop_(options.stop) {
   const char code = bitrate_code(options.bitrate);
   const speed_t speed = baud_constant(options.baud, name_);
   fd_.reset(::open(device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC));
@@ -221,7 +221,7 @@ SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("s
   write_all(fd_.get(), "\r\r\r", 3, kWriteTimeout, name_);
   const auto drain_until = Clock::now() + options.reply_timeout;
   for (int answers = 0; answers < 3 && Clock::now() < drain_until;) {
-    read_some(left_until(drain_until));
+    read_while_opening(drain_until);
     while (auto token = reader_.next())
       if (token->kind == LineReader::Token::bell ||
           (token->kind == LineReader::Token::line && !decode(token->text, nullptr)))
@@ -293,8 +293,13 @@ bool SlcanBus::command(const std::string& text, std::chrono::milliseconds timeou
       throw BusError(
           fmt::format("{}: no answer to '{}' within {} ms: is it an SLCAN adapter, and is the baud rate right?", name_,
                       text, timeout.count()));
-    read_some(left_until(deadline));
+    read_while_opening(deadline);
   }
+}
+
+void SlcanBus::read_while_opening(Clock::time_point deadline) {
+  if (stop_.stop_requested()) throw BusError(name_ + ": opening the adapter stopped: the application is stopping");
+  read_some(std::min(left_until(deadline), std::chrono::milliseconds(10)));
 }
 
 void SlcanBus::send(const Frame& frame) {

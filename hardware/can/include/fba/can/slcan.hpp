@@ -14,6 +14,7 @@
 #include <deque>
 #include <optional>
 #include <span>
+#include <stop_token>
 #include <string>
 #include <string_view>
 
@@ -62,6 +63,7 @@ struct Options {
   int bitrate = 500000;                          // the CAN bitrate (S code); 500 kbit/s is CANopen's most common
   int baud = 115200;                             // the serial line's speed; USB CDC adapters ignore it
   std::chrono::milliseconds reply_timeout{500};  // for each command while opening
+  std::stop_token stop;                          // requested while opening: the opening gives up at once
 };
 
 // The host side: opens an adapter on a serial device and speaks CAN through it.
@@ -83,11 +85,14 @@ class SlcanBus final : public CanBus {
  private:
   // Reads what is there (waiting at most `timeout`) into the line reader; throws when the line is gone.
   bool read_some(std::chrono::milliseconds timeout);
+  // While opening: reads until `deadline` at most, in short slices, so that a stop ends the wait.
+  void read_while_opening(std::chrono::steady_clock::time_point deadline);
   // Sends a command and waits for its CR (true) or BEL (false); frames meanwhile are kept.
   bool command(const std::string& text, std::chrono::milliseconds timeout);
   void discard(std::string reason);
 
   std::string name_;
+  std::stop_token stop_;
   Fd fd_;
   LineReader reader_;
   std::deque<Frame> pending_;  // frames that arrived while a command waited for its answer
