@@ -5,14 +5,15 @@
 // profile position moves, and publishes joint states from the drives' PDOs while they move.
 // Any fault (a drive's EMCY or fault state, a silent drive, the line gone, persistent noise)
 // quick-stops every joint and ends process() with an error naming the bus, the joint, its node and
-// the reason, so the task's on_error policy applies.
+// the reason, so the task's on_error policy applies. The safe state (a quick stop of every drive,
+// its own bus messages) runs beside a process() still under way: the master takes one step of
+// either at a time, and once the safe state has begun the master sends nothing else.
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <deque>
 #include <memory>
-#include <mutex>
 #include <optional>
-#include <thread>
 #include <variant>
 
 #include <fmt/format.h>
@@ -87,7 +88,8 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
              kSdoTimeout, kEnableTimeout, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
         .check(kDevice, check_bus)
         .check(kRate, check_rate)
-        .blocking();
+        .blocking()
+        .concurrent_safe_state();
   }
 
   explicit CanopenArmComponent(fba::Context& ctx)
@@ -129,7 +131,7 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
                                          .max_acceleration = ctx(kAcceleration)});
     }
     // A wrong device is a configuration error, reported before the task runs.
-    bus_ = fba::can::open_bus(ctx(kDevice), ctx(kBitrate));
+    bus_ = fba::can::open_bus(ctx(kDevice), ctx(kBitrate), ctx.stop_token());
     master_ = std::make_unique<canopen::Master>(*bus_, canopen::MasterOptions{.sdo_timeout = sdo_timeout_});
     arm_ = std::make_unique<canopen::CanopenArm>(
         *master_, std::move(joints),
@@ -142,7 +144,6 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
   }
 
   void process() override {
-    std::lock_guard lock(mutex_);
     guarded([&] {
       if (auto in = ctx_(kTarget); in.has()) pending_.emplace_back(in.get());
       if (auto in = ctx_(kJointTarget); in.has()) pending_.emplace_back(in.get());
@@ -152,34 +153,26 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
 
   // The targets' producers are done: the motion under way and those pending run to their end.
   void end_of_stream() override {
-    std::lock_guard lock(mutex_);
     guarded([&] {
       const auto period = std::chrono::milliseconds(std::max<std::int64_t>(1, std::llround(1000 / ctx_(kRate))));
       for (step(); moving_ || !pending_.empty(); step()) arm_->wait(period);
     });
   }
 
-  // Quick stop of every joint; bounded: each drive gets one SDO timeout to confirm.
+  // Quick stop of every drive at once, beside a process() that may still be running: from here on
+  // the master sends nothing else, and that call's waits end. One SDO timeout bounds the wait for
+  // all the confirmations; the drives that did not confirm are named.
   void safe_state() override {
-    std::unique_lock lock(mutex_, std::defer_lock);
-    // process() ends within a few milliseconds of interrupt(); a wait this long means it is stuck.
-    // (Not timed_mutex::try_lock_for: ThreadSanitizer does not see its pthread_mutex_clocklock and
-    // then reports the unlock as one of an unlocked mutex.)
-    const auto give_up = Clock::now() + std::chrono::seconds(3);
-    while (!lock.try_lock()) {
-      if (Clock::now() >= give_up)
-        throw std::runtime_error(fmt::format(
-            "{}: the driver's thread did not let go of the bus within 3 s; no quick stop was sent", bus_->name()));
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    }
+    interrupted_ = true;
+    master_->interrupt();
     if (!started_) return;  // the drives were never enabled by this run
-    master_->resume();
-    moving_ = false;
-    pending_.clear();
     const auto failures = arm_->quick_stop_all();
-    if (!failures.empty())
-      throw std::runtime_error(fmt::format("{}: quick stop failed on {} of {} joints: {}", bus_->name(),
-                                           failures.size(), model_.size(), fmt::join(failures, "; ")));
+    if (!failures.empty()) {
+      const std::size_t confirmed = model_.size() - failures.size();
+      throw std::runtime_error(fmt::format("{}: quick stop failed on {} of {} joints: {}{}", bus_->name(),
+                                           failures.size(), model_.size(), fmt::join(failures, "; "),
+                                           confirmed ? fmt::format("; the other {} confirmed it", confirmed) : ""));
+    }
     ctx_.log().info("safe state: every joint quick-stopped");
   }
 
@@ -260,13 +253,13 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
   // producing more than noise_limit bad frames a second is not.
   void check_noise() {
     const auto now = Clock::now();
-    const std::uint64_t total = bus_->discarded();
+    const std::uint64_t total = master_->discarded();
     noise_.push_back({now, total});
     while (noise_.size() > 1 && noise_[1].first <= now - std::chrono::seconds(1)) noise_.pop_front();
     const std::uint64_t recent = total - noise_.front().second;
     if (total > noise_reported_) {
       ctx_.log().warn("{}: {} bad frames skipped so far (the last: {})", bus_->name(), total,
-                      bus_->last_discard_reason());
+                      master_->last_discard_reason());
       noise_reported_ = total;
     }
     if (recent <= noise_limit_) return;
@@ -276,7 +269,7 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
                     "second; the last: "
                     "{}); {}",
                     recent, std::chrono::duration<double>(now - noise_.front().first).count(), noise_limit_,
-                    bus_->last_discard_reason(),
+                    master_->last_discard_reason(),
                     failures.empty() ? "every joint was sent quick stop" : "quick stop failed: " + failures.front()));
   }
 
@@ -285,10 +278,9 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
   std::unique_ptr<fba::can::CanBus> bus_;
   std::unique_ptr<canopen::Master> master_;
   std::unique_ptr<canopen::CanopenArm> arm_;
-  // process(), end_of_stream() and safe_state() take turns on the bus (the master is single-threaded).
-  std::mutex mutex_;
+  // Set by interrupt() and safe_state(), from other threads than process()'s.
   std::atomic<bool> interrupted_{false};
-  bool started_ = false;
+  std::atomic<bool> started_{false};
   Eigen::VectorXd joints_;  // where the drives last said they are
   bool moving_ = false;
   double planned_s_ = 0;

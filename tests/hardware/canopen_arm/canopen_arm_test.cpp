@@ -5,6 +5,7 @@
 // the ticks that only catches a hang, never a slow machine).
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -25,6 +26,7 @@
 #include "arm_model.hpp"
 #include "support/wrist_camera_arm.hpp"
 #include "support/built_plugins.hpp"
+#include "support/canopen_frames.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 #include "support/contains.hpp"
@@ -67,6 +69,7 @@ class Emulator {
   }
   std::string device() const { return "slcan:" + pty_.slave_path; }
   fba::emulators::CanopenArmEmulator* operator->() { return emulator_.get(); }
+  fba::emulators::CanopenArmEmulator& operator*() { return *emulator_; }
   bool quick_stopped(int node) { return (emulator_->statusword(node) & 0x6F) == 0x07; }
   bool enabled(int node) { return (emulator_->statusword(node) & 0x6F) == 0x27; }
 
@@ -352,6 +355,63 @@ TEST_F(CanopenArmComponent, SafeStateQuickStopsEveryJointMidMotion) {
   EXPECT_TRUE(h().failure().empty()) << h().failure();
   h().safe_state();
   for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+// hw.canopen_arm declares concurrent_safe_state(): the runtime calls safe_state() beside a call
+// still running. The quick stop goes out while end_of_stream() is still following a long move (no
+// interrupt() first), the drives stop short of their targets, and that call then ends.
+TEST_F(CanopenArmComponent, SafeStateQuickStopsEveryJointWhileAnotherCallIsStillFollowingAMove) {
+  make({{"speed_scale", 0.01}});  // a move of about 30 s
+  tick();
+  h().push("joint_target", fba::JointState{{}, {1, -1, 1, -1, 1, -1}, {}, 0});
+  tick();
+  h().close("joint_target");
+  h().close("target");
+  const auto syncs = emulator_->syncs_seen();
+  std::atomic<bool> returned{false};
+  std::jthread follow([&] {
+    h().run();  // end_of_stream(): follows the move to its end
+    returned = true;
+  });
+  // It samples the drives on every tick of the move: the call is under way.
+  while (emulator_->syncs_seen() < syncs + 2 && !returned) std::this_thread::sleep_for(1ms);
+  ASSERT_FALSE(returned) << h().failure();
+  EXPECT_NO_THROW(h().safe_state());
+  for (int node = 1; node <= 6; ++node) {
+    EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+    EXPECT_LT(std::abs(emulator_->position(node)), kCounts) << "node " << node << " finished its move first";
+  }
+  follow.join();  // the safe state ended the call too
+  EXPECT_TRUE(named(h().events(), "arrived").empty());
+}
+
+// One drive gone quiet: every other drive is sent its quick stop before any answer is awaited, and
+// the safe state fails after one SDO timeout, naming the drive that did not confirm.
+TEST_F(CanopenArmComponent, ASilentDriveFailsTheSafeStateNamingItAfterEveryOtherDriveWasQuickStopped) {
+  make({{"speed_scale", 0.2}});
+  tick();
+  start_long_move();
+  emulator_->silence(2);
+  while (!emulator_->silent(2)) std::this_thread::sleep_for(1ms);
+  std::string why;
+  try {
+    h().safe_state();
+  } catch (const std::exception& e) {
+    why = e.what();
+  }
+  EXPECT_TRUE(contains(why, emulator_.device())) << why;
+  EXPECT_TRUE(contains(why, "quick stop failed on 1 of 6 joints")) << why;
+  EXPECT_TRUE(contains(why, "joint 'shoulder_lift_joint' (node 2): node 2: no answer")) << why;
+  EXPECT_TRUE(contains(why, "the other 5 confirmed")) << why;
+  for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+  long given_up = -1;
+  const auto heard = fba::test::heard_until_given_up(*emulator_, 2, given_up);
+  ASSERT_GE(given_up, 0) << "the driver did not tell node 2 it gave up its quick stop";
+  for (int node = 1; node <= 6; ++node) {
+    const long sent = fba::test::last_quick_stop(heard, node);
+    EXPECT_GE(sent, 0) << "node " << node;
+    EXPECT_LT(sent, given_up) << "node " << node << "'s quick stop waited for node 2's time-out";
+  }
 }
 
 TEST_F(CanopenArmComponent, AConfigurationThatDoesNotFitTheArmIsRefusedNamingTheParameter) {
