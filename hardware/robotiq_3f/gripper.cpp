@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
 #include <thread>
 
@@ -57,7 +58,14 @@ void Gripper::fail(const std::string& doing, const std::string& reason) const {
   throw DeviceError(name_ + ": " + doing + ": " + reason);
 }
 
-void Gripper::transact(const std::string& what, const std::string& doing, const std::function<int()>& request) {
+std::string Gripper::refused() const {
+  if (taken_) return "not sent: the safe state has the line";
+  if (options_.stop.stop_requested()) return "interrupted (the task is stopping)";
+  return {};
+}
+
+void Gripper::transact(const std::string& what, const std::string& doing, const std::function<int()>& request,
+                       bool task) {
   std::string reason;
   for (int attempt = 0; attempt <= options_.retries; ++attempt) {
     if (request() != -1) return;
@@ -75,52 +83,72 @@ void Gripper::transact(const std::string& what, const std::string& doing, const 
     // What is left of a garbled answer would spoil the next one: let it arrive, then drop it.
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     modbus_flush(ctx_);
+    if (const std::string why = task ? refused() : ""; !why.empty())
+      fail(doing, what + ": " + reason + "; not retried: " + why);
   }
   fail(doing, what + ": " + reason + ", " + std::to_string(options_.retries + 1) + " tries");
 }
 
-void Gripper::write(const Command& c, const std::string& doing) {
+void Gripper::send_command(const Command& c, const std::string& doing, bool task) {
   Registers r;
   try {
     r = encode(c);
   } catch (const std::out_of_range& e) {
     fail(doing, std::string("command refused before sending: ") + e.what());
   }
+  std::lock_guard lock(line_);
+  if (const std::string why = task ? refused() : ""; !why.empty()) fail(doing, why);
   transact("writing the command registers", doing,
-           [&] { return modbus_write_registers(ctx_, kCommandAddress, kRegisterCount, r.data()); });
+           [&] { return modbus_write_registers(ctx_, kCommandAddress, kRegisterCount, r.data()); }, task);
   last_ = c;
 }
 
-Status Gripper::read(const std::string& doing) {
+Status Gripper::read_status(const std::string& doing, bool task) {
   Registers r{};
+  std::lock_guard lock(line_);
+  if (const std::string why = task ? refused() : ""; !why.empty()) fail(doing, why);
   transact("reading the status registers", doing,
-           [&] { return modbus_read_input_registers(ctx_, kStatusAddress, kRegisterCount, r.data()); });
+           [&] { return modbus_read_input_registers(ctx_, kStatusAddress, kRegisterCount, r.data()); }, task);
   return decode(r);
 }
 
-Status Gripper::wait_until(const std::function<bool(const Status&)>& done, double timeout_s, double poll_s,
-                           const std::string& doing, const std::atomic<bool>* interrupted) {
+Command Gripper::last_command() const {
+  std::lock_guard lock(line_);
+  return last_;
+}
+
+void Gripper::pause(double seconds) const {
+  std::mutex m;
+  std::condition_variable_any cv;
+  std::unique_lock lock(m);
+  cv.wait_for(lock, options_.stop, std::chrono::duration<double>(seconds), [] { return false; });
+}
+
+Status Gripper::poll_until(const std::function<bool(const Status&)>& done, double timeout_s, double poll_s,
+                           const std::string& doing, bool task) {
   const auto deadline =
       Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
   for (;;) {
-    const Status s = read(doing);
+    const Status s = read_status(doing, task);
     if (s.fault != 0 && !fault_is_transient(s.fault)) fail(doing, "the gripper reports fault " + fault_text(s.fault));
     if (done(s)) return s;
-    if (interrupted && interrupted->load()) fail(doing, "interrupted (the task is stopping)");
     if (Clock::now() >= deadline)
       fail(doing, "not done within " + seconds_text(timeout_s) + "; last status: " + describe(s) +
                       (s.fault ? " (" + fault_text(s.fault) + ")" : ""));
-    std::this_thread::sleep_for(std::chrono::duration<double>(poll_s));
+    if (task)
+      pause(poll_s);  // a stop ends it; the next read says so
+    else
+      std::this_thread::sleep_for(std::chrono::duration<double>(poll_s));
   }
 }
 
-void Gripper::activate(Mode mode, double timeout_s, double poll_s, const std::atomic<bool>* interrupted) {
+void Gripper::activate(Mode mode, double timeout_s, double poll_s) {
   Command c;
   write(c, "activation (reset)");
   c.activate = true;
   c.mode = mode;
   write(c, "activation");
-  wait_until([](const Status& s) { return s.activated && s.imc == 3; }, timeout_s, poll_s, "activation", interrupted);
+  wait_until([](const Status& s) { return s.activated && s.imc == 3; }, timeout_s, poll_s, "activation");
 }
 
 std::string describe(const Status& s) {

@@ -4,17 +4,18 @@
 // control; the grasp is held when every finger used reports an object contact (gDTx) and keeps
 // reporting it for hold_time. A device fault, a silent or garbled line, a line that disappears, or a
 // grasp the hand cannot make ends process() with an exception naming the device and the reason; the
-// runtime then calls safe_state(): stop, then open.
-#include <atomic>
+// runtime then calls safe_state(): stop, then open. The safe state runs beside a process() still
+// under way: the line carries one request at a time, so it takes the line between two of process()'s
+// requests (a few milliseconds), and process() sends nothing after it.
 #include <chrono>
 #include <cmath>
 #include <fba/component.hpp>
+#include <functional>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <stop_token>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "gripper.hpp"
@@ -112,18 +113,21 @@ class Robotiq3f final : public fba::Component {
                "(the twin of sim.hand).")
         .add(kGrasp, kResult, kHeld, kDropped, kDevice, kBaud, kSlave, kResponseTimeout, kRetries, kPollPeriod, kSpeed,
              kForce, kMode, kMaxAperture, kMaxSpread, kHoldTime, kActivationTimeout, kMotionTimeout, kSafeTimeout)
-        .blocking();
+        .blocking()
+        .concurrent_safe_state();
   }
 
-  explicit Robotiq3f(fba::Context& ctx) : ctx_(ctx), mode_(mode_named(ctx(kMode))) {
-    gripper_ = std::make_unique<Gripper>(
-        rq::LineOptions{ctx(kDevice), ctx(kBaud), ctx(kSlave), ctx(kResponseTimeout), ctx(kRetries)});
-    gripper_->activate(mode_.value_or(Mode::basic), ctx(kActivationTimeout), ctx(kPollPeriod), &interrupted_);
+  // Activation waits for the hand (seconds); a stop of the task ends it at once.
+  explicit Robotiq3f(fba::Context& ctx)
+      : ctx_(ctx), mode_(mode_named(ctx(kMode))), on_stop_(ctx.stop_token(), [this] { stop_.request_stop(); }) {
+    gripper_ = std::make_unique<Gripper>(rq::LineOptions{ctx(kDevice), ctx(kBaud), ctx(kSlave), ctx(kResponseTimeout),
+                                                         ctx(kRetries), stop_.get_token()});
+    ctx.log().info("{}: activating ({} mode, within {} s)", gripper_->name(), ctx(kMode), ctx(kActivationTimeout));
+    gripper_->activate(mode_.value_or(Mode::basic), ctx(kActivationTimeout), ctx(kPollPeriod));
     ctx.log().info("{}: activated in {} mode", gripper_->name(), ctx(kMode));
   }
 
   void process() override {
-    std::lock_guard lock(mutex_);
     const fba::Grasp& grasp = ctx_(kGrasp).get();
     const Plan plan = plan_for(grasp);
     const double poll = ctx_(kPollPeriod);
@@ -136,7 +140,7 @@ class Robotiq3f final : public fba::Component {
       gripper_->write(c, "changing to " + std::string(rq::to_string(plan.mode)) + " mode");
       gripper_->wait_until([&](const Status& st) { return st.imc == 3 && st.mode == plan.mode; },
                            ctx_(kActivationTimeout), poll,
-                           "changing to " + std::string(rq::to_string(plan.mode)) + " mode", &interrupted_);
+                           "changing to " + std::string(rq::to_string(plan.mode)) + " mode");
     }
     move(plan, plan.open_position, "pregrasp");
     s = move(plan, 255, "closing");
@@ -172,26 +176,17 @@ class Robotiq3f final : public fba::Component {
     ctx_(kResult).emit(std::move(result));
   }
 
-  void interrupt() override { interrupted_ = true; }
+  void interrupt() override { stop_.request_stop(); }
 
-  // Stop (rGTO = 0), then open; a hand with a fault that needs a reset stays stopped.
+  // Stop (rGTO = 0), then open; a hand with a fault that needs a reset stays stopped. Beside a
+  // process() still running: its request on the line finishes first (without retries), then it
+  // sends nothing more.
   void safe_state() override {
-    // A process() that is still running returns within one request's retries once interrupted.
-    const double request_s = ctx_(kResponseTimeout) * (ctx_(kRetries) + 1) + ctx_(kPollPeriod);
-    // (Not timed_mutex::try_lock_for: ThreadSanitizer does not see its pthread_mutex_clocklock and
-    // then reports the unlock as one of an unlocked mutex.)
-    std::unique_lock lock(mutex_, std::defer_lock);
-    const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(request_s + 1.0);
-    while (!lock.try_lock()) {
-      if (std::chrono::steady_clock::now() >= give_up)
-        throw DeviceError(gripper_->name() +
-                          ": safe state: the gripper's line is still busy with a request that does not return");
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    }
-    Command c = gripper_->last_command();
+    Gripper::SafeState line(*gripper_);
+    Command c = line.last_command();
     c.go = false;
-    gripper_->write(c, "safe state (stop)");
-    const Status s = gripper_->read("safe state");
+    line.write(c, "safe state (stop)");
+    const Status s = line.read("safe state");
     if (!s.activated || (s.fault != 0 && !rq::fault_is_transient(s.fault))) {
       ctx_.log().warn("{}: safe state: stopped, not opened ({})", gripper_->name(),
                       s.activated ? "fault " + rq::fault_text(s.fault) : "the gripper is not activated");
@@ -200,9 +195,9 @@ class Robotiq3f final : public fba::Component {
     c.go = true;
     c.individual_fingers = c.mode != Mode::scissor;  // in scissor mode A's request opens the scissor
     for (int axis : {rq::kA, rq::kB, rq::kC}) c.axes[axis] = AxisRequest{0, ctx_(kSpeed), ctx_(kForce)};
-    gripper_->write(c, "safe state (open)");
-    gripper_->wait_until([&](const Status& st) { return echoed(st, c) && st.motion != 0; }, ctx_(kSafeTimeout),
-                         ctx_(kPollPeriod), "safe state (open)");
+    line.write(c, "safe state (open)");
+    line.wait_until([&](const Status& st) { return echoed(st, c) && st.motion != 0; }, ctx_(kSafeTimeout),
+                    ctx_(kPollPeriod), "safe state (open)");
     ctx_.log().info("{}: safe state: stopped and opened", gripper_->name());
   }
 
@@ -263,7 +258,7 @@ class Robotiq3f final : public fba::Component {
     c.axes[rq::kScissor] = AxisRequest{plan.scissor_position, ctx_(kSpeed), ctx_(kForce)};
     gripper_->write(c, doing);
     return gripper_->wait_until([&](const Status& s) { return echoed(s, c) && s.motion != 0; }, ctx_(kMotionTimeout),
-                                ctx_(kPollPeriod), doing, &interrupted_);
+                                ctx_(kPollPeriod), doing);
   }
 
   // Every finger must keep its contact for hold_time.
@@ -272,8 +267,8 @@ class Robotiq3f final : public fba::Component {
     const auto start = Clock::now();
     const auto held_for = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
     while (held_for() < ctx_(kHoldTime)) {
-      std::this_thread::sleep_for(std::chrono::duration<double>(ctx_(kPollPeriod)));
-      s = gripper_->read("holding");
+      gripper_->pause(ctx_(kPollPeriod));
+      s = gripper_->read("holding");  // after a stop: "interrupted"
       if (s.fault != 0 && !rq::fault_is_transient(s.fault))
         throw DeviceError(gripper_->name() + ": holding: the gripper reports fault " + rq::fault_text(s.fault));
       for (int axis : plan.axes)
@@ -285,7 +280,6 @@ class Robotiq3f final : public fba::Component {
           result.hold_s = held_for();
           return;
         }
-      if (interrupted_) throw DeviceError(gripper_->name() + ": holding: interrupted (the task is stopping)");
     }
     result.hold_s = held_for();
   }
@@ -317,9 +311,9 @@ class Robotiq3f final : public fba::Component {
 
   fba::Context& ctx_;
   const std::optional<Mode> mode_;  // empty: auto
+  std::stop_source stop_;           // the task's stop, or interrupt(): the gripper's waits end
+  std::stop_callback<std::function<void()>> on_stop_;
   std::unique_ptr<Gripper> gripper_;
-  std::mutex mutex_;  // one conversation on the line at a time: process() or safe_state()
-  std::atomic<bool> interrupted_{false};
 };
 
 }  // namespace

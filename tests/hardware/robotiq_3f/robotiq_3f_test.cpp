@@ -225,6 +225,49 @@ TEST(Robotiq3f, SafeStateStopsThenOpens) {
   }
 }
 
+// hw.robotiq_3f declares concurrent_safe_state(): the runtime calls safe_state() beside a process()
+// still running. The line carries one request at a time: the safe state takes it between two of
+// process()'s requests, so the stop and the open reach the hand while the fingers are still closing
+// (no interrupt() first), and process() ends there.
+TEST(Robotiq3f, SafeStateStopsAndOpensTheHandWhileAGraspIsStillClosing) {
+  auto options = EmulatedHand::quick();
+  options.speed_scale = 0.01;  // a close of most of a minute
+  EmulatedHand hand(options);
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f",
+                     params(hand.device(), {{"motion_timeout", 120.0}, {"safe_state_timeout", 60.0}}));
+  h.push("grasp", grasp(0.155));  // fully open already: the pregrasp does not move the fingers
+  std::atomic<bool> returned{false};
+  std::jthread grasping([&] {
+    h.run();
+    returned = true;
+  });
+  while (!closing(hand.emulator().state()) && !returned) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_FALSE(returned) << h.failure();
+  EXPECT_NO_THROW(h.safe_state());
+  grasping.join();
+  EXPECT_NE(h.failure().find("closing"), std::string::npos) << h.failure();
+  EXPECT_NE(h.failure().find("the safe state has the line"), std::string::npos) << h.failure();
+  EXPECT_TRUE(named(h.events(), "held").empty());
+  EXPECT_TRUE(named(h.events(), "dropped").empty());
+  // The order the hand heard the commands in: the close, then the stop and the open, with the
+  // fingers still closing when the stop came.
+  const auto commands = hand.emulator().commands();
+  std::size_t close = 0;
+  while (close < commands.size() && !(commands[close].go() && commands[close].request_a() == 255)) ++close;
+  ASSERT_LT(close, commands.size()) << "no close command";
+  std::size_t stop = close + 1;
+  while (stop < commands.size() && commands[stop].go()) ++stop;
+  ASSERT_LT(stop, commands.size()) << "no stop after the close";
+  const auto& then = commands[stop].before;
+  EXPECT_TRUE(then.go);
+  EXPECT_EQ(then.axes[0].contact, 0) << "finger A had stopped";
+  EXPECT_LT(then.axes[0].position, 255);
+  ASSERT_LT(stop + 1, commands.size()) << "no open after the stop";
+  EXPECT_TRUE(commands[stop + 1].go());
+  EXPECT_EQ(commands[stop + 1].request_a(), 0);
+  EXPECT_EQ(stop + 2, commands.size()) << "a command after the safe state's";
+}
+
 // --- Faults: each ends in a report naming the device and the reason, and safe_state() returns.
 
 TEST(Robotiq3fFaults, GripperThatStopsAnsweringIsATimeoutNamingTheDevice) {

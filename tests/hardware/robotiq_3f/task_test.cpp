@@ -11,6 +11,8 @@
 #include <fba/task.hpp>
 #include <fba/task_config.hpp>
 #include <fba/types/grasp.hpp>
+#include <memory>
+#include <stop_token>
 #include <thread>
 
 #include "emulated_hand.hpp"
@@ -127,4 +129,38 @@ TEST(Robotiq3fTask, LineDisappearingMidCloseStopsTheTaskNamingTheDeviceAndTheSaf
   ASSERT_TRUE(safe);
   EXPECT_EQ(safe->status, "failed");
   EXPECT_NE(safe->message.find("the serial line is gone"), std::string::npos) << safe->message;
+}
+
+// A stop (a signal, for fba-run) while the hand activates in its constructor: the activation gives
+// up at once (Context::stop_token()) instead of polling until activation_timeout; the task ends
+// interrupted, the hand not constructed.
+TEST(Robotiq3fTask, AStopWhileTheHandActivatesEndsTheActivationAtOnce) {
+  fba::test::TempDir dir;
+  auto options = EmulatedHand::quick();
+  options.activates = false;
+  EmulatedHand hand(options);
+  const auto config = fba::load_task_text(task_yaml(hand.device(), 0.1), "grasp.yaml", dir.path(), registry());
+  std::stop_source stop;
+  fba::RunOptions run;
+  run.stop = stop.get_token();
+  std::unique_ptr<fba::Task> task;
+  std::atomic<bool> constructed{false};
+  std::jthread construct([&] {
+    task = std::make_unique<fba::Task>(config, run);
+    constructed = true;
+  });
+  while (hand.emulator().state().imc != 1 && !constructed) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_FALSE(constructed) << "constructed without activating";
+  stop.request_stop();
+  const auto requests = hand.emulator().state().requests;
+  construct.join();
+  // The request on the line when the stop came may finish; no poll follows it.
+  EXPECT_LE(hand.emulator().state().requests, requests + 1);
+  ASSERT_TRUE(task);
+  const auto result = task->run();
+  EXPECT_EQ(result.outcome, fba::Outcome::Interrupted) << result.reason;
+  EXPECT_NE(result.reason.find("'hand'"), std::string::npos) << result.reason;
+  const auto* safe = safe_state_of(result, "hand");
+  ASSERT_TRUE(safe);
+  EXPECT_EQ(safe->status, "not constructed");
 }
