@@ -110,8 +110,8 @@ resamples, --seed): a gap whose interval holds 0 is one the runs' spread explain
 --dry-run prints each run's fba-run command line (random poses drawn) and runs nothing.
 
 SIGTERM, SIGINT or SIGHUP to the batch stops it: the running runs get the same signal (and SIGKILL
-20 s later), the runs not started are rows "not run", and the table and runs.json are written for
-the runs that finished.
+20 s later), the runs not started are rows "not run", and the table and runs.json are written, their
+figures over the runs that finished.
 
 Exit status: 0 when the batch was run and evaluated (whatever the runs' outcomes), 2 for a bad
 list or command line, 128 + the signal when it was stopped by one.
@@ -411,7 +411,7 @@ struct Job {
   pid_t pid = -1;
   Clock::time_point started;
   bool term_sent = false, kill_sent = false;
-  int stopped_by = 0;  // the signal that stopped the batch, passed on to this run while it ran
+  int stopped_by = 0;  // the signal that stopped the batch before this run ended (passed on to it if it ran)
   int status = 0;
   double elapsed_s = 0, cpu_s = 0;
 };
@@ -559,8 +559,10 @@ void run_all(std::vector<Job>& jobs, int parallel, double timeout_s) {
   }
   while (running > 0)
     if (!reap(0) && errno == ECHILD) break;
-  for (std::size_t i = next; i < jobs.size(); ++i)
+  for (std::size_t i = next; i < jobs.size(); ++i) {
+    jobs[i].stopped_by = sig;
     jobs[i].setup_error = "the batch was stopped by " + name + " before this run started";
+  }
 }
 
 // What one run gave.
@@ -568,6 +570,7 @@ struct Row {
   std::string variant, object, mesh, pose, dir;
   std::string outcome;  // the summary's outcome, or how the child ended without one
   std::string reason;
+  bool unfinished = false;  // the batch was stopped before the run ended: left out of the figures
   bool selected = false;
   std::optional<bool> force_closure;
   double epsilon = 0, score = 0;
@@ -608,6 +611,7 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
   row.mesh = j.run->mesh;
   row.pose = shortest(j.run->x) + " " + shortest(j.run->y) + " " + shortest(j.run->yaw);
   row.dir = j.dir.string();
+  row.unfinished = j.stopped_by != 0;
   if (!j.setup_error.empty()) {
     row.outcome = "not run";  // could not start, or the batch was stopped first
     row.reason = j.setup_error;
@@ -793,6 +797,7 @@ std::string paired_block(const BatchList& l, const std::vector<Row>& rows, std::
     for (std::size_t i = 0; i < n; ++i) {
       const Row& a = rows[i];
       const Row& b = rows[v * n + i];
+      if (a.unfinished || b.unfinished) continue;
       if (a.selected && b.selected) ++both;
       else if (a.selected) ++only_ref;
       else if (b.selected) ++only_var;
@@ -856,7 +861,7 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
   auto group = [&](const std::string& variant, const std::string& mesh) {
     std::vector<const Row*> mine;
     for (const auto& r : rows)
-      if (r.variant == variant && (mesh.empty() || r.mesh == mesh)) mine.push_back(&r);
+      if (r.variant == variant && (mesh.empty() || r.mesh == mesh) && !r.unfinished) mine.push_back(&r);
     return stats_of(mine, baselines);
   };
   for (const auto& v : l.variants) {
@@ -913,7 +918,7 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
     std::vector<double> errors;
     std::size_t off = 0;
     for (const auto& r : rows)
-      if (r.variant == v.name)
+      if (r.variant == v.name && !r.unfinished)
         for (const auto& c : r.contacts) {
           if (c.displacement >= kOnObject) ++off;
           else if (c.normal_error_deg) errors.push_back(*c.normal_error_deg);
@@ -1086,8 +1091,10 @@ int run_grasp_batch(const std::vector<std::string>& args) {
   if (const int sig = stop_signal) {
     const auto finished = std::count_if(all.begin(), all.end(), [](const Job& j) { return j.pid > 0 && !j.stopped_by; });
     stopped = "stopped by " + signal_name(sig) + ": " + std::to_string(finished) + " of " + std::to_string(all.size()) +
-              " runs finished; the others are rows 'interrupted' (stopped while running) or 'not run'" +
-              (baselines.size() < checked.size() && random_sets > 0 ? "; random baselines not all computed" : "");
+              " runs finished, over which the figures are; the others are rows 'interrupted' (stopped while running) or 'not run'" +
+              (random_sets == 0 || baselines.size() == checked.size() ? ""
+               : baselines.empty()                                    ? "; no random baseline computed"
+                                                                      : "; random baselines not all computed");
   }
   const std::string table = make_table(list, rows, baselines, random_sets, seed, stopped);
   std::cout << table << std::flush;

@@ -432,6 +432,8 @@ exec sleep 600)");
     EXPECT_EQ(runs[3]["outcome"], "not run");
     EXPECT_NE(runs[3]["reason"].get<std::string>().find("the batch was stopped by"), std::string::npos) << runs[3];
     EXPECT_TRUE(fs::exists(out / "table.txt"));
+    // The figures are the finished run's: one run, which selected no grasp.
+    EXPECT_NE(line_starting(output, "task     YcbMustardBottle      1 "), "") << output;
   }
 }
 
