@@ -4,14 +4,18 @@
 // drives report. The same task, with --profile real, drives the devices themselves.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+
 #include <fba/registry.hpp>
 #include <fba/task.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "support/built_plugins.hpp"
 #include "support/child_process.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
+#include "tasks/fba_run_process.hpp"
 
 namespace {
 
@@ -53,6 +57,35 @@ TEST(GraspEmulated, TheRealDriversRunTheLoopAgainstTheEmulatorsToAHeldObject) {
     for (const auto& s : r.safe_states) safe = safe || (s.component == device && s.status == "reached");
     EXPECT_TRUE(safe) << device;
   }
+}
+
+// Ctrl-C while the hand activates (its emulator never finishes activating): the activation gives
+// up at once rather than at activation_timeout, the arm constructed before it goes to its safe
+// state, and fba-run exits 130 with the summary saying where the run stopped.
+TEST(GraspEmulated, CtrlCWhileTheHandActivatesStopsAtOnceWithTheSafeStatesInTheSummary) {
+  const fba::test::TempDir temp;
+  const std::string arm_link = (temp.path() / "arm").string(), hand_link = (temp.path() / "hand").string();
+  Child arm({fba::test::program("fba-canopen-arm-emulator"), "--link", arm_link});
+  ASSERT_NE(arm.read_until("(link " + arm_link + ")").find("SLCAN adapter on"), std::string::npos) << arm.read_until("");
+  Child hand({fba::test::program("fba-robotiq-3f-emulator"), "--link", hand_link, "--never-activate"});
+  ASSERT_NE(hand.read_until("(link " + hand_link + ")").find("Modbus RTU slave 9"), std::string::npos);
+
+  const auto out = temp.path() / "out";
+  fba::test::Process run({fba::test::tasks_dir() + "/grasp.yaml", "--profile", "emulated", "--set",
+                          "arm_bus=slcan:" + arm_link, "--set", "hand_device=" + hand_link, "--output-dir",
+                          out.string()});
+  ASSERT_TRUE(run.wait_for_output(": activating (")) << run.output();
+  run.signal(SIGINT);
+  const auto r = run.wait();
+  EXPECT_EQ(r.status, 130) << r.output;
+  EXPECT_NE(r.output.find("activation: interrupted (the task is stopping)"), std::string::npos) << r.output;
+  const auto summary = nlohmann::json::parse(fba::test::read_file(out / "summary.json"), nullptr, false);
+  ASSERT_TRUE(summary.is_object()) << r.output;
+  EXPECT_EQ(summary.value("phase", ""), "constructing") << summary.dump(2);
+  EXPECT_GT(summary.value("wall_time_s", 0.0), 0) << summary.dump(2);
+  const auto& safe = summary["safe_states"];
+  EXPECT_EQ(safe["hand"]["status"], "not constructed") << summary.dump(2);
+  EXPECT_EQ(safe["arm"]["status"], "reached") << summary.dump(2);  // constructed before the hand
 }
 
 }  // namespace
