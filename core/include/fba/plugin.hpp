@@ -11,7 +11,7 @@
 namespace fba {
 
 // Bumped whenever a header a plugin compiles against changes layout or meaning.
-inline constexpr std::uint32_t kAbiVersion = 2;  // 2: typed handles, ComponentEntry::implements_interrupt
+inline constexpr std::uint32_t kAbiVersion = 3;  // 3: Spec::concurrent_safe_state (Spec's layout)
 inline constexpr std::uint32_t kPluginMagic = 0x46424131;  // "FBA1"
 
 // The C++ library ABI the plugin was built against: a plugin built with another standard
