@@ -84,7 +84,64 @@ struct ArmModel::Impl {
   std::vector<std::string> names;
   std::vector<JointLimits> limits;
   std::vector<bool> revolute;  // a revolute or continuous joint: positions equal modulo 2 pi
+  std::vector<std::string> links;  // each segment's child link
+  std::vector<CollisionShape> shapes;
 };
+
+namespace {
+
+Eigen::Isometry3d to_eigen(const urdf::Pose& p) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).normalized().toRotationMatrix();
+  t.translation() << p.position.x, p.position.y, p.position.z;
+  return t;
+}
+
+// The <collision> shapes of `link` and of the links fixed to it off the chain, placed in the frame
+// of the chain link they move with.
+void add_shapes(const urdf::Link& link, const Eigen::Isometry3d& frame_from_link, std::size_t frame, std::size_t joints_before,
+                const std::vector<std::string>& chain_links, std::vector<CollisionShape>& out) {
+  for (const auto& c : link.collision_array) {
+    if (!c || !c->geometry) continue;
+    CollisionShape s;
+    s.link = link.name;
+    s.frame = frame;
+    s.joints_before = joints_before;
+    s.frame_from_shape = frame_from_link * to_eigen(c->origin);
+    switch (c->geometry->type) {
+      case urdf::Geometry::BOX: {
+        const auto& d = static_cast<const urdf::Box&>(*c->geometry).dim;
+        s.kind = CollisionShape::Kind::Box;
+        s.size << d.x, d.y, d.z;
+        break;
+      }
+      case urdf::Geometry::CYLINDER: {
+        const auto& g = static_cast<const urdf::Cylinder&>(*c->geometry);
+        s.kind = CollisionShape::Kind::Cylinder;
+        s.size << g.radius, g.length, 0;
+        break;
+      }
+      case urdf::Geometry::SPHERE:
+        s.kind = CollisionShape::Kind::Sphere;
+        s.size << static_cast<const urdf::Sphere&>(*c->geometry).radius, 0, 0;
+        break;
+      case urdf::Geometry::MESH:
+        s.kind = CollisionShape::Kind::Mesh;
+        s.mesh = static_cast<const urdf::Mesh&>(*c->geometry).filename;
+        break;
+    }
+    out.push_back(std::move(s));
+  }
+  for (const auto& j : link.child_joints) {
+    if (!j || j->type != urdf::Joint::FIXED) continue;
+    if (std::find(chain_links.begin(), chain_links.end(), j->child_link_name) != chain_links.end()) continue;
+    for (const auto& child : link.child_links)
+      if (child && child->name == j->child_link_name)
+        add_shapes(*child, frame_from_link * to_eigen(j->parent_to_joint_origin_transform), frame, joints_before, chain_links, out);
+  }
+}
+
+}  // namespace
 
 ArmModel::ArmModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ArmModel::ArmModel(ArmModel&&) noexcept = default;
@@ -150,13 +207,37 @@ ArmModel ArmModel::from_string(const std::string& xml, const std::string& origin
   }
   if (impl->names.empty())
     throw ArmModelError("no movable joint between '" + base_link + "' and '" + tip_link + "' in " + origin);
+  // The collision shapes of the chain's links, each in the frame of the link it moves with.
+  for (unsigned i = 0; i < impl->chain.getNrOfSegments(); ++i) impl->links.push_back(impl->chain.getSegment(i).getName());
+  std::size_t joints = 0;
+  for (unsigned i = 0; i < impl->chain.getNrOfSegments(); ++i) {
+    if (impl->chain.getSegment(i).getJoint().getType() != KDL::Joint::Fixed) ++joints;
+    if (const auto link = model->getLink(impl->links[i]))
+      add_shapes(*link, Eigen::Isometry3d::Identity(), i, joints, impl->links, impl->shapes);
+  }
   return ArmModel(std::move(impl));
 }
 
 const std::string& ArmModel::base_link() const { return impl_->base; }
+const std::vector<std::string>& ArmModel::link_names() const { return impl_->links; }
+const std::vector<CollisionShape>& ArmModel::collision_shapes() const { return impl_->shapes; }
+
 const std::string& ArmModel::tip_link() const { return impl_->tip; }
 const std::vector<std::string>& ArmModel::joint_names() const { return impl_->names; }
 const std::vector<JointLimits>& ArmModel::limits() const { return impl_->limits; }
+
+std::vector<Eigen::Isometry3d> ArmModel::link_poses(const Eigen::VectorXd& joints) const {
+  if (static_cast<std::size_t>(joints.size()) != size())
+    throw std::invalid_argument("link poses: " + std::to_string(joints.size()) + " joint positions given, the arm has " +
+                                std::to_string(size()));
+  KDL::ChainFkSolverPos_recursive fk(impl_->chain);
+  std::vector<KDL::Frame> frames(impl_->chain.getNrOfSegments());
+  fk.JntToCart(to_kdl(joints), frames);
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(frames.size());
+  for (const KDL::Frame& f : frames) poses.push_back(to_eigen(f));
+  return poses;
+}
 
 Eigen::Isometry3d ArmModel::forward(const Eigen::VectorXd& joints) const {
   if (static_cast<std::size_t>(joints.size()) != size())
@@ -221,7 +302,9 @@ IkResult ArmModel::inverse(const Eigen::Isometry3d& base_from_tip, const Eigen::
   double best_score = std::numeric_limits<double>::infinity();  // of an attempt that is not a solution
   bool found = false;
   double found_time = 0;
+  int made = 0;
   for (int attempt = 0; attempt < std::max(1, options.attempts); ++attempt) {
+    made = attempt + 1;
     Eigen::VectorXd start(n);
     if (attempt == 0) {
       start = seed;
@@ -242,6 +325,15 @@ IkResult ArmModel::inverse(const Eigen::Isometry3d& base_from_tip, const Eigen::
     const double orientation_error = angle_between(reached, base_from_tip);
     const bool close = position_error <= options.position_tolerance && orientation_error <= options.orientation_tolerance;
     const std::string violation = limit_violation(q);
+    const std::string refused = close && violation.empty() && options.accept ? options.accept(q) : std::string();
+    if (close && violation.empty() && !refused.empty()) {
+      // A solution the caller refuses: the first one (from the seed, when it gives one) says why.
+      if (!found && best_score > -1) {
+        best_score = -1;
+        best = IkResult{false, q, position_error, orientation_error, "every solution found is refused: " + refused};
+      }
+      continue;
+    }
     if (close && violation.empty()) {
       const double t = motion_time(q);
       if (!found || t < found_time) {
@@ -268,6 +360,7 @@ IkResult ArmModel::inverse(const Eigen::Isometry3d& base_from_tip, const Eigen::
     best.joints = seed;
     best.why = "the solver gave no finite joint positions";
   }
+  best.attempts = made;
   return best;
 }
 

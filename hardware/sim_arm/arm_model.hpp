@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -32,6 +33,9 @@ struct IkOptions {
   double position_tolerance = 1e-4;    // m
   double orientation_tolerance = 1e-3; // rad
   std::uint64_t seed = 1;              // of the random seeds: the same answer on every run
+  // When set, a solution must also pass it: it returns "" for joint positions it accepts, else
+  // why not (a collision, say). The nearest accepted solution is returned.
+  std::function<std::string(const Eigen::VectorXd&)> accept;
 };
 
 struct IkResult {
@@ -40,6 +44,23 @@ struct IkResult {
   double position_error = 0.0;        // m, of `joints`
   double orientation_error = 0.0;     // rad, of `joints`
   std::string why;                    // when !ok: what was wrong with the best attempt
+  int attempts = 0;                   // solver starts made
+};
+
+// One <collision> shape of a link that moves with the chain: a link on it, or one fixed to such a
+// link (the camera on the flange).
+struct CollisionShape {
+  enum class Kind { Box, Cylinder, Sphere, Mesh };
+  std::string link;             // the URDF link it belongs to
+  std::size_t frame = 0;        // index into ArmModel::link_names(): the chain link it moves with
+  // Movable joints between the base and `link`: shapes with the same count move as one body, and
+  // counts one apart are joined by one joint.
+  std::size_t joints_before = 0;
+  Eigen::Isometry3d frame_from_shape = Eigen::Isometry3d::Identity();
+  Kind kind = Kind::Box;
+  // Box: the edge lengths; cylinder (along z): radius, length, 0; sphere: radius, 0, 0.
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  std::string mesh;             // Kind::Mesh: its file name, as the URDF gives it
 };
 
 class ArmModel {
@@ -69,6 +90,13 @@ class ArmModel {
   // valid solution nearest `seed` among the attempts (KDL's Levenberg-Marquardt solver from
   // `seed`, then from random seeds).
   IkResult inverse(const Eigen::Isometry3d& base_from_tip, const Eigen::VectorXd& seed, const IkOptions& options = {}) const;
+
+  // The links of the chain after the base, from base to tip (each segment's child link).
+  const std::vector<std::string>& link_names() const;
+  // base_from_link for each of link_names() at the given joint positions, in one pass.
+  std::vector<Eigen::Isometry3d> link_poses(const Eigen::VectorXd& joints) const;
+  // The URDF's <collision> shapes of those links and of the links fixed to them.
+  const std::vector<CollisionShape>& collision_shapes() const;
 
  private:
   struct Impl;
