@@ -8,6 +8,8 @@
 #include "fba/types/grasp.hpp"
 #include "fba/types/joint_state.hpp"
 #include "fba/types/grasp_execution.hpp"
+#include "fba/types/hand_command.hpp"
+#include "fba/types/joint_trajectory.hpp"
 #include "fba/types/mesh.hpp"
 #include "fba/types/octree.hpp"
 #include "fba/types/pose.hpp"
@@ -25,6 +27,8 @@ namespace {
   fba::type_of<fba::Grasp>();
   fba::type_of<fba::JointState>();
   fba::type_of<fba::GraspExecution>();
+  fba::type_of<fba::JointTrajectory>();
+  fba::type_of<fba::HandCommand>();
   return true;
 }();
 }  // namespace
