@@ -16,7 +16,7 @@ packages=(
   build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev
   libyaml-cpp-dev libboost-program-options-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   libeigen3-dev libopencv-dev libassimp-dev libqhull-dev libmujoco-dev
-  liburdfdom-dev libkdl-parser-dev liborocos-kdl-dev libmodbus-dev
+  liburdfdom-dev libkdl-parser-dev liborocos-kdl-dev libmodbus-dev libompl-dev libfcl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gstreamer1.0-tools gstreamer1.0-plugins-base graphviz bc ccache
 )

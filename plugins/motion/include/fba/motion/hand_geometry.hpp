@@ -1,0 +1,64 @@
+// The three-fingered hand of hardware/robots/three_finger_hand.xml as collision shapes, each of its
+// dimensions named once here (tests/plugins/motion checks them against the MJCF).
+//
+// Palm frame (as the MJCF and the lift test use it): z is the approach (the fingers point along
+// +z), x runs from the thumb to the two fingers, y = z cross x. The thumb stands at -x and the two
+// fingers at +x, finger_a on the +y side; each closes along x on a straight slide.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include <Eigen/Geometry>
+
+namespace fba::motion {
+
+namespace hand {
+// The palm: a box centred below the palm frame's origin.
+inline constexpr double kPalmHalfWidth = 0.11;       // x, thumb to fingers
+inline constexpr double kPalmHalfDepth = 0.065;      // y
+inline constexpr double kPalmHalfThickness = 0.02;   // z
+inline constexpr double kPalmCentreZ = -0.025;
+// Each finger's knuckle (its slide's carriage) stands this far from the palm's centre along x
+// when fully open, and this high along z.
+inline constexpr double kKnuckleX = 0.12;
+inline constexpr double kKnuckleZ = 0.03;
+// The closing slide's travel from fully open.
+inline constexpr double kTravel = 0.1;
+// Each finger: three straight phalanges, base first, lengths and radii (capsules).
+inline constexpr std::array<double, 3> kPhalanxLength{0.06, 0.045, 0.03};
+inline constexpr std::array<double, 3> kPhalanxRadius{0.011, 0.011, 0.01};
+// The pad: this far along the distal phalanx from its base.
+inline constexpr double kPadAlongDistal = 0.015;
+// The two fingers' axes stand this far apart at least and at most (the scissor's range).
+inline constexpr double kSpreadMin = 0.02;
+inline constexpr double kSpreadMax = 0.12;
+
+inline constexpr double kFingerLength = kPhalanxLength[0] + kPhalanxLength[1] + kPhalanxLength[2];
+// The pads' distance from the palm frame along z.
+inline constexpr double kPadDistance = kKnuckleZ + kPhalanxLength[0] + kPhalanxLength[1] + kPadAlongDistal;
+// The pad's radius: the distal phalanx's.
+inline constexpr double kPadRadius = kPhalanxRadius[2];
+}  // namespace hand
+
+// One collision shape of the hand, in the palm frame.
+struct HandPart {
+  enum class Kind { Box, Capsule };
+  std::string name;  // "palm", "thumb", "finger_a", "finger_b"
+  Kind kind = Kind::Box;
+  // Box: the half sizes; capsule (along z): radius, length of its straight part, 0.
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  Eigen::Isometry3d palm_from_part = Eigen::Isometry3d::Identity();
+};
+
+// The palm and the three fingers, straight, each finger one capsule as thick as its thickest
+// phalanx. `opening`: the thumb's pad to the fingers' pads, inner surfaces, m (closed as far as
+// the slides go when smaller); `spread`: between the two fingers' axes, m (within the scissor's
+// range).
+std::array<HandPart, 4> hand_parts(double opening, double spread);
+
+// The slide travel that puts each pad's inner surface half_opening from the palm's centre along x,
+// within [0, kTravel].
+double travel_for(double half_opening);
+
+}  // namespace fba::motion

@@ -1,0 +1,139 @@
+// Reach planning, the motor stage: from a selected grasp and the carved model, what MoveIt would
+// compute for a ROS arm. The palm's pregrasp on the grasp's approach line (hand_placement.hpp),
+// inverse kinematics for the flange there (KDL, several seeds, the solution nearest the current
+// joints), a collision-free joint path from the current joints to the standoff (OMPL's
+// RRT-Connect, then shortcut), the straight approach, the close, the straight lift, the hold and
+// the retreat (the object put back, the hand opened, the way in backed out), timed within the
+// URDF's velocity limits, with the hand's commands in order. Collisions (robot_collision.hpp):
+// the arm, the camera and the hand against the table, the arm itself and the model, whose
+// occupied and not-yet-carved leaves are obstacles until the fingers close.
+//
+// A refusal says which step failed and why, so that grasp synthesis can pass over grasps the arm
+// cannot take and count the reasons: reachable() is the cheap check (everything but the path
+// search), plan() the whole plan.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "arm_model.hpp"
+#include "fba/motion/model_obstacles.hpp"
+#include "fba/types/grasp.hpp"
+#include "fba/types/hand_command.hpp"
+#include "fba/types/joint_trajectory.hpp"
+#include "fba/types/octree.hpp"
+
+namespace fba::motion {
+
+struct ReachParams {
+  // Where the palm sits on the flange (the flange's frame: z out of it).
+  Eigen::Isometry3d flange_from_palm = Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.075));
+  double clearance = 0.01;       // m between each pad and its contact at the pregrasp, at least
+  double standoff = 0.05;        // m back along the approach from the grasp: where the path ends
+  double lift_height = 0.10;     // m, straight up
+  double hold_s = 2.0;           // s the arm holds still at the top of the lift
+  double hand_s = 1.0;           // s the arm stands still while the hand opens or closes
+  double finger_force = 10.0;    // N at each pad when closing
+  bool retreat = true;           // after the hold: put the object back, open, back out to the standoff
+  // The fingers may touch the model within this distance of their contacts (the model is the
+  // object's visual hull: near a contact the finger is about to touch the object).
+  double contact_allowance = 0.02;
+  double planning_time = 0.5;    // s: the path search's limit
+  std::uint32_t seed = 1;        // OMPL's random numbers (and the IK's random starts): the same plan every run
+  int ik_attempts = 32;          // IK starts: the current joints, then random ones within the limits
+  double cartesian_step = 0.01;  // m between the IK solutions along a straight line
+  double max_joint_step = 0.3;   // rad: a larger jump between two of them is a flip, not a line
+  double collision_step = 0.02;  // rad: motions are checked at poses this far apart (joint space, Euclidean)
+  double speed_scale = 0.5;      // share of each joint's URDF velocity limit used
+  double acceleration = 3.0;     // rad/s^2, every joint
+  double sample_period = 0.02;   // s between the trajectory's waypoints (and at each segment's ends)
+};
+
+// Why a grasp was refused, for counting.
+enum class Refusal {
+  None,
+  Hand,       // the hand cannot take it (contacts too far apart, a bad grasp)
+  Table,      // the hand at the grasp, its pregrasp or the lift would be in the table
+  Ik,         // no IK solution within the joint limits for the pregrasp
+  Collision,  // every IK solution for the pregrasp collides
+  Approach,   // the straight approach has no IK solution or collides
+  Lift,       // the straight lift has no IK solution or collides
+  Start,      // the current joints collide (with the hand opened for the pregrasp)
+  Path,       // no collision-free path to the pregrasp within the time limit
+};
+const char* to_string(Refusal r);
+
+struct ReachFigures {
+  int ik_attempts = 0;             // IK solver starts, the pregrasp's and the lines' steps
+  double planning_s = 0;           // wall time of the path search
+  double path_length = 0;          // rad: the path's length in joint space (Euclidean)
+  std::size_t path_waypoints = 0;  // after shortcutting
+  bool direct = false;             // the straight joint-space line was free: no search needed
+  std::size_t collision_checks = 0;
+};
+
+// One step of the plan on the trajectory's clock.
+struct ReachStep {
+  std::string name;  // "plan" (the hand opens, the path), "approach", "close", "lift", "hold", "retreat"
+  double start_s = 0;
+  double end_s = 0;
+};
+
+struct ReachPlan {
+  bool ok = false;
+  Refusal refusal = Refusal::None;
+  std::string why;  // when !ok
+
+  // The poses (world) and joint positions along the plan.
+  Eigen::Isometry3d pregrasp_palm = Eigen::Isometry3d::Identity();  // at the standoff
+  Eigen::Isometry3d grasp_palm = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d lift_palm = Eigen::Isometry3d::Identity();
+  Eigen::VectorXd pregrasp_joints, grasp_joints, lift_joints;
+  // The IK solutions along the straight lines, each first at the line's start.
+  std::vector<Eigen::VectorXd> approach_path, lift_path;
+  double opening = 0;  // the pregrasp's, m
+  double spread = 0;   // m
+
+  fba::JointTrajectory trajectory;  // from the current joints; every joint on every waypoint
+  std::vector<fba::HandCommand> hand;  // in order, timed on the trajectory
+  std::vector<ReachStep> steps;
+  ReachFigures figures;
+};
+
+class ReachPlanner {
+ public:
+  // `urdf`: the arm; its chain from `base_link` (the world frame the grasp is in) to `flange_link`.
+  // Throws arm::ArmModelError for the URDF, std::invalid_argument for parameters out of range.
+  ReachPlanner(const std::filesystem::path& urdf, const ReachParams& params = {}, const std::string& base_link = "world",
+               const std::string& flange_link = "flange");
+  ReachPlanner(arm::ArmModel arm, const ReachParams& params = {});
+  ~ReachPlanner();
+  ReachPlanner(ReachPlanner&&) noexcept;
+  ReachPlanner& operator=(ReachPlanner&&) noexcept;
+
+  const arm::ArmModel& arm() const;
+  const ReachParams& params() const;
+
+  // The model's obstacles, built once for several grasps.
+  static std::shared_ptr<const ModelObstacles> obstacles(const Octree& model);
+
+  // Everything but the path search: the hand's placement, the current joints with the hand open,
+  // the pregrasp's IK, the approach and the lift. The plan it returns has the poses and joints,
+  // no trajectory.
+  ReachPlan reachable(const Grasp& grasp, std::shared_ptr<const ModelObstacles> model, const Eigen::VectorXd& current) const;
+  ReachPlan reachable(const Grasp& grasp, const Octree& model, const Eigen::VectorXd& current) const;
+  // The whole plan.
+  ReachPlan plan(const Grasp& grasp, std::shared_ptr<const ModelObstacles> model, const Eigen::VectorXd& current) const;
+  ReachPlan plan(const Grasp& grasp, const Octree& model, const Eigen::VectorXd& current) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace fba::motion
