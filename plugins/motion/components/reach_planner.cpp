@@ -171,6 +171,7 @@ class ReachPlannerFilter final : public fba::Component {
 
   void plan(const fba::Grasp& grasp, const fba::Octree& model, const fba::JointState& js) {
     go("plan");
+    steps_.clear();  // a new grasp replaces the plan being followed
     ++plans_;
     std::string why;
     const auto current = arm_joints(js, why);

@@ -103,3 +103,26 @@ TEST(ReachPlannerComponent, AJointStateWithoutOneOfTheArmsJointsIsARefusalNaming
   ASSERT_NE(it, events.end());
   EXPECT_EQ(nlohmann::json::parse(it->payload)["reason"], "the joint state has no position for joint 'shoulder_pan_joint'");
 }
+
+TEST(ReachPlannerComponent, ANewGraspReplacesThePlanBeingFollowed) {
+  ComponentHarness h(fba::test::built_plugins(), "motion.reach_planner");
+  h.push("octree", box_model(kBox));
+  h.push("joint_state", named_joints(home()));
+  h.push("grasp", box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07));
+  h.run();
+  const auto hand = h.values<fba::HandCommand>("hand");
+  ASSERT_EQ(hand.size(), 3u) << h.failure();
+  h.set_time(nanoseconds(hand[1].time + 0.01));
+  h.push("joint_state", named_joints(home()));
+  h.run();
+  EXPECT_EQ(h.stage(), "close");
+  // One it cannot take: refused, and nothing left to follow.
+  h.push("grasp", box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.01));
+  h.run();
+  EXPECT_EQ(h.stage(), "idle");
+  h.set_time(nanoseconds(hand[2].time + 0.01));
+  h.push("joint_state", named_joints(home()));
+  h.run();
+  EXPECT_EQ(h.stage(), "idle");
+  EXPECT_EQ(h.failure(), "");
+}
