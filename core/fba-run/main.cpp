@@ -651,15 +651,15 @@ int run(int argc, char** argv) {
       std::cerr << d.str() << "\n";
       reason += (reason.empty() ? "" : "; ") + d.str();
     }
-    fba::RunResult r = early_result(fba::Outcome::ConfigError, reason);
+    const auto* construction = dynamic_cast<const fba::ConstructionError*>(&e);
+    // A device that failed to start is a runtime error (exit 3); the task's own mistakes exit 2.
+    fba::RunResult r = early_result(construction ? construction->outcome() : fba::Outcome::ConfigError, reason);
     if (const int sig = st.signal.load()) {  // the user's stop is what a calling script must see
       r = early_result(fba::Outcome::Interrupted, "interrupted by " + signal_name(sig) + " while constructing; " + reason);
       r.phase = st.signal_phase.load();
-      status = r.exit_code();
-    } else {
-      status = kConfigError;
     }
-    if (const auto* c = dynamic_cast<const fba::ConstructionError*>(&e)) r.safe_states = c->safe_states();
+    status = r.exit_code();
+    if (construction) r.safe_states = construction->safe_states();
     const std::string error = write_summary(r);
     if (!error.empty()) std::cerr << "fba-run: could not write the summary " << error << "\n";
     return status;

@@ -448,9 +448,14 @@ void Node::fail(std::string_view what, std::uint64_t lost) {
                  what.size(), kMaxEventPayload);
   const std::string reason = bounded_payload(what);
   ++errors;
-  logger->error("{}", describe(reason));
+  // A call the stop cut short (a driver whose safe state took its line) is the stop's doing, not
+  // a failure to alarm anyone with: said, at info.
+  if (graph.stopping())
+    logger->info("{} (during the stop)", describe(reason));
+  else
+    logger->error("{}", describe(reason));
   emit_event("error", reason);
-  if (graph.stopping()) return;  // a rule on the error event decided already
+  if (graph.stopping()) return;  // the stop, or a rule on the error event, decided already
   if (config.on_error == ErrorPolicy::Restart && restarts < static_cast<std::uint64_t>(config.max_restarts)) {
     ++restarts;
     lost_to_restarts += lost;
@@ -613,12 +618,16 @@ void Graph::construct() {
   for (auto& n : nodes) {
     if (stop_source_.stop_requested()) break;
     std::string error;
+    bool device = false;
     try {
       n->construct();
     } catch (const ConfigError&) {
       throw;
     } catch (const PluginBug& e) {  // the component's code is wrong, not the task file
       throw ConfigError({Diagnostic{Location{n->config.type->origin, 0, 0}, e.what()}});
+    } catch (const DeviceError& e) {
+      error = e.what();
+      device = true;
     } catch (const std::exception& e) {
       error = e.what();
     } catch (...) {
@@ -633,9 +642,9 @@ void Graph::construct() {
     // The actuators created so far may already hold a device: they go to their safe state, and
     // the results go with the error (the summary lists them as after a run).
     construct_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - constructing_since).count();
-    throw ConstructionError({Diagnostic{n->config.where, "component '" + n->config.name + "' (" + n->spec.type_name() +
-                                                             ") refused its configuration: " + error}},
-                            safe_states_after_construction());
+    const std::string what = device ? ") could not start its device: " : ") refused its configuration: ";
+    throw ConstructionError({Diagnostic{n->config.where, "component '" + n->config.name + "' (" + n->spec.type_name() + what + error}},
+                            safe_states_after_construction(), device ? Outcome::RuntimeError : Outcome::ConfigError);
   }
   construct_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - constructing_since).count();
   constructed_.store(true);

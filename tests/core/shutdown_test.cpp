@@ -266,6 +266,15 @@ class SlowConstructor final : public fba::Component {
   void process() override {}
 };
 
+// Its device never answers: the constructor says so with a DeviceError.
+class DeadDevice final : public fba::Component {
+ public:
+  static fba::Spec spec() { return fba::Spec::actuator("test.dead_device", "Its device never answers.").add(kIn); }
+  static constexpr fba::OptionalIn<std::int64_t> kIn{"in", "anything"};
+  explicit DeadDevice(fba::Context&) { throw fba::DeviceError("/dev/ttyX: no answer from slave 9 within 0.5 s"); }
+  void process() override {}
+};
+
 // Free-running, produces nothing, never finishes.
 class Idle final : public fba::Component {
  public:
@@ -291,6 +300,7 @@ FBA_COMPONENT(InterruptThenSafe);
 FBA_COMPONENT(OverlapChecked);
 FBA_COMPONENT(ConcurrentSafeState);
 FBA_COMPONENT(SlowConstructor);
+FBA_COMPONENT(DeadDevice);
 
 namespace {
 
@@ -460,6 +470,32 @@ components:
   EXPECT_EQ(g_safe_states.load(), safe_before + 1);
   EXPECT_GT(r.construct_s, 0.0);
   EXPECT_GE(r.wall_s, r.construct_s);
+}
+
+// A device that fails to start is a runtime error naming the component and its device, not a
+// mistake in the task (exit 3, not 2); the actuators built before it still go safe.
+TEST(Shutdown, ADeviceThatFailsToStartIsARuntimeErrorAndEarlierActuatorsGoSafe) {
+  const int safe_before = g_safe_states.load();
+  try {
+    fba::Task task(load(R"(
+components:
+  first: { type: test.counted_actuator }
+  hand: { type: test.dead_device }
+)"),
+                   options(ExecutorKind::Threaded));
+    FAIL() << "the device's failure was not reported";
+  } catch (const fba::ConstructionError& e) {
+    EXPECT_EQ(e.outcome(), Outcome::RuntimeError);
+    ASSERT_FALSE(e.diagnostics().empty());
+    EXPECT_NE(e.diagnostics()[0].message.find("component 'hand' (test.dead_device) could not start its device: /dev/ttyX: "
+                                              "no answer from slave 9 within 0.5 s"),
+              std::string::npos)
+        << e.diagnostics()[0].message;
+    ASSERT_EQ(e.safe_states().size(), 2u);
+    EXPECT_EQ(e.safe_states()[0].status, "reached");
+    EXPECT_EQ(e.safe_states()[1].status, "not constructed");
+  }
+  EXPECT_EQ(g_safe_states.load(), safe_before + 1);
 }
 
 // A grace too long for the clock (about 9.2e9 s and more overflowed the nanoseconds) still waits

@@ -41,6 +41,15 @@ struct InputState;
 struct OutputState;
 }  // namespace detail
 
+// A device failed rather than the task being wrong: it never answered, reported a fault, or
+// answered garbled or as another device. Thrown from a constructor (or a call), it ends the run as
+// a runtime error (exit 3) naming the component, not as a configuration error (exit 2), which
+// stays for the task's own mistakes.
+class DeviceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 class Component {
  public:
   virtual ~Component() = default;

@@ -79,17 +79,21 @@ struct SafeStateResult {
   std::string message;
 };
 
-// A component refused its configuration while the task was built (Task's constructor): the
-// actuators constructed before it were sent to their safe states, with these results, one per
+// A component's constructor failed while the task was built (Task's constructor): it refused its
+// configuration (outcome ConfigError), or its device failed (DeviceError: outcome RuntimeError).
+// The actuators constructed before it were sent to their safe states, with these results, one per
 // actuator of the task ("not constructed" for those that never were).
 class ConstructionError : public ConfigError {
  public:
-  ConstructionError(std::vector<Diagnostic> diagnostics, std::vector<SafeStateResult> safe_states)
-      : ConfigError(std::move(diagnostics)), safe_states_(std::move(safe_states)) {}
+  ConstructionError(std::vector<Diagnostic> diagnostics, std::vector<SafeStateResult> safe_states,
+                    Outcome outcome = Outcome::ConfigError)
+      : ConfigError(std::move(diagnostics)), safe_states_(std::move(safe_states)), outcome_(outcome) {}
   const std::vector<SafeStateResult>& safe_states() const { return safe_states_; }
+  Outcome outcome() const { return outcome_; }
 
  private:
   std::vector<SafeStateResult> safe_states_;
+  Outcome outcome_;
 };
 
 struct ConnectionStats {
