@@ -46,7 +46,6 @@ class TrajectoryBuilder {
     add(0, start, Eigen::VectorXd::Zero(start.size()));
   }
   double now() const { return now_; }
-  const Eigen::VectorXd& last() const { return last_; }
 
   void move_to(const Eigen::VectorXd& goal) {
     const arm::JointTrajectory motion(last_, goal, vmax_, amax_);
