@@ -130,7 +130,7 @@ class ThreadedExecutor final : public Executor {
     const bool limited = limit_ns != kNeverNs;
     const auto deadline = g_.started + std::chrono::nanoseconds(limited ? limit_ns : 0);
     const auto stall = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.001, g_.options.stall_warning_s)));
-    auto progress = g_.progress.load();
+    auto progress = g_.progress();
     auto quiet_since = Clock::now();
     std::unique_lock lock(main_mutex_);
     while (!g_.stopping()) {
@@ -145,8 +145,8 @@ class ThreadedExecutor final : public Executor {
         lock.lock();
         continue;
       }
-      if (g_.progress.load() != progress) {
-        progress = g_.progress.load();
+      if (g_.progress() != progress) {
+        progress = g_.progress();
         quiet_since = now;
       } else if (now >= quiet_since + stall) {
         lock.unlock();

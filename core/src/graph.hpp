@@ -75,6 +75,7 @@ struct Buffer {
   std::size_t max_bytes = 0;  // payload bytes queued at most; 0 for no byte budget
   bool gating = false;  // a full buffer holds its producer back (lossless connections)
   bool feedback = false;
+  bool one_thread = false;   // every push and pop on one thread (the deterministic executor)
   Node* producer = nullptr;  // null for event deliveries
   Node* consumer = nullptr;  // null for taps
   std::string from, to;      // "component.port", for messages and statistics
@@ -83,7 +84,8 @@ struct Buffer {
   std::deque<Packet> queue;  // Lossless and DropOldest
   Packet latest;             // Latest
   std::atomic<std::size_t> size{0};   // readable without the lock, for scheduling decisions
-  std::atomic<std::size_t> bytes{0};  // payload bytes queued, likewise
+  std::size_t queued_bytes = 0;        // payload bytes queued, under the lock
+  std::atomic<std::size_t> bytes{0};  // queued_bytes, published for full() when max_bytes > 0
   std::atomic<bool> producer_done{false};
   // Under the lock. Every sample pushed is consumed, dropped by the policy, or still queued:
   // pushed = consumed + dropped + queued().
@@ -198,6 +200,7 @@ class Node {
   std::atomic<bool> ticking{false};  // periodic, and a tick will still come (see Graph::end_ticks)
 
   Counter invocations, errors, restarts, lost_to_restarts;
+  Counter productive_calls;  // invocations that emitted something (Graph::progress)
   std::atomic<std::int64_t> last_tick_ns{-1};  // for the stall warning: when the next tick is due
   PiMutex stage_mutex;  // components set their stage and report results from process()
   std::string stage;
@@ -284,7 +287,13 @@ class Graph {
   std::atomic<int> active{0};  // nodes queued or running
   std::atomic<std::uint64_t> notifications{0};  // Idle -> Queued transitions, for check_idle
   std::atomic<int> live_periodic{0};
-  std::atomic<std::uint64_t> progress{0};  // invocations that emitted something: for the stall warning
+  // Invocations that emitted something, summed over the nodes (each counts its own: one shared
+  // atomic was a locked add on every hop): for the stall warning.
+  std::uint64_t progress() const {
+    std::uint64_t n = 0;
+    for (const auto& node : nodes) n += node->productive_calls;
+    return n;
+  }
   // Threads were left behind in a component call: the graph must outlive them, so the Task
   // leaks it on purpose rather than destroy what they use.
   std::atomic<bool> abandoned{false};
@@ -348,8 +357,10 @@ class Watchdog {
 // when a component overflowed its stack (fba-run installs the handler).
 void prepare_thread_for_crash_reports();
 
-extern thread_local const Node* t_active_node;
-extern thread_local const char* t_active_call;
+// Set around every component call (crash and exit reports). Initial-exec TLS, as in PiMutex: the
+// default model for a shared library called __tls_get_addr twice a call.
+extern thread_local const Node* t_active_node [[gnu::tls_model("initial-exec")]];
+extern thread_local const char* t_active_call [[gnu::tls_model("initial-exec")]];
 
 std::unique_ptr<Executor> make_threaded_executor(Graph& g, int threads);
 std::unique_ptr<Executor> make_deterministic_executor(Graph& g);

@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <sys/syscall.h>
+#include <linux/futex.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <condition_variable>
 #include <mutex>
 #include <thread>
@@ -13,15 +15,34 @@
 
 using fba::detail::PiMutex;
 
-TEST(PiMutex, IsInitialisedWithThePriorityInheritanceProtocol) {
+TEST(PiMutex, HoldsItsOwnersThreadIdAsTheKernelsPriorityInheritanceProtocolRequires) {
+  // What the kernel sees: a priority-inheriting lock's futex word holds its owner's thread id (so
+  // that FUTEX_LOCK_PI can boost that thread), where a plain mutex holds 1 or 2.
   PiMutex m;
-  EXPECT_EQ(m.protocol(), PTHREAD_PRIO_INHERIT);
-#ifdef __GLIBC__
-  // What the kernel sees: a priority-inheriting mutex's futex word holds its owner's thread id (so
-  // that the kernel can boost that thread), where a plain mutex holds 1 or 2.
-  std::lock_guard lock(m);
-  EXPECT_EQ(m.native_handle()->__data.__lock, static_cast<int>(syscall(SYS_gettid)));
-#endif
+  EXPECT_EQ(m.owner_word(), 0);
+  {
+    std::lock_guard lock(m);
+    EXPECT_EQ(m.owner_word(), static_cast<int>(syscall(SYS_gettid)));
+  }
+  EXPECT_EQ(m.owner_word(), 0);
+}
+
+// A waiter goes through the kernel (FUTEX_LOCK_PI), which marks the word; the owner's release then
+// goes through the kernel too, and hands the lock to the waiter.
+TEST(PiMutex, AWaiterIsMarkedInTheWordAndGetsTheLockWhenReleased) {
+  PiMutex m;
+  std::unique_lock lock(m);
+  std::atomic<bool> got{false};
+  std::thread waiter([&] {
+    std::lock_guard l(m);
+    got = true;
+  });
+  while ((m.owner_word() & FUTEX_WAITERS) == 0) std::this_thread::yield();
+  EXPECT_FALSE(got.load());
+  lock.unlock();
+  waiter.join();
+  EXPECT_TRUE(got.load());
+  EXPECT_EQ(m.owner_word(), 0);
 }
 
 TEST(PiMutex, ExcludesOtherThreads) {
