@@ -56,13 +56,13 @@ void Buffer::publish_size() {
   else
     size.store(n, std::memory_order_seq_cst);
   if (max_bytes > 0) bytes.store(queued_bytes, std::memory_order_seq_cst);  // read by full() only
-  peak = std::max(peak, n);
-  peak_bytes = std::max(peak_bytes, queued_bytes);
+  peak.raise_to(n);
+  peak_bytes.raise_to(queued_bytes);
 }
 
 void Buffer::push(Packet&& p) {
   std::vector<Packet> displaced;  // declared before the lock: destroyed after it is released
-  std::lock_guard lock(mutex);
+  BufferLock lock(*this);
   ++pushed;
   if (tap) {
     if (tap->size() >= tap_keep && !tap->empty()) {
@@ -118,7 +118,7 @@ bool Buffer::take_head(Packet& out, bool& was_full) {
 bool Buffer::pop(Packet& out, bool& was_full) {
   Packet taken;
   {
-    std::lock_guard lock(mutex);
+    BufferLock lock(*this);
     if (!take_head(taken, was_full)) return false;
     ++consumed;
   }
@@ -128,21 +128,22 @@ bool Buffer::pop(Packet& out, bool& was_full) {
 
 bool Buffer::drop_head(bool& was_full) {
   Packet taken;  // declared before the lock: destroyed after it is released
-  std::lock_guard lock(mutex);
+  BufferLock lock(*this);
   if (!take_head(taken, was_full)) return false;
   ++dropped;
   return true;
 }
 
 std::int64_t Buffer::head_stamp() {
-  std::lock_guard lock(mutex);
+  BufferLock lock(*this);
   if (policy == BufferPolicy::Latest) return latest.header().stamp_ns;
   return queue.front().header().stamp_ns;
 }
 
 std::size_t Buffer::queued() {
-  std::lock_guard lock(mutex);
   if (tap) return 0;
+  if (one_thread) return size.load(std::memory_order_relaxed);  // another thread may be asking
+  std::lock_guard lock(mutex);
   return policy == BufferPolicy::Latest ? (latest ? 1 : 0) : queue.size();
 }
 
@@ -619,7 +620,9 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
                                                       std::to_string(kMaxDedicatedThreads) + " may"}});
   }
   // One thread pushes and pops every buffer under the deterministic executor: no wake-up races.
-  for (auto& b : buffers) b->one_thread = kind == ExecutorKind::Deterministic;
+  // Event queues are left out: a rule delivers the events of a safe state, which may run on a
+  // thread of its own beside the executor's.
+  for (auto& b : buffers) b->one_thread = kind == ExecutorKind::Deterministic && b->producer != nullptr;
   executor_ = kind == ExecutorKind::Deterministic ? make_deterministic_executor(*this)
                                                   : make_threaded_executor(*this, threads);
   worker_threads = threads > 0 ? threads : static_cast<int>(std::max(2u, std::thread::hardware_concurrency()));
@@ -1026,7 +1029,7 @@ std::uint64_t Graph::collect_stats(RunResult& r) {
   for (auto& b : buffers) {
     if (b->tap || !b->consumer) continue;
     const std::uint64_t queued = b->queued();
-    std::lock_guard block(b->mutex);
+    BufferLock block(*b);
     ConnectionStats c{b->from, b->to, b->policy, b->pushed, b->consumed, b->dropped, queued, b->peak, b->peak_bytes};
     c.capacity = b->policy == BufferPolicy::Latest ? 1 : b->capacity;
     r.connections.push_back(std::move(c));

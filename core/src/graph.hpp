@@ -55,6 +55,9 @@ class Counter {
   }
   Counter& operator++() { (*this)++; return *this; }
   Counter& operator+=(std::uint64_t d) { v_.store(get() + d, std::memory_order_relaxed); return *this; }
+  void raise_to(std::uint64_t v) {  // a running maximum
+    if (v > get()) v_.store(v, std::memory_order_relaxed);
+  }
 
  private:
   std::atomic<std::uint64_t> v_{0};
@@ -75,7 +78,9 @@ struct Buffer {
   std::size_t max_bytes = 0;  // payload bytes queued at most; 0 for no byte budget
   bool gating = false;  // a full buffer holds its producer back (lossless connections)
   bool feedback = false;
-  bool one_thread = false;   // every push and pop on one thread (the deterministic executor)
+  // Every push and pop on one thread (the deterministic executor's data connections): no lock,
+  // since the snapshots other threads take read only the atomic size and counts.
+  bool one_thread = false;
   Node* producer = nullptr;  // null for event deliveries
   Node* consumer = nullptr;  // null for taps
   std::string from, to;      // "component.port", for messages and statistics
@@ -87,10 +92,10 @@ struct Buffer {
   std::size_t queued_bytes = 0;        // payload bytes queued, under the lock
   std::atomic<std::size_t> bytes{0};  // queued_bytes, published for full() when max_bytes > 0
   std::atomic<bool> producer_done{false};
-  // Under the lock. Every sample pushed is consumed, dropped by the policy, or still queued:
-  // pushed = consumed + dropped + queued().
-  std::uint64_t pushed = 0, consumed = 0, dropped = 0;
-  std::size_t peak = 0, peak_bytes = 0;  // the most samples and bytes queued at once
+  // Written under the lock, read by snapshots without it. Every sample pushed is consumed, dropped
+  // by the policy, or still queued: pushed = consumed + dropped + queued().
+  Counter pushed, consumed, dropped;
+  Counter peak, peak_bytes;  // the most samples and bytes queued at once
   std::size_t tap_keep = SIZE_MAX;
   std::vector<Packet>* tap = nullptr;  // set for taps: packets are appended, at most tap_keep kept
 
@@ -112,6 +117,22 @@ struct Buffer {
  private:
   bool take_head(Packet& out, bool& was_full);  // under the lock
   void publish_size();                          // under the lock
+};
+
+// A buffer's lock, taken unless one thread does every push and pop (Buffer::one_thread).
+class BufferLock {
+ public:
+  explicit BufferLock(Buffer& b) : b_(b.one_thread ? nullptr : &b) {
+    if (b_) b_->mutex.lock();
+  }
+  ~BufferLock() {
+    if (b_) b_->mutex.unlock();
+  }
+  BufferLock(const BufferLock&) = delete;
+  BufferLock& operator=(const BufferLock&) = delete;
+
+ private:
+  Buffer* b_;
 };
 
 struct InputState {
