@@ -14,6 +14,7 @@
 #include <kdl/chainiksolverpos_lma.hpp>
 #include <kdl/tree.hpp>
 #include <kdl_parser/kdl_parser.hpp>
+#include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
 namespace fba::arm {
@@ -97,8 +98,17 @@ Eigen::Isometry3d to_eigen(const urdf::Pose& p) {
   return t;
 }
 
+// Whether a movable joint lies beyond `link`: it is the base of another mechanism (the hand).
+bool carries_joints(const urdf::Link& link) {
+  for (const auto& j : link.child_joints)
+    if (j && j->type != urdf::Joint::FIXED) return true;
+  for (const auto& child : link.child_links)
+    if (child && carries_joints(*child)) return true;
+  return false;
+}
+
 // The <collision> shapes of `link` and of the links fixed to it off the chain, placed in the frame
-// of the chain link they move with.
+// of the chain link they move with; not those of a mechanism mounted there (carries_joints).
 void add_shapes(const urdf::Link& link, const Eigen::Isometry3d& frame_from_link, std::size_t frame, std::size_t joints_before,
                 const std::vector<std::string>& chain_links, std::vector<CollisionShape>& out) {
   for (const auto& c : link.collision_array) {
@@ -136,7 +146,7 @@ void add_shapes(const urdf::Link& link, const Eigen::Isometry3d& frame_from_link
     if (!j || j->type != urdf::Joint::FIXED) continue;
     if (std::find(chain_links.begin(), chain_links.end(), j->child_link_name) != chain_links.end()) continue;
     for (const auto& child : link.child_links)
-      if (child && child->name == j->child_link_name)
+      if (child && child->name == j->child_link_name && !carries_joints(*child))
         add_shapes(*child, frame_from_link * to_eigen(j->parent_to_joint_origin_transform), frame, joints_before, chain_links, out);
   }
 }
@@ -362,6 +372,59 @@ IkResult ArmModel::inverse(const Eigen::Isometry3d& base_from_tip, const Eigen::
   }
   best.attempts = made;
   return best;
+}
+
+std::string with_fixed_joint_origins(const std::string& urdf_xml, const std::map<std::string, Eigen::Isometry3d>& origins,
+                                     const std::string& origin_name) {
+  if (origins.empty()) return urdf_xml;
+  TiXmlDocument doc;
+  doc.Parse(urdf_xml.c_str());
+  if (doc.Error()) throw ArmModelError(origin_name + " is not XML: " + doc.ErrorDesc());
+  TiXmlElement* robot = doc.RootElement();
+  if (!robot || std::string(robot->Value()) != "robot") throw ArmModelError(origin_name + " has no <robot> element");
+  std::map<std::string, TiXmlElement*> fixed;
+  std::string fixed_names;
+  for (TiXmlElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+    const char* name = j->Attribute("name");
+    const char* type = j->Attribute("type");
+    if (!name || !type || std::string(type) != "fixed") continue;
+    fixed[name] = j;
+    fixed_names += (fixed_names.empty() ? "" : ", ") + std::string(name);
+  }
+  for (const auto& [name, pose] : origins) {
+    const auto it = fixed.find(name);
+    if (it == fixed.end())
+      throw ArmModelError("cannot set the origin of joint '" + name + "' in " + origin_name + ": it has no fixed joint of that name; its fixed joints: " +
+                          fixed_names);
+    TiXmlElement* joint = it->second;
+    while (TiXmlElement* old = joint->FirstChildElement("origin")) joint->RemoveChild(old);
+    // rpy about the fixed x, y, z axes: R = Rz(yaw) Ry(pitch) Rx(roll).
+    const Eigen::Vector3d ypr = pose.linear().eulerAngles(2, 1, 0);
+    std::ostringstream xyz, rpy;
+    xyz.precision(17);
+    rpy.precision(17);
+    xyz << pose.translation().x() << ' ' << pose.translation().y() << ' ' << pose.translation().z();
+    rpy << ypr[2] << ' ' << ypr[1] << ' ' << ypr[0];
+    TiXmlElement element("origin");
+    element.SetAttribute("xyz", xyz.str());
+    element.SetAttribute("rpy", rpy.str());
+    joint->InsertEndChild(element);
+  }
+  TiXmlPrinter printer;
+  doc.Accept(&printer);
+  return printer.CStr();
+}
+
+Eigen::Isometry3d pose_from_xyz_rpy(const std::vector<double>& v, const std::string& what) {
+  if (v.size() != 6) throw std::invalid_argument(what + ": expected [x, y, z, roll, pitch, yaw] (6 values); found " + std::to_string(v.size()));
+  for (double x : v)
+    if (!std::isfinite(x)) throw std::invalid_argument(what + ": every value must be finite");
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = (Eigen::AngleAxisd(v[5], Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(v[4], Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(v[3], Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  t.translation() << v[0], v[1], v[2];
+  return t;
 }
 
 JointTrajectory::JointTrajectory(Eigen::VectorXd start, Eigen::VectorXd goal, const Eigen::VectorXd& max_velocity,

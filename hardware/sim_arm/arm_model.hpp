@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -95,7 +96,9 @@ class ArmModel {
   const std::vector<std::string>& link_names() const;
   // base_from_link for each of link_names() at the given joint positions, in one pass.
   std::vector<Eigen::Isometry3d> link_poses(const Eigen::VectorXd& joints) const;
-  // The URDF's <collision> shapes of those links and of the links fixed to them.
+  // The URDF's <collision> shapes of those links and of the links fixed to them. A link fixed to
+  // them that carries movable joints of its own (the hand on the flange) is another mechanism,
+  // whose parts move with its joints: neither its shapes nor those beyond it are the arm's.
   const std::vector<CollisionShape>& collision_shapes() const;
 
  private:
@@ -103,6 +106,17 @@ class ArmModel {
   explicit ArmModel(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
+
+// The URDF text with the origins of the named fixed joints replaced: where a real robot's parts
+// were measured to be (the arm's base on the table, the hand and the camera on the flange), given
+// by a task's profile, for every reader of the one description. Throws ArmModelError naming the
+// joint when it is missing or not fixed (with the fixed joints there are), or the text is not XML.
+std::string with_fixed_joint_origins(const std::string& urdf_xml, const std::map<std::string, Eigen::Isometry3d>& origins,
+                                     const std::string& origin_name = "the URDF");
+
+// [x, y, z] in metres and [roll, pitch, yaw] in radians (URDF's <origin rpy>: about the fixed x,
+// then y, then z) as a transform; throws std::invalid_argument naming `what` unless 6 finite values.
+Eigen::Isometry3d pose_from_xyz_rpy(const std::vector<double>& xyz_rpy, const std::string& what);
 
 // A synchronised trapezoidal motion between two joint vectors: a straight line in joint space,
 // every joint starting and stopping together, each within its velocity and acceleration limit.
