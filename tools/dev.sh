@@ -173,6 +173,12 @@ case "$cmd" in
     configure asan "${sanitized[@]}" -DFBA_SANITIZE=address,undefined -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_BENCHMARKS=OFF
     build_behind asan --target fba_tests
     run_tests release
+    # The runtime's hop and loader against plain code in the same run, and those ratios against the
+    # committed ones: a change that makes them slower is named here, the day it lands (not failed:
+    # figures on a shared machine are for a person to read).
+    echo "== runtime benchmark against tools/runtime-benchmark/reference.json"
+    build/release/bin/fba-runtime-benchmark --quick --reference tools/runtime-benchmark/reference.json |
+      grep -E '^(ratio|REGRESSION|as before|no regression)'
 
     stage "AddressSanitizer + UndefinedBehaviorSanitizer"
     wait_build asan

@@ -6,18 +6,29 @@
 // a lossless soak that must lose nothing and whose resident memory must not grow beyond a bound
 // (exit status 1 otherwise).
 //
-//   fba-runtime-benchmark [--quick] [--json]
+// Regressions show as ratios to plain implementations measured in the same run, which a loaded or
+// slower machine slows alike: a hop of the deterministic executor against a mutex-guarded
+// std::deque hop, and building a 1000-component task against yaml-cpp's parse of its file.
+// --reference FILE compares them with the committed figures (tools/runtime-benchmark/reference.json)
+// and names each that grew by more than a third.
+//
+//   fba-runtime-benchmark [--quick] [--json] [--reference FILE]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <sys/resource.h>
 #include <string>
 #include <vector>
 
-#include <sys/resource.h>
+#include <deque>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include <fba/component.hpp>
 #include <fba/log.hpp>
@@ -133,6 +144,45 @@ PerSample per_sample(int hops, long count, Mode mode, int reps) {
   return best;
 }
 
+// The plainest good hop in one thread: a sample through K mutex-guarded queues, each popped and
+// pushed to the next, a shared pointer moved along. CPU nanoseconds per sample, best of `reps`.
+double plain_queue_chain_cpu_ns(int hops, long count, int reps) {
+  struct Queue {
+    std::mutex mutex;
+    std::deque<std::shared_ptr<const std::int64_t>> items;
+  };
+  double best = 1e300;
+  for (int r = 0; r < reps; ++r) {
+    std::vector<Queue> queues(static_cast<std::size_t>(hops) + 1);
+    std::int64_t sum = 0;
+    const double cpu0 = cpu_s();
+    for (long i = 0; i < count; ++i) {
+      {
+        std::lock_guard lock(queues[0].mutex);
+        queues[0].items.push_back(std::make_shared<const std::int64_t>(i));
+      }
+      for (std::size_t k = 0; k < queues.size(); ++k) {
+        std::shared_ptr<const std::int64_t> sample;
+        {
+          std::lock_guard lock(queues[k].mutex);
+          sample = std::move(queues[k].items.front());
+          queues[k].items.pop_front();
+        }
+        if (k + 1 == queues.size()) {
+          sum += *sample;
+          continue;
+        }
+        std::lock_guard lock(queues[k + 1].mutex);
+        queues[k + 1].items.push_back(std::move(sample));
+      }
+    }
+    const double cpu = (cpu_s() - cpu0) * 1e9 / static_cast<double>(count);
+    if (sum != count * (count - 1) / 2) std::exit(1);  // every sample went through
+    best = std::min(best, cpu);
+  }
+  return best;
+}
+
 long rss_kib() {
   std::ifstream status("/proc/self/status");
   std::string line;
@@ -145,14 +195,27 @@ long rss_kib() {
 
 int main(int argc, char** argv) {
   bool quick = false, json = false;
+  std::string reference;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) quick = true;
     else if (!std::strcmp(argv[i], "--json")) json = true;
+    else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc) reference = argv[++i];
     else {
-      std::fprintf(stderr, "usage: fba-runtime-benchmark [--quick] [--json]\n");
+      std::fprintf(stderr, "usage: fba-runtime-benchmark [--quick] [--json] [--reference FILE]\n");
       return 2;
     }
   }
+  nlohmann::json expected;
+  if (!reference.empty()) {
+    std::ifstream in(reference);
+    expected = nlohmann::json::parse(in, nullptr, false);
+    if (!in || !expected.is_object()) {
+      std::fprintf(stderr, "fba-runtime-benchmark: --reference %s: expected a JSON object of ratios, found %s\n", reference.c_str(),
+                   in ? "something else" : "no readable file");
+      return 2;
+    }
+  }
+  std::map<std::string, double> ratios;  // what the reference file holds, measured now
   fba::set_log_level("warn");
   const long n = quick ? 20'000 : 1'000'000;
   const int reps = quick ? 1 : 3;
@@ -179,6 +242,11 @@ int main(int argc, char** argv) {
     out(m + " per extra hop (K=1..50)", (t[2].wall_ns - t[0].wall_ns) / 49.0, "ns");
     out(m + " per extra hop (K=10..50)", (t[2].wall_ns - t[1].wall_ns) / 40.0, "ns");
     out(m + " CPU per extra hop (K=1..50)", (t[2].cpu_ns - t[0].cpu_ns) / 49.0, "ns");
+    if (mode == Mode::Deterministic) {
+      const double plain = (plain_queue_chain_cpu_ns(50, count, reps) - plain_queue_chain_cpu_ns(1, count, reps)) / 49.0;
+      out("plain mutex-guarded deque: CPU per extra hop (K=1..50)", plain, "ns");
+      ratios["deterministic CPU per extra hop / plain queue hop"] = (t[2].cpu_ns - t[0].cpu_ns) / 49.0 / plain;
+    }
   }
 
   // Latency: one sample at a time, every millisecond, through K hops of both threaded kinds.
@@ -223,6 +291,15 @@ int main(int argc, char** argv) {
       best = std::min(best, std::chrono::duration<double>(Clock::now() - start).count());
     }
     out("build a task of 1000 components", best * 1e3, "ms");
+    double parse = 1e300;
+    for (int i = 0; i < reps; ++i) {
+      const auto start = Clock::now();
+      const YAML::Node doc = YAML::Load(yaml);
+      parse = std::min(parse, std::chrono::duration<double>(Clock::now() - start).count());
+      if (!doc["components"]) return 1;
+    }
+    out("yaml-cpp's parse of its file alone", parse * 1e3, "ms");
+    ratios["build 1000 components / yaml-cpp parse"] = best / parse;
   }
 
   // Soak: a lossless threaded chain; the sink fails the run on any gap; memory must not grow. After
@@ -259,6 +336,19 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  for (const auto& [key, value] : ratios) out("ratio: " + key, value, "");
+  // A ratio a third above its reference is named: the hop or the loader got slower than the plain
+  // code beside it, whatever the machine's speed or load. Printed, not failed: a loaded machine's
+  // noise must not fail CI, and a person reads it the day it lands.
+  bool slower = false;
+  for (const auto& [key, value] : ratios) {
+    if (!expected.contains(key) || !expected[key].is_number()) continue;
+    const double ref = expected[key].get<double>();
+    const bool worse = value > ref * 4.0 / 3.0;
+    slower |= worse;
+    std::printf("%s %s: %.2f now, %.2f in %s\n", worse ? "REGRESSION" : "as before:", key.c_str(), value, ref, reference.c_str());
+  }
+  if (!reference.empty() && !slower) std::printf("no regression against %s\n", reference.c_str());
   if (json) {
     std::printf("{\n");
     for (std::size_t i = 0; i < lines.size(); ++i) std::printf("%s%s\n", lines[i].c_str(), i + 1 < lines.size() ? "," : "");
