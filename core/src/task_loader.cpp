@@ -207,11 +207,19 @@ std::string read_text(const fs::path& path, std::string& problem) {
     problem = "cannot be opened: " + std::string(std::strerror(errno));
     return {};
   }
-  // One byte more than the limit tells a file that grew since it was measured.
-  std::string text(kMaxFileBytes + 1, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  if (text.size() > kMaxFileBytes) problem = "is larger than 4 MiB" + limit;
+  // Read in pieces up to one byte more than the limit, which tells a file that grew since it was
+  // measured (a 4 MiB buffer made zeroed for each file cost a third of a --check).
+  std::string text;
+  if (!ec) text.reserve(static_cast<std::size_t>(size) + 1);
+  char piece[64 * 1024];
+  while (text.size() <= kMaxFileBytes && in.read(piece, sizeof piece).gcount() > 0) {
+    text.append(piece, static_cast<std::size_t>(in.gcount()));
+    if (!in) break;
+  }
+  if (text.size() > kMaxFileBytes) {
+    problem = "is larger than 4 MiB" + limit;
+    text.resize(kMaxFileBytes + 1);
+  }
   return text;
 }
 
