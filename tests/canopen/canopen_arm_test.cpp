@@ -231,3 +231,215 @@ TEST(CanopenArmConfiguration, ImpossibleJointsAreRefused) {
   bad.node = 128;
   EXPECT_THROW(CanopenArm(master, {bad}), std::invalid_argument);
 }
+
+// Start-up, each failure its own emulator: the arm refuses what is not a healthy CiA 402 drive,
+// naming the joint, its node and why, before any drive is enabled.
+class CanopenArmStartUp : public ::testing::TestWithParam<Transport> {
+ protected:
+  // Six drives as `options` has them (20 ms heartbeats), the master, and the arm (not started).
+  void make(fba::emulators::CanopenArmOptions options, ArmOptions arm = {}) {
+    options.nodes = {1, 2, 3, 4, 5, 6};
+    options.heartbeat_ms = 20;
+    emulated_.emplace(GetParam(), options);
+    master_.emplace(emulated_->host(), MasterOptions{.sdo_timeout = 3s});
+    std::vector<ArmJoint> joints;
+    for (int n = 1; n <= 6; ++n) joints.push_back({"joint" + std::to_string(n), n, kCounts, 0, -2.5, 2.5, 20.0});
+    arm.heartbeat_ms = 20;
+    arm.heartbeat_timeout = 3s;
+    arm_.emplace(*master_, joints, arm);
+  }
+  fba::emulators::CanopenArmEmulator& emulator() { return emulated_->emulator(); }
+  std::string start_failure() {
+    try {
+      arm_->start();
+    } catch (const ArmStopped& e) {
+      return e.what();
+    }
+    return "";
+  }
+
+  std::optional<fba::test::EmulatedArm> emulated_;
+  std::optional<Master> master_;
+  std::optional<CanopenArm> arm_;
+};
+
+INSTANTIATE_TEST_SUITE_P(Transports, CanopenArmStartUp, ::testing::Values(Transport::slcan_pty, Transport::socketpair),
+                         fba::test::transport_name);
+
+// The order the drives heard: the communication reset of every node first, then (per node) the
+// mode of operation before the controlword that enables operation.
+TEST_P(CanopenArmStartUp, ResetsCommunicationThenSetsTheModeBeforeEnablingEachDrive) {
+  make({});
+  arm_->start();
+  const auto heard = emulator().heard();
+  long first_sdo = -1;
+  for (long i = 0; i < static_cast<long>(heard.size()) && first_sdo < 0; ++i)
+    if ((heard[static_cast<std::size_t>(i)].id & 0x780) == 0x600) first_sdo = i;
+  ASSERT_GE(first_sdo, 0);
+  for (int node = 1; node <= 6; ++node) {
+    long reset = -1, mode = -1, enable = -1;
+    for (long i = 0; i < static_cast<long>(heard.size()); ++i) {
+      const auto& f = heard[static_cast<std::size_t>(i)];
+      if (f.id == 0x000 && f.dlc == 2 && f.data[0] == 0x82 && f.data[1] == node && reset < 0) reset = i;
+      if (f.id == 0x600u + node && f.data[0] == 0x2F && f.data[1] == 0x60 && f.data[2] == 0x60 && mode < 0) mode = i;
+      if (f.id == 0x600u + node && f.data[0] == 0x2B && f.data[1] == 0x40 && f.data[2] == 0x60 && f.data[4] == 0x0F &&
+          enable < 0)
+        enable = i;
+    }
+    EXPECT_GE(reset, 0) << "node " << node;
+    EXPECT_LT(reset, first_sdo) << "node " << node << ": an SDO went out before every node was reset";
+    EXPECT_GE(mode, 0) << "node " << node;
+    EXPECT_GE(enable, 0) << "node " << node;
+    EXPECT_LT(mode, enable) << "node " << node << ": enabled before its mode of operation was set";
+    EXPECT_EQ(emulator().statusword(node) & 0x6F, 0x27) << "node " << node;
+  }
+}
+
+TEST_P(CanopenArmStartUp, ADriveInFaultIsRefusedNamingItsErrorCodeAndNotReset) {
+  fba::emulators::CanopenArmOptions options;
+  options.fault_at_start = {{3, 0x7121}};
+  make(options);
+  const std::string why = start_failure();
+  EXPECT_TRUE(contains(why, "joint 'joint3' (node 3): the drive is in fault at start-up, error code 0x7121 (motor blocked)"))
+      << why;
+  EXPECT_TRUE(contains(why, "it is not reset unless allowed (reset_faults_at_start)")) << why;
+  EXPECT_EQ(emulator().statusword(3) & 0x4F, 0x08) << "the fault was reset";
+  for (int node = 1; node <= 6; ++node)
+    EXPECT_NE(emulator().statusword(node) & 0x6F, 0x27) << "node " << node << " was enabled";
+}
+
+TEST_P(CanopenArmStartUp, ADriveInFaultIsResetWhenAllowedWithItsErrorCodeTold) {
+  fba::emulators::CanopenArmOptions options;
+  options.fault_at_start = {{3, 0x7121}};
+  std::vector<std::string> notices;
+  make(options, ArmOptions{.reset_faults = true, .notice = [&](const std::string& s) { notices.push_back(s); }});
+  arm_->start();
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_TRUE(contains(notices[0], "joint 'joint3' (node 3): the drive is in fault at start-up, error code 0x7121")) << notices[0];
+  EXPECT_TRUE(contains(notices[0], "resetting it")) << notices[0];
+  for (int node = 1; node <= 6; ++node) EXPECT_EQ(emulator().statusword(node) & 0x6F, 0x27) << "node " << node;
+}
+
+TEST_P(CanopenArmStartUp, ANodeThatIsNotACia402DriveIsRefused) {
+  fba::emulators::CanopenArmOptions options;
+  options.device_type = {{5, 0x00040191}};  // CiA 401: generic I/O
+  make(options);
+  const std::string why = start_failure();
+  EXPECT_TRUE(contains(why, "joint 'joint5' (node 5): device type 0x00040191 (0x1000) is device profile 401, not a CiA 402 drive"))
+      << why;
+  for (int node = 1; node <= 6; ++node)
+    EXPECT_NE(emulator().statusword(node) & 0x6F, 0x27) << "node " << node << " was enabled";
+}
+
+TEST_P(CanopenArmStartUp, ANodeThatNeverBootsIsNamed) {
+  fba::emulators::CanopenArmOptions options;
+  options.silent = {2};
+  make(options, ArmOptions{.enable_timeout = 500ms});
+  const std::string why = start_failure();
+  EXPECT_TRUE(contains(why, "no boot-up message within 500 ms of an NMT reset communication from joint 'joint2' (node 2)"))
+      << why;
+  EXPECT_TRUE(contains(why, "quick stop failed on 1 of 6 joints")) << why;
+}
+
+// Cyclic synchronous position: every drive takes its set-point on the same SYNC, and the drives'
+// set-points, as the emulator recorded them per SYNC, stay in step along the way.
+TEST_P(CanopenArmTest, InCyclicSynchronousPositionEveryDriveTakesItsSetPointOnEverySyncInStep) {
+  arm_->begin_cyclic();
+  std::vector<double> start(6);
+  for (int n = 1; n <= 6; ++n) start[n - 1] = -0.1 * n;  // drive position 0, zero offset 1000 n
+  const std::vector<double> goal{0.5, 0.2, 0.3, -0.9, 0.1, -0.2};
+  const auto before = emulator().syncs_seen();
+  constexpr int kSteps = 20;
+  for (int k = 1; k <= kSteps; ++k) {
+    std::vector<double> q(6);
+    for (int j = 0; j < 6; ++j) q[j] = start[j] + (goal[j] - start[j]) * k / kSteps;
+    const ArmSample s = arm_->cycle(q, 1s);
+    ASSERT_EQ(s.positions.size(), 6u);
+  }
+  EXPECT_EQ(emulator().syncs_seen(), before + kSteps);  // one SYNC a cycle
+  std::vector<fba::emulators::SyncSetPoints> taken;
+  for (const auto& r : emulator().set_points())
+    if (r.sync > before) taken.push_back(r);
+  ASSERT_EQ(taken.size(), static_cast<std::size_t>(kSteps));
+  for (const auto& r : taken) {
+    EXPECT_EQ(r.mode, 8);
+    ASSERT_EQ(r.set_points.size(), 6u) << "SYNC " << r.sync << ": a drive took no set-point";
+    // Every drive at the same share of its way, to the count.
+    const double share = (r.set_points[0].second - 1000.0 - start[0] * kCounts) / ((goal[0] - start[0]) * kCounts);
+    for (const auto& [node, counts] : r.set_points) {
+      const double expected = (start[node - 1] + (goal[node - 1] - start[node - 1]) * share) * kCounts + 1000.0 * node;
+      EXPECT_NEAR(counts, expected, 1.0) << "SYNC " << r.sync << ", node " << node;
+    }
+  }
+  arm_->end_cyclic();
+  // Back in profile position, where they stand: a move works as before.
+  arm_->move_and_wait(goal, 1.0, 10s);
+  EXPECT_EQ(master_->read<std::int8_t>(1, 0x6061, 0), 1);
+}
+
+// One drive does not follow its set-points: on the SYNC where it shows it, every joint is
+// quick-stopped, naming it, and no drive is given another set-point.
+TEST_P(CanopenArmTest, ADriveThatDoesNotFollowItsSetPointsStopsEveryJointOnThatSync) {
+  arm_->begin_cyclic();
+  std::vector<double> q(6);
+  for (int n = 1; n <= 6; ++n) q[n - 1] = -0.1 * n;
+  for (int k = 0; k < 3; ++k) arm_->cycle(q, 1s);
+  emulator().ignore_set_points(4);
+  std::string why;
+  try {
+    for (int k = 0; k < 1000; ++k) {  // the bound only catches a hang
+      for (double& x : q) x += 0.001;
+      arm_->cycle(q, 1s);
+    }
+  } catch (const ArmStopped& e) {
+    why = e.what();
+    EXPECT_EQ(e.node, 4);
+  }
+  EXPECT_TRUE(contains(why, "joint 'joint4' (node 4): does not follow its set-point")) << why;
+  EXPECT_TRUE(contains(why, "every joint was sent quick stop")) << why;
+  for (int node : {1, 2, 3, 5, 6}) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+  // After the last SYNC, only the quick stops went out: no set-point (RPDO), no further SYNC.
+  const auto heard = emulator().heard();
+  long last_sync = -1;
+  for (long i = 0; i < static_cast<long>(heard.size()); ++i)
+    if (heard[static_cast<std::size_t>(i)].id == 0x080) last_sync = i;
+  for (long i = last_sync + 1; i < static_cast<long>(heard.size()); ++i) {
+    const auto& f = heard[static_cast<std::size_t>(i)];
+    EXPECT_FALSE((f.id & 0x780) == 0x200) << "a set-point to node " << (f.id & 0x7F) << " after the failure";
+  }
+  for (int node = 1; node <= 6; ++node) EXPECT_GT(fba::test::last_quick_stop(heard, node), last_sync) << "node " << node;
+}
+
+// Profile position: a drive that does not acknowledge its set-point stops the arm within one SDO
+// timeout of the set-points' SYNC; the master asks for the acknowledges by SYNC, each answered by
+// the drives' PDOs, not by polling the drive's statusword through SDO.
+TEST_P(CanopenArmTest, ASetPointNotAcknowledgedStopsEveryJointWithoutPollingTheDriveBySdo) {
+  emulator().ignore_set_points(2);
+  const auto before = emulator().heard().size();
+  std::string why;
+  try {
+    arm_->move_to({1, 1, 1, 1, 1, 1}, 0.01);
+  } catch (const ArmStopped& e) {
+    why = e.what();
+    EXPECT_EQ(e.node, 2);
+  }
+  EXPECT_TRUE(contains(why, "joint 'joint2' (node 2): did not acknowledge its set-point within 3000 ms")) << why;
+  EXPECT_TRUE(contains(why, "every joint was sent quick stop")) << why;
+  for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+  const auto heard = emulator().heard();
+  ASSERT_LT(before, heard.size());
+  long set_points = -1;  // the RPDO with bit 4 to node 2
+  for (long i = static_cast<long>(before); i < static_cast<long>(heard.size()) && set_points < 0; ++i)
+    if (heard[static_cast<std::size_t>(i)].id == 0x202 && (heard[static_cast<std::size_t>(i)].data[0] & 0x10)) set_points = i;
+  ASSERT_GE(set_points, 0);
+  const long stopped = fba::test::last_quick_stop(heard, 2);
+  std::size_t statusword_reads = 0, syncs = 0;
+  for (long i = set_points; i < stopped; ++i) {
+    const auto& f = heard[static_cast<std::size_t>(i)];
+    statusword_reads += f.id == 0x602 && f.data[0] == 0x40 && f.data[1] == 0x41 && f.data[2] == 0x60;
+    syncs += f.id == 0x080;
+  }
+  EXPECT_EQ(statusword_reads, 0u);
+  // About one SYNC a SYNC period (20 ms) over the 3 s: nothing like 750 frames a second.
+  EXPECT_LE(syncs, 3000u / 20u + 2u);
+}

@@ -26,7 +26,9 @@ commands:
   read NODE INDEX[:SUB]            expedited SDO upload; INDEX and SUB in hex (6041, 1018:04)
   write NODE INDEX[:SUB] SIZE VALUE   expedited SDO download of SIZE (1, 2, 4) bytes; VALUE decimal or 0x hex
   status NODE                      a CiA 402 drive's state, position and error code
-  move NODE TARGET [VELOCITY]      start the node, enable the drive and make a profile position move
+  move NODE TARGET [VELOCITY]      start the node, set profile position mode, enable the drive and make a
+                                   profile position move (a drive in fault is refused, naming its error code)
+  reset NODE                       reset a drive's fault (naming the error code it had)
   monitor SECONDS                  print NMT states, EMCY, lost heartbeats and reboots as they come
 )";
 
@@ -135,10 +137,27 @@ int run(co::Master& m, const std::vector<std::string>& a) {
     const auto velocity = static_cast<std::uint32_t>(a.size() > 3 ? number(a[3], "velocity", 1, UINT32_MAX) : 100000);
     m.nmt(co::NmtCommand::start, node);
     co::cia402::Drive drive(m, node);
-    drive.enable(2s);
-    drive.set_profile(velocity, 10 * velocity);
+    drive.set_profile(velocity, 10 * velocity);  // the mode before "operation enabled"
+    try {
+      drive.enable(2s);
+    } catch (const co::cia402::DriveFault& e) {
+      throw co::Error(std::string(e.what()) + "; 'fba-canopen reset " + std::to_string(node) + "' resets it");
+    }
     drive.move_to(target, 600s);
     fmt::print("node {}: at {}\n", node, drive.position());
+    return 0;
+  }
+  if (command == "reset") {
+    co::cia402::Drive drive(m, node_arg(a, 1));
+    const std::uint16_t s = drive.statusword();
+    if (co::cia402::decode(s) != co::cia402::State::fault) {
+      fmt::print("node {}: not in fault ({}, statusword 0x{:04X}): nothing to reset\n", drive.node(),
+                 co::cia402::to_string(co::cia402::decode(s)), s);
+      return 0;
+    }
+    const std::uint16_t code = drive.error_code();
+    drive.fault_reset(2s);
+    fmt::print("node {}: fault reset (its error code was 0x{:04X}: {})\n", drive.node(), code, co::emcy_name(code));
     return 0;
   }
   if (command == "monitor") {

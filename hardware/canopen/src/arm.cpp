@@ -7,6 +7,7 @@
 #include <set>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 namespace fba::canopen {
 
@@ -113,41 +114,90 @@ auto CanopenArm::guarded(F&& f) -> decltype(f()) {
 }
 
 void CanopenArm::start() {
-  guarded([&] {
-    for (std::size_t i = 0; i < joints_.size(); ++i) {
-      const ArmJoint& j = joints_[i];
-      master_.write<std::uint16_t>(j.node, 0x1017, 0, options_.heartbeat_ms);
-      // The drive's own software limits, in counts, as a second line behind the check in move_to.
-      const std::int32_t a = to_counts(i, j.lower), b = to_counts(i, j.upper);
-      master_.write<std::int32_t>(j.node, cia402::od::kSoftwarePositionLimit, 1, std::min(a, b));
-      master_.write<std::int32_t>(j.node, cia402::od::kSoftwarePositionLimit, 2, std::max(a, b));
-      // The state a task watches, on every SYNC: one SYNC, one fresh sample of every drive.
-      master_.configure_tpdo(j.node, 1,
-                             PdoConfig{{{cia402::od::kStatusword, 0, 16}, {cia402::od::kPositionActual, 0, 32}}, 1});
-      master_.configure_tpdo(j.node, 2, PdoConfig{{{cia402::od::kVelocityActual, 0, 32}}, 1});
-      // Set-points by RPDO taking effect on the next SYNC: every joint starts its move at once.
-      master_.configure_rpdo(j.node, 1,
-                             PdoConfig{{{cia402::od::kControlword, 0, 16}, {cia402::od::kTargetPosition, 0, 32}}, 1});
-      master_.nmt(NmtCommand::start, j.node);
-      if (options_.heartbeat_ms > 0) master_.watch_heartbeat(j.node, options_.heartbeat_timeout);
-    }
-    for (std::size_t i = 0; i < joints_.size(); ++i) {
-      drives_[i].enable(options_.enable_timeout);
-      const auto v =
-          static_cast<std::uint32_t>(std::max(1.0, std::abs(joints_[i].max_velocity * joints_[i].counts_per_unit)));
-      drives_[i].set_profile(
-          v, static_cast<std::uint32_t>(std::max(1.0, std::abs(acceleration(i) * joints_[i].counts_per_unit))));
-    }
-  });
+  guarded([&] { start_up(); });
 }
 
-double CanopenArm::move_to(const std::vector<double>& targets, double speed) {
+void CanopenArm::start_up() {
+  auto notice = [&](const std::string& text) {
+    if (options_.notice) options_.notice(text);
+  };
+  // Communication reset, then every node's boot-up: the nodes are on the bus, with these ids, and
+  // their communication objects (PDOs, heartbeat) are at their defaults before they are configured.
+  // What is already waiting on the line (a boot-up from before) is taken in first, so that it is
+  // not taken for the answer.
+  master_.spin_for(std::chrono::milliseconds(10));
+  for (const ArmJoint& j : joints_) master_.nmt(NmtCommand::reset_communication, j.node);
+  master_.spin_until(
+      [&] {
+        return std::none_of(joints_.begin(), joints_.end(), [&](const ArmJoint& j) { return master_.awaiting_boot(j.node); });
+      },
+      options_.enable_timeout);
+  std::vector<std::string> silent;
+  int first_silent = 0;
+  for (const ArmJoint& j : joints_)
+    if (master_.awaiting_boot(j.node)) {
+      silent.push_back(joint_name(j));
+      if (!first_silent) first_silent = j.node;
+    }
+  if (!silent.empty())
+    throw JointFailure(first_silent,
+                       fmt::format("no boot-up message within {} ms of an NMT reset communication from {} (is it on the "
+                                   "bus, powered, with this node id?)",
+                                   options_.enable_timeout.count(), fmt::join(silent, ", ")));
+  // Only CiA 402 drives: 0x1000's low 16 bits name the device profile.
+  for (const ArmJoint& j : joints_) {
+    const auto type = master_.read<std::uint32_t>(j.node, 0x1000, 0);
+    if ((type & 0xFFFF) != cia402::kDeviceProfile)
+      throw JointFailure(j.node, fmt::format("{}: device type 0x{:08X} (0x1000) is device profile {}, not a CiA 402 drive "
+                                             "(402): refused",
+                                             joint_name(j), type, type & 0xFFFF));
+  }
+  // A drive in fault is the drive's news: its error code is told, and it is reset only with leave.
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    const std::uint16_t word = drives_[i].statusword();
+    if (cia402::decode(word) != cia402::State::fault) continue;
+    const std::uint16_t code = drives_[i].error_code();
+    const std::string what = fmt::format("{}: the drive is in fault at start-up, error code 0x{:04X} ({}), statusword 0x{:04X}",
+                                         joint_name(joints_[i]), code, emcy_name(code), word);
+    if (!options_.reset_faults)
+      throw JointFailure(joints_[i].node, what + "; it is not reset unless allowed (reset_faults_at_start)");
+    notice(what + "; resetting it, as allowed (reset_faults_at_start)");
+    drives_[i].fault_reset(options_.enable_timeout);
+  }
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    const ArmJoint& j = joints_[i];
+    master_.write<std::uint16_t>(j.node, 0x1017, 0, options_.heartbeat_ms);
+    // The drive's own software limits, in counts, as a second line behind the check in move_to.
+    const std::int32_t a = to_counts(i, j.lower), b = to_counts(i, j.upper);
+    master_.write<std::int32_t>(j.node, cia402::od::kSoftwarePositionLimit, 1, std::min(a, b));
+    master_.write<std::int32_t>(j.node, cia402::od::kSoftwarePositionLimit, 2, std::max(a, b));
+    // The state a task watches, on every SYNC: one SYNC, one fresh sample of every drive.
+    master_.configure_tpdo(j.node, 1,
+                           PdoConfig{{{cia402::od::kStatusword, 0, 16}, {cia402::od::kPositionActual, 0, 32}}, 1});
+    master_.configure_tpdo(j.node, 2, PdoConfig{{{cia402::od::kVelocityActual, 0, 32}}, 1});
+    // Set-points by RPDO taking effect on the next SYNC: every joint starts its move at once.
+    master_.configure_rpdo(j.node, 1,
+                           PdoConfig{{{cia402::od::kControlword, 0, 16}, {cia402::od::kTargetPosition, 0, 32}}, 1});
+    // The mode of operation before "operation enabled", as CiA 402 asks; the target where the
+    // drive stands, so that nothing moves when it is enabled.
+    master_.write<std::int32_t>(j.node, cia402::od::kTargetPosition, 0, drives_[i].position());
+    drives_[i].set_mode(cia402::kProfilePosition);
+    master_.nmt(NmtCommand::start, j.node);
+    if (options_.heartbeat_ms > 0) master_.watch_heartbeat(j.node, options_.heartbeat_timeout);
+  }
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    drives_[i].enable(options_.enable_timeout);  // a fault now is new: not reset
+    const auto v =
+        static_cast<std::uint32_t>(std::max(1.0, std::abs(joints_[i].max_velocity * joints_[i].counts_per_unit)));
+    drives_[i].set_profile(
+        v, static_cast<std::uint32_t>(std::max(1.0, std::abs(acceleration(i) * joints_[i].counts_per_unit))));
+  }
+}
+
+std::vector<std::int32_t> CanopenArm::checked_counts(const std::vector<double>& targets) const {
   if (targets.size() != joints_.size())
     throw LimitError(
         fmt::format("CANopen arm: {} targets for {} joints; no command was sent", targets.size(), joints_.size()));
-  if (!(speed > 0 && speed <= 1))
-    throw LimitError(
-        fmt::format("CANopen arm: speed {} is not in (0, 1] of the maximum velocities; no command was sent", speed));
   std::vector<std::int32_t> counts(targets.size());
   for (std::size_t i = 0; i < targets.size(); ++i) {
     const ArmJoint& j = joints_[i];
@@ -156,6 +206,14 @@ double CanopenArm::move_to(const std::vector<double>& targets, double speed) {
                                    targets[i], j.lower, j.upper));
     counts[i] = to_counts(i, targets[i]);
   }
+  return counts;
+}
+
+double CanopenArm::move_to(const std::vector<double>& targets, double speed) {
+  if (targets.size() == joints_.size() && !(speed > 0 && speed <= 1))
+    throw LimitError(
+        fmt::format("CANopen arm: speed {} is not in (0, 1] of the maximum velocities; no command was sent", speed));
+  const std::vector<std::int32_t> counts = checked_counts(targets);
   return guarded([&] {
     const auto now = read_positions();
     // One path s from 0 to 1 for every joint (joint i moves distance_i * s): the path's velocity and
@@ -198,20 +256,31 @@ double CanopenArm::move_to(const std::vector<double>& targets, double speed) {
             static_cast<std::uint8_t>(t >> 16),     static_cast<std::uint8_t>(t >> 24)};
         master_.send_rpdo(joints_[i].node, 1, data);
       }
-      sync(options_.enable_timeout);  // its TPDO answers taken in here, so no later sample takes them for its own
+      sync(master_.options().sdo_timeout);  // its TPDO answers taken in here, so no later sample takes them for its own
     };
     set_point(base | cia402::cw::kNewSetPoint);
-    const auto deadline = Clock::now() + options_.enable_timeout;
-    for (std::size_t i = 0; i < joints_.size(); ++i) {
-      for (std::uint16_t s = drives_[i].statusword(); !(s & cia402::sw::kSetPointAcknowledge);
-           s = drives_[i].statusword()) {
+    // The acknowledges (statusword bit 12) come in the drives' PDOs answering a SYNC: the one that
+    // carried the set-points, else one repeated every SYNC period. A drive that has not acknowledged
+    // within one SDO timeout of the set-points' SYNC stops the arm (guarded: every joint is
+    // quick-stopped), so the others do not move on alone for longer than that.
+    const auto deadline = Clock::now() + master_.options().sdo_timeout;
+    for (;;) {
+      std::size_t missing = joints_.size();
+      std::uint16_t word = 0;
+      for (std::size_t i = 0; i < joints_.size() && missing == joints_.size(); ++i) {
+        const can::Frame f = master_.tpdo(joints_[i].node, 1)->frame;
+        const auto s = static_cast<std::uint16_t>(f.data[0] | f.data[1] << 8);
         check_drive(i, s);
-        if (Clock::now() > deadline)
-          throw JointFailure(joints_[i].node,
-                             fmt::format("{}: no set-point acknowledge within {} ms (statusword 0x{:04X})",
-                                         joint_name(joints_[i]), options_.enable_timeout.count(), s));
-        master_.spin_for(std::chrono::milliseconds(1));
+        if (!(s & cia402::sw::kSetPointAcknowledge)) missing = i, word = s;
       }
+      if (missing == joints_.size()) break;
+      if (Clock::now() >= deadline)
+        throw JointFailure(joints_[missing].node,
+                           fmt::format("{}: did not acknowledge its set-point within {} ms of the SYNC that carried it "
+                                       "(statusword 0x{:04X}, bit 12 clear)",
+                                       joint_name(joints_[missing]), master_.options().sdo_timeout.count(), word));
+      master_.spin_for(options_.sync_period);
+      sync(master_.options().sdo_timeout);
     }
     set_point(base);
     return duration;
@@ -276,6 +345,12 @@ void CanopenArm::sync(std::chrono::milliseconds timeout) {
 ArmSample CanopenArm::sample(std::chrono::milliseconds timeout) {
   return guarded([&] {
     sync(timeout);
+    return read_sample(false);
+  });
+}
+
+ArmSample CanopenArm::read_sample(bool cyclic) {
+  {
     ArmSample out;
     out.reached = true;
     for (std::size_t i = 0; i < joints_.size(); ++i) {
@@ -287,6 +362,10 @@ ArmSample CanopenArm::sample(std::chrono::milliseconds timeout) {
                                                joint_name(j), state.dlc, velocity.dlc));
       const auto word = static_cast<std::uint16_t>(state.data[0] | state.data[1] << 8);
       check_drive(i, word);
+      if (cyclic && !(word & cia402::sw::kFollowsCommand))
+        throw JointFailure(j.node, fmt::format("{}: does not follow its set-point (statusword 0x{:04X}, bit 12 clear "
+                                               "on the SYNC that carried it)",
+                                               joint_name(j), word));
       const auto le32 = [](const std::uint8_t* b) {
         return static_cast<std::int32_t>(static_cast<std::uint32_t>(b[0]) | static_cast<std::uint32_t>(b[1]) << 8 |
                                          static_cast<std::uint32_t>(b[2]) << 16 |
@@ -297,6 +376,47 @@ ArmSample CanopenArm::sample(std::chrono::milliseconds timeout) {
       out.reached = out.reached && (word & cia402::sw::kTargetReached);
     }
     return out;
+  }
+}
+
+void CanopenArm::begin_cyclic() {
+  guarded([&] {
+    const auto period = static_cast<std::uint8_t>(std::clamp<std::int64_t>(options_.sync_period.count(), 1, 255));
+    for (std::size_t i = 0; i < joints_.size(); ++i) {
+      const int node = joints_[i].node;
+      master_.write<std::uint8_t>(node, cia402::od::kInterpolationPeriod, 1, period);
+      master_.write<std::int8_t>(node, cia402::od::kInterpolationPeriod, 2, -3);  // milliseconds
+      // Held where it stands: the first set-point it takes in the mode is its own position.
+      master_.write<std::int32_t>(node, cia402::od::kTargetPosition, 0, drives_[i].position());
+      drives_[i].set_mode(cia402::kCyclicSynchronousPosition);
+      check_drive(i, drives_[i].statusword());
+    }
+  });
+}
+
+ArmSample CanopenArm::cycle(const std::vector<double>& set_points, std::chrono::milliseconds timeout) {
+  const std::vector<std::int32_t> counts = checked_counts(set_points);
+  return guarded([&] {
+    for (std::size_t i = 0; i < joints_.size(); ++i) {
+      const auto t = static_cast<std::uint32_t>(counts[i]);
+      const std::uint16_t controlword = cia402::cw::kEnableOperation;
+      const std::array<std::uint8_t, 6> data{
+          static_cast<std::uint8_t>(controlword), static_cast<std::uint8_t>(controlword >> 8),
+          static_cast<std::uint8_t>(t),           static_cast<std::uint8_t>(t >> 8),
+          static_cast<std::uint8_t>(t >> 16),     static_cast<std::uint8_t>(t >> 24)};
+      master_.send_rpdo(joints_[i].node, 1, data);
+    }
+    sync(timeout);
+    return read_sample(true);
+  });
+}
+
+void CanopenArm::end_cyclic() {
+  guarded([&] {
+    for (std::size_t i = 0; i < joints_.size(); ++i) {
+      master_.write<std::int32_t>(joints_[i].node, cia402::od::kTargetPosition, 0, drives_[i].position());
+      drives_[i].set_mode(cia402::kProfilePosition);
+    }
   });
 }
 

@@ -87,20 +87,27 @@ std::uint16_t Drive::wait(const std::function<bool(std::uint16_t)>& done, std::c
   }
 }
 
-void Drive::enable(std::chrono::milliseconds timeout) {
+std::uint16_t Drive::enable(std::chrono::milliseconds timeout, bool reset_fault) {
   const auto deadline = Clock::now() + timeout;
+  std::uint16_t reset = 0;
   for (;;) {
     master_.throw_if_faulted(node_);
     const State state = this->state();
-    if (state == State::operation_enabled) return;
+    if (state == State::operation_enabled) return reset;
     if (Clock::now() >= deadline)
       throw Error(fmt::format("node {}: could not enable the drive within {} ms; it stays in \"{}\"", node_,
                               timeout.count(), to_string(state)));
     switch (state) {
-      case State::fault:
-        controlword(cw::kDisableVoltage);  // bit 7 low, so that the reset below is a rising edge
-        controlword(cw::kFaultReset);
+      case State::fault: {
+        const std::uint16_t code = error_code();
+        if (!reset_fault || reset != 0)
+          throw DriveFault(node_, code,
+                           fmt::format("node {}: the drive is in fault{}, error code 0x{:04X} ({})", node_,
+                                       reset != 0 ? " again after its fault was reset" : "", code, emcy_name(code)));
+        reset = code ? code : 0xFFFF;  // a fault without a code was reset too
+        fault_reset(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()));
         break;
+      }
       case State::switch_on_disabled:
         controlword(cw::kShutdown);
         break;
@@ -122,12 +129,15 @@ void Drive::enable(std::chrono::milliseconds timeout) {
   }
 }
 
+void Drive::set_mode(std::int8_t mode) {
+  master_.write<std::int8_t>(node_, od::kModesOfOperation, 0, mode);
+  const auto shown = master_.read<std::int8_t>(node_, od::kModesOfOperationDisplay, 0);
+  if (shown != mode)
+    throw Error(fmt::format("node {}: the drive shows mode of operation {} after {} was set", node_, shown, mode));
+}
+
 void Drive::set_profile(std::uint32_t velocity, std::uint32_t acceleration) {
-  master_.write<std::int8_t>(node_, od::kModesOfOperation, 0, kProfilePosition);
-  const auto mode = master_.read<std::int8_t>(node_, od::kModesOfOperationDisplay, 0);
-  if (mode != kProfilePosition)
-    throw Error(
-        fmt::format("node {}: the drive shows mode of operation {} after profile position (1) was set", node_, mode));
+  set_mode(kProfilePosition);
   master_.write<std::uint32_t>(node_, od::kProfileVelocity, 0, velocity);
   master_.write<std::uint32_t>(node_, od::kProfileAcceleration, 0, acceleration);
   master_.write<std::uint32_t>(node_, od::kProfileDeceleration, 0, acceleration);
@@ -163,9 +173,17 @@ void Drive::move_to(std::int32_t target, std::chrono::milliseconds timeout) {
 void Drive::quick_stop() { controlword(cw::kQuickStop); }
 
 void Drive::fault_reset(std::chrono::milliseconds timeout) {
-  controlword(cw::kDisableVoltage);
+  controlword(cw::kDisableVoltage);  // bit 7 low, so that the reset is a rising edge
   controlword(cw::kFaultReset);
-  wait([](std::uint16_t s) { return decode(s) == State::switch_on_disabled; }, timeout, "the fault reset");
+  const auto deadline = Clock::now() + timeout;
+  for (std::uint16_t s = statusword(); decode(s) == State::fault || decode(s) == State::fault_reaction_active;
+       s = statusword()) {
+    if (Clock::now() >= deadline)
+      throw Error(fmt::format("node {}: still in fault {} ms after a fault reset (statusword 0x{:04X}, error code 0x{:04X})",
+                              node_, timeout.count(), s, error_code()));
+    master_.spin_for(options_.poll_period);
+  }
+  controlword(cw::kDisableVoltage);  // bit 7 low again
 }
 
 void Drive::disable() { controlword(cw::kDisableVoltage); }

@@ -63,6 +63,11 @@ void Master::nmt(NmtCommand command, int node) {
 
 bool Master::known(int node) const { return states_.count(node) != 0; }
 
+bool Master::awaiting_boot(int node) const {
+  std::lock_guard lock(mutex_);
+  return resets_asked_.count(node) != 0;
+}
+
 NmtState Master::state(int node) const {
   std::lock_guard lock(mutex_);
   const auto it = states_.find(node);

@@ -31,6 +31,11 @@ constexpr const char* kUsage = R"(usage: fba-canopen-arm-emulator [options]
   --reboot-after S:NODE    after S seconds, NODE reboots (a power glitch: defaults, boot-up, pre-operational)
   --garbage-every S       put a burst of noise on the line every S seconds
   --disconnect-after S    close the line after S seconds (a pulled cable)
+  --ignore-set-points-after S:NODE  after S seconds, NODE takes no more set-points (no acknowledge)
+  --fault-at-start NODE:CODE  NODE is in fault from power-on, error code CODE (hex) in 0x603F
+  --device-type NODE:HEX  NODE's device type (0x1000; default 00020192, a CiA 402 servo drive)
+  --silent NODE           NODE never answers (as if it were not on the bus)
+  --exit-with-parent      end when the program that started this one ends
 )";
 
 const fba::emulators::ProgramOptions kCli{"fba-canopen-arm-emulator", kUsage};
@@ -42,6 +47,7 @@ double seconds(const std::string& text, const std::string& option) { return kCli
 int main(int argc, char** argv) {
   fba::emulators::CanopenArmOptions options;
   std::string link, socketcan;
+  bool exit_with_parent = false;
   std::vector<fba::emulators::ScheduledFault> schedule;
   fba::emulators::CanopenArmEmulator* emulator = nullptr;  // the actions below run once it exists
   std::vector<std::string> args(argv + 1, argv + argc);
@@ -50,6 +56,10 @@ int main(int argc, char** argv) {
     if (a == "-h" || a == "--help") {
       std::cout << kUsage;
       return 0;
+    }
+    if (a == "--exit-with-parent") {
+      exit_with_parent = true;
+      continue;
     }
     if (i + 1 >= args.size()) kCli.fail(a == "" ? "an empty argument" : "'" + a + "' needs a value or is unknown");
     const std::string v = args[++i];
@@ -83,6 +93,18 @@ int main(int argc, char** argv) {
       schedule.push_back({s, [&emulator] { emulator->inject_garbage(); }, s});
     } else if (a == "--disconnect-after") {
       schedule.push_back({seconds(v, a), [&emulator] { emulator->disconnect(); }});
+    } else if (a == "--ignore-set-points-after") {
+      const auto p = kCli.fields(v, a, 2, "S:NODE");
+      const int node = kCli.integer(p[1], a, 1, 127);
+      schedule.push_back({seconds(p[0], a), [&emulator, node] { emulator->ignore_set_points(node); }});
+    } else if (a == "--fault-at-start") {
+      const auto p = kCli.fields(v, a, 2, "NODE:CODE");
+      options.fault_at_start[kCli.integer(p[0], a, 1, 127)] = static_cast<std::uint16_t>(kCli.integer(p[1], a, 1, 0xFFFF, 16));
+    } else if (a == "--device-type") {
+      const auto p = kCli.fields(v, a, 2, "NODE:HEX");
+      options.device_type[kCli.integer(p[0], a, 1, 127)] = static_cast<std::uint32_t>(kCli.integer(p[1], a, 0, 0x7FFFFFFF, 16));
+    } else if (a == "--silent") {
+      options.silent.push_back(kCli.integer(v, a, 1, 127));
     } else {
       kCli.fail("unknown option '" + a + "'");
     }
@@ -111,7 +133,8 @@ int main(int argc, char** argv) {
     }
     fba::emulators::CanopenArmEmulator emu(*bus, options, noise);
     emulator = &emu;
-    const std::string end = fba::emulators::run_device([&] { return emu.run(); }, [&] { emu.stop(); }, schedule, link);
+    const std::string end =
+        fba::emulators::run_device([&] { return emu.run(); }, [&] { emu.stop(); }, schedule, link, exit_with_parent);
     std::cout << "CANopen arm emulator: " << end << std::endl;
   } catch (const std::exception& e) {
     std::cerr << "fba-canopen-arm-emulator: " << e.what() << std::endl;

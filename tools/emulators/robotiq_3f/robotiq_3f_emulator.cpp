@@ -30,6 +30,9 @@ constexpr const char* kUsage = R"(usage: fba-robotiq-3f-emulator [options]
   --fault-after S:CODE    after S seconds, report fault CODE (hex, e.g. 0D) and stop moving until a reset
   --drop-after S          after S seconds, the object slips out of the fingers
   --disconnect-after S    close the line after S seconds (a pulled cable)
+  --stall-aperture M      the fingers stall on an object at this thumb-to-fingers aperture, metres, whatever
+                          their spread (instead of the object above): a grasp that holds
+  --exit-with-parent      end when the program that started this one ends
 )";
 
 const fba::emulators::ProgramOptions kCli{"fba-robotiq-3f-emulator", kUsage};
@@ -39,6 +42,7 @@ const fba::emulators::ProgramOptions kCli{"fba-robotiq-3f-emulator", kUsage};
 int main(int argc, char** argv) {
   fba::emulators::Robotiq3fOptions options;
   std::string link;
+  bool exit_with_parent = false;
   std::vector<fba::emulators::ScheduledFault> schedule;
   fba::emulators::Robotiq3fEmulator* emulator = nullptr;  // the actions below run once it exists
   std::vector<std::string> args(argv + 1, argv + argc);
@@ -54,6 +58,10 @@ int main(int argc, char** argv) {
     }
     if (a == "--never-activate") {
       options.activates = false;
+      continue;
+    }
+    if (a == "--exit-with-parent") {
+      exit_with_parent = true;
       continue;
     }
     if (i + 1 >= args.size()) kCli.fail(a.empty() ? "an empty argument" : "'" + a + "' needs a value or is unknown");
@@ -73,6 +81,8 @@ int main(int argc, char** argv) {
       options.object_offset = kCli.number(v, a, -1, 1);
     } else if (a == "--max-aperture") {
       options.max_aperture = kCli.number(v, a, 0.01, 1);
+    } else if (a == "--stall-aperture") {
+      options.stall_aperture = kCli.number(v, a, 0.001, 1);
     } else if (a == "--max-spread") {
       options.max_spread = kCli.number(v, a, 0.01, 1);
     } else if (a == "--silence-after") {
@@ -108,7 +118,8 @@ int main(int argc, char** argv) {
     emulator = &emu;
     std::cout << "Robotiq 3-Finger emulator: Modbus RTU slave " << options.slave_id << " on " << pty.slave_path
               << (link.empty() ? "" : " (link " + link + ")") << std::endl;
-    const std::string end = fba::emulators::run_device([&] { return emu.run(); }, [&] { emu.stop(); }, schedule, link);
+    const std::string end =
+        fba::emulators::run_device([&] { return emu.run(); }, [&] { emu.stop(); }, schedule, link, exit_with_parent);
     std::cout << "Robotiq 3-Finger emulator: " << end << std::endl;
   } catch (const std::exception& e) {
     std::cerr << "fba-robotiq-3f-emulator: " << e.what() << std::endl;

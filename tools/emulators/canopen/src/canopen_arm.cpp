@@ -63,14 +63,29 @@ struct CanopenArmEmulator::Node {
   Drive drive = Drive::switch_on_disabled;
   std::uint16_t controlword = 0;
   double position = 0;
-  double target = 0;
+  double velocity = 0;  // units/s, as the drive measures it (0x606C)
+  double target = 0;    // profile position: where the move goes
   bool moving = false;
   bool acknowledged = false;
   bool limited = false;
+  bool took_set_point = false;  // profile position: a new set-point was taken (for set_points())
+  bool ignores_set_points = false;
+  // Cyclic synchronous position: the straight line from `csp_from` to `csp_demand` (the set-point
+  // taken on the last SYNC), followed over one interpolation period from `csp_since`.
+  double csp_from = 0, csp_demand = 0;
+  Clock::time_point csp_since{};
   Clock::time_point last_update;
 
   std::uint32_t get(std::uint16_t index, std::uint8_t sub) const { return od.at(key(index, sub)).value; }
   void set(std::uint16_t index, std::uint8_t sub, std::uint32_t v) { od.at(key(index, sub)).value = v; }
+  std::int8_t mode() const { return static_cast<std::int8_t>(get(0x6060, 0)); }
+  bool cyclic() const { return drive == Drive::enabled && mode() == 8; }
+  // Every way out of a motion: the drive stands where it is, in either mode.
+  void hold() {
+    moving = false;
+    target = csp_from = csp_demand = position;
+    velocity = 0;
+  }
 };
 
 namespace {
@@ -81,12 +96,15 @@ void add(std::map<std::uint32_t, Entry>& od, std::uint16_t index, std::uint8_t s
   od[key(index, sub)] = Entry{size, a != "wo", a != "ro", mappable, value};
 }
 
-// The object dictionary after a reset: communication objects and the CiA 402 drive objects.
-void reset_dictionary(CanopenArmEmulator::Node& n, const CanopenArmOptions& o) {
+// The communication objects (0x1000..0x1FFF) after a reset of the node or of its communication,
+// with the PDOs' run-time state; the drive is not touched (CiA 301: NMT reset communication resets
+// the communication area only, so a drive in fault stays in fault).
+void reset_communication(CanopenArmEmulator::Node& n, const CanopenArmOptions& o) {
   auto& od = n.od;
-  od.clear();
+  std::erase_if(od, [](const auto& e) { return (e.first >> 8) < 0x2000; });
   const auto id = static_cast<std::uint32_t>(n.id);
-  add(od, 0x1000, 0, 4, "ro", false, 0x00020192);  // device type: CiA 402, servo drive
+  const auto type = o.device_type.find(n.id);
+  add(od, 0x1000, 0, 4, "ro", false, type == o.device_type.end() ? 0x00020192 : type->second);  // CiA 402, servo
   add(od, 0x1001, 0, 1, "ro", true, 0);            // error register
   add(od, 0x1017, 0, 2, "rw", false, o.heartbeat_ms);
   add(od, 0x1018, 0, 1, "ro", false, 4);
@@ -111,11 +129,23 @@ void reset_dictionary(CanopenArmEmulator::Node& n, const CanopenArmOptions& o) {
       add(od, 0x1A00 + p, s, 4, "rw", false, 0);
     }
   }
+  n.tpdo_syncs = {};
+  n.tpdo_last = {};
+  n.rpdo_pending = {};
+}
+
+// The drive's objects and state after a reset of the node (or power-on): the joint stays where it is.
+void reset_application(CanopenArmEmulator::Node& n, const CanopenArmOptions& o) {
+  auto& od = n.od;
+  std::erase_if(od, [](const auto& e) { return (e.first >> 8) >= 0x2000; });
   add(od, 0x603F, 0, 2, "ro", true, 0);  // error code
   add(od, 0x6040, 0, 2, "rw", true, 0);  // controlword
   add(od, 0x6041, 0, 2, "ro", true, 0);  // statusword
   add(od, 0x6060, 0, 1, "rw", true, 0);  // modes of operation
   add(od, 0x6061, 0, 1, "ro", true, 0);  // modes of operation display
+  add(od, 0x60C2, 0, 1, "ro", false, 2);     // interpolation time period: value * 10^index seconds
+  add(od, 0x60C2, 1, 1, "rw", false, 10);    // 10 ms
+  add(od, 0x60C2, 2, 1, "rw", false, 0xFD);  // -3
   add(od, 0x6064, 0, 4, "ro", true, 0);  // position actual value
   add(od, 0x606C, 0, 4, "ro", true, 0);  // velocity actual value
   add(od, 0x607A, 0, 4, "rw", true, 0);  // target position
@@ -127,20 +157,31 @@ void reset_dictionary(CanopenArmEmulator::Node& n, const CanopenArmOptions& o) {
   add(od, 0x6084, 0, 4, "rw", true, 10 * o.profile_velocity);
   n.drive = Drive::switch_on_disabled;
   n.controlword = 0;
-  n.target = n.position;
-  n.moving = n.acknowledged = n.limited = false;
-  n.tpdo_syncs = {};
-  n.tpdo_last = {};
-  n.rpdo_pending = {};
+  n.hold();
+  n.acknowledged = n.limited = false;
+}
+
+void reset_dictionary(CanopenArmEmulator::Node& n, const CanopenArmOptions& o) {
+  reset_communication(n, o);
+  reset_application(n, o);
 }
 
 std::uint16_t statusword(const CanopenArmEmulator::Node& n) {
   std::uint16_t s = static_cast<std::uint16_t>(n.drive) | 0x0200;                    // remote: controlled over the bus
   if (n.drive != Drive::switch_on_disabled && n.drive != Drive::fault) s |= 0x0010;  // voltage enabled
-  if (!n.moving) s |= 0x0400;                                                        // target reached
   if (n.limited) s |= 0x0800;                                                        // internal limit active
-  if (n.acknowledged) s |= 0x1000;                                                   // set-point acknowledge
+  if (n.mode() == 8) {
+    if (n.position == n.csp_demand) s |= 0x0400;                 // (reserved in CSP) at the set-point
+    if (n.cyclic() && !n.ignores_set_points) s |= 0x1000;        // drive follows the command value
+  } else {
+    if (!n.moving) s |= 0x0400;         // target reached
+    if (n.acknowledged) s |= 0x1000;    // set-point acknowledge
+  }
   return s;
+}
+
+double interpolation_period_s(const CanopenArmEmulator::Node& n) {
+  return static_cast<double>(n.get(0x60C2, 1)) * std::pow(10.0, static_cast<std::int8_t>(n.get(0x60C2, 2)));
 }
 
 // The objects the drive computes, brought up to date before anything reads them.
@@ -148,8 +189,7 @@ void refresh(CanopenArmEmulator::Node& n) {
   n.set(0x6041, 0, statusword(n));
   n.set(0x6061, 0, n.get(0x6060, 0));
   n.set(0x6064, 0, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(n.position))));
-  const double v = n.moving && n.drive == Drive::enabled ? static_cast<double>(n.get(0x6081, 0)) : 0.0;
-  n.set(0x606C, 0, static_cast<std::uint32_t>(static_cast<std::int32_t>(n.target >= n.position ? v : -v)));
+  n.set(0x606C, 0, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(n.velocity))));
 }
 
 std::uint8_t error_register_for(std::uint16_t code) {
@@ -204,6 +244,14 @@ CanopenArmEmulator::CanopenArmEmulator(can::CanBus& bus, CanopenArmOptions optio
     nodes_[id] = std::move(n);
   }
   if (nodes_.empty()) throw std::invalid_argument("CANopen arm emulator: no node ids given");
+  for (const auto& [id, code] : options_.fault_at_start) {  // in fault from power-on: no EMCY heard yet
+    Node& n = node(id);
+    n.drive = Drive::fault;
+    n.set(0x603F, 0, code);
+    n.set(0x1001, 0, error_register_for(code));
+  }
+  for (const auto& [id, type] : options_.device_type) node(id);  // an unknown node is refused here
+  for (int id : options_.silent) node(id).silent = true;
 }
 
 CanopenArmEmulator::~CanopenArmEmulator() = default;
@@ -235,8 +283,7 @@ void CanopenArmEmulator::inject_fault(int id, std::uint16_t code) {
   requests_.push_back([this, id, code] {
     Node& n = node(id);
     n.drive = Drive::fault;
-    n.moving = false;
-    n.target = n.position;
+    n.hold();
     n.set(0x603F, 0, code);
     n.set(0x1001, 0, error_register_for(code));
     if (!n.silent) send(emcy_frame(id, code, error_register_for(code)));
@@ -258,6 +305,17 @@ void CanopenArmEmulator::reboot(int id) {
 void CanopenArmEmulator::disconnect() {
   std::lock_guard lock(mutex_);
   requests_.push_back([this] { disconnect_ = true; });
+}
+
+void CanopenArmEmulator::ignore_set_points(int id) {
+  std::lock_guard lock(mutex_);
+  node(id);
+  requests_.push_back([this, id] { node(id).ignores_set_points = true; });
+}
+
+std::vector<SyncSetPoints> CanopenArmEmulator::set_points() const {
+  std::lock_guard lock(mutex_);
+  return {set_points_.begin(), set_points_.end()};
 }
 
 std::int32_t CanopenArmEmulator::position(int id) const {
@@ -291,7 +349,7 @@ std::string CanopenArmEmulator::run() {
       std::lock_guard lock(mutex_);
       const auto now = Clock::now();
       for (auto& [id, n] : nodes_) {
-        send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {0x00}));  // boot-up
+        if (!n->silent) send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {0x00}));  // boot-up
         n->nmt = kPreOperational;
         n->last_heartbeat = n->last_update = now;
       }
@@ -384,12 +442,9 @@ void apply_controlword(CanopenArmEmulator::Node& n, std::uint16_t cw,
         next = Drive::enabled;  // quick stop option codes 5-8: transition 16
       break;
   }
-  if (next != Drive::enabled) {  // every way out of "operation enabled" stops the motion
-    n.moving = false;
-    n.target = n.position;
-  }
+  if (next != Drive::enabled) n.hold();  // every way out of "operation enabled" stops the motion
   n.drive = next;
-  if (n.drive != Drive::enabled || n.get(0x6060, 0) != 1) return;
+  if (n.drive != Drive::enabled || n.mode() != 1 || n.ignores_set_points) return;
   // Profile position: a rising edge of bit 4 takes the target (relative with bit 6); bit 5
   // replaces a move in progress, without it a new set-point waits for the current one to end.
   if ((cw & 0x10) && !(previous & 0x10) && (!n.moving || (cw & 0x20))) {
@@ -402,6 +457,7 @@ void apply_controlword(CanopenArmEmulator::Node& n, std::uint16_t cw,
     n.target = goal;
     n.moving = goal != n.position;
     n.acknowledged = true;
+    n.took_set_point = true;
   }
   if (!(cw & 0x10)) n.acknowledged = false;
 }
@@ -442,7 +498,13 @@ std::uint32_t write_object(CanopenArmEmulator::Node& n, std::uint16_t index, std
       if (rpdo_map && !object->second.writable) return kAbortNotMappable;
     }
   }
-  if (index == 0x6060 && static_cast<std::int8_t>(value) != 1) return kAbortValue;  // profile position only
+  // Profile position and cyclic synchronous position only. A change of mode starts from where the
+  // drive stands: no motion carries over, and the first cyclic set-point is its own position.
+  if (index == 0x6060) {
+    const auto mode = static_cast<std::int8_t>(value);
+    if (mode != 1 && mode != 8) return kAbortValue;
+    if (mode != n.mode()) n.hold();
+  }
   e.value = value;
   if (index == 0x6040) apply_controlword(n, static_cast<std::uint16_t>(value), send);
   return 0;
@@ -507,9 +569,12 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
         case 0x80:
           n->nmt = kPreOperational;
           break;
-        case 0x81:  // reset node: the whole dictionary
-        case 0x82:  // reset communication: this emulator keeps no other state worth sparing
-          reset_dictionary(*n, options_);
+        case 0x81:  // reset node: the whole dictionary, and the drive (a fault is cleared)
+        case 0x82:  // reset communication: the communication objects only; the drive keeps its state
+          if (frame.data[0] == 0x81)
+            reset_dictionary(*n, options_);
+          else
+            reset_communication(*n, options_);
           send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {0x00}));
           n->nmt = kPreOperational;
           n->last_heartbeat = Clock::now();
@@ -521,14 +586,33 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
     return;
   }
   if (frame.id == kSync) {
-    ++syncs_;
+    const std::uint64_t sync = ++syncs_;
+    const auto now = Clock::now();
+    SyncSetPoints taken{sync, {}, 0};
     for (auto& [id, n] : nodes_) {
       if (n->silent || n->nmt != kOperational) continue;
+      n->took_set_point = false;
       for (int p = 0; p < 4; ++p)
         if (n->rpdo_pending[p]) {
           apply_rpdo(*n, p, *n->rpdo_pending[p], sender);
           n->rpdo_pending[p].reset();
         }
+      // Cyclic synchronous position: the set-point that came before this SYNC is taken on it, and
+      // followed in a straight line over the interpolation period, from where the drive stands.
+      if (n->cyclic() && !n->ignores_set_points) {
+        const auto lo = static_cast<double>(static_cast<std::int32_t>(n->get(0x607D, 1)));
+        const auto hi = static_cast<double>(static_cast<std::int32_t>(n->get(0x607D, 2)));
+        const auto demand = static_cast<double>(static_cast<std::int32_t>(n->get(0x607A, 0)));
+        n->limited = demand < lo || demand > hi;
+        n->csp_from = n->position;
+        n->csp_demand = std::clamp(demand, lo, hi);
+        n->csp_since = now;
+        taken.mode = 8;
+        taken.set_points.emplace_back(id, static_cast<std::int32_t>(n->csp_demand));
+      } else if (n->took_set_point) {
+        if (taken.mode == 0) taken.mode = 1;
+        taken.set_points.emplace_back(id, static_cast<std::int32_t>(n->target));
+      }
       for (int p = 0; p < 4; ++p) {
         const auto communication = static_cast<std::uint16_t>(0x1800 + p);
         const std::uint32_t type = n->get(communication, 2);
@@ -544,6 +628,10 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
         send(f);
         n->tpdo_last[p] = std::move(bytes);
       }
+    }
+    if (!taken.set_points.empty()) {
+      set_points_.push_back(std::move(taken));
+      if (set_points_.size() > kHeardKept) set_points_.pop_front();
     }
     return;
   }
@@ -623,15 +711,25 @@ void CanopenArmEmulator::update(Clock::time_point now) {
   for (auto& [id, n] : nodes_) {
     const double dt = std::chrono::duration<double>(now - n->last_update).count();
     n->last_update = now;
-    if (n->drive == Drive::enabled && n->moving && !(n->controlword & 0x0100)) {  // bit 8: halt
-      const double step = static_cast<double>(n->get(0x6081, 0)) * dt;
+    if (n->cyclic()) {
+      const double period = interpolation_period_s(*n);
+      const double share = period > 0 ? std::clamp(std::chrono::duration<double>(now - n->csp_since).count() / period, 0.0, 1.0) : 1.0;
+      n->position = n->csp_from + (n->csp_demand - n->csp_from) * share;
+      n->velocity = share < 1 && period > 0 ? (n->csp_demand - n->csp_from) / period : 0.0;
+    } else if (n->drive == Drive::enabled && n->moving && !(n->controlword & 0x0100)) {  // bit 8: halt
+      const double speed = static_cast<double>(n->get(0x6081, 0));
+      const double step = speed * dt;
       const double left = n->target - n->position;
       if (std::abs(left) <= step) {
         n->position = n->target;
         n->moving = false;
+        n->velocity = 0;
       } else {
         n->position += left > 0 ? step : -step;
+        n->velocity = left > 0 ? speed : -speed;
       }
+    } else {
+      n->velocity = 0;
     }
     if (n->silent) continue;
     const std::uint32_t period = n->get(0x1017, 0);

@@ -246,7 +246,9 @@ void Robotiq3fEmulator::update(std::chrono::steady_clock::time_point now) {
     const double r = options_.object_width / 2, x = options_.object_offset;
     const double half_length = (options_.object_length > 0 ? options_.object_length : options_.object_width) / 2;
     auto position_at = [&](double reach) { return reach <= 0 ? kNever : std::max(0.0, 255.0 * (1 - reach / half)); };
-    if (s.mode == kScissorMode && !individual_scissor_) {
+    if (options_.stall_aperture > 0 && !(s.mode == kScissorMode && !individual_scissor_)) {
+      touch[kA] = touch[kB] = touch[kC] = position_at(options_.stall_aperture / 2);
+    } else if (s.mode == kScissorMode && !individual_scissor_) {
       touch[kS] =
           options_.object_width >= options_.max_spread ? 0 : 255.0 * (1 - options_.object_width / options_.max_spread);
     } else {

@@ -122,11 +122,15 @@ class Master {
   explicit Master(can::CanBus& bus, MasterOptions options = {});
 
   can::CanBus& bus() { return bus_; }
+  const MasterOptions& options() const { return options_; }
 
   // NMT: `node` 0 addresses every node.
   void nmt(NmtCommand command, int node);
   // The state from the node's last heartbeat or boot-up message.
   NmtState state(int node) const;
+  // Whether the node was sent an NMT reset (node or communication) and its boot-up message has not
+  // come yet.
+  bool awaiting_boot(int node) const;
 
   // Expedited SDO (1-4 bytes). Throw SdoAbort, SdoTimeout, or can::BusError if the line is gone.
   // A node answers one SDO at a time, but each node is a server of its own: calls to different

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <signal.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -91,9 +92,12 @@ inline void catch_stop_signals() {
 
 // Runs `run` (the device; returns why it ended) on its own thread until it ends or a stop signal
 // comes, firing `faults` on time; then `stop` and the join. Returns "stopped" or the device's reason,
-// and removes `link`.
+// and removes `link`. With `exit_with_parent`, it also ends when the process that started it has
+// ended (a driver that started the emulator and was killed): its parent is no longer the same.
 inline std::string run_device(const std::function<std::string()>& run, const std::function<void()>& stop,
-                              std::vector<ScheduledFault> faults, const std::string& link) {
+                              std::vector<ScheduledFault> faults, const std::string& link, bool exit_with_parent = false) {
+  const pid_t parent = ::getppid();
+  bool orphaned = false;
   std::string reason;
   std::atomic<bool> ended{false};
   std::thread runner([&] {
@@ -101,7 +105,8 @@ inline std::string run_device(const std::function<std::string()>& run, const std
     ended = true;
   });
   const auto start = std::chrono::steady_clock::now();
-  while (!detail::stop_signal && !ended) {
+  while (!detail::stop_signal && !ended && !orphaned) {
+    orphaned = exit_with_parent && ::getppid() != parent;
     const double now = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     for (auto& f : faults)
       if (f.at >= 0 && now >= f.at) {
@@ -113,6 +118,7 @@ inline std::string run_device(const std::function<std::string()>& run, const std
   stop();
   runner.join();
   if (!link.empty()) std::filesystem::remove(link);
+  if (orphaned) return "stopped: the program that started it has ended";
   return detail::stop_signal ? "stopped" : reason;
 }
 

@@ -1,9 +1,18 @@
 // A CANopen arm emulator: N CiA 402 drives (one per joint) behind a CanBus, answering NMT, SDO,
-// PDO, SYNC, sending heartbeats and EMCY, running the CiA 402 state machine and a simulated
-// profile position motion. It knows nothing of the master in hardware/canopen (it is written from
-// the standards), so the master's tests against it test both readings of the standards.
+// PDO, SYNC, sending heartbeats and EMCY, running the CiA 402 state machine and a simulated motion
+// in profile position mode (1) or cyclic synchronous position mode (8). It knows nothing of the
+// master in hardware/canopen (it is written from the standards), so the master's tests against it
+// test both readings of the standards.
+//
+// Cyclic synchronous position, as CiA 402 defines it and as the drives do: the position set-point
+// (0x607A) that arrived before a SYNC is taken on that SYNC, and the drive's position loop follows
+// the straight line from where it stands to it over one interpolation period (0x60C2), reporting
+// "drive follows the command value" (statusword bit 12). The set-points each drive took are kept
+// per SYNC (set_points()), so a test sees whether the drives moved in step.
+//
 // Faults can be injected while it runs: a node falls silent, noise on the line, a drive fault with
-// its EMCY, the line closed mid-motion.
+// its EMCY, a drive that ignores its set-points, the line closed mid-motion. At start: a node that
+// is silent from the start, a drive already in fault, a node that is not a CiA 402 drive.
 #pragma once
 
 #include <atomic>
@@ -29,6 +38,16 @@ struct CanopenArmOptions {
   std::int32_t min_position = -10'000'000;  // 0x607D software limits after a reset
   std::int32_t max_position = 10'000'000;
   std::uint32_t profile_velocity = 100'000;  // 0x6081 after a reset, units/s
+  std::map<int, std::uint16_t> fault_at_start;   // node -> error code: in fault from power-on (0x603F)
+  std::map<int, std::uint32_t> device_type;      // node -> 0x1000 (default 0x00020192: a CiA 402 servo drive)
+  std::vector<int> silent;                       // nodes that never answer (not on the bus)
+};
+
+// The set-points the drives took on one SYNC, in node order: (node, 0x607A in drive units).
+struct SyncSetPoints {
+  std::uint64_t sync = 0;  // the SYNC's number, from 1
+  std::vector<std::pair<int, std::int32_t>> set_points;
+  std::int8_t mode = 0;  // 8: cyclic synchronous position; 1: profile position (new set-points only)
 };
 
 class CanopenArmEmulator {
@@ -49,6 +68,9 @@ class CanopenArmEmulator {
   void inject_fault(int node, std::uint16_t code);  // the drive faults and sends EMCY `code`
   void reboot(int node);                            // a power glitch: defaults again, boot-up, pre-operational
   void disconnect();                                // closes the line, as a pulled cable
+  // The drive keeps answering (SDO, heartbeat, PDOs) but takes no set-point: no acknowledge in
+  // profile position, and in cyclic synchronous position it holds and clears "follows the command".
+  void ignore_set_points(int node);
 
   // For tests: a node's actual position and controlword-driven state bits.
   std::int32_t position(int node) const;
@@ -62,6 +84,8 @@ class CanopenArmEmulator {
   // reached the drives.
   static constexpr std::size_t kHeardKept = 4096;
   std::vector<can::Frame> heard() const;
+  // The set-points taken, per SYNC on which any drive took one, oldest first (the last kHeardKept).
+  std::vector<SyncSetPoints> set_points() const;
 
   struct Node;
 
@@ -78,6 +102,7 @@ class CanopenArmEmulator {
   mutable std::mutex mutex_;  // guards the nodes and the requests below
   std::vector<std::function<void()>> requests_;
   std::deque<can::Frame> heard_;
+  std::deque<SyncSetPoints> set_points_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> syncs_{0};
   bool disconnect_ = false;

@@ -12,6 +12,9 @@
 // 255 closed) is (max_aperture / 2) (1 - p / 255) from the centre; fingers B and C are spread sideways
 // by the scissor (max_spread (1 - s / 255) apart), so a spread wider than the object passes beside it.
 //
+// With `stall_aperture`, the object is simpler: every finger stalls where the aperture (thumb to
+// fingers) is that wide, as on an object of that width held anywhere along the fingers.
+//
 // Faults can be injected while it runs: it stops answering, sends bad CRCs, puts noise on the line,
 // reports a fault code, drops the object, or closes the line (a pulled cable).
 #pragma once
@@ -44,6 +47,9 @@ struct Robotiq3fOptions {
   double object_width = 0.06;  // metres
   double object_length = 0.0;  // metres; 0: object_width
   double object_offset = 0.0;  // metres, towards the thumb
+  // > 0: instead of the ellipse, every finger (A, B and C) stalls on the object where the thumb and
+  // the fingers are this far apart, whatever the spread: an object the grasp holds.
+  double stall_aperture = 0.0;  // metres
 };
 
 class Robotiq3fEmulator {
