@@ -327,6 +327,21 @@ std::thread stop_when(fba::Task& task, std::atomic<int>& counter, int seen) {
   });
 }
 
+// Runs the task and stops it from another thread once `counter` moved past its value now.
+fba::RunResult run_and_stop_when(const std::string& yaml, std::atomic<int>& counter, const fba::RunOptions& o) {
+  fba::Task task(load(yaml), o);
+  auto stopper = stop_when(task, counter, counter.load());
+  auto r = task.run();
+  stopper.join();
+  return r;
+}
+
+// One actuator of `type` fed by a counter that never ends.
+std::string counter_into(const std::string& type) {
+  return "components:\n  src: { type: examples.counter, params: { count: 1000000000 } }\n  act: { type: " + type +
+         " }\nconnections: [ src.out -> act.in ]\n";
+}
+
 class Shutdown : public ::testing::TestWithParam<ExecutorKind> {};
 
 TEST_P(Shutdown, AComponentStuckInProcessIsNamedLeftBehindAndTheSafeStatesStillRun) {
@@ -381,16 +396,7 @@ connections: [ src.out -> stuck.in, src.out -> act.in ]
 // A blocking actuator is interrupted at the stop; its safe state waits for that call to return,
 // so the interrupt cannot cut the safe state's own waits on the device.
 TEST_P(Shutdown, AnActuatorGoesSafeOnlyAfterItsInterruptReturned) {
-  fba::Task task(load(R"(
-components:
-  src: { type: examples.counter, params: { count: 1000000000 } }
-  act: { type: test.interrupt_then_safe }
-connections: [ src.out -> act.in ]
-)"),
-                 options(GetParam(), 30));
-  auto stopper = stop_when(task, g_interrupt_then_safe_calls, g_interrupt_then_safe_calls.load());
-  const auto r = task.run();
-  stopper.join();
+  const auto r = run_and_stop_when(counter_into("test.interrupt_then_safe"), g_interrupt_then_safe_calls, options(GetParam(), 30));
   ASSERT_NE(safe_state_of(r, "act"), nullptr);
   EXPECT_EQ(safe_state_of(r, "act")->status, "reached") << safe_state_of(r, "act")->message;
 }
@@ -399,16 +405,7 @@ connections: [ src.out -> act.in ]
 // started safe_state() beside process() (a data race that ThreadSanitizer caught in CI).
 TEST_P(Shutdown, AnActuatorNotifiedDuringItsCallGoesSafeOnlyAfterTheCall) {
   for (int run = 0; run < 3; ++run) {
-    fba::Task task(load(R"(
-components:
-  src: { type: examples.counter, params: { count: 1000000000 } }
-  act: { type: test.overlap_checked }
-connections: [ src.out -> act.in ]
-)"),
-                   options(GetParam(), 30));
-    auto stopper = stop_when(task, g_overlap_checked_calls, g_overlap_checked_calls.load());
-    const auto r = task.run();
-    stopper.join();
+    const auto r = run_and_stop_when(counter_into("test.overlap_checked"), g_overlap_checked_calls, options(GetParam(), 30));
     ASSERT_NE(safe_state_of(r, "act"), nullptr);
     EXPECT_EQ(safe_state_of(r, "act")->status, "reached") << safe_state_of(r, "act")->message;
   }
@@ -419,16 +416,7 @@ connections: [ src.out -> act.in ]
 // sink's safe state only after the grace).
 TEST_P(Shutdown, AnActuatorWithAConcurrentSafeStateGetsItDuringItsCall) {
   g_concurrent_safe_seen_in_process = false;
-  fba::Task task(load(R"(
-components:
-  src: { type: examples.counter, params: { count: 1000000000 } }
-  act: { type: test.concurrent_safe_state }
-connections: [ src.out -> act.in ]
-)"),
-                 options(GetParam(), 60));
-  auto stopper = stop_when(task, g_concurrent_safe_entered, g_concurrent_safe_entered.load());
-  const auto r = task.run();
-  stopper.join();
+  const auto r = run_and_stop_when(counter_into("test.concurrent_safe_state"), g_concurrent_safe_entered, options(GetParam(), 60));
   EXPECT_TRUE(g_concurrent_safe_seen_in_process.load());
   ASSERT_NE(safe_state_of(r, "act"), nullptr);
   EXPECT_EQ(safe_state_of(r, "act")->status, "reached");
@@ -502,17 +490,14 @@ components:
 // for the safe states instead of acting as no grace at all.
 TEST_P(Shutdown, AStopGraceBeyondTheClocksRangeStillWaitsForTheSafeStates) {
   for (const double grace : {1e10, 1e300, std::numeric_limits<double>::infinity()}) {
-    fba::Task task(load(R"(
+    const auto r = run_and_stop_when(R"(
 components:
   src: { type: examples.counter, params: { count: 1000000000 } }
   stuck: { type: test.stuck_until_safe }
   act: { type: test.counted_actuator }
 connections: [ src.out -> stuck.in, src.out -> act.in ]
-)"),
-                   options(GetParam(), grace));
-    auto stopper = stop_when(task, g_stuck_entered, g_stuck_entered.load());
-    const auto r = task.run();
-    stopper.join();
+)",
+                                     g_stuck_entered, options(GetParam(), grace));
     ASSERT_NE(safe_state_of(r, "act"), nullptr) << grace;
     EXPECT_EQ(safe_state_of(r, "act")->status, "reached") << grace;
     EXPECT_TRUE(r.stuck.empty()) << grace << ": " << r.reason;
