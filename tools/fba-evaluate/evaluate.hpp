@@ -81,4 +81,13 @@ SyntheticResult evaluate_synthetic(const std::filesystem::path& mesh_path,
 Silhouette silhouette_from_render(const cv::Mat& colour, const cv::Mat& mask,
                                   const CameraModel& camera, int index);
 
+// The edges of only one triangle: 0 for a closed surface.
+std::size_t boundary_edges(const TriangleMesh& mesh);
+
+// A true object's mesh file, which must be closed: every measure of it (a grasp's volume and
+// centre of mass, a model's voxel IoU against its solid) needs its inside, which an open surface
+// does not have. Throws geometry::MeshLoadError, or std::invalid_argument naming the file and how
+// many boundary edges it has.
+TriangleMesh load_closed_mesh(const std::string& path);
+
 }  // namespace fba::evaluate

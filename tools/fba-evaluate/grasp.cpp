@@ -87,34 +87,6 @@ Eigen::Isometry3d parse_pose(const std::vector<double>& v) {
 
 }  // namespace
 
-std::size_t boundary_edges(const TriangleMesh& mesh) {
-  // Each edge as its two vertex indices, smaller first; an edge that occurs once is on a boundary.
-  std::vector<std::uint64_t> edges;
-  edges.reserve(3 * mesh.triangles.size());
-  for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const auto a = static_cast<std::uint32_t>(t[k]), b = static_cast<std::uint32_t>(t[(k + 1) % 3]);
-      edges.push_back(std::uint64_t{std::min(a, b)} << 32 | std::max(a, b));
-    }
-  std::sort(edges.begin(), edges.end());
-  std::size_t once = 0;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i + 1;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    once += j - i == 1;
-    i = j;
-  }
-  return once;
-}
-
-TriangleMesh load_closed_mesh(const std::string& path) {
-  TriangleMesh m = geometry::load_mesh(path);
-  if (const std::size_t open = boundary_edges(m))
-    throw std::invalid_argument("mesh '" + path + "': expected a closed surface (the grasp measure needs its volume and centre of mass); found " +
-                                std::to_string(open) + " boundary edge" + (open == 1 ? "" : "s") + " (edges of one triangle only)");
-  return m;
-}
-
 TriangleMesh load_posed(const std::string& path, const Eigen::Isometry3d& pose) {
   TriangleMesh m = load_closed_mesh(path);
   for (auto& v : m.vertices) v = (pose * v.cast<double>()).cast<float>();

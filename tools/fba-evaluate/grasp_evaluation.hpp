@@ -15,6 +15,8 @@
 #include "fba/types/mesh.hpp"
 #include "run_summary.hpp"
 
+#include "evaluate.hpp"
+
 namespace fba::evaluate {
 
 // The grasp subcommand's option limits, for both modes: beyond them a run takes hours or the
@@ -26,14 +28,6 @@ constexpr int kMaxConeEdges = 64;
 
 // "YcbBanana" for .../YcbBanana/model.obj, else the file's name.
 std::string object_name(const std::string& mesh);
-
-// The edges of only one triangle: 0 for a closed surface.
-std::size_t boundary_edges(const TriangleMesh& mesh);
-
-// The mesh file, which must be closed: the measure needs the solid's volume and centre of mass,
-// which an open surface does not have. Throws geometry::MeshLoadError, or std::invalid_argument
-// naming the file and how many boundary edges it has.
-TriangleMesh load_closed_mesh(const std::string& path);
 
 // The closed mesh file with every vertex moved by pose.
 TriangleMesh load_posed(const std::string& path, const Eigen::Isometry3d& pose);

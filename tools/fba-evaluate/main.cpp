@@ -259,7 +259,7 @@ int run_model(const std::vector<std::string>& args) {
   std::printf("model %s: %zu triangles\n", model_path.c_str(), model.triangles.size());
 
   if (!mesh_path.empty()) {
-    const TriangleMesh truth_mesh = geometry::load_mesh(mesh_path);
+    const TriangleMesh truth_mesh = evaluate::load_closed_mesh(mesh_path);
     const auto box = geometry::mesh_bounds(truth_mesh);
     Eigen::AlignedBox3d cube;
     if (!bounds.empty()) {

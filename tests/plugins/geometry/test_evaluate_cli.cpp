@@ -288,7 +288,8 @@ TEST(EvaluateCli, GraspRefusesAMeshThatIsNotClosed) {
   open.triangles.resize(open.triangles.size() - 2);  // a face of the box left open: its four edges
   const std::string path = dir.file("open.ply");
   fba::geometry::write_ply(open, path);
-  const std::string says = "mesh '" + path + "': expected a closed surface (the grasp measure needs its volume and centre of mass); found 4 boundary edges";
+  const std::string says = "mesh '" + path + "': expected a closed surface (what is measured is inside it: the volume and centre of "
+                           "mass of a grasp's object, the voxels of a model's truth); found 4 boundary edges";
   // Before any work: no row for the banana, which is closed, before the open mesh is refused.
   const Result r = fba_evaluate({"grasp", "--mesh", kBanana, path, "--random", "10"});
   EXPECT_EQ(r.status, 2) << r.output;
@@ -299,6 +300,11 @@ TEST(EvaluateCli, GraspRefusesAMeshThatIsNotClosed) {
       {"position": [-0.05, 0, 0], "normal": [1, 0, 0]}, {"position": [0.05, 0.02, 0], "normal": [-1, 0, 0]},
       {"position": [0.05, -0.02, 0], "normal": [-1, 0, 0]}]}})");
   expect_refused({"grasp", "--mesh", path, "--summary", summary}, says);
+  // The model comparison and the synthetic carve voxelise the true solid: the same refusal.
+  expect_refused({"synthetic", "--mesh", path, "--views", "2", "--depth", "3"}, says);
+  const std::string model = dir.file("model.ply");
+  fba::geometry::write_ply(fba::geometry::make_box({-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05}), model);
+  expect_refused({"model", "--model", model, "--mesh", path, "--depth", "3"}, says);
 }
 
 // Opening a FIFO for reading waits for a writer, maybe forever: --summary must be a regular file.
