@@ -373,7 +373,7 @@ TEST_F(EvaluateGraspBatch, AnOpenMeshIsRefusedAtItsPlaceBeforeAnyRun) {
   const Result r = evaluate_grasp("--batch " + l.string() + " --random 0 -o " + out.string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("list.yaml:4:13: mesh '" + (dir_ / "open.ply").string() +
-                          "': expected a closed surface (the grasp measure needs its volume and centre of mass); found 3 boundary edges"),
+                          "': expected a closed surface (what is measured is inside it: the volume and centre of mass of a grasp's object, the voxels of a model's truth); found 3 boundary edges"),
             std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(out)) << "nothing runs";
