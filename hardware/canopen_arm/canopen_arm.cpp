@@ -1,13 +1,30 @@
 // hw.canopen_arm: the task's real arm, one CiA 402 drive per joint on a CANopen bus (SLCAN adapter
 // or SocketCAN), the twin of sim.arm with the same ports and events (arm_ports.hpp) and the same
-// URDF for kinematics and limits. It enables the drives, turns camera poses into joint targets by
-// IK, checks every target against the URDF's limits before anything is sent, makes synchronised
-// profile position moves, and publishes joint states from the drives' PDOs while they move.
-// Any fault (a drive's EMCY or fault state, a silent drive, the line gone, persistent noise)
-// quick-stops every joint and ends process() with an error naming the bus, the joint, its node and
-// the reason, so the task's on_error policy applies. The safe state (a quick stop of every drive,
-// its own bus messages) runs beside a process() still under way: the master takes one step of
-// either at a time, and once the safe state has begun the master sends nothing else.
+// URDF for kinematics and limits. Its constructor starts the drives (communication reset and
+// boot-up, device type, a drive found in fault, mode of operation, enable): a device that fails
+// there is an fba::DeviceError naming it (exit 3), every joint quick-stopped. It turns camera poses
+// into joint targets by IK, checks every target against the URDF's limits before anything is sent,
+// makes synchronised profile position moves, follows trajectories in cyclic synchronous position
+// (every drive takes its set-point on the same SYNC), and publishes joint states from the drives'
+// PDOs while they move. Any fault (a drive's EMCY or fault state, a silent drive, a set-point not
+// taken, the line gone, persistent noise) quick-stops every joint and ends process() with an error
+// naming the bus, the joint, its node and the reason, so the task's on_error policy applies. The
+// safe state (a quick stop of every drive, its own bus messages) runs beside a process() still under
+// way: the master takes one step of either at a time, and once the safe state has begun the master
+// sends nothing else.
+//
+// Why cyclic synchronous position (CiA 402 mode 8) for trajectories, and not profile position with
+// set-points released by SYNC: a reach plan is already a timed path sampled every few tens of
+// milliseconds, and in mode 8 each drive takes the path's position for the next SYNC on that SYNC,
+// so every joint is where the plan says at the same instant by construction, and a drive that does
+// not take its set-point shows it (statusword bit 12) on the very SYNC it missed, before any other
+// joint is given the next one. Profile position would make each waypoint a move of its own, with
+// its own trapezoid and the set-point handshake (bit 4 up, acknowledge, bit 4 down: two SYNCs a
+// waypoint), stopping at every waypoint unless the vendor's blending of buffered set-points
+// (change-on-set-point, end velocities) is used, which drives do differently. Mode 8 is also what
+// the emulator can play faithfully: CiA 402 defines it completely (the set-point before a SYNC,
+// taken on it, followed over the interpolation period 0x60C2), where profile position's blending is
+// each vendor's own.
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -21,6 +38,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fba/can/open_bus.hpp>
+#include <stop_token>
 #include <fba/can/slcan.hpp>
 #include <fba/canopen/arm.hpp>
 #include <fba/component.hpp>
@@ -71,6 +89,10 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
       fba::Param<int>("enable_timeout_ms", 2000,
                       "how long a drive may take to reach \"operation enabled\" or take a set-point")
           .range(1, 60000);
+  static constexpr fba::Param<bool> kResetFaults{
+      "reset_faults_at_start", false,
+      "reset a drive found in fault at start-up (its error code, 0x603F, is logged either way); false: refuse to "
+      "start, naming the drive and its error code"};
   static constexpr auto kNoiseLimit =
       fba::Param<int>("noise_limit", 100,
                       "bad frames (line noise) tolerated within one second; more and the line is not trusted")
@@ -82,10 +104,10 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
                "Real arm of CiA 402 drives on a CANopen bus (SLCAN or SocketCAN), one node per joint, "
                "kinematics and limits from a URDF (the twin of sim.arm): moves to camera poses or joint "
                "targets with synchronised profile position moves, quick-stops on any fault.")
-        .add(kTarget, kJointTarget, kJointState, kCameraPose, kArrived, kUnreachable, kDevice, kBitrate, kNodeIds,
-             kCountsPerRad, kZeroCounts, kUrdf, kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate,
+        .add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable, kDevice, kBitrate,
+             kNodeIds, kCountsPerRad, kZeroCounts, kUrdf, kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate,
              kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kHeartbeatPeriod, kHeartbeatTimeout,
-             kSdoTimeout, kEnableTimeout, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
+             kSdoTimeout, kEnableTimeout, kResetFaults, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
         .check(kDevice, check_bus)
         .check(kRate, check_rate)
         .blocking()
@@ -130,17 +152,41 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
                                          .max_velocity = limits.velocity * ctx(kSpeed),
                                          .max_acceleration = ctx(kAcceleration)});
     }
-    // A wrong device is a configuration error, reported before the task runs.
-    bus_ = fba::can::open_bus(ctx(kDevice), ctx(kBitrate), ctx.stop_token());
+    // The device: a line that cannot be opened, or an adapter that does not answer, is the device's
+    // failure (exit 3), not the task's.
+    try {
+      bus_ = fba::can::open_bus(ctx(kDevice), ctx(kBitrate), ctx.stop_token());
+    } catch (const std::exception& e) {
+      if (ctx.stop_token().stop_requested()) throw;
+      throw fba::DeviceError(fmt::format("hw.canopen_arm on {}: {}", ctx(kDevice), e.what()));
+    }
     master_ = std::make_unique<canopen::Master>(*bus_, canopen::MasterOptions{.sdo_timeout = sdo_timeout_});
+    period_ = std::chrono::milliseconds(std::max<std::int64_t>(1, std::llround(1000 / ctx(kRate))));
     arm_ = std::make_unique<canopen::CanopenArm>(
         *master_, std::move(joints),
         canopen::ArmOptions{.heartbeat_ms = static_cast<std::uint16_t>(ctx(kHeartbeatPeriod)),
                             .heartbeat_timeout = std::chrono::milliseconds(ctx(kHeartbeatTimeout)),
-                            .enable_timeout = std::chrono::milliseconds(ctx(kEnableTimeout))});
+                            .enable_timeout = std::chrono::milliseconds(ctx(kEnableTimeout)),
+                            .reset_faults = ctx(kResetFaults),
+                            .sync_period = period_,
+                            .notice = [&ctx](const std::string& s) { ctx.log().warn("{}", s); }});
     ctx.set_trigger({fba::TriggerPolicy::Periodic, 1.0 / ctx(kRate)});
-    ctx.log().info("{} joints from '{}' to '{}' ({}) on {}", n, model_.base_link(), model_.tip_link(), names(),
-                   bus_->name());
+    ctx.log().info("{} joints from '{}' to '{}' ({}) on {}: starting the drives", n, model_.base_link(),
+                   model_.tip_link(), names(), bus_->name());
+    // Start-up, now, so that a device that fails is reported before the task runs. A stop of the
+    // task meanwhile ends every wait on the bus at once; the drives are quick-stopped either way.
+    std::stop_callback on_stop(ctx.stop_token(), [this] { master_->interrupt(); });
+    try {
+      started_ = true;  // from here on the drives may be enabled: safe_state() quick-stops
+      arm_->start();
+    } catch (const std::exception& e) {
+      if (ctx.stop_token().stop_requested()) {
+        arm_->quick_stop_all();  // not constructed, so no safe_state(): the stop is sent here
+        throw;
+      }
+      throw fba::DeviceError(fmt::format("hw.canopen_arm on {}: {}", bus_->name(), e.what()));
+    }
+    ctx.log().info("{}: every drive enabled", bus_->name());
   }
 
   void process() override {
@@ -148,14 +194,15 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
       if (auto in = ctx_(kTarget); in.has()) pending_.emplace_back(in.get());
       if (auto in = ctx_(kJointTarget); in.has()) pending_.emplace_back(in.get());
       step();
+      if (auto in = ctx_(kTrajectory); in.has()) begin_following(in.get());
     });
   }
 
-  // The targets' producers are done: the motion under way and those pending run to their end.
+  // The targets' producers are done: the motion under way and those pending run to their end (a
+  // trajectory on the task's clock, which the executor keeps moving).
   void end_of_stream() override {
     guarded([&] {
-      const auto period = std::chrono::milliseconds(std::max<std::int64_t>(1, std::llround(1000 / ctx_(kRate))));
-      for (step(); moving_ || !pending_.empty(); step()) arm_->wait(period);
+      for (step(); moving_ || following_ || !pending_.empty(); step()) arm_->wait(period_);
     });
   }
 
@@ -196,14 +243,15 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
     }
   }
 
-  // One tick: start the drives the first time, sample them, publish, end or start motions.
+  // One tick: sample the drives (or give them the trajectory's next set-points), publish, end or
+  // start motions.
   void step() {
     const std::int64_t now = ctx_.now_ns();
-    if (!started_) {
-      started_ = true;  // from here on safe_state() quick-stops, even when start() fails half-way
-      arm_->start();
-    }
     check_noise();
+    if (following_) {
+      follow(now);
+      return;
+    }
     const canopen::ArmSample s = arm_->sample(sdo_timeout_);
     joints_ = Eigen::Map<const Eigen::VectorXd>(s.positions.data(), static_cast<Eigen::Index>(s.positions.size()));
     publish_initial(joints_, s.velocities, now);
@@ -225,6 +273,64 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
       pending_.pop_front();
       start(r);
     }
+  }
+
+  // A trajectory from where the arm stands, on the task's clock from now: the drives go to cyclic
+  // synchronous position and take the first set-point at once. Refused with 'unreachable' (nothing
+  // sent) when it does not fit the arm or comes while the arm moves.
+  void begin_following(const fba::JointTrajectory& trajectory) {
+    nlohmann::json target;
+    fba::arm::TimedPath path;
+    const bool busy = moving_ || following_ || !pending_.empty();
+    std::string why = path_of(trajectory, joints_, path, target);
+    if (busy) why = "the arm is moving: a trajectory starts where the arm stands still";
+    if (!why.empty()) {
+      refuse(target, why);
+      return;
+    }
+    start_ns_ = ctx_.now_ns();
+    path_ = std::move(path);
+    arm_->begin_cyclic();
+    following_ = true;
+    settle_deadline_.reset();
+    ctx_.log().info("following a trajectory of {} waypoints, {:.3f} s", path_.size(), path_.duration());
+    follow(ctx_.now_ns());
+  }
+
+  // One SYNC of a trajectory: every drive is given the path's position for the next SYNC (where it
+  // is to be one period from now), and reports where it is. The end: the last waypoint has been
+  // every drive's set-point for two SYNCs and one period of time (the drives follow their
+  // set-points a period behind) and every joint is within kSettleTolerance of it; then the drives
+  // go back to profile position, where they stand, and the arm has arrived.
+  void follow(std::int64_t now) {
+    const double t = static_cast<double>(now - start_ns_) * 1e-9;
+    const double ahead = t + std::chrono::duration<double>(period_).count();
+    Eigen::VectorXd q, v;
+    path_.sample(ahead, q, v);
+    const canopen::ArmSample s = arm_->cycle(fba::arm::values(q), sdo_timeout_);
+    joints_ = Eigen::Map<const Eigen::VectorXd>(s.positions.data(), static_cast<Eigen::Index>(s.positions.size()));
+    publish_initial(joints_, s.velocities, now);
+    publish_state(s.positions, s.velocities, now);
+    if (ahead < path_.duration()) return;
+    if (!settle_deadline_) {  // the first SYNC with the last waypoint
+      settle_from_ = Clock::now();
+      settle_deadline_ = settle_from_ + std::chrono::seconds(1);
+      final_syncs_ = 0;
+    }
+    ++final_syncs_;
+    if (final_syncs_ < 2 || Clock::now() - settle_from_ < period_ ||
+        (joints_ - path_.goal()).cwiseAbs().maxCoeff() > kSettleTolerance) {
+      if (Clock::now() < *settle_deadline_) return;
+      const auto failures = arm_->quick_stop_all();
+      throw std::runtime_error(fmt::format(
+          "arm stopped: the joints did not settle within {} rad of the trajectory's end within 1 s of it (the "
+          "farthest {:.4f} rad away); {}",
+          kSettleTolerance, (joints_ - path_.goal()).cwiseAbs().maxCoeff(),
+          failures.empty() ? "every joint was sent quick stop" : "quick stop failed: " + failures.front()));
+    }
+    following_ = false;
+    arm_->end_cyclic();
+    arrive(joints_, now);
   }
 
   // Plans a motion to a request from where the joints are, and starts it, or refuses it with
@@ -273,8 +379,12 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
                     failures.empty() ? "every joint was sent quick stop" : "quick stop failed: " + failures.front()));
   }
 
+  // How close to a trajectory's last waypoint every joint must come for it to have arrived, rad.
+  static constexpr double kSettleTolerance = 1e-3;
+
   const std::chrono::milliseconds sdo_timeout_;
   const std::uint64_t noise_limit_;
+  std::chrono::milliseconds period_{20};  // a tick: one SYNC
   std::unique_ptr<fba::can::CanBus> bus_;
   std::unique_ptr<canopen::Master> master_;
   std::unique_ptr<canopen::CanopenArm> arm_;
@@ -283,6 +393,12 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
   std::atomic<bool> started_{false};
   Eigen::VectorXd joints_;  // where the drives last said they are
   bool moving_ = false;
+  bool following_ = false;        // a trajectory, in cyclic synchronous position
+  fba::arm::TimedPath path_;      // the trajectory followed
+  std::int64_t start_ns_ = 0;     // when it arrived, on the task's clock: its time 0
+  std::optional<Clock::time_point> settle_deadline_;
+  Clock::time_point settle_from_;
+  int final_syncs_ = 0;
   double planned_s_ = 0;
   Clock::time_point move_start_, deadline_;
   // Targets that came during a motion, in order: each starts when the one before ends.

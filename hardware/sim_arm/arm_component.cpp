@@ -3,6 +3,9 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <cmath>
+#include <set>
+#include <sstream>
 
 namespace fba::arm {
 
@@ -26,6 +29,82 @@ nlohmann::json pose_json(const Eigen::Isometry3d& t) {
 }  // namespace
 
 std::vector<double> values(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+
+void TimedPath::sample(double t, Eigen::VectorXd& positions, Eigen::VectorXd& velocities) const {
+  velocities = Eigen::VectorXd::Zero(positions_.front().size());
+  if (times_.size() < 2 || !(t > 0)) {
+    positions = positions_.front();
+    return;
+  }
+  if (t >= times_.back()) {
+    positions = positions_.back();
+    return;
+  }
+  const std::size_t k = static_cast<std::size_t>(std::upper_bound(times_.begin(), times_.end(), t) - times_.begin()) - 1;
+  const double dt = times_[k + 1] - times_[k];
+  velocities = (positions_[k + 1] - positions_[k]) / dt;
+  positions = positions_[k] + velocities * (t - times_[k]);
+}
+
+std::string ArmComponent::path_of(const fba::JointTrajectory& t, const Eigen::VectorXd& from, TimedPath& path,
+                                  nlohmann::json& target) const {
+  const auto& joints = model_.joint_names();
+  const std::size_t n = joints.size();
+  target = {{"trajectory",
+             {{"joints", t.names},
+              {"waypoints", t.points.size()},
+              {"duration_s", t.points.empty() ? 0.0 : t.points.back().time}}}};
+  auto text = [](double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  };
+  // Its joints, each to its place in the arm's order.
+  std::vector<std::size_t> place(t.names.size());
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < t.names.size(); ++i) {
+    const auto it = std::find(joints.begin(), joints.end(), t.names[i]);
+    if (it == joints.end()) return "the trajectory's joint '" + t.names[i] + "' is not one of the arm's (" + names() + ")";
+    if (!seen.insert(t.names[i]).second) return "the trajectory names joint '" + t.names[i] + "' twice";
+    place[i] = static_cast<std::size_t>(it - joints.begin());
+  }
+  for (const auto& j : joints)
+    if (!seen.count(j)) return "the trajectory has no joint '" + j + "'; it must move every joint of the arm (" + names() + ")";
+  if (t.points.empty()) return "the trajectory has no waypoint";
+  path.times_.clear();
+  path.positions_.clear();
+  for (std::size_t k = 0; k < t.points.size(); ++k) {
+    const auto& p = t.points[k];
+    const std::string at = "waypoint " + std::to_string(k) + " (at " + text(p.time) + " s)";
+    if (p.positions.size() != n)
+      return at + " has " + std::to_string(p.positions.size()) + " positions for " + std::to_string(n) + " joints";
+    if (!std::isfinite(p.time) || (k == 0 && p.time != 0) || (k > 0 && !(p.time > path.times_.back())))
+      return at + ": the times must start at 0 and increase";
+    Eigen::VectorXd q(static_cast<Eigen::Index>(n));
+    for (std::size_t i = 0; i < n; ++i) q(static_cast<Eigen::Index>(place[i])) = p.positions[i];
+    if (!q.allFinite()) return at + " has a position that is not a number";
+    if (const std::string bad = model_.limit_violation(q); !bad.empty()) return at + ": " + bad;
+    if (k > 0) {
+      const double dt = p.time - path.times_.back();
+      for (std::size_t j = 0; j < n; ++j) {
+        const auto jj = static_cast<Eigen::Index>(j);
+        const double v = std::abs(q(jj) - path.positions_.back()(jj)) / dt, limit = model_.limits()[j].velocity;
+        if (limit > 0 && v > limit * (1 + 1e-6) + 1e-9)
+          return at + ": joint '" + joints[j] + "' would move at " + text(v) + " rad/s from the waypoint before, beyond its limit of " +
+                 text(limit) + " rad/s";
+      }
+    }
+    path.times_.push_back(p.time);
+    path.positions_.push_back(std::move(q));
+  }
+  for (std::size_t j = 0; j < n; ++j) {
+    const auto jj = static_cast<Eigen::Index>(j);
+    if (std::abs(path.positions_.front()(jj) - from(jj)) > kStartTolerance)
+      return "the trajectory starts with joint '" + joints[j] + "' at " + text(path.positions_.front()(jj)) +
+             " rad, but the arm stands at " + text(from(jj)) + " rad (more than " + text(kStartTolerance) + " apart)";
+  }
+  return {};
+}
 
 ArmComponent::ArmComponent(fba::Context& ctx)
     : ctx_(ctx),

@@ -19,6 +19,24 @@
 
 namespace fba::arm {
 
+// A trajectory (fba.JointTrajectory) as an arm follows it: its waypoints in the arm's joint order,
+// checked against the arm (ArmComponent::path_of), positions in between on straight lines.
+class TimedPath {
+ public:
+  double duration() const { return times_.empty() ? 0.0 : times_.back(); }  // s
+  const Eigen::VectorXd& start() const { return positions_.front(); }
+  const Eigen::VectorXd& goal() const { return positions_.back(); }
+  std::size_t size() const { return times_.size(); }
+  // Positions and velocities at time t (s from the first waypoint; clamped to [0, duration]): on the
+  // straight line between the waypoints around t, at that segment's velocity (0 at the ends).
+  void sample(double t, Eigen::VectorXd& positions, Eigen::VectorXd& velocities) const;
+
+ private:
+  friend class ArmComponent;
+  std::vector<double> times_;
+  std::vector<Eigen::VectorXd> positions_;
+};
+
 class ArmComponent : public fba::Component, public ArmPorts {
  public:
   static constexpr fba::Param<std::filesystem::path> kUrdf{
@@ -56,6 +74,16 @@ class ArmComponent : public fba::Component, public ArmPorts {
                       nlohmann::json& target) const;
   // A refused target: logged, and the 'unreachable' event with the target and the reason.
   void refuse(const nlohmann::json& target, const std::string& why);
+
+  // How far a trajectory's first waypoint may be from where the arm stands, rad (m), each joint.
+  static constexpr double kStartTolerance = 0.01;
+  // The trajectory as the arm follows it, checked: its joints are the arm's (each once, any order),
+  // its times start at 0 and increase, every waypoint is within the joints' position limits, no
+  // joint moves faster between two waypoints than its URDF velocity limit, and it starts within
+  // kStartTolerance of `from`. Returns why not, or "" when `path` is set; `target` is the
+  // trajectory as JSON for the events.
+  std::string path_of(const fba::JointTrajectory& t, const Eigen::VectorXd& from, TimedPath& path,
+                      nlohmann::json& target) const;
 
   void publish_state(std::vector<double> positions, std::vector<double> velocities, std::int64_t stamp_ns);
   // Once, at the first tick (unless publish_initial is off): the joints and the camera pose.

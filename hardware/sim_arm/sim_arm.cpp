@@ -1,11 +1,13 @@
 // sim.arm: the simulated twin of the task's arm (hw.canopen_arm is the real one, with the same
 // ports and events). It takes a camera pose or joint target, plans a joint-space motion within
 // the URDF's limits, and moves along it in the task's time: joint states at `rate` while it
-// moves, and the camera's pose when it arrives, for sim.camera to render from.
+// moves, and the camera's pose when it arrives, for sim.camera to render from. A timed trajectory
+// (a reach plan) is followed kinematically on the task's clock from when it arrives.
 #include <cmath>
 #include <deque>
 #include <limits>
 #include <optional>
+#include <variant>
 
 #include <fba/component.hpp>
 
@@ -14,7 +16,20 @@
 namespace {
 
 using fba::arm::JointTrajectory;
+using fba::arm::TimedPath;
 using fba::arm::values;
+
+// What the arm follows: a planned motion to a target, or a trajectory it was given.
+using Motion = std::variant<JointTrajectory, TimedPath>;
+double duration(const Motion& m) {
+  return std::visit([](const auto& x) { return x.duration(); }, m);
+}
+const Eigen::VectorXd& goal(const Motion& m) {
+  return std::visit([](const auto& x) -> const Eigen::VectorXd& { return x.goal(); }, m);
+}
+void sample(const Motion& m, double t, Eigen::VectorXd& q, Eigen::VectorXd& v) {
+  std::visit([&](const auto& x) { x.sample(t, q, v); }, m);
+}
 
 class SimArm final : public fba::arm::ArmComponent {
  public:
@@ -27,7 +42,7 @@ class SimArm final : public fba::arm::ArmComponent {
     return fba::Spec::actuator("sim.arm",
                                "Simulated 6-joint arm with a wrist camera (URDF, Orocos KDL): moves to camera poses or joint targets "
                                "within the joint limits, in task time (the twin of hw.canopen_arm).")
-        .add(kTarget, kJointTarget, kJointState, kCameraPose, kArrived, kUnreachable, kUrdf, kBaseLink, kCameraLink, kInitial, kSpeed,
+        .add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable, kUrdf, kBaseLink, kCameraLink, kInitial, kSpeed,
              kAcceleration, kRate, kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial);
   }
 
@@ -53,6 +68,7 @@ class SimArm final : public fba::arm::ArmComponent {
     if (auto in = ctx_(kTarget); in.has()) pending_.push_back(Pending{in.get(), now});
     if (auto in = ctx_(kJointTarget); in.has()) pending_.push_back(Pending{in.get(), now});
     advance(now);
+    if (auto in = ctx_(kTrajectory); in.has()) follow(in.get(), now);
   }
 
   // The targets' producers are done: the motions under way and pending run to their end in task
@@ -66,8 +82,8 @@ class SimArm final : public fba::arm::ArmComponent {
   void safe_state() override {
     if (motion_) {
       Eigen::VectorXd velocity;
-      motion_->sample(seconds_since_start(ctx_.now_ns()), joints_, velocity);
-      ctx_.log().warn("safe state: stopped {:.3f} s into a motion of {:.3f} s", seconds_since_start(ctx_.now_ns()), motion_->duration());
+      sample(*motion_, seconds_since_start(ctx_.now_ns()), joints_, velocity);
+      ctx_.log().warn("safe state: stopped {:.3f} s into a motion of {:.3f} s", seconds_since_start(ctx_.now_ns()), duration(*motion_));
     }
     motion_.reset();
     pending_.clear();
@@ -89,14 +105,14 @@ class SimArm final : public fba::arm::ArmComponent {
         start(p.request, std::max(p.received_ns, stopped_ns_));
         continue;
       }
-      const std::int64_t end = start_ns_ + static_cast<std::int64_t>(std::ceil(motion_->duration() * 1e9));
+      const std::int64_t end = start_ns_ + static_cast<std::int64_t>(std::ceil(duration(*motion_) * 1e9));
       const bool to_the_end = until == std::numeric_limits<std::int64_t>::max();  // end of stream: every sample it would have had
       for (std::int64_t t = last_ns_ + period_ns(); t < std::min(until, end) && to_the_end; t += period_ns()) publish_along(t);
       if (until < end) {
         if (until > last_ns_) publish_along(until);
         return;
       }
-      joints_ = motion_->goal();
+      joints_ = goal(*motion_);
       motion_.reset();
       stopped_ns_ = last_ns_ = end;
       publish_state(values(joints_), still(), end);
@@ -106,7 +122,7 @@ class SimArm final : public fba::arm::ArmComponent {
 
   void publish_along(std::int64_t t) {
     Eigen::VectorXd q, v;
-    motion_->sample(seconds_since_start(t), q, v);
+    sample(*motion_, seconds_since_start(t), q, v);
     publish_state(values(q), values(v), t);
     last_ns_ = t;
   }
@@ -119,10 +135,28 @@ class SimArm final : public fba::arm::ArmComponent {
       refuse(target, why);
       return;
     }
-    motion_.emplace(joints_, goal, max_velocity_, max_acceleration_);
+    motion_.emplace(JointTrajectory(joints_, goal, max_velocity_, max_acceleration_));
     start_ns_ = now;
     publish_along(now);
-    ctx_.log().debug("moving to {} in {:.3f} s", target.dump(), motion_->duration());
+    ctx_.log().debug("moving to {} in {:.3f} s", target.dump(), duration(*motion_));
+  }
+
+  // Follows a trajectory from now, on the task's clock, or refuses it with 'unreachable': one that
+  // does not fit the arm, or that comes while the arm moves (a trajectory starts where it stands).
+  void follow(const fba::JointTrajectory& trajectory, std::int64_t now) {
+    nlohmann::json target;
+    TimedPath path;
+    std::string why = motion_ || !pending_.empty() ? "the arm is moving: a trajectory starts where the arm stands still"
+                                                   : path_of(trajectory, joints_, path, target);
+    if (!why.empty()) {
+      if (target.is_null()) path_of(trajectory, joints_, path, target);  // the trajectory, for the event
+      refuse(target, why);
+      return;
+    }
+    ctx_.log().info("following a trajectory of {} waypoints, {:.3f} s", path.size(), path.duration());
+    motion_.emplace(std::move(path));
+    start_ns_ = now;
+    publish_along(now);
   }
 
   std::vector<double> still() const { return std::vector<double>(joints_.size(), 0.0); }  // velocities at rest
@@ -131,7 +165,7 @@ class SimArm final : public fba::arm::ArmComponent {
 
   Eigen::VectorXd joints_;  // where the arm is when not moving
   Eigen::VectorXd max_velocity_, max_acceleration_;
-  std::optional<JointTrajectory> motion_;
+  std::optional<Motion> motion_;
   std::int64_t start_ns_ = 0;    // of the motion
   std::int64_t last_ns_ = 0;     // the last time the motion was published
   std::int64_t stopped_ns_ = 0;  // when the last motion ended

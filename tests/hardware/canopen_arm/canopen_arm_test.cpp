@@ -20,7 +20,9 @@
 #include <fba/task.hpp>
 #include <fba/task_config.hpp>
 #include <fba/testing.hpp>
+#include <fba/component.hpp>
 #include <fba/types/joint_state.hpp>
+#include <fba/types/joint_trajectory.hpp>
 #include <fba/types/pose.hpp>
 
 #include "arm_model.hpp"
@@ -30,6 +32,7 @@
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 #include "support/contains.hpp"
+#include "support/joint_trajectories.hpp"
 
 using fba::testing::ComponentHarness;
 using namespace std::chrono_literals;
@@ -54,11 +57,10 @@ std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::
 // The emulator in a thread of its own, behind an SLCAN adapter on a new pseudo-terminal.
 class Emulator {
  public:
-  Emulator() : pty_(fba::can::open_pty()) {
+  explicit Emulator(fba::emulators::CanopenArmOptions options = {}) : pty_(fba::can::open_pty()) {
     auto adapter = std::make_unique<fba::can::slcan::SlcanAdapter>(std::move(pty_.master), "emulator");
     noise_ = fba::emulators::noise_for(*adapter);
     adapter_ = std::move(adapter);
-    fba::emulators::CanopenArmOptions options;
     options.nodes = {1, 2, 3, 4, 5, 6};
     emulator_ = std::make_unique<fba::emulators::CanopenArmEmulator>(*adapter_, options, noise_);
     thread_ = std::thread([this] { emulator_->run(); });
@@ -72,6 +74,7 @@ class Emulator {
   fba::emulators::CanopenArmEmulator& operator*() { return *emulator_; }
   bool quick_stopped(int node) { return (emulator_->statusword(node) & 0x6F) == 0x07; }
   bool enabled(int node) { return (emulator_->statusword(node) & 0x6F) == 0x27; }
+  bool in_fault(int node) { return (emulator_->statusword(node) & 0x4F) == 0x08; }
 
  private:
   fba::can::Pty pty_;
@@ -98,7 +101,7 @@ class CanopenArmComponent : public ::testing::Test {
   }
   void make(fba::testing::Params more = {}) {
     harness_.emplace(built_plugins(), "hw.canopen_arm", params(std::move(more)),
-                     std::vector<std::string>{"target", "joint_target"});
+                     std::vector<std::string>{"target", "joint_target", "trajectory"});
   }
   ComponentHarness& h() { return *harness_; }
   // One period of the task's clock and its invocation; the drives get a millisecond to move.
@@ -161,7 +164,7 @@ TEST(CanopenArmSpec, HasExactlyTheInputsOutputsAndEventsOfSimArm) {
     EXPECT_EQ(a.events()[i].name, b.events()[i].name);
     EXPECT_EQ(a.events()[i].doc, b.events()[i].doc);
   }
-  EXPECT_EQ(a.inputs().size(), 2u);  // target, joint_target: the comparison compared something
+  EXPECT_EQ(a.inputs().size(), 3u);  // target, joint_target, trajectory: the comparison compared something
   EXPECT_EQ(a.events().size(), 2u);  // arrived, unreachable
 }
 
@@ -296,6 +299,7 @@ TEST_F(CanopenArmComponent, AtTheEndOfTheStreamTheMovesUnderWayAndPendingAreComp
   tick();  // taken in: it waits for the first move's end
   h().close("joint_target");
   h().close("target");
+  h().close("trajectory");
   h().run();
   EXPECT_TRUE(h().failure().empty()) << h().failure();
   EXPECT_EQ(named(h().events(), "arrived").size(), 2u);
@@ -367,6 +371,7 @@ TEST_F(CanopenArmComponent, SafeStateQuickStopsEveryJointWhileAnotherCallIsStill
   tick();
   h().close("joint_target");
   h().close("target");
+  h().close("trajectory");
   const auto syncs = emulator_->syncs_seen();
   std::atomic<bool> returned{false};
   std::jthread follow([&] {
@@ -495,4 +500,213 @@ TEST_F(CanopenArmInATask, AStopFromOutsideInterruptsTheDriverAndQuickStopsEveryJ
   ASSERT_EQ(result.safe_states.size(), 1u);
   EXPECT_EQ(result.safe_states[0].status, "reached") << result.safe_states[0].message;
   for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+}
+
+namespace {
+
+// The trajectories below start where the emulator's drives stand, at 0.
+const std::vector<double> kZero(6, 0.0);
+
+// The set-points the drives took in cyclic synchronous position since SYNC number `after`.
+std::vector<fba::emulators::SyncSetPoints> cyclic_set_points(fba::emulators::CanopenArmEmulator& e, std::uint64_t after) {
+  std::vector<fba::emulators::SyncSetPoints> out;
+  for (const auto& r : e.set_points())
+    if (r.sync > after && r.mode == 8) out.push_back(r);
+  return out;
+}
+
+}  // namespace
+
+// A reach plan's trajectory on the real driver: every drive takes its set-point on the same SYNC,
+// all at the same share of their way on each (the emulator's record per SYNC), and the arm arrives
+// where the trajectory ends, with joint states all along.
+TEST_F(CanopenArmComponent, FollowsATrajectoryWithEveryDriveTakingItsSetPointOnTheSameSyncInStep) {
+  make();
+  tick();
+  const std::vector<double> goal{0.3, -0.2, 0.25, -0.15, 0.2, 0.1};
+  const auto syncs = emulator_->syncs_seen();
+  h().push("trajectory", fba::test::straight_trajectory(wrist_camera_arm().joint_names(), kZero, goal, 1.0, 0.02, 0.2));
+  tick_until_arrived();
+  ASSERT_TRUE(h().failure().empty()) << h().failure();
+  EXPECT_TRUE(named(h().events(), "unreachable").empty());
+  ASSERT_EQ(named(h().events(), "arrived").size(), 1u);
+  // Arrived within 1 mrad of the end (the drives' last set-point); they finish its last step.
+  auto at_goal = [&] {
+    for (int node = 1; node <= 6; ++node)
+      if (std::abs(emulator_->position(node) - goal[node - 1] * kCounts) > 1.0) return false;
+    return true;
+  };
+  for (int i = 0; i < 100'000 && !at_goal(); ++i) std::this_thread::sleep_for(1ms);  // the bound only catches a hang
+  for (int node = 1; node <= 6; ++node) {
+    EXPECT_NEAR(emulator_->position(node), goal[node - 1] * kCounts, 1.0) << "node " << node;
+    EXPECT_TRUE(emulator_.enabled(node)) << "node " << node;
+  }
+  const auto taken = cyclic_set_points(*emulator_, syncs);
+  ASSERT_GE(taken.size(), 60u);  // 1.2 s of trajectory at a SYNC every 20 ms of the task's clock
+  double previous = 0;
+  for (const auto& r : taken) {
+    ASSERT_EQ(r.set_points.size(), 6u) << "SYNC " << r.sync << ": a drive took no set-point";
+    const double share = r.set_points[0].second / (goal[0] * kCounts);
+    for (const auto& [node, counts] : r.set_points)
+      EXPECT_NEAR(counts / (goal[node - 1] * kCounts), share, 1e-4) << "SYNC " << r.sync << ", node " << node;
+    EXPECT_GE(share, previous - 1e-4) << "SYNC " << r.sync;
+    previous = share;
+  }
+  EXPECT_NEAR(previous, 1.0, 1e-4);
+  // Joint states all along; the arrival where the drives stand.
+  const auto states = h().values<fba::JointState>("joint_state");
+  ASSERT_GE(states.size(), taken.size());
+  const auto arrived = nlohmann::json::parse(named(h().events(), "arrived")[0].payload);
+  for (int j = 0; j < 6; ++j) EXPECT_NEAR(arrived["joints"][j].get<double>(), goal[j], 1e-3) << "joint " << j;
+  // Back in profile position: a joint target moves the arm as before.
+  h().push("joint_target", fba::JointState{{"wrist_3_joint"}, {0.0}, {}, 0});
+  tick_until_arrived(2);
+  EXPECT_EQ(emulator_->position(6), 0);
+}
+
+TEST_F(CanopenArmComponent, ATrajectoryThatDoesNotFitTheArmIsRefusedWithNothingSent) {
+  make();
+  tick();
+  const auto names = wrist_camera_arm().joint_names();
+  const std::vector<double> goal{0.3, -0.2, 0.25, -0.15, 0.2, 0.1};
+  std::vector<std::pair<fba::JointTrajectory, std::string>> cases;
+  auto other_names = names;
+  other_names[2] = "knee_joint";
+  cases.push_back({fba::test::straight_trajectory(other_names, kZero, goal, 1.0), "joint 'knee_joint' is not one of the arm's"});
+  auto five = names;
+  five.pop_back();
+  cases.push_back({fba::test::straight_trajectory(five, std::vector<double>(5, 0.0), std::vector<double>(5, 0.1), 1.0),
+                   "the trajectory has no joint 'wrist_3_joint'"});
+  cases.push_back({fba::test::straight_trajectory(names, kZero, {0, 0, 3.5, 0, 0, 0}, 5.0),
+                   ": joint 'elbow_joint' at 3.15"});
+  cases.push_back({fba::test::straight_trajectory(names, kZero, {3, 0, 0, 0, 0, 0}, 0.1), "beyond its limit of"});
+  cases.push_back({fba::test::straight_trajectory(names, {0.5, 0, 0, 0, 0, 0}, goal, 1.0),
+                   "the trajectory starts with joint 'shoulder_pan_joint' at 0.5 rad, but the arm stands at 0 rad"});
+  std::vector<std::uint64_t> before;
+  for (int node = 1; node <= 6; ++node) before.push_back(emulator_->sdo_downloads(node));
+  const auto syncs = emulator_->syncs_seen();
+  for (const auto& [trajectory, why] : cases) {
+    h().push("trajectory", trajectory);
+    tick();
+  }
+  ASSERT_TRUE(h().failure().empty()) << h().failure();
+  const auto refused = named(h().events(), "unreachable");
+  ASSERT_EQ(refused.size(), cases.size());
+  for (std::size_t i = 0; i < cases.size(); ++i)
+    EXPECT_TRUE(contains(refused[i].payload, cases[i].second)) << refused[i].payload;
+  for (int node = 1; node <= 6; ++node) {
+    EXPECT_EQ(emulator_->sdo_downloads(node), before[node - 1]) << "node " << node << " was sent a command";
+    EXPECT_EQ(emulator_->position(node), 0) << "node " << node;
+  }
+  EXPECT_TRUE(cyclic_set_points(*emulator_, syncs).empty());
+}
+
+TEST_F(CanopenArmComponent, ATrajectoryThatComesWhileTheArmMovesIsRefused) {
+  make({{"speed_scale", 0.2}});
+  tick();
+  start_long_move();
+  h().push("trajectory", fba::test::straight_trajectory(wrist_camera_arm().joint_names(), kZero, kZero, 0.2));
+  tick();
+  ASSERT_TRUE(h().failure().empty()) << h().failure();
+  const auto refused = named(h().events(), "unreachable");
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_TRUE(contains(refused[0].payload, "the arm is moving")) << refused[0].payload;
+}
+
+// A drive that stops taking its set-points mid-trajectory: every joint is quick-stopped on the SYNC
+// where it shows, naming it, and no other drive took a set-point the failing one did not take
+// after that SYNC (at most that one SYNC's).
+TEST_F(CanopenArmComponent, ADriveThatStopsTakingItsSetPointsMidTrajectoryStopsEveryJointOnThatSync) {
+  make();
+  tick();
+  const auto syncs = emulator_->syncs_seen();
+  h().push("trajectory", fba::test::straight_trajectory(wrist_camera_arm().joint_names(), kZero,
+                                                        {1.0, -1.0, 1.0, -1.0, 1.0, -1.0}, 20.0));
+  tick();
+  tick_until([&] { return cyclic_set_points(*emulator_, syncs).size() >= 5; });
+  emulator_->ignore_set_points(3);
+  tick_until_failed();
+  const std::string why = h().failure();
+  EXPECT_TRUE(contains(why, emulator_.device())) << why;
+  EXPECT_TRUE(contains(why, "joint 'elbow_joint' (node 3): does not follow its set-point")) << why;
+  EXPECT_TRUE(contains(why, "every joint was sent quick stop")) << why;
+  for (int node : {1, 2, 4, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
+  const auto taken = cyclic_set_points(*emulator_, syncs);
+  ASSERT_FALSE(taken.empty());
+  for (std::size_t i = 0; i + 1 < taken.size(); ++i)
+    EXPECT_EQ(taken[i].set_points.size(), 6u) << "SYNC " << taken[i].sync << ": the others moved on alone before the last";
+  EXPECT_EQ(taken.back().set_points.size(), 5u);  // the SYNC it missed, and the arm stopped on it
+  EXPECT_TRUE(named(h().events(), "arrived").empty());
+}
+
+// Start-up in the constructor: a device that fails ends the construction as a device error (a
+// runtime error, exit 3), naming the drive, with no drive left enabled.
+class CanopenArmStartUp : public ::testing::Test {
+ protected:
+  std::string construct(const fba::emulators::CanopenArmOptions& options, fba::testing::Params more = {}) {
+    emulator_.emplace(options);
+    fba::testing::Params p{{"device", emulator_->device()},
+                           {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
+                           {"counts_per_rad", std::vector<double>(6, kCounts)},
+                           {"heartbeat_period_ms", 20},
+                           {"heartbeat_timeout_ms", 1000},
+                           {"sdo_timeout_ms", 1000},
+                           {"enable_timeout_ms", 1000}};
+    for (auto& [k, v] : more) p[k] = v;
+    try {
+      ComponentHarness h(built_plugins(), "hw.canopen_arm", p);
+    } catch (const fba::ConstructionError& e) {
+      EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
+      return e.what();
+    }
+    return "";
+  }
+  std::optional<Emulator> emulator_;
+};
+
+TEST_F(CanopenArmStartUp, ADriveInFaultIsRefusedAsADeviceErrorNamingItsErrorCode) {
+  fba::emulators::CanopenArmOptions options;
+  options.fault_at_start = {{4, 0x7121}};
+  const std::string why = construct(options);
+  EXPECT_TRUE(contains(why, "could not start its device")) << why;
+  EXPECT_TRUE(contains(why, "hw.canopen_arm on " + emulator_->device())) << why;
+  EXPECT_TRUE(contains(why, "joint 'wrist_1_joint' (node 4): the drive is in fault at start-up, error code 0x7121 (motor blocked)"))
+      << why;
+  EXPECT_TRUE(emulator_->in_fault(4)) << "reset without leave";
+  for (int node = 1; node <= 6; ++node) EXPECT_FALSE(emulator_->enabled(node)) << "node " << node;
+}
+
+TEST_F(CanopenArmStartUp, ADriveInFaultIsResetWhenTheTaskAllowsIt) {
+  fba::emulators::CanopenArmOptions options;
+  options.fault_at_start = {{4, 0x7121}};
+  EXPECT_EQ(construct(options, {{"reset_faults_at_start", true}}), "");
+  for (int node = 1; node <= 6; ++node) EXPECT_TRUE(emulator_->enabled(node)) << "node " << node;
+}
+
+TEST_F(CanopenArmStartUp, ANodeThatIsNotACia402DriveOrDoesNotBootIsADeviceError) {
+  fba::emulators::CanopenArmOptions other;
+  other.device_type = {{2, 0x00020191}};
+  std::string why = construct(other);
+  EXPECT_TRUE(contains(why, "joint 'shoulder_lift_joint' (node 2): device type 0x00020191 (0x1000) is device profile 401"))
+      << why;
+  fba::emulators::CanopenArmOptions silent;
+  silent.silent = {6};
+  why = construct(silent);
+  EXPECT_TRUE(contains(why, "could not start its device")) << why;
+  EXPECT_TRUE(contains(why, "no boot-up message within 1000 ms of an NMT reset communication from joint 'wrist_3_joint' (node 6)"))
+      << why;
+}
+
+TEST_F(CanopenArmStartUp, AnAdapterThatDoesNotAnswerIsADeviceError) {
+  fba::can::Pty nobody = fba::can::open_pty();  // a terminal with nothing behind it
+  try {
+    ComponentHarness h(built_plugins(), "hw.canopen_arm",
+                       {{"device", "slcan:" + nobody.slave_path},
+                        {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
+                        {"counts_per_rad", std::vector<double>(6, kCounts)}});
+    FAIL() << "started without an adapter";
+  } catch (const fba::ConstructionError& e) {
+    EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
+    EXPECT_TRUE(contains(e.what(), "could not start its device: hw.canopen_arm on slcan:" + nobody.slave_path)) << e.what();
+  }
 }

@@ -12,6 +12,7 @@
 #include <fba/testing.hpp>
 #include <fba/types/frame.hpp>
 #include <fba/types/joint_state.hpp>
+#include <fba/types/joint_trajectory.hpp>
 #include <fba/types/pose.hpp>
 
 #include "arm_model.hpp"
@@ -19,6 +20,7 @@
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
 #include "support/data_sets.hpp"
+#include "support/joint_trajectories.hpp"
 
 using fba::testing::ComponentHarness;
 
@@ -298,4 +300,77 @@ TEST(SimArm, InATaskTheCameraSeesTheObjectFromTheArmsStartingPose) {
   bool arm_safe = false;  // the arm is an actuator: told to go safe at the end
   for (const auto& s : result.safe_states) arm_safe |= s.component == "arm" && s.status == "reached";
   EXPECT_TRUE(arm_safe);
+}
+
+namespace {
+
+// sim.arm's default initial joints (its parameter initial_joints).
+const std::vector<double> kInitialJoints{-0.4148, -2.1223, 2.2888, -2.2234, -1.3679, -0.3644};
+
+}  // namespace
+
+// A reach plan's trajectory: followed on the task's clock from when it arrives, joint states along
+// it where the trajectory says, and 'arrived' at its end, at its last waypoint.
+TEST(SimArm, FollowsATrajectoryOnTheTasksClockAndArrivesAtItsEnd) {
+  ComponentHarness h(built_plugins(), "sim.arm", {}, {"trajectory"});
+  tick(h);
+  std::vector<double> goal = kInitialJoints;
+  for (double& q : goal) q += 0.2;
+  const auto trajectory =
+      fba::test::straight_trajectory(wrist_camera_arm().joint_names(), kInitialJoints, goal, 1.0, 0.02, 0.2);
+  h.push("trajectory", trajectory);
+  tick(h);
+  const std::int64_t start = h.now_ns();
+  tick_until_arrived(h);
+  ASSERT_EQ(named(h.events(), "arrived").size(), 1u);
+  EXPECT_TRUE(named(h.events(), "unreachable").empty());
+  const auto states = h.values<fba::JointState>("joint_state");
+  std::size_t along = 0;
+  for (const auto& p : h.packets("joint_state")) {
+    const auto& js = p.get<fba::JointState>();
+    if (p.header().stamp_ns < start) continue;
+    ++along;
+    const double t = static_cast<double>(p.header().stamp_ns - start) * 1e-9;
+    // Where the trajectory is at t: between its waypoints, on the straight line.
+    const std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(t / 0.02), trajectory.points.size() - 2);
+    const double share = std::clamp((t - trajectory.points[k].time) / 0.02, 0.0, 1.0);
+    for (std::size_t j = 0; j < 6; ++j) {
+      const double expected =
+          trajectory.points[k].positions[j] + share * (trajectory.points[k + 1].positions[j] - trajectory.points[k].positions[j]);
+      EXPECT_NEAR(js.positions[j], expected, 1e-9) << "at " << t << " s, joint " << j;
+    }
+  }
+  EXPECT_GE(along, 60u);  // 1.2 s at 50 Hz
+  const auto arrived = named(h.events(), "arrived");
+  const auto joints = nlohmann::json::parse(arrived[0].payload)["joints"].get<std::vector<double>>();
+  for (std::size_t j = 0; j < 6; ++j) EXPECT_NEAR(joints[j], goal[j], 1e-12);
+  EXPECT_EQ(states.back().stamp, static_cast<double>(start + 1'200'000'000) * 1e-9);
+}
+
+TEST(SimArm, ATrajectoryThatDoesNotFitTheArmOrComesWhileItMovesIsRefused) {
+  ComponentHarness h(built_plugins(), "sim.arm", {}, {"trajectory", "joint_target"});
+  tick(h);
+  const auto names = wrist_camera_arm().joint_names();
+  std::vector<double> goal = kInitialJoints;
+  goal[0] += 0.3;
+  std::vector<double> elsewhere = kInitialJoints;
+  elsewhere[4] += 0.1;
+  h.push("trajectory", fba::test::straight_trajectory(names, elsewhere, goal, 1.0));
+  tick(h);
+  auto wrong = names;
+  std::swap(wrong[0], wrong[1]);  // the same joints in another order: fine, each by name
+  wrong[5] = "tool_joint";
+  h.push("trajectory", fba::test::straight_trajectory(wrong, kInitialJoints, goal, 1.0));
+  tick(h);
+  h.push("joint_target", fba::JointState{{"wrist_3_joint"}, {0.5}, {}, 0});
+  tick(h);
+  h.push("trajectory", fba::test::straight_trajectory(names, kInitialJoints, goal, 1.0));
+  tick(h);
+  const auto refused = named(h.events(), "unreachable");
+  ASSERT_EQ(refused.size(), 3u);
+  EXPECT_NE(refused[0].payload.find("the trajectory starts with joint 'wrist_2_joint' at"), std::string::npos) << refused[0].payload;
+  EXPECT_NE(refused[1].payload.find("joint 'tool_joint' is not one of the arm's"), std::string::npos) << refused[1].payload;
+  EXPECT_NE(refused[2].payload.find("the arm is moving"), std::string::npos) << refused[2].payload;
+  tick_until_arrived(h);
+  EXPECT_EQ(named(h.events(), "arrived").size(), 1u);  // the joint target's move only
 }

@@ -70,8 +70,9 @@ struct CanopenArmEmulator::Node {
   bool limited = false;
   bool took_set_point = false;  // profile position: a new set-point was taken (for set_points())
   bool ignores_set_points = false;
-  // Cyclic synchronous position: the straight line from `csp_from` to `csp_demand` (the set-point
-  // taken on the last SYNC), followed over one interpolation period from `csp_since`.
+  // Cyclic synchronous position: the straight line from `csp_from` (the set-point taken on the
+  // SYNC before) to `csp_demand` (the one taken on the last SYNC), followed over one interpolation
+  // period from `csp_since`: the drive's position loop follows its interpolated set-points.
   double csp_from = 0, csp_demand = 0;
   Clock::time_point csp_since{};
   Clock::time_point last_update;
@@ -598,13 +599,14 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
           n->rpdo_pending[p].reset();
         }
       // Cyclic synchronous position: the set-point that came before this SYNC is taken on it, and
-      // followed in a straight line over the interpolation period, from where the drive stands.
+      // the drive follows the straight line from the one before to it over the interpolation
+      // period (a SYNC that comes early cuts the line short: the drive is then at the one before).
       if (n->cyclic() && !n->ignores_set_points) {
         const auto lo = static_cast<double>(static_cast<std::int32_t>(n->get(0x607D, 1)));
         const auto hi = static_cast<double>(static_cast<std::int32_t>(n->get(0x607D, 2)));
         const auto demand = static_cast<double>(static_cast<std::int32_t>(n->get(0x607A, 0)));
         n->limited = demand < lo || demand > hi;
-        n->csp_from = n->position;
+        n->csp_from = n->csp_demand;
         n->csp_demand = std::clamp(demand, lo, hi);
         n->csp_since = now;
         taken.mode = 8;

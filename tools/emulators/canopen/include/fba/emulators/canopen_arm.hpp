@@ -6,8 +6,8 @@
 //
 // Cyclic synchronous position, as CiA 402 defines it and as the drives do: the position set-point
 // (0x607A) that arrived before a SYNC is taken on that SYNC, and the drive's position loop follows
-// the straight line from where it stands to it over one interpolation period (0x60C2), reporting
-// "drive follows the command value" (statusword bit 12). The set-points each drive took are kept
+// the straight line from the set-point before to it over one interpolation period (0x60C2),
+// reporting "drive follows the command value" (statusword bit 12). The set-points each drive took are kept
 // per SYNC (set_points()), so a test sees whether the drives moved in step.
 //
 // Faults can be injected while it runs: a node falls silent, noise on the line, a drive fault with
