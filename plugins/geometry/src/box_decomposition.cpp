@@ -21,16 +21,19 @@ constexpr int kMaxMeasureDepth = 8;
 
 namespace {
 
-// The greedy merge growing each box along the axes in `order` (a permutation of 0, 1, 2).
-std::vector<VoxelBox> merge_in_order(const VoxelGrid& grid, const std::array<int, 3>& order) {
+// The greedy merge growing each box along the axes in `order` (a permutation of 0, 1, 2), from
+// each voxel not yet in a box. With `overlap`, a box grows over every occupied voxel, in a box or
+// not (a cover); without, over those in none (a partition).
+std::vector<VoxelBox> merge_in_order(const VoxelGrid& grid, const std::array<int, 3>& order, bool overlap) {
   const int n = grid.n;
   std::vector<std::uint8_t> free(grid.occupancy);  // occupied and not yet in a box
-  // Whether every voxel of [lo, hi) is free.
+  const std::vector<std::uint8_t>& room = overlap ? grid.occupancy : free;  // where a box may grow
+  // Whether every voxel of [lo, hi) is room.
   auto all_free = [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) {
     for (int k = lo.z(); k < hi.z(); ++k)
       for (int j = lo.y(); j < hi.y(); ++j)
         for (int i = lo.x(); i < hi.x(); ++i)
-          if (!free[grid.index(i, j, k)]) return false;
+          if (!room[grid.index(i, j, k)]) return false;
     return true;
   };
   std::vector<VoxelBox> boxes;
@@ -58,16 +61,41 @@ std::vector<VoxelBox> merge_in_order(const VoxelGrid& grid, const std::array<int
   return boxes;
 }
 
-}  // namespace
-
-std::vector<VoxelBox> merge_into_boxes(const VoxelGrid& grid) {
+// Of the six orders of the axes, the one that gives the fewest boxes.
+std::vector<VoxelBox> fewest(const VoxelGrid& grid, bool overlap) {
   std::vector<VoxelBox> best;
   std::array<int, 3> order{0, 1, 2};
   do {
-    std::vector<VoxelBox> boxes = merge_in_order(grid, order);
+    std::vector<VoxelBox> boxes = merge_in_order(grid, order, overlap);
     if (best.empty() || boxes.size() < best.size()) best = std::move(boxes);
   } while (std::next_permutation(order.begin(), order.end()));
   return best;
+}
+
+}  // namespace
+
+std::vector<VoxelBox> merge_into_boxes(const VoxelGrid& grid) { return fewest(grid, false); }
+
+std::vector<VoxelBox> cover_with_boxes(const VoxelGrid& grid) {
+  std::vector<VoxelBox> boxes = fewest(grid, true);
+  // A box the others cover whole adds nothing: dropped, the largest kept first.
+  std::stable_sort(boxes.begin(), boxes.end(), [](const VoxelBox& a, const VoxelBox& b) { return a.voxels() > b.voxels(); });
+  std::vector<int> count(grid.occupancy.size(), 0);
+  auto each = [&](const VoxelBox& b, const auto& f) {
+    for (int k = b.min.z(); k < b.max.z(); ++k)
+      for (int j = b.min.y(); j < b.max.y(); ++j)
+        for (int i = b.min.x(); i < b.max.x(); ++i) f(grid.index(i, j, k));
+  };
+  for (const VoxelBox& b : boxes) each(b, [&](std::size_t v) { ++count[v]; });
+  std::vector<VoxelBox> kept;
+  for (auto it = boxes.rbegin(); it != boxes.rend(); ++it) {  // the smallest first
+    bool redundant = true;
+    each(*it, [&](std::size_t v) { redundant = redundant && count[v] > 1; });
+    if (redundant) each(*it, [&](std::size_t v) { --count[v]; });
+    else kept.push_back(*it);
+  }
+  std::reverse(kept.begin(), kept.end());
+  return kept;
 }
 
 Eigen::AlignedBox3d world_box(const VoxelGrid& grid, const VoxelBox& box) {
@@ -95,8 +123,28 @@ BoxDecomposition decompose_into_boxes(const TriangleMesh& mesh, double voxel_siz
   BoxDecomposition out;
   out.voxel_size = voxel_size;
   out.grid = voxelize(mesh, cube, depth);
-  for (const VoxelBox& b : merge_into_boxes(out.grid)) out.boxes.push_back(world_box(out.grid, b));
+  for (const VoxelBox& b : cover_with_boxes(out.grid)) out.boxes.push_back(world_box(out.grid, b));
   out.volume = out.grid.occupied_volume();
+  // The solid's mass properties, voxel by voxel (the boxes overlap: their own would count twice).
+  const double h = out.grid.voxel_size();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();  // sum of p p^T
+  std::size_t count = 0;
+  for (int k = 0; k < out.grid.n; ++k)
+    for (int j = 0; j < out.grid.n; ++j)
+      for (int i = 0; i < out.grid.n; ++i)
+        if (out.grid.occupied(i, j, k)) {
+          const Eigen::Vector3d p = out.grid.centre(i, j, k);
+          sum += p;
+          second += p * p.transpose();
+          ++count;
+        }
+  if (count > 0) {
+    out.centroid = sum / double(count);
+    // Per unit mass, about the centroid: each voxel a point at its centre plus its own cube's h^2/6.
+    const Eigen::Matrix3d covariance = second / double(count) - out.centroid * out.centroid.transpose();
+    out.inertia = covariance.trace() * Eigen::Matrix3d::Identity() - covariance + Eigen::Matrix3d::Identity() * (h * h / 6);
+  }
   out.mesh_volume = std::abs(signed_volume(mesh));
 
   // The fit, on a finer grid of the same cube: a fine voxel is in the boxes when its coarse voxel

@@ -190,7 +190,8 @@ class ReachPlannerFilter final : public fba::Component {
                               {"path_length_rad", plan.figures.path_length},
                               {"path_waypoints", plan.figures.path_waypoints},
                               {"direct", plan.figures.direct},
-                              {"collision_checks", plan.figures.collision_checks}};
+                              {"collision_checks", plan.figures.collision_checks},
+                              {"backout_m", plan.figures.backout}};
     if (!plan.ok) {
       ++refused_[refusal];
       figures["refusal"] = refusal;

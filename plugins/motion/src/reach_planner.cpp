@@ -113,6 +113,7 @@ struct ReachPlanner::Impl {
           "cartesian_step, max_joint_step and collision_step must be > 0");
     check(p.speed_scale > 0 && p.speed_scale <= 1, "speed_scale must be in (0, 1], found " + format("%g", p.speed_scale));
     check(p.acceleration > 0 && p.sample_period > 0, "acceleration and sample_period must be > 0");
+    check(p.max_backout >= 0 && std::isfinite(p.max_backout), "max_backout must be >= 0, found " + format("%g", p.max_backout));
     const auto n = static_cast<Eigen::Index>(arm.size());
     max_velocity.resize(n);
     for (Eigen::Index i = 0; i < n; ++i) max_velocity(i) = arm.limits()[static_cast<std::size_t>(i)].velocity * p.speed_scale;
@@ -126,9 +127,11 @@ struct ReachPlanner::Impl {
 
   // IK solutions every cartesian_step along the straight line between two palm poses of the same
   // orientation, from q0 (which reaches `from`), each motion between two of them free. Returns
-  // why not, or "" with `path` filled (q0 first).
+  // why not, or "" with `path` filled (q0 first). With `done`, the line ends at the first
+  // solution it accepts.
   std::string line(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const Eigen::VectorXd& q0, RobotCollision& robot,
-                   std::vector<Eigen::VectorXd>& path, ReachFigures& figures) const {
+                   std::vector<Eigen::VectorXd>& path, ReachFigures& figures,
+                   const std::function<bool(const Eigen::VectorXd&)>& done = {}) const {
     const Eigen::Vector3d d = to.translation() - from.translation();
     const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / params.cartesian_step - 1e-9)));
     path = {q0};
@@ -162,7 +165,32 @@ struct ReachPlanner::Impl {
           !c.empty())
         return c + ", " + format("%.3f m", in) + " along it";
       path.push_back(s.joints);
+      if (done && done(s.joints)) return {};
     }
+    return {};
+  }
+
+  // The start's hand is in the model: back out along the flange's -z axis, in straight steps
+  // checked against the table and the arm itself (the model's leaves the hand is in lie on the way
+  // out), until a pose clear of everything, within max_backout. Returns why not, or "" with `path`
+  // filled (the current joints first, the clear pose last). `robot` checks the model again after.
+  std::string back_out(const Eigen::VectorXd& current, RobotCollision& robot, std::vector<Eigen::VectorXd>& path,
+                       ReachFigures& figures) const {
+    const Eigen::Isometry3d flange = arm.forward(current);
+    const Eigen::Isometry3d palm = flange * params.flange_from_palm;
+    const Eigen::Isometry3d out = Eigen::Translation3d(-params.max_backout * flange.linear().col(2)) * palm;
+    std::string still;  // what the last pose reached still touches
+    auto clear = [&](const Eigen::VectorXd& q) {
+      robot.check_model(true);
+      still = robot.collision(q);
+      robot.check_model(false);
+      return still.empty();
+    };
+    robot.check_model(false);
+    std::string why = line(palm, out, current, robot, path, figures, clear);
+    robot.check_model(true);
+    if (!why.empty()) return why;
+    if (!still.empty()) return text::metres(params.max_backout) + " back (max_backout), it still puts " + into(still);
     return {};
   }
 };
@@ -212,9 +240,23 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
   const std::array<Eigen::Vector3d, 3> contacts{grasp.contacts[0].position, grasp.contacts[1].position, grasp.contacts[2].position};
   robot.set_model(std::move(model), contacts, p.contact_allowance);
 
-  // The hand opens for the pregrasp where the arm stands.
-  if (std::string c = robot.collision(current); !c.empty())
-    return refuse(std::move(plan), Refusal::Start, "the current joints collide, with the hand open for the pregrasp: " + c);
+  // The hand opens for the pregrasp where the arm stands; where it would touch the model (at a
+  // view pose, space not yet carved), the arm first backs out of it along the flange's axis.
+  plan.start_joints = current;
+  if (std::string c = robot.collision(current); !c.empty()) {
+    robot.check_model(false);
+    const std::string fixed = robot.collision(current);  // the table or the arm itself: no way out
+    robot.check_model(true);
+    if (!fixed.empty() || p.max_backout <= 0)
+      return refuse(std::move(plan), Refusal::Start,
+                    "the current joints collide, with the hand open for the pregrasp: " + (fixed.empty() ? c : fixed));
+    if (std::string why = s.back_out(current, robot, plan.backout_path, plan.figures); !why.empty())
+      return refuse(std::move(plan), Refusal::Start,
+                    "the current joints put " + into(c) + " (the hand open for the pregrasp), and backing out along the flange's axis "
+                    "fails: " + why);
+    plan.start_joints = plan.backout_path.back();
+    plan.figures.backout = (s.arm.forward(plan.start_joints).translation() - s.arm.forward(current).translation()).norm();
+  }
 
   // The hand alone, open, at the pregrasp and at the grasp: the table, then the model.
   for (const auto& [name, palm] : {std::pair{"pregrasp", plan.pregrasp_palm}, std::pair{"grasp", plan.grasp_palm}}) {
@@ -258,7 +300,7 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
   ik.attempts = p.ik_attempts;
   ik.seed = p.seed;
   ik.accept = lines;
-  const auto pregrasp = s.arm.inverse(plan.pregrasp_palm * p.flange_from_palm.inverse(), current, ik);
+  const auto pregrasp = s.arm.inverse(plan.pregrasp_palm * p.flange_from_palm.inverse(), plan.start_joints, ik);
   plan.figures.ik_attempts += pregrasp.attempts;
   if (!pregrasp.ok) {
     const std::string refused = "every solution found is refused: ";  // arm::ArmModel::inverse's words for `accept`
@@ -286,12 +328,13 @@ ReachPlan ReachPlanner::plan(const Grasp& grasp, std::shared_ptr<const ModelObst
   ReachPlan plan = reachable(grasp, model, current);
   if (!plan.ok) return plan;
 
-  // From the current joints to the standoff, the hand open for the pregrasp.
+  // From the current joints (or where the back-out ends) to the standoff, the hand open for the
+  // pregrasp.
   RobotCollision robot(s.arm, p.flange_from_palm);
   robot.set_hand(plan.opening, plan.spread);
   const std::array<Eigen::Vector3d, 3> contacts{grasp.contacts[0].position, grasp.contacts[1].position, grasp.contacts[2].position};
   robot.set_model(std::move(model), contacts, p.contact_allowance);
-  const JointPath path = plan_joint_path(current, plan.pregrasp_joints, s.arm.limits(), s.checker(robot),
+  const JointPath path = plan_joint_path(plan.start_joints, plan.pregrasp_joints, s.arm.limits(), s.checker(robot),
                                          JointPathOptions{p.planning_time, p.collision_step, p.seed});
   plan.figures.planning_s = path.planning_s;
   plan.figures.direct = path.direct;
@@ -319,6 +362,7 @@ ReachPlan ReachPlanner::plan(const Grasp& grasp, std::shared_ptr<const ModelObst
     plan.steps.push_back({name, start, t.now()});
   };
   step("plan", [&] {
+    t.through(plan.backout_path);  // out of the model first: the hand opens where it is clear
     hand(HandCommand::Action::Open);
     t.through(path.waypoints);
   });

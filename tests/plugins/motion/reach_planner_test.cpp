@@ -136,3 +136,62 @@ TEST(ReachPlanner, ParametersOutOfRangeAreRefusedByName) {
     EXPECT_STREQ(e.what(), "reach planner: planning_time must be > 0, found 0");
   }
 }
+
+// At a view pose the open hand's fingers reach 24 cm past the flange, into space the views have not
+// carved yet above the object: the arm backs out along the flange's axis until the hand is clear,
+// and plans from there; the trajectory begins with that retreat. Backing out less than it takes is
+// refused with the reason.
+TEST(ReachPlanner, AStartWhoseFingersAreInSpaceNotYetCarvedBacksOutAlongTheFlangesAxisFirst) {
+  const auto box = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, kBox.z() / 2), kBox);
+  // A slab above the box, between where the thumb and the fingers come down for the grasp below
+  // (at x = -5 cm and +5 cm), where the hand's fingers are at home (6 cm either side of y = 0).
+  const auto uncarved = fba::grasp::test::box_sdf(Eigen::Vector3d(-0.015, 0, 0.15), Eigen::Vector3d(0.03, 0.14, 0.06));
+  const fba::Octree model = fba::grasp::test::voxelise([&](const Eigen::Vector3d& p) { return std::min(box(p), uncarved(p)); }, workspace(), 6);
+  const fba::Grasp grasp = box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07);
+  const ReachParams& p = planner().params();
+  RobotCollision robot(planner().arm(), p.flange_from_palm);
+  robot.set_hand(place_hand(grasp, p.clearance).opening, grasp.spread);
+  robot.set_model(ReachPlanner::obstacles(model));
+  const std::string touches = robot.collision(home());
+  ASSERT_NE(touches.find("touches the model"), std::string::npos) << touches;
+  ASSERT_EQ(touches.find("palm"), std::string::npos) << touches;  // the fingers, in space not yet carved
+  robot.check_model(false);
+  ASSERT_EQ(robot.collision(home()), "");  // nothing else
+
+  const ReachPlan plan = planner().plan(grasp, model, home());
+  expect_a_sound_plan(planner(), plan, grasp, model, home());
+  ASSERT_GE(plan.backout_path.size(), 2u);
+  EXPECT_GT(plan.figures.backout, 0.0);
+  EXPECT_LE(plan.figures.backout, p.max_backout + 1e-9);
+  // Straight back along the flange's axis, the flange turning not at all, one cartesian step apart.
+  const Eigen::Isometry3d start = planner().arm().forward(home());
+  for (std::size_t i = 1; i < plan.backout_path.size(); ++i) {
+    const Eigen::Isometry3d at = planner().arm().forward(plan.backout_path[i]);
+    const Eigen::Vector3d moved = at.translation() - start.translation();
+    EXPECT_NEAR(moved.dot(-start.linear().col(2)), p.cartesian_step * static_cast<double>(i), 1e-3) << i;
+    EXPECT_LT((moved - moved.dot(start.linear().col(2)) * start.linear().col(2)).norm(), 1e-3) << i;
+    EXPECT_LT(fba::arm::angle_between(at, start), 1e-2) << i;
+  }
+  EXPECT_NEAR(plan.figures.backout, p.cartesian_step * static_cast<double>(plan.backout_path.size() - 1), 1e-3);
+  // reachable() backs out the same way, and plans the same pregrasp from there.
+  const ReachPlan quick = planner().reachable(grasp, model, home());
+  ASSERT_TRUE(quick.ok) << quick.why;
+  EXPECT_EQ(quick.backout_path, plan.backout_path);
+  EXPECT_EQ(quick.pregrasp_joints, plan.pregrasp_joints);
+
+  // Allowed to back out a centimetre only: the fingers are still in it there.
+  ReachParams near = p;
+  near.max_backout = 0.01;
+  const ReachPlan refused = ReachPlanner(arm_urdf(), near).plan(grasp, model, home());
+  EXPECT_FALSE(refused.ok);
+  EXPECT_EQ(refused.refusal, Refusal::Start);
+  EXPECT_EQ(refused.why.rfind("the current joints put the ", 0), 0u) << refused.why;
+  EXPECT_NE(refused.why.find(" into the model at ("), std::string::npos) << refused.why;
+  EXPECT_NE(refused.why.find("backing out along the flange's axis fails: 0.010 m back (max_backout), it still puts the "), std::string::npos)
+      << refused.why;
+  // Not at all: refused as before.
+  near.max_backout = 0;
+  const ReachPlan kept = ReachPlanner(arm_urdf(), near).plan(grasp, model, home());
+  EXPECT_EQ(kept.refusal, Refusal::Start);
+  EXPECT_EQ(kept.why, "the current joints collide, with the hand open for the pregrasp: " + touches);
+}

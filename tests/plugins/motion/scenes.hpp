@@ -96,7 +96,9 @@ inline arm::ArmModel arm_with_limits(const std::vector<std::pair<double, double>
 // increase; every waypoint is within the joint limits and the speeds the planner was given; the
 // approach ends at the grasp and the lift at the lift's pose; and, checked again finer than the
 // planner checks, no motion touches anything: the hand open and the model an obstacle until the
-// close, closed and the model not checked (the object in the hand) until the release.
+// close, closed and the model not checked (the object in the hand) until the release. A start
+// whose hand is in the model backs out of it first, touching neither the table nor the arm
+// itself, and the hand opens where the back-out ends, clear of the model.
 inline void expect_a_sound_plan(const ReachPlanner& planner, const ReachPlan& plan, const Grasp& grasp, const Octree& model,
                                 const Eigen::VectorXd& current) {
   ASSERT_TRUE(plan.ok) << plan.why;
@@ -147,7 +149,15 @@ inline void expect_a_sound_plan(const ReachPlanner& planner, const ReachPlan& pl
   // retreats) once the object is back down.
   ASSERT_EQ(plan.hand.size(), p.retreat ? 3u : 2u);
   EXPECT_EQ(plan.hand[0].action, fba::HandCommand::Action::Open);
-  EXPECT_EQ(plan.hand[0].time, 0.0);
+  if (plan.backout_path.empty()) {
+    EXPECT_EQ(plan.hand[0].time, 0.0);
+    EXPECT_EQ(plan.start_joints, current);
+  } else {
+    EXPECT_EQ(plan.backout_path.front(), current);
+    EXPECT_EQ(plan.backout_path.back(), plan.start_joints);
+    EXPECT_GT(plan.hand[0].time, 0.0);
+  }
+  EXPECT_TRUE(joints_at(plan.hand[0].time).isApprox(plan.start_joints, 1e-12));
   EXPECT_EQ(plan.hand[1].action, fba::HandCommand::Action::Close);
   EXPECT_EQ(plan.hand[1].time, plan.steps[1].end_s);
   EXPECT_EQ(plan.hand[1].force, p.finger_force);
@@ -158,10 +168,13 @@ inline void expect_a_sound_plan(const ReachPlanner& planner, const ReachPlan& pl
   robot.set_model(ReachPlanner::obstacles(model), contacts, p.contact_allowance);
   const double closed_width = place_hand(grasp, p.clearance).width;
   auto free = [&](const Eigen::VectorXd& q) { return robot.collision(q); };
+  robot.set_hand(plan.opening, plan.spread);
+  EXPECT_EQ(robot.collision(plan.start_joints), "");
   for (std::size_t i = 1; i < points.size(); ++i) {
     const bool holding = points[i - 1].time >= plan.hand[1].time && points[i].time <= released;
+    const bool backing_out = points[i].time <= plan.hand[0].time;
     robot.set_hand(holding ? closed_width : plan.opening, plan.spread);
-    robot.check_model(!holding);
+    robot.check_model(!holding && !backing_out);
     EXPECT_EQ(motion_collision(at(points[i - 1]), at(points[i]), p.collision_step / 4, free), "")
         << "between waypoints " << i - 1 << " and " << i << " at " << points[i].time << " s";
   }

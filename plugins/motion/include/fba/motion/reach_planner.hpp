@@ -8,6 +8,10 @@
 // the arm, the camera and the hand against the table, the arm itself and the model, whose
 // occupied and not-yet-carved leaves are obstacles until the fingers close.
 //
+// A start whose hand is in the model (at a view pose, the open hand reaches into space the views
+// have not carved yet) first backs out along the flange's axis, away from where the hand points,
+// until clear: the plan begins with that retreat.
+//
 // A refusal says which step failed and why, so that grasp synthesis can pass over grasps the arm
 // cannot take and count the reasons: reachable() is the cheap check (everything but the path
 // search), plan() the whole plan.
@@ -52,6 +56,10 @@ struct ReachParams {
   double speed_scale = 0.5;      // share of each joint's URDF velocity limit used
   double acceleration = 3.0;     // rad/s^2, every joint
   double sample_period = 0.02;   // s between the trajectory's waypoints (and at each segment's ends)
+  // m: a start whose hand touches the model (but not the table or the arm) backs out along the
+  // flange's -z axis (the wrist camera's line of sight, backwards) at most this far, in
+  // cartesian_step steps, each an IK solution, until clear of the model. 0: such a start is refused.
+  double max_backout = 0.2;
 };
 
 // Why a grasp was refused, for counting.
@@ -63,7 +71,8 @@ enum class Refusal {
   Collision,  // every IK solution for the pregrasp collides
   Approach,   // the straight approach has no IK solution or collides
   Lift,       // the straight lift has no IK solution or collides
-  Start,      // the current joints collide (with the hand opened for the pregrasp)
+  Start,      // the current joints collide with the table or the arm itself (with the hand opened for the
+              // pregrasp), or with the model and backing out does not clear them
   Path,       // no collision-free path to the pregrasp within the time limit
 };
 const char* to_string(Refusal r);
@@ -75,11 +84,12 @@ struct ReachFigures {
   std::size_t path_waypoints = 0;  // after shortcutting
   bool direct = false;             // the straight joint-space line was free: no search needed
   std::size_t collision_checks = 0;
+  double backout = 0;              // m the start backed out of the model along the flange's axis
 };
 
 // One step of the plan on the trajectory's clock.
 struct ReachStep {
-  std::string name;  // "plan" (the hand opens, the path), "approach", "close", "lift", "hold", "retreat"
+  std::string name;  // "plan" (the back-out, the hand opens, the path), "approach", "close", "lift", "hold", "retreat"
   double start_s = 0;
   double end_s = 0;
 };
@@ -94,13 +104,16 @@ struct ReachPlan {
   Eigen::Isometry3d grasp_palm = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d lift_palm = Eigen::Isometry3d::Identity();
   Eigen::VectorXd pregrasp_joints, grasp_joints, lift_joints;
-  // The IK solutions along the straight lines, each first at the line's start.
-  std::vector<Eigen::VectorXd> approach_path, lift_path;
+  // Where the path to the pregrasp starts: the current joints, or where the back-out ends.
+  Eigen::VectorXd start_joints;
+  // The IK solutions along the straight lines, each first at the line's start: the back-out from
+  // the current joints (empty when the start is clear of the model), the approach, the lift.
+  std::vector<Eigen::VectorXd> backout_path, approach_path, lift_path;
   double opening = 0;  // the pregrasp's, m
   double spread = 0;   // m
 
-  fba::JointTrajectory trajectory;  // from the current joints; every joint on every waypoint
-  std::vector<fba::HandCommand> hand;  // in order, timed on the trajectory
+  fba::JointTrajectory trajectory;  // from the current joints (the back-out first); every joint on every waypoint
+  std::vector<fba::HandCommand> hand;  // in order, timed on the trajectory: the first once the back-out ends
   std::vector<ReachStep> steps;
   ReachFigures figures;
 };
@@ -122,9 +135,9 @@ class ReachPlanner {
   // The model's obstacles, built once for several grasps.
   static std::shared_ptr<const ModelObstacles> obstacles(const Octree& model);
 
-  // Everything but the path search: the hand's placement, the current joints with the hand open,
-  // the pregrasp's IK, the approach and the lift. The plan it returns has the poses and joints,
-  // no trajectory.
+  // Everything but the path search: the hand's placement, the current joints with the hand open
+  // (backed out of the model when its hand is in it), the pregrasp's IK, the approach and the
+  // lift. The plan it returns has the poses and joints, no trajectory.
   ReachPlan reachable(const Grasp& grasp, std::shared_ptr<const ModelObstacles> model, const Eigen::VectorXd& current) const;
   ReachPlan reachable(const Grasp& grasp, const Octree& model, const Eigen::VectorXd& current) const;
   // The whole plan.
