@@ -3,10 +3,7 @@
 // for the arm's driver, the hand's commands in order, or the event `unreachable` with the reason.
 // Its stages follow the plan's steps on the task's clock from when the plan was sent, as the
 // component runs (each joint state or model that arrives).
-#include <dlfcn.h>
-
 #include <cmath>
-#include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
@@ -22,20 +19,14 @@
 #include <fba/types/joint_trajectory.hpp>
 #include <fba/types/octree.hpp>
 
+#include "fba/motion/reach_parameters.hpp"
 #include "fba/motion/reach_planner.hpp"
 
 namespace {
 
+using fba::motion::ReachParameters;
 using fba::motion::ReachPlan;
 using fba::motion::ReachPlanner;
-
-// The project's arm, installed beside the plugins (FBA_ROBOTS_FROM_PLUGIN is relative to them), as
-// sim.arm finds it.
-std::filesystem::path default_urdf() {
-  Dl_info info{};
-  if (!dladdr(reinterpret_cast<void*>(&default_urdf), &info) || !info.dli_fname) return "wrist_camera_arm.urdf";
-  return (std::filesystem::path(info.dli_fname).parent_path() / FBA_ROBOTS_FROM_PLUGIN / "wrist_camera_arm.urdf").lexically_normal();
-}
 
 nlohmann::json values(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
 
@@ -58,32 +49,13 @@ class ReachPlannerFilter final : public fba::Component {
   static constexpr fba::EventOut kUnreachable{
       "unreachable", "the grasp cannot be taken; payload (JSON): refusal (hand, table, ik, collision, approach, lift, start, path) and reason"};
 
-  static constexpr fba::Param<std::filesystem::path> kUrdf{
-      "urdf", "", "the arm's URDF (kinematics, limits, collision shapes); empty: the project's wrist_camera_arm.urdf"};
-  static constexpr fba::Param<std::string> kBaseLink{"base_link", "world", "the frame grasps are given in"};
-  static constexpr fba::Param<std::string> kFlangeLink{"flange_link", "flange", "the link the hand is mounted on"};
-  static inline const auto kFlangeToPalm = fba::Param<std::vector<double>>(
-      "flange_to_palm", std::vector<double>{0, 0, 0.075, 0, 0, 0},
-      "the palm's frame on the flange: [x, y, z] in metres and [roll, pitch, yaw] in radians (the default: the palm's back 3 cm "
-      "out along the flange's axis, past the wrist camera)")
-      .size({6});
-  static constexpr auto kStandoff =
-      fba::Param<double>("standoff", 0.05, "metres back along the approach where the path ends and the straight approach begins").range(0, 0.5);
-  static constexpr auto kLiftHeight = fba::Param<double>("lift_height", 0.1, "metres, straight up").range(0, 0.5);
   static constexpr auto kHoldTime = fba::Param<double>("hold_time", 2.0, "seconds the arm holds still at the top of the lift").range(0, 60);
   static constexpr auto kHandTime =
       fba::Param<double>("hand_time", 1.0, "seconds the arm stands still while the hand opens or closes").range(0, 60);
   static constexpr auto kFingerForce = fba::Param<double>("finger_force", 10.0, "newtons at each pad when closing").range(0.1, 1000);
   static constexpr fba::Param<bool> kRetreat{"retreat", true, "after the hold: put the object back, open the hand, back out to the standoff"};
-  static constexpr auto kContactAllowance = fba::Param<double>(
-      "contact_allowance", 0.02, "metres around each contact where the fingers may touch the model (about to touch the object)")
-      .range(0, 0.1);
   static constexpr auto kPlanningTime =
       fba::Param<double>("planning_time", 0.5, "seconds the collision-free path search may take").range(0.001, 60);
-  static constexpr auto kSeed =
-      fba::Param<int>("seed", 1, "seed of the path search and the IK's random starts: the same plan on every run").range(1, 2147483647);
-  static constexpr auto kIkAttempts =
-      fba::Param<int>("ik_attempts", 32, "IK starts for the pregrasp: the current joints, then random ones").range(1, 10000);
   static constexpr auto kSpeed =
       fba::Param<double>("speed_scale", 0.5, "share of each joint's URDF velocity limit the trajectory uses").range(0.01, 1.0);
   static constexpr auto kAcceleration =
@@ -92,20 +64,21 @@ class ReachPlannerFilter final : public fba::Component {
       fba::Param<double>("sample_period", 0.02, "seconds between the trajectory's waypoints").range(0.001, 1.0);
 
   static fba::Spec spec() {
-    return fba::Spec::filter("motion.reach_planner",
-                             "Plans the arm's reach for a grasp (KDL inverse kinematics, OMPL path, FCL collisions against the "
-                             "table, the arm and the carved model): a timed joint trajectory and the hand's commands.")
-        .add(kGrasp, kOctree, kJointState, kTrajectory, kHand, kUnreachable, kUrdf, kBaseLink, kFlangeLink, kFlangeToPalm, kStandoff,
-             kLiftHeight, kHoldTime, kHandTime, kFingerForce, kRetreat, kContactAllowance, kPlanningTime, kSeed, kIkAttempts, kSpeed,
-             kAcceleration, kSamplePeriod)
+    fba::Spec spec = fba::Spec::filter("motion.reach_planner",
+                                       "Plans the arm's reach for a grasp (KDL inverse kinematics, OMPL path, FCL collisions against "
+                                       "the table, the arm and the carved model): a timed joint trajectory and the hand's commands.");
+    spec.add(kGrasp, kOctree, kJointState, kTrajectory, kHand, kUnreachable);
+    ReachParameters::add(spec)  // shared with grasp.synthesis, which checks reachability with them
+        .add(kHoldTime, kHandTime, kFingerForce, kRetreat, kPlanningTime, kSpeed, kAcceleration, kSamplePeriod)
         .stages({"idle", "plan", "approach", "close", "lift", "hold", "retreat"},
                 {{"idle", "plan"}, {"plan", "idle"}, {"plan", "approach"}, {"approach", "plan"}, {"approach", "close"},
                  {"close", "plan"}, {"close", "lift"}, {"lift", "plan"}, {"lift", "hold"}, {"hold", "plan"}, {"hold", "retreat"},
                  {"hold", "idle"}, {"retreat", "plan"}, {"retreat", "idle"}});
+    return spec;
   }
 
   explicit ReachPlannerFilter(fba::Context& ctx)
-      : ctx_(ctx), stages_(ctx), planner_(ctx(kUrdf).empty() ? default_urdf() : ctx(kUrdf), params(ctx), ctx(kBaseLink), ctx(kFlangeLink)) {
+      : ctx_(ctx), stages_(ctx), planner_(ReachParameters::planner(ctx, params(ctx))) {
     ctx.log().info("reach planning for the arm from '{}' to '{}' ({} joints)", planner_.arm().base_link(), planner_.arm().tip_link(),
                    planner_.arm().size());
   }
@@ -123,50 +96,18 @@ class ReachPlannerFilter final : public fba::Component {
   }
 
  private:
+  // The planner's own parameters; ReachParameters::planner() adds the shared ones.
   static fba::motion::ReachParams params(fba::Context& ctx) {
     fba::motion::ReachParams p;
-    const std::vector<double> f = ctx(kFlangeToPalm);
-    p.flange_from_palm = Eigen::Translation3d(f[0], f[1], f[2]) * Eigen::AngleAxisd(f[5], Eigen::Vector3d::UnitZ()) *
-                         Eigen::AngleAxisd(f[4], Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(f[3], Eigen::Vector3d::UnitX());
-    p.standoff = ctx(kStandoff);
-    p.lift_height = ctx(kLiftHeight);
     p.hold_s = ctx(kHoldTime);
     p.hand_s = ctx(kHandTime);
     p.finger_force = ctx(kFingerForce);
     p.retreat = ctx(kRetreat);
-    p.contact_allowance = ctx(kContactAllowance);
     p.planning_time = ctx(kPlanningTime);
-    p.seed = static_cast<std::uint32_t>(ctx(kSeed));
-    p.ik_attempts = ctx(kIkAttempts);
     p.speed_scale = ctx(kSpeed);
     p.acceleration = ctx(kAcceleration);
     p.sample_period = ctx(kSamplePeriod);
     return p;
-  }
-
-  // The joint state in the arm's order; names empty: already in it.
-  std::optional<Eigen::VectorXd> arm_joints(const fba::JointState& js, std::string& why) const {
-    const auto& names = planner_.arm().joint_names();
-    Eigen::VectorXd q(static_cast<Eigen::Index>(names.size()));
-    if (js.names.empty()) {
-      if (js.positions.size() != names.size()) {
-        why = "the joint state has " + std::to_string(js.positions.size()) + " positions without names; the arm has " +
-              std::to_string(names.size()) + " joints";
-        return std::nullopt;
-      }
-      for (std::size_t i = 0; i < names.size(); ++i) q(static_cast<Eigen::Index>(i)) = js.positions[i];
-      return q;
-    }
-    for (std::size_t i = 0; i < names.size(); ++i) {
-      std::size_t k = 0;
-      while (k < js.names.size() && js.names[k] != names[i]) ++k;
-      if (k == js.names.size() || k >= js.positions.size()) {
-        why = "the joint state has no position for joint '" + names[i] + "'";
-        return std::nullopt;
-      }
-      q(static_cast<Eigen::Index>(i)) = js.positions[k];
-    }
-    return q;
   }
 
   void plan(const fba::Grasp& grasp, const fba::Octree& model, const fba::JointState& js) {
@@ -174,7 +115,7 @@ class ReachPlannerFilter final : public fba::Component {
     steps_.clear();  // a new grasp replaces the plan being followed
     ++plans_;
     std::string why;
-    const auto current = arm_joints(js, why);
+    const auto current = fba::motion::arm_joints(planner_.arm(), js, why);
     ReachPlan plan;
     if (current) {
       plan = planner_.plan(grasp, model, *current);
