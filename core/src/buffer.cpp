@@ -1,0 +1,113 @@
+// The connections' storage (Buffer): a sample pushed by a producer, popped by its consumer, under
+// each connection's policy (lossless, drop_oldest, latest) and byte budget. Apart from the nodes
+// and the graph because it is the one piece every hop goes through twice, and the one a test
+// checks alone (tests/core/data_path_test.cpp).
+#include "buffer.hpp"
+
+#include <vector>
+
+namespace fba::detail {
+
+void Buffer::publish_size() {
+  const std::size_t n = policy == BufferPolicy::Latest ? (latest ? 1 : 0) : queue.size();
+  // Sequentially consistent for the wake-up protocol (Graph::run_strand) between threads; one
+  // thread running every node has no such race, and the fence was a fifth of its hop.
+  // (Two stores, not one with a computed order: GCC makes any order not known at compile time
+  // sequentially consistent.)
+  if (one_thread)
+    size.store(n, std::memory_order_relaxed);
+  else
+    size.store(n, std::memory_order_seq_cst);
+  if (max_bytes > 0) bytes.store(queued_bytes, std::memory_order_seq_cst);  // read by full() only
+  peak.raise_to(n);
+  peak_bytes.raise_to(queued_bytes);
+}
+
+void Buffer::push(Packet&& p) {
+  std::vector<Packet> displaced;  // declared before the lock: destroyed after it is released
+  BufferLock lock(*this);
+  ++pushed;
+  if (tap) {
+    if (tap->size() >= tap_keep && !tap->empty()) {
+      displaced.push_back(std::move(tap->front()));
+      tap->erase(tap->begin());
+    }
+    if (tap_keep > 0) tap->push_back(std::move(p));
+    return;
+  }
+  const std::size_t b = p.bytes();
+  switch (policy) {
+    case BufferPolicy::Latest:
+      if (latest) {  // superseded before anyone read it
+        ++dropped;
+        displaced.push_back(std::move(latest));
+      }
+      latest = std::move(p);
+      queued_bytes = b;
+      break;
+    case BufferPolicy::DropOldest:
+      while (!queue.empty() && (queue.size() >= capacity || (max_bytes > 0 && queued_bytes + b > max_bytes))) {
+        queued_bytes -= queue.front().bytes();
+        displaced.push_back(std::move(queue.front()));
+        queue.pop_front();
+        ++dropped;
+      }
+      [[fallthrough]];
+    case BufferPolicy::Lossless:
+      queue.push_back(std::move(p));
+      queued_bytes += b;
+      break;
+  }
+  publish_size();
+}
+
+bool Buffer::take_head(Packet& out, bool& was_full) {
+  was_full = false;
+  if (policy == BufferPolicy::Latest) {
+    if (!latest) return false;
+    out = std::move(latest);
+    latest = Packet();
+  } else {
+    if (queue.empty()) return false;
+    was_full = full();
+    out = std::move(queue.front());
+    queue.pop_front();
+  }
+  queued_bytes -= out.bytes();
+  publish_size();
+  return true;
+}
+
+bool Buffer::pop(Packet& out, bool& was_full) {
+  Packet taken;
+  {
+    BufferLock lock(*this);
+    if (!take_head(taken, was_full)) return false;
+    ++consumed;
+  }
+  out = std::move(taken);  // frees the input's previous sample, outside the lock
+  return true;
+}
+
+bool Buffer::drop_head(bool& was_full) {
+  Packet taken;  // declared before the lock: destroyed after it is released
+  BufferLock lock(*this);
+  if (!take_head(taken, was_full)) return false;
+  ++dropped;
+  return true;
+}
+
+std::int64_t Buffer::head_stamp() {
+  BufferLock lock(*this);
+  if (policy == BufferPolicy::Latest) return latest.header().stamp_ns;
+  return queue.front().header().stamp_ns;
+}
+
+std::size_t Buffer::queued() {
+  if (tap) return 0;
+  if (one_thread) return size.load(std::memory_order_relaxed);  // another thread may be asking
+  std::lock_guard lock(mutex);
+  return policy == BufferPolicy::Latest ? (latest ? 1 : 0) : queue.size();
+}
+
+}  // namespace fba::detail
