@@ -100,10 +100,14 @@ struct State {
   std::stop_source stop;             // the task's RunOptions::stop: reaches constructors too
   std::string run_id;                // summary.json's run_id: which run wrote it
   std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
-  // A fault signal sent by kill(2), passed on by the crash handler to the watcher.
-  std::atomic<int> forwarded{0};
-  std::atomic<pid_t> forwarded_pid{0};
 };
+
+// A fault signal sent by kill(2), passed on by the crash handler to the watcher. Plain globals,
+// constant-initialised, not members of State: the handler may run before any initialiser has (a
+// signal pending since exec arrives when .preinit_array unblocks the faults), and building State
+// from there ran libstdc++'s and libfba's code before their own initialisation.
+constinit std::atomic<int> g_forwarded{0};
+constinit std::atomic<pid_t> g_forwarded_pid{0};
 State& state() {
   static State* s = new State;  // alive for the exit handler
   return *s;
@@ -299,10 +303,10 @@ void watch_signals(sigset_t signals) {
                                                           std::chrono::duration<double>(every));
     }
     siginfo_t info{};
-    if (const int forwarded = st.forwarded.exchange(0)) {
+    if (const int forwarded = g_forwarded.exchange(0)) {
       info.si_signo = forwarded;
       info.si_code = SI_USER;
-      info.si_pid = st.forwarded_pid.load();
+      info.si_pid = g_forwarded_pid.load();
     } else if (sigtimedwait(&signals, &info, &tick) <= 0) {
       continue;
     }
@@ -372,8 +376,8 @@ void say(const char* s) {
 void on_crash(int sig, siginfo_t* info, void*) {
   // Sent by another process (kill -SEGV): a request to stop, not a fault; the watcher takes it.
   if (info && (info->si_code == SI_USER || info->si_code == SI_QUEUE) && info->si_pid != getpid()) {
-    state().forwarded_pid.store(info->si_pid);
-    state().forwarded.store(sig);
+    g_forwarded_pid.store(info->si_pid);
+    g_forwarded.store(sig);
     return;
   }
   static std::atomic<bool> once{false};

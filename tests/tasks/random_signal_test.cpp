@@ -67,4 +67,26 @@ TEST(RandomSignal, EveryTerminatingSignalAtRandomMomentsEndsTheRunInOrder) {
   std::cout << "signals during loading or construction: " << in_loading << ", while running: " << in_running << "\n";
 }
 
+// A fault signal sent by kill(2) while fba-run is still being loaded (blocked from exec, as a
+// supervisor may start it) arrives when its first code unblocks the faults, before any library's
+// initialiser has run: it is a stop request like any other. Its handler once built fba-run's state
+// from there, before libstdc++'s initialisation, and the run then ignored the signal for good.
+TEST(RandomSignal, AFaultSignalPendingSinceExecStopsTheRunInOrder) {
+  const fs::path dir = temp_dir("pending-fault");
+  const fs::path task = dir / "task.yaml";
+  std::ofstream(task) << kTask;
+  for (const int sig : {SIGSYS, SIGTRAP, SIGSEGV, SIGABRT, SIGBUS, SIGFPE, SIGILL}) {
+    const fs::path out = dir / std::to_string(sig);
+    Process p({task.string(), "--plugin-path", misbehaving_plugins(), "--output-dir", out.string()}, {}, true);
+    p.signal(sig);
+    const auto r = p.wait();
+    const std::string what = std::string(strsignal(sig)) + ":\n" + r.output;
+    EXPECT_EQ(r.status, 128 + sig) << what;
+    const auto summary = nlohmann::json::parse(read_file(out / "summary.json"), nullptr, false);
+    ASSERT_TRUE(summary.is_object()) << what;
+    EXPECT_EQ(summary["outcome"], "interrupted") << what;
+    EXPECT_EQ(summary["signal"], sig) << what;
+  }
+}
+
 }  // namespace
