@@ -44,6 +44,7 @@
 #include <fba/component.hpp>
 
 #include "arm_component.hpp"
+#include "launcher.hpp"
 
 namespace {
 
@@ -51,6 +52,7 @@ using Clock = std::chrono::steady_clock;
 namespace canopen = fba::canopen;
 
 std::string check_bus(const fba::ParamValues& p);
+std::string check_emulator(const fba::ParamValues& p);
 std::string check_rate(const fba::ParamValues& p);
 
 class CanopenArmComponent final : public fba::arm::ArmComponent {
@@ -93,6 +95,11 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
       "reset_faults_at_start", false,
       "reset a drive found in fault at start-up (its error code, 0x603F, is logged either way); false: refuse to "
       "start, naming the drive and its error code"};
+  static constexpr fba::Param<std::string> kEmulator{
+      "emulator", "",
+      "an emulator program, with its options, started when the device does not exist or does not answer: it "
+      "plays the arm on a pseudo-terminal linked at the device's path and is stopped at the end (the emulated "
+      "profile: fba-canopen-arm-emulator); empty: never"};
   static constexpr auto kNoiseLimit =
       fba::Param<int>("noise_limit", 100,
                       "bad frames (line noise) tolerated within one second; more and the line is not trusted")
@@ -107,8 +114,9 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
         .add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable, kDevice, kBitrate,
              kNodeIds, kCountsPerRad, kZeroCounts, kUrdf, kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate,
              kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kHeartbeatPeriod, kHeartbeatTimeout,
-             kSdoTimeout, kEnableTimeout, kResetFaults, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
+             kSdoTimeout, kEnableTimeout, kResetFaults, kEmulator, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
         .check(kDevice, check_bus)
+        .check(kEmulator, check_emulator)
         .check(kRate, check_rate)
         .blocking()
         .concurrent_safe_state();
@@ -155,7 +163,7 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
     // The device: a line that cannot be opened, or an adapter that does not answer, is the device's
     // failure (exit 3), not the task's.
     try {
-      bus_ = fba::can::open_bus(ctx(kDevice), ctx(kBitrate), ctx.stop_token());
+      bus_ = open(ctx);
     } catch (const std::exception& e) {
       if (ctx.stop_token().stop_requested()) throw;
       throw fba::DeviceError(fmt::format("hw.canopen_arm on {}: {}", ctx(kDevice), e.what()));
@@ -221,6 +229,23 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
                                            confirmed ? fmt::format("; the other {} confirmed it", confirmed) : ""));
     }
     ctx_.log().info("safe state: every joint quick-stopped");
+  }
+
+  // The line to the drives. When it does not open (nothing there, or an adapter that does not answer)
+  // and an emulator is configured, the emulator is started at the device's path (never in place of a
+  // real device: only where nothing is, or a symbolic link), and the line opened to it.
+  std::unique_ptr<fba::can::CanBus> open(fba::Context& ctx) {
+    const std::string device = ctx(kDevice), emulator = ctx(kEmulator);
+    try {
+      return fba::can::open_bus(device, ctx(kBitrate), ctx.stop_token());
+    } catch (const std::exception& e) {
+      const std::string path = device.substr(6);  // after slcan: (check_emulator)
+      if (emulator.empty() || ctx.stop_token().stop_requested() || !fba::emulators::free_for_emulator(path)) throw;
+      ctx.log().info("{}: {}; starting the emulator: {}", device, e.what(), emulator);
+      emulator_.emplace(emulator, path, ctx.stop_token());
+      ctx.log().info("{}: played by {} (pid {})", device, emulator_->program(), emulator_->pid());
+      return fba::can::open_bus(device, ctx(kBitrate), ctx.stop_token());
+    }
   }
 
   // From the runtime's thread at shutdown: every wait on the bus ends within a few milliseconds.
@@ -384,6 +409,8 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
 
   const std::chrono::milliseconds sdo_timeout_;
   const std::uint64_t noise_limit_;
+  // The emulator this driver started, if any: stopped after the line (declared first, gone last).
+  std::optional<fba::emulators::LaunchedEmulator> emulator_;
   std::chrono::milliseconds period_{20};  // a tick: one SYNC
   std::unique_ptr<fba::can::CanBus> bus_;
   std::unique_ptr<canopen::Master> master_;
@@ -422,6 +449,13 @@ std::string check_bus(const fba::ParamValues& p) {
     return std::string("parameter 'bitrate': ") + e.what();
   }
   return {};
+}
+
+// An emulator plays an SLCAN adapter on a pseudo-terminal: the device must be slcan:PATH.
+std::string check_emulator(const fba::ParamValues& p) {
+  if (p(CanopenArmComponent::kEmulator).empty() || p(CanopenArmComponent::kDevice).rfind("slcan:", 0) == 0) return {};
+  return "an emulator plays an SLCAN adapter on a pseudo-terminal: 'device' must be slcan:PATH, not '" +
+         p(CanopenArmComponent::kDevice) + "'";
 }
 
 // The bus is read only while a tick runs: ticks further apart than the heartbeat timeout would

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -709,4 +710,34 @@ TEST_F(CanopenArmStartUp, AnAdapterThatDoesNotAnswerIsADeviceError) {
     EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
     EXPECT_TRUE(contains(e.what(), "could not start its device: hw.canopen_arm on slcan:" + nobody.slave_path)) << e.what();
   }
+}
+
+// The emulated profile's way: given an emulator, the driver starts it when its bus is not there (no
+// second terminal) and stops it when the driver goes; the program ends on that SIGTERM and takes
+// its link with it.
+TEST(CanopenArmEmulatorProgram, TheDriverStartsItsEmulatorWhenTheBusIsNotThereAndStopsItAtTheEnd) {
+  fba::test::TempDir dir;
+  const std::string link = dir.file("arm");
+  {
+    ComponentHarness h(built_plugins(), "hw.canopen_arm",
+                       {{"device", "slcan:" + link},
+                        {"emulator", std::string("fba-canopen-arm-emulator --heartbeat-ms 20")},
+                        {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
+                        {"counts_per_rad", std::vector<double>(6, kCounts)},
+                        {"heartbeat_timeout_ms", 1000},
+                        {"sdo_timeout_ms", 1000}},
+                       {"joint_target"});
+    EXPECT_TRUE(std::filesystem::is_symlink(link));
+    h.tick();
+    h.run();
+    h.push("joint_target", fba::JointState{{"wrist_3_joint"}, {0.05}, {}, 0});
+    for (int i = 0; i < 100'000 && named(h.events(), "arrived").empty() && h.failure().empty(); ++i) {
+      h.tick();
+      h.run();
+      std::this_thread::sleep_for(1ms);
+    }
+    EXPECT_EQ(h.failure(), "");
+    EXPECT_EQ(named(h.events(), "arrived").size(), 1u);
+  }
+  EXPECT_FALSE(std::filesystem::exists(std::filesystem::symlink_status(link)));
 }
