@@ -44,7 +44,7 @@ Gripper::Gripper(LineOptions options) : options_(std::move(options)) {
     const std::string why = modbus_strerror(errno);
     modbus_free(ctx_);
     ctx_ = nullptr;
-    fail("opening the line", "cannot open the serial line: " + why);
+    fail("opening the line", "cannot open the serial line: " + why, DeviceError::Kind::line_gone);
   }
 }
 
@@ -54,8 +54,8 @@ Gripper::~Gripper() {
   modbus_free(ctx_);
 }
 
-void Gripper::fail(const std::string& doing, const std::string& reason) const {
-  throw DeviceError(name_ + ": " + doing + ": " + reason);
+void Gripper::fail(const std::string& doing, const std::string& reason, DeviceError::Kind kind) const {
+  throw DeviceError(name_ + ": " + doing + ": " + reason, kind);
 }
 
 std::string Gripper::refused() const {
@@ -67,10 +67,13 @@ std::string Gripper::refused() const {
 void Gripper::transact(const std::string& what, const std::string& doing, const std::function<int()>& request,
                        bool task) {
   std::string reason;
+  bool answered = false;  // by any of the tries: the gripper hears the line
   for (int attempt = 0; attempt <= options_.retries; ++attempt) {
     if (request() != -1) return;
     const int error = errno;
-    if (line_gone(error)) fail(doing, what + ": the serial line is gone (" + std::strerror(error) + ")");
+    if (line_gone(error))
+      fail(doing, what + ": the serial line is gone (" + std::strerror(error) + ")", DeviceError::Kind::line_gone);
+    answered = answered || error != ETIMEDOUT;
     if (error == ETIMEDOUT)
       reason = "no answer within " + seconds_text(options_.response_timeout_s) +
                " (Modbus timeout: the gripper is off, on another slave id or not wired)";
@@ -84,9 +87,10 @@ void Gripper::transact(const std::string& what, const std::string& doing, const 
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     modbus_flush(ctx_);
     if (const std::string why = task ? refused() : ""; !why.empty())
-      fail(doing, what + ": " + reason + "; not retried: " + why);
+      fail(doing, what + ": " + reason + "; not retried: " + why, answered ? DeviceError::Kind::device : DeviceError::Kind::no_answer);
   }
-  fail(doing, what + ": " + reason + ", " + std::to_string(options_.retries + 1) + " tries");
+  fail(doing, what + ": " + reason + ", " + std::to_string(options_.retries + 1) + " tries",
+       answered ? DeviceError::Kind::device : DeviceError::Kind::no_answer);
 }
 
 void Gripper::send_command(const Command& c, const std::string& doing, bool task) {

@@ -18,7 +18,11 @@ namespace fba::robotiq {
 
 class DeviceError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  // What failed: the gripper answered (wrongly, garbled, or with a fault) and so hears commands; it
+  // did not answer at all; or the line is gone.
+  enum class Kind { device, no_answer, line_gone };
+  explicit DeviceError(const std::string& what, Kind kind_ = Kind::device) : std::runtime_error(what), kind(kind_) {}
+  Kind kind;
 };
 
 struct LineOptions {
@@ -81,7 +85,8 @@ class Gripper {
   };
 
  private:
-  [[noreturn]] void fail(const std::string& doing, const std::string& reason) const;
+  [[noreturn]] void fail(const std::string& doing, const std::string& reason,
+                         DeviceError::Kind kind = DeviceError::Kind::device) const;
   // Why a request of the task must not go out (or be retried) now; empty when it may.
   std::string refused() const;
   void send_command(const Command& c, const std::string& doing, bool task);

@@ -35,6 +35,10 @@ class SimHand final : public fba::Component {
   static constexpr auto kResult = fba::hand::kResult;
   static constexpr auto kHeld = fba::hand::kHeld;
   static constexpr auto kDropped = fba::hand::kDropped;
+  // A reach plan's hand commands and the arm's trajectory, declared as hw.robotiq_3f does (the twins'
+  // ports alike); not executed here yet: each command is logged.
+  static constexpr auto kCommands = fba::hand::kCommands;
+  static constexpr auto kTrajectory = fba::hand::kTrajectory;
   static constexpr fba::Param<std::filesystem::path> kMesh{
       "mesh", fba::required, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up; it rests on the table at z = 0"};
   static constexpr auto kObjectX = fba::Param<double>("object_x", 0.0, "the object's position on the table, metres").range(-1, 1);
@@ -61,7 +65,7 @@ class SimHand final : public fba::Component {
                              "A three-fingered hand executing grasps in the MuJoCo physics engine: it lifts the object and "
                              "holds it, and reports the real contacts, whether it held and how far it slipped "
                              "(the twin of hw.robotiq_3f).")
-        .add(kGrasp, kResult, kHeld, kDropped, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kMass, kFriction, kLiftHeight, kHoldTime,
+        .add(kGrasp, kCommands, kTrajectory, kResult, kHeld, kDropped, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kMass, kFriction, kLiftHeight, kHoldTime,
              kFingerForce, kWorld);
   }
 
@@ -76,6 +80,10 @@ class SimHand final : public fba::Component {
   void safe_state() override { test_.stop(); }
 
   void process() override {
+    if (auto in = ctx_(kCommands); in.has())
+      ctx_.log().info("hand command ({} at {:.3f} s on the trajectory): not executed by sim.hand yet",
+                      in.get().action == fba::HandCommand::Action::Close ? "close" : "open", in.get().time);
+    if (!ctx_(kGrasp).has()) return;
     fba::Grasp grasp = ctx_(kGrasp).get();
     for (auto& c : grasp.contacts) c.position.z() += table_shift_;
     fba::GraspExecution result = test_.run(grasp);

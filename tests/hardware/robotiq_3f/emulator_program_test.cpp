@@ -3,13 +3,16 @@
 // bad options are refused with the usage.
 #include <gtest/gtest.h>
 #include <poll.h>
+#include <pthread.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <fba/task.hpp>
 #include <fba/testing.hpp>
+#include <fstream>
 #include <fba/types/grasp.hpp>
 #include <fba/types/grasp_execution.hpp>
 #include <filesystem>
@@ -91,4 +94,50 @@ TEST(Robotiq3fEmulatorProgram, BadOptionIsRefusedWithTheUsage) {
   const std::string out = emulator.read_until("usage:");
   EXPECT_NE(out.find("--fault-after: 'ZZ' is not an integer"), std::string::npos) << out;
   EXPECT_NE(out.find("usage: fba-robotiq-3f-emulator"), std::string::npos) << out;
+}
+
+// The emulated profile's way: the driver, given an emulator, starts it when its device is not
+// there (no second terminal), from a thread that blocks the terminating signals as fba-run's do,
+// and stops it when the driver goes: the program ends on that SIGTERM and takes its link with it.
+TEST(Robotiq3fEmulatorProgram, TheDriverStartsItsEmulatorWhenTheDeviceIsNotThereAndStopsItAtTheEnd) {
+  fba::test::TempDir dir;
+  const std::string link = dir.file("hand");
+  sigset_t terminating, before;
+  sigemptyset(&terminating);
+  sigaddset(&terminating, SIGTERM);
+  sigaddset(&terminating, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &terminating, &before);
+  {
+    auto p = params(link);
+    p["emulator"] = std::string("fba-robotiq-3f-emulator --activation-s 0.05 --stall-aperture 0.07");
+    ComponentHarness h(fba::test::built_plugins(), "hw.robotiq_3f", p);
+    EXPECT_TRUE(std::filesystem::is_symlink(link));
+    h.push("grasp", grasp());
+    ASSERT_EQ(h.run(), 1);
+    ASSERT_EQ(h.failure(), "");
+    const auto results = h.values<fba::GraspExecution>("result");
+    ASSERT_EQ(results.size(), 1u);
+    EXPECT_TRUE(results[0].held) << results[0].reason;
+  }
+  pthread_sigmask(SIG_SETMASK, &before, nullptr);
+  // Ended by its SIGTERM (not the SIGKILL 5 s later): it removed its link on the way out.
+  EXPECT_FALSE(std::filesystem::exists(std::filesystem::symlink_status(link)));
+}
+
+// Never in place of a real device: a device that is there (here a plain file) and does not work is
+// the device's failure, and no emulator is started.
+TEST(Robotiq3fEmulatorProgram, AnEmulatorIsNeverStartedInPlaceOfADeviceThatIsThere) {
+  fba::test::TempDir dir;
+  const std::string device = dir.file("ttyUSB0");
+  { std::ofstream(device) << ""; }
+  auto p = params(device);
+  p["emulator"] = std::string("fba-robotiq-3f-emulator");
+  try {
+    ComponentHarness h(fba::test::built_plugins(), "hw.robotiq_3f", p);
+    FAIL() << "started on a plain file";
+  } catch (const fba::ConstructionError& e) {
+    EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
+    EXPECT_NE(std::string(e.what()).find(device), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(std::filesystem::is_regular_file(device));
 }

@@ -7,8 +7,11 @@
 
 #include <atomic>
 #include <cmath>
+#include <fba/task.hpp>
 #include <fba/testing.hpp>
 #include <fba/types/grasp.hpp>
+#include <fba/types/hand_command.hpp>
+#include <fba/types/joint_trajectory.hpp>
 #include <fba/types/grasp_execution.hpp>
 #include <functional>
 #include <limits>
@@ -370,14 +373,20 @@ TEST(Robotiq3fFaults, GraspOutsideTheHandsRangeIsRefusedBeforeAnythingIsSent) {
   }
 }
 
+// A device that fails to start is a device error (a runtime error, exit 3 from fba-run), not the
+// task's configuration error, and it names the device.
 TEST(Robotiq3fFaults, GripperOnAnotherSlaveIdFailsTheStartNamingTheDevice) {
   EmulatedHand hand;
   try {
     ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"slave_id", 10}}));
     FAIL() << "started without a gripper on slave 10";
-  } catch (const std::exception& e) {
+  } catch (const fba::ConstructionError& e) {
+    EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
+    EXPECT_NE(std::string(e.what()).find("could not start its device"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("(slave 10)"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("no answer"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("it never answered, so nothing was sent to stop it"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -387,8 +396,216 @@ TEST(Robotiq3fFaults, MissingSerialLineFailsTheStartNamingIt) {
   try {
     ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(device));
     FAIL() << "started on a serial line that does not exist";
-  } catch (const std::exception& e) {
+  } catch (const fba::ConstructionError& e) {
+    EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
     EXPECT_NE(std::string(e.what()).find(device), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("cannot open the serial line"), std::string::npos) << e.what();
   }
+}
+
+// The start's other failures: each a device error naming the device, and the gripper, which hears
+// the line, reset (rACT = 0) after it: the last command it saw.
+TEST(Robotiq3fFaults, AGripperThatNeverActivatesReportsAFaultOrAnswersGarbledIsResetAndADeviceError) {
+  auto start_failure = [](EmulatedHand& hand, fba::testing::Params more = {}) {
+    try {
+      ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), std::move(more)));
+    } catch (const fba::ConstructionError& e) {
+      EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
+      EXPECT_NE(std::string(e.what()).find("could not start its device: Robotiq 3-Finger gripper on " + hand.device()),
+                std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("reset (rACT = 0)"), std::string::npos) << e.what();
+      const auto seen = hand.emulator().commands();
+      EXPECT_FALSE(seen.empty());
+      if (!seen.empty()) EXPECT_EQ((seen.back().registers[0] >> 8) & 0x01, 0) << "the last command was not a reset";
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "the gripper started";
+    return std::string();
+  };
+  {
+    Robotiq3fOptions o = EmulatedHand::quick();
+    o.activates = false;
+    EmulatedHand hand(o);
+    EXPECT_NE(start_failure(hand, {{"activation_timeout", 0.3}}).find("activation: not done within 0.3 s"),
+              std::string::npos);
+  }
+  {
+    Robotiq3fOptions o = EmulatedHand::quick();
+    o.activation_s = 60;  // the fault comes first
+    EmulatedHand hand(o);
+    When fault(hand.emulator(), [](const Robotiq3fEmulator::State& s) { return s.imc == 1; },
+               [&] { hand.emulator().inject_fault(0x0D); });
+    EXPECT_NE(start_failure(hand).find("fault 0x0D activation fault"), std::string::npos);
+    EXPECT_EQ(hand.emulator().state().fault, 0) << "the reset clears it";
+  }
+  {
+    EmulatedHand hand;
+    hand.emulator().corrupt_replies(-1);
+    EXPECT_NE(start_failure(hand).find("the answer's CRC was wrong"), std::string::npos);
+  }
+}
+
+namespace {
+
+// A reach plan's hand command: open to `opening` with the fingers `spread` apart, or close with
+// `force` newtons, at `time` on the trajectory.
+fba::HandCommand command(fba::HandCommand::Action action, double time, double force = 30,
+                         fba::HandCommand::Mode mode = fba::HandCommand::Mode::Basic) {
+  fba::HandCommand c;
+  c.action = action;
+  c.mode = mode;
+  c.opening = 0.1;
+  c.spread = 0.03;
+  c.force = force;
+  c.time = time;
+  return c;
+}
+
+fba::JointTrajectory trajectory_of(double seconds) {
+  fba::JointTrajectory t;
+  t.names = {"j"};
+  t.points = {{0.0, {0.0}, {0.0}}, {seconds, {0.0}, {0.0}}};
+  return t;
+}
+
+constexpr std::int64_t kSecond = 1'000'000'000;
+using Action = fba::HandCommand::Action;
+
+// The emulator's gripper holds whatever it closes on at 0.07 m.
+Robotiq3fOptions stalling() {
+  Robotiq3fOptions o = EmulatedHand::quick();
+  o.stall_aperture = 0.07;
+  return o;
+}
+
+}  // namespace
+
+// The commands of a reach plan at their times on the trajectory's clock (which starts when the
+// trajectory arrives): each runs once the task's clock has reached its time, in order; the open
+// maps the opening and spread to the fingers' and the scissor's positions, the close its force
+// onto the gripper's 15..60 N, and the close ends held with every finger stalled on the object.
+TEST(Robotiq3fCommands, RunInOrderAtTheirTimesOnTheTrajectoryAndACloseEndsHeld) {
+  EmulatedHand hand(stalling());
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands", "trajectory"});
+  const auto before = hand.emulator().commands().size();
+  h.push("trajectory", trajectory_of(3.0));
+  h.push("commands", command(Action::Open, 0.0));
+  h.push("commands", command(Action::Close, 1.0, 30));
+  h.push("commands", command(Action::Open, 2.0));
+  ASSERT_TRUE(h.step());  // the trajectory, and the open at 0 s: now
+  ASSERT_TRUE(h.failure().empty()) << h.failure();
+  h.set_time(1 * kSecond);
+  ASSERT_TRUE(h.step());  // the close at 1 s
+  ASSERT_TRUE(h.failure().empty()) << h.failure();
+  ASSERT_EQ(named(h.events(), "held").size(), 1u) << (h.events().empty() ? "" : h.events().back().payload);
+  h.set_time(2 * kSecond);
+  ASSERT_TRUE(h.step());  // the open at 2 s: the release
+  ASSERT_TRUE(h.failure().empty()) << h.failure();
+  EXPECT_TRUE(named(h.events(), "dropped").empty());
+
+  // What reached the gripper, in order: open, close, open.
+  std::vector<Robotiq3fEmulator::CommandSeen> moves;
+  const auto seen = hand.emulator().commands();
+  for (std::size_t i = before; i < seen.size(); ++i)
+    if (seen[i].go()) moves.push_back(seen[i]);
+  ASSERT_EQ(moves.size(), 3u);
+  auto byte = [](const Robotiq3fEmulator::CommandSeen& c, int k) {
+    return (k % 2 == 0) ? c.registers[k / 2] >> 8 : c.registers[k / 2] & 0xFF;
+  };
+  const int open = static_cast<int>(std::lround(255 * (1 - 0.1 / 0.155)));  // 0.1 m of the 0.155 m stroke
+  for (int finger = 0; finger < 3; ++finger) {
+    EXPECT_EQ(byte(moves[0], 3 + 3 * finger), open) << "finger " << finger;
+    EXPECT_EQ(byte(moves[1], 3 + 3 * finger), 255) << "finger " << finger;
+    EXPECT_EQ(byte(moves[1], 5 + 3 * finger), std::lround(255 * (30 - 15) / 45.0)) << "finger " << finger;  // 30 N
+    EXPECT_EQ(byte(moves[2], 3 + 3 * finger), open) << "finger " << finger;
+  }
+  EXPECT_EQ(byte(moves[0], 12), std::lround(255 * (1 - 0.03 / 0.12)));  // the scissor: B and C 0.03 m apart
+  EXPECT_EQ(byte(moves[0], 1) & 0x08, 0x08);                             // individual scissor control
+  // Held: the close's result names every finger in contact.
+  const auto held = nlohmann::json::parse(named(h.events(), "held")[0].payload);
+  EXPECT_TRUE(held["held"].get<bool>());
+  EXPECT_EQ(held["contacts"].size(), 3u);
+  EXPECT_EQ(hand.emulator().state().axes[0].request, open);  // released at the end
+}
+
+// A command waits for its time: the task's clock has not reached it, the close does not go out,
+// and a stop ends the wait at once with nothing sent.
+TEST(Robotiq3fCommands, ACommandWaitsForItsTimeAndAStopEndsTheWaitWithNothingSent) {
+  EmulatedHand hand(stalling());
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands", "trajectory"});
+  h.push("trajectory", trajectory_of(1000.0));
+  h.push("commands", command(Action::Close, 900.0));
+  const auto before = hand.emulator().commands().size();
+  std::atomic<bool> returned{false};
+  std::thread run([&] {
+    h.step();
+    returned = true;
+  });
+  // However long the test looks, the close is 900 s away: nothing reaches the gripper meanwhile.
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  EXPECT_FALSE(returned);
+  EXPECT_EQ(hand.emulator().commands().size(), before);
+  h.interrupt();  // as the runtime does at a stop: the wait ends at once
+  run.join();
+  EXPECT_TRUE(returned);
+  EXPECT_EQ(hand.emulator().commands().size(), before) << "a command went out before its time";
+  EXPECT_TRUE(named(h.events(), "held").empty());
+}
+
+TEST(Robotiq3fCommands, AModeCommandChangesTheGripperModeAndAWeakCloseUsesItsLeastForce) {
+  EmulatedHand hand(stalling());
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands"});
+  h.push("commands", command(Action::Open, 0.0, 0, fba::HandCommand::Mode::Pinch));
+  h.push("commands", command(Action::Close, 0.5, 10, fba::HandCommand::Mode::Pinch));  // no trajectory: as they come
+  h.run();
+  ASSERT_TRUE(h.failure().empty()) << h.failure();
+  EXPECT_EQ(hand.emulator().state().mode, 1);  // pinch
+  const auto seen = hand.emulator().commands();
+  ASSERT_FALSE(seen.empty());
+  EXPECT_EQ(seen.back().registers[2] & 0xFF, 0);  // finger A's force: 10 N is below the least, 15 N
+  EXPECT_EQ(named(h.events(), "held").size(), 1u);
+}
+
+TEST(Robotiq3fCommands, ACommandTheHandCannotMakeOrBeforeItsTrajectoryFailsNamingTheDeviceWithNothingSent) {
+  EmulatedHand hand(stalling());
+  {
+    ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands", "trajectory"});
+    const auto before = hand.emulator().state().requests;
+    h.push("commands", command(Action::Open, 0.0));
+    h.run();
+    EXPECT_NE(h.failure().find(hand.device()), std::string::npos) << h.failure();
+    EXPECT_NE(h.failure().find("before any trajectory"), std::string::npos) << h.failure();
+    EXPECT_EQ(hand.emulator().state().requests, before);
+  }
+  {
+    ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands"});
+    const auto before = hand.emulator().state().requests;
+    auto wide = command(Action::Open, 0.0);
+    wide.opening = 0.2;
+    h.push("commands", wide);
+    h.run();
+    EXPECT_NE(h.failure().find("hand command (open at 0 s on the trajectory) refused before sending: the opening must "
+                               "be in (0, 0.155 m]"),
+              std::string::npos)
+        << h.failure();
+    EXPECT_EQ(hand.emulator().state().requests, before);
+  }
+}
+
+// With commands connected, a grasp is not executed by itself: it names the planned contacts that
+// a close reports.
+TEST(Robotiq3fCommands, AGraspAloneMovesNothingWhenCommandsDriveTheHand) {
+  EmulatedHand hand(stalling());
+  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands"});
+  const auto before = hand.emulator().commands().size();
+  h.push("grasp", grasp());
+  h.run();
+  EXPECT_EQ(hand.emulator().commands().size(), before);
+  h.push("commands", command(Action::Open, 0.0));
+  h.push("commands", command(Action::Close, 0.0));
+  h.run();
+  ASSERT_EQ(named(h.events(), "held").size(), 1u);
+  const auto held = nlohmann::json::parse(named(h.events(), "held")[0].payload);
+  EXPECT_NEAR(held["contacts"][0]["position"][0].get<double>(), 0.03, 1e-12);  // the grasp's thumb contact
 }
