@@ -2,7 +2,14 @@
 // component parameter means when the task file writes that parameter with ${...}.
 #include <gtest/gtest.h>
 
+#include <fba/task_config.hpp>
+
 #include "overrides.hpp"
+#include "test_components.hpp"
+
+using fba::test::errors_of;
+using fba::test::kChain;
+using fba::test::load;
 
 TEST(SetOptions, SplitAtTheFirstEqualsSignAndTheLastDotBeforeIt) {
   std::string problem;
@@ -100,4 +107,30 @@ TEST(SetOptions, AComponentParameterSharedWithOthersOrMadeFromTaskParametersIsRe
   const auto made = o.for_component_param("out.file");
   EXPECT_FALSE(made.apply);
   EXPECT_EQ(made.refusal, "out.file is '${dir}/${name}.txt' (task.yaml:7:30), made from the task parameters dir, name; set them with --set dir=...");
+}
+
+// Through the loader: a --set replaces what the file says, checked by the same rules.
+TEST(Loader, OverridesReplaceFileValuesAndAreChecked) {
+  fba::LoadOptions o;
+  o.overrides = {{"source.count=42"}};
+  EXPECT_EQ(std::get<std::int64_t>(load(kChain, o).find("source")->params.at("count")), 42);
+  o.overrides = {{"source.count=-3"}};
+  EXPECT_NE(errors_of(kChain, o).find("--set source.count=-3: error: parameter 'count' must be in"), std::string::npos);
+  o.overrides = {{"nobody.count=3"}};
+  EXPECT_NE(errors_of(kChain, o).find("no component 'nobody'"), std::string::npos);
+}
+
+TEST(Loader, OverridesGoThroughTheSameChecksWithSetAsTheirPlace) {
+  fba::LoadOptions o;
+  o.overrides = {{"source.count=3"}, {"source.count=4"}};
+  EXPECT_NE(errors_of(kChain, o).find("--set source.count=4: error: 'source.count' is set twice on the command line (also by --set source.count=3)"),
+            std::string::npos)
+      << errors_of(kChain, o);
+  o.overrides = {{"source.count={a: 1, a: 2}"}};
+  EXPECT_NE(errors_of(kChain, o).find("--set source.count={a: 1, a: 2}: error: key 'a' is given twice in one mapping"), std::string::npos)
+      << errors_of(kChain, o);
+  o.overrides = {{"source.rate=1000001"}};
+  EXPECT_NE(errors_of(kChain, o).find("--set source.rate=1000001: error: parameter 'rate' must be in [0, 1000000]; found 1000001"),
+            std::string::npos)
+      << errors_of(kChain, o);
 }

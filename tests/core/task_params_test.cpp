@@ -17,16 +17,9 @@
 namespace {
 
 namespace fs = std::filesystem;
+using fba::test::errors_of;
 using fba::test::load;
-
-std::string errors_of(const std::string& yaml, const fba::LoadOptions& options = {}) {
-  try {
-    load(yaml, options);
-  } catch (const fba::ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
+using fba::test::TempDir;
 
 fba::LoadOptions with_sets(std::vector<std::string> sets, std::string profile = "") {
   fba::LoadOptions o;
@@ -34,28 +27,6 @@ fba::LoadOptions with_sets(std::vector<std::string> sets, std::string profile = 
   o.profile = std::move(profile);
   return o;
 }
-
-// A folder of its own for each test, removed at the end.
-class TempDir {
- public:
-  TempDir() {
-    std::string pattern = (fs::path(testing::TempDir()) / "fba_profiles_XXXXXX").string();
-    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  fs::path write(const std::string& name, const std::string& text) const {
-    fs::create_directories((path_ / name).parent_path());
-    std::ofstream(path_ / name, std::ios::binary) << text;
-    return path_ / name;
-  }
-
- private:
-  fs::path path_;
-};
 
 std::string load_errors(const fs::path& file, const fba::LoadOptions& options = {}) {
   try {
@@ -553,4 +524,27 @@ TEST(Profiles, AnEmptyProfileNameIsRefused) {
   const auto empty_key = dir.write("empty.yaml", std::string(kSlotTask) + "profile: ''\n");
   const std::string k = load_errors(empty_key);
   EXPECT_NE(k.find("empty.yaml:12:10: error: 'profile:' expects a profile's name"), std::string::npos) << k;
+}
+
+// A bound on a string, bool or path was ignored: the declaration seemed to limit what it did not.
+TEST(Loader, MinAndMaxApplyToNumbersAndListsOnly) {
+  const auto e = errors_of(R"(
+params:
+  on: { type: bool, default: true, max: 1 }
+  where: { type: path, default: ., min: 0 }
+  n: { type: int, default: 3, min: 1, max: 5 }
+  gains: { type: list, default: [1, 2], max: 5 }
+components:
+  source: { type: examples.counter, params: { count: "${n}" } }
+  sink: { type: examples.sink }
+connections: [ source.out -> sink.in ]
+)");
+  EXPECT_NE(e.find("test.yaml:3:41: error: max applies to int and double parameters (and to every number of a list); 'on' is a bool parameter"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("test.yaml:4:41: error: min applies to int and double parameters (and to every number of a list); 'where' is a path parameter"),
+            std::string::npos)
+      << e;
+  EXPECT_EQ(e.find("'n'"), std::string::npos) << e;
+  EXPECT_EQ(e.find("'gains'"), std::string::npos) << e;
 }

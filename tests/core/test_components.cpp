@@ -241,4 +241,28 @@ std::vector<std::int64_t> ints(const std::vector<Packet>& packets) {
   return out;
 }
 
+std::string errors_of(const std::string& yaml, const LoadOptions& options) {
+  try {
+    load(yaml, options);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::vector<Diagnostic> diagnostics_of_file(const std::filesystem::path& file, const LoadOptions& options) {
+  try {
+    load_task(file, registry(), options);
+  } catch (const ConfigError& e) {
+    return e.diagnostics();
+  }
+  return {};
+}
+
+std::string errors_of_file(const std::filesystem::path& file) {
+  std::string s;
+  for (const auto& d : diagnostics_of_file(file)) s += d.str() + "\n";
+  return s;
+}
+
 }  // namespace fba::test

@@ -1,7 +1,8 @@
 // Shared helpers of the runtime's tests: a registry with the example plugin and the test
-// components, and a loader for inline task text.
+// components, and a loader for inline task text and what it says.
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,24 @@ namespace fba::test {
 const Registry& registry();
 TaskConfig load(const std::string& yaml, const LoadOptions& options = {});
 std::vector<std::int64_t> ints(const std::vector<Packet>& packets);
+
+// What loading `yaml` as test.yaml says (ConfigError's text); empty when it loads.
+std::string errors_of(const std::string& yaml, const LoadOptions& options = {});
+// The diagnostics of loading the task file `file`; none when it loads.
+std::vector<Diagnostic> diagnostics_of_file(const std::filesystem::path& file, const LoadOptions& options = {});
+// Those diagnostics as text, a line each.
+std::string errors_of_file(const std::filesystem::path& file);
+
+// A chain that loads: a counter of 5, a passthrough and a sink.
+inline constexpr const char* kChain = R"(
+components:
+  source: { type: examples.counter, params: { count: 5 } }
+  pass: { type: examples.passthrough }
+  sink: { type: examples.sink }
+connections:
+  - source.out -> pass.in
+  - pass.out -> sink.in
+)";
 
 // Options for a test run on the given executor, with a timeout as a safety net (never a bound).
 inline RunOptions with(ExecutorKind e, double timeout_s = 60) {

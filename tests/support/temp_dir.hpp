@@ -51,6 +51,12 @@ class TempDir {
     kept.push_back(std::make_unique<TempDir>(what));
     return kept.back()->path();
   }
+  // Writes `text` to `name` inside the folder, making the folders on its way; returns its path.
+  std::filesystem::path write(const std::string& name, const std::string& text) const {
+    std::filesystem::create_directories((path_ / name).parent_path());
+    std::ofstream(path_ / name, std::ios::binary) << text;
+    return path_ / name;
+  }
   // The path of `name` inside the folder, as a string; with `text`, the file is written first.
   std::string file(const std::string& name, const std::string& text = {}) const {
     const std::string p = (path_ / name).string();
