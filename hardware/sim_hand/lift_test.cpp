@@ -1,22 +1,23 @@
 #include "lift_test.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
-#include <cstdint>
 #include <cstring>
+#include <functional>
+#include <map>
 #include <mutex>
-#include <sstream>
 #include <string_view>
-#include <vector>
 
 #include <fmt/format.h>
 #include <mujoco/mujoco.h>
 
-#include <Eigen/Geometry>
-
-#include "fba/geometry/decimate.hpp"
-#include "hand_model.hpp"
+#include "arm_model.hpp"
+#include "fba/geometry/box_decomposition.hpp"
+#include "fba/motion/reach_planner.hpp"
+#include "robot_urdf.hpp"
+#include "robot_world.hpp"
 
 namespace fba::sim_hand {
 
@@ -37,26 +38,6 @@ void install_mujoco_handlers() {
   });
 }
 
-// A binary STL: what MuJoCo 2.2 reads as a mesh asset (it has no mesh API; the file goes in its
-// virtual file system).
-std::string binary_stl(const TriangleMesh& mesh, const Eigen::Vector3d& origin) {
-  std::string out(80, '\0');
-  auto put = [&out](const void* p, std::size_t n) { out.append(static_cast<const char*>(p), n); };
-  const auto count = static_cast<std::uint32_t>(mesh.triangles.size());
-  put(&count, 4);
-  for (const auto& t : mesh.triangles) {
-    float v[12] = {};
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3f p = mesh.vertices[static_cast<std::size_t>(t[k])] - origin.cast<float>();
-      for (int j = 0; j < 3; ++j) v[3 + 3 * k + j] = p[j];
-    }
-    put(v, sizeof v);
-    const std::uint16_t attributes = 0;
-    put(&attributes, 2);
-  }
-  return out;
-}
-
 struct VfsDeleter {
   void operator()(mjVFS* v) const {
     mj_deleteVFS(v);
@@ -71,42 +52,178 @@ void add_file(mjVFS& vfs, const std::string& name, const std::string& data) {
   std::memcpy(vfs.filedata[i], data.data(), data.size());
 }
 
-double smoothstep(double s) {
-  s = std::clamp(s, 0.0, 1.0);
-  return s * s * (3 - 2 * s);
+// The arm's joints follow the trajectory under a computed-torque law: the acceleration the
+// trajectory asks plus a critically damped PD of the error, times the mass matrix, plus gravity and
+// Coriolis; a 10 Hz bandwidth, the torques within the URDF's effort limits (as a real arm's
+// controller compensates its own weight and limits its motors' current).
+constexpr double kArmBandwidth = 2 * M_PI * 10;  // rad/s
+constexpr double kArmKp = kArmBandwidth * kArmBandwidth;
+constexpr double kArmKd = 2 * kArmBandwidth;
+// The closing slides hold the commanded opening with a proportional law (N/m; the joints' damping
+// damps it), within the finger force.
+constexpr double kHoldGain = 2000;
+// The object settles on the table before the trajectory starts; the way in is then checked
+// against it where it rests.
+constexpr double kSettle_s = 0.2;
+
+// sim.arm's initial joints (the camera 0.35 m from the workspace's centre, 60 degrees up): the
+// seed of the start pose's IK.
+const std::vector<double> kArmHome{-0.4148, -2.1223, 2.2888, -2.2234, -1.3679, -0.3644};
+// run()'s plans start with the hand pointing down over the workspace's centre, its fingertips
+// this high over the table (above the tallest object the workspace holds), so that a grasp from
+// above needs a short path. The fingers reach about this far past the palm's frame.
+constexpr double kStartClearance = 0.25;
+constexpr double kFingerReach = 0.18;
+
+std::string seconds(double t) { return fmt::format("t={:.2f} s", t); }
+
+// An octree of the voxelised object: a node whose voxels are all occupied is Full, all empty
+// Empty; the rest split. What a perfect carve would give reach planning as its model.
+Octree octree_of(const geometry::VoxelGrid& g) {
+  const int n = g.n;
+  int depth = 0;
+  while ((1 << depth) < n) ++depth;
+  // Summed-volume table: the occupied voxels in [0, i) x [0, j) x [0, k).
+  const auto m = static_cast<std::size_t>(n + 1);
+  std::vector<int> sum(m * m * m, 0);
+  auto at = [&](int i, int j, int k) -> int& { return sum[(std::size_t(k) * m + std::size_t(j)) * m + std::size_t(i)]; };
+  for (int k = 1; k <= n; ++k)
+    for (int j = 1; j <= n; ++j)
+      for (int i = 1; i <= n; ++i)
+        at(i, j, k) = int(g.occupied(i - 1, j - 1, k - 1)) + at(i - 1, j, k) + at(i, j - 1, k) + at(i, j, k - 1) - at(i - 1, j - 1, k) -
+                      at(i - 1, j, k - 1) - at(i, j - 1, k - 1) + at(i - 1, j - 1, k - 1);
+  auto count = [&](int i, int j, int k, int s) {
+    return at(i + s, j + s, k + s) - at(i, j + s, k + s) - at(i + s, j, k + s) - at(i + s, j + s, k) + at(i, j, k + s) + at(i, j + s, k) +
+           at(i + s, j, k) - at(i, j, k);
+  };
+  Octree t;
+  t.bounds = g.bounds;
+  t.max_depth = depth;
+  t.views = 1;
+  t.arena = std::make_shared<OctreeArena>();
+  std::function<void(OctreeNode&, int, int, int, int)> build = [&](OctreeNode& node, int d, int i, int j, int k) {
+    const int s = n >> d;
+    const int c = count(i, j, k, s);
+    if (c == 0) return node.set_state(NodeState::Empty);
+    if (c == s * s * s) return node.set_state(NodeState::Full);
+    node.set_state(NodeState::Partial);
+    OctreeNode* kids = t.split(node, NodeState::Partial);
+    const int h = s / 2;
+    for (int q = 0; q < 8; ++q) build(kids[q], d + 1, i + (q & 1 ? h : 0), j + (q & 2 ? h : 0), k + (q & 4 ? h : 0));
+  };
+  build(t.root, 0, 0, 0, 0);
+  return t;
 }
 
-std::string format_m(double v) { return fmt::format("{:.3f} m", v); }
+// A trajectory sampled between its waypoints by cubic Hermite interpolation of their positions
+// and velocities: the reference the arm's joints follow, with its velocity and acceleration.
+class Reference {
+ public:
+  Reference(const JointTrajectory& t, const std::vector<int>& column) : n_(column.size()) {
+    for (const auto& p : t.points) {
+      times_.push_back(p.time);
+      Eigen::VectorXd q(static_cast<Eigen::Index>(n_)), v = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n_));
+      for (std::size_t i = 0; i < n_; ++i) {
+        q(static_cast<Eigen::Index>(i)) = p.positions[static_cast<std::size_t>(column[i])];
+        if (!p.velocities.empty()) v(static_cast<Eigen::Index>(i)) = p.velocities[static_cast<std::size_t>(column[i])];
+      }
+      q_.push_back(q);
+      v_.push_back(v);
+    }
+  }
+  double end() const { return times_.back(); }
+  const Eigen::VectorXd& position(std::size_t i) const { return q_[i]; }
+  std::size_t size() const { return times_.size(); }
+  double time(std::size_t i) const { return times_[i]; }
+
+  void sample(double t, Eigen::VectorXd& q, Eigen::VectorXd& v, Eigen::VectorXd& a) {
+    if (t <= times_.front() || times_.size() == 1) return hold(0, q, v, a);
+    if (t >= times_.back()) return hold(times_.size() - 1, q, v, a);
+    while (cursor_ + 1 < times_.size() && times_[cursor_ + 1] <= t) ++cursor_;
+    while (cursor_ > 0 && times_[cursor_] > t) --cursor_;
+    const std::size_t i = cursor_;
+    const double dt = times_[i + 1] - times_[i];
+    const double s = (t - times_[i]) / dt;
+    const double s2 = s * s, s3 = s2 * s;
+    const Eigen::VectorXd &p0 = q_[i], &p1 = q_[i + 1];
+    const Eigen::VectorXd m0 = v_[i] * dt, m1 = v_[i + 1] * dt;
+    q = (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * m1;
+    v = ((6 * s2 - 6 * s) * p0 + (3 * s2 - 4 * s + 1) * m0 + (-6 * s2 + 6 * s) * p1 + (3 * s2 - 2 * s) * m1) / dt;
+    a = ((12 * s - 6) * p0 + (6 * s - 4) * m0 + (-12 * s + 6) * p1 + (6 * s - 2) * m1) / (dt * dt);
+  }
+
+ private:
+  void hold(std::size_t i, Eigen::VectorXd& q, Eigen::VectorXd& v, Eigen::VectorXd& a) const {
+    q = q_[i];
+    v = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n_));
+    a = v;
+  }
+  std::size_t n_;
+  std::vector<double> times_;
+  std::vector<Eigen::VectorXd> q_, v_;
+  std::size_t cursor_ = 0;
+};
+
+// The stretches of the plan after the fingers close: the hand's wait, the lift (the first motion),
+// the hold (the still stretch after it); each an end time on the trajectory.
+struct Phases {
+  double lift_start = 0, lift_end = 0, hold_end = 0;
+};
+
+Phases phases_after(const Reference& r, double close) {
+  auto moving = [&](std::size_t i) { return (r.position(i + 1) - r.position(i)).cwiseAbs().maxCoeff() > 1e-12; };
+  Phases p;
+  p.lift_start = p.lift_end = p.hold_end = r.end();
+  std::size_t i = 0;
+  while (i + 1 < r.size() && (r.time(i) < close - 1e-9 || !moving(i))) ++i;
+  if (i + 1 >= r.size()) return p;
+  p.lift_start = r.time(i);
+  while (i + 1 < r.size() && moving(i)) ++i;
+  p.lift_end = r.time(i);
+  while (i + 1 < r.size() && !moving(i)) ++i;
+  p.hold_end = r.time(i);
+  return p;
+}
 
 }  // namespace
 
-const std::string& LiftTest::hand_model() {
-  static const std::string text(kHandModel);
+const std::string& LiftTest::robot_urdf() {
+  static const std::string text(kRobotUrdf);
   return text;
 }
 
 struct LiftTest::Impl {
   LiftTestParams params;
   TriangleMesh object;
-  std::string physics_note;
+  ObjectPieces pieces;
+  std::string mjcf;
+  std::string plan_note;
+  // run()'s planners, by the pregrasp's clearance in mm: the robot's URDF with the measured
+  // transforms in place, and the reach parameters but the clearance.
+  std::string urdf, urdf_name;
+  motion::ReachParams reach;
+  std::map<long, std::unique_ptr<motion::ReachPlanner>> planners;
+  std::shared_ptr<const motion::ModelObstacles> obstacles;
+  Eigen::VectorXd start;
   mjModel* m = nullptr;
   mjData* d = nullptr;
 
   // Indices in the model, looked up once by name.
-  int palm_body = -1, palm_joint = -1, mocap = -1, object_body = -1, table_geom = -1;
+  int palm_body = -1, object_body = -1, table_geom = -1, robot_root = -1;
+  std::vector<std::string> arm_names;
+  std::vector<int> arm_qpos, arm_dof, arm_actuator;
+  std::vector<double> arm_effort;
   struct Finger {
     std::string name;
     int close_joint = -1, close_actuator = -1;  // the closing slide, force driven
-    std::vector<int> phalanx_actuators;         // the phalanges' position servos
-    int spread_actuator = -1;          // -1 for the thumb
-    int spread_joint = -1;
+    double gear = 1;                            // its force over a finger's: the thumb pushes for two
+    std::vector<int> phalanx_actuators;         // the phalanges' springs
+    int spread_joint = -1, spread_actuator = -1;  // -1 for the thumb
   };
   std::array<Finger, 3> fingers;  // thumb, finger_a (+y), finger_b (-y)
-  // The hand's geometry, read from the model: the fully open fingers' distance from the palm's
-  // centre along x, the pad's distance from the palm's frame along z, the pad's radius, the spread range,
-  // the closing slides' travel.
-  // pad_to_end: from the pad to the end of the distal phalanx's straight part.
-  double base_x = 0, pad_distance = 0, pad_radius = 0, pad_to_end = 0, spread_min = 0, spread_max = 0, travel = 0;
+  // The hand's geometry, read from the model: the fully open knuckles' distance from the palm's
+  // centre along x, the pad's radius, the closing slides' travel, the scissor's range.
+  double knuckle_x = 0, pad_radius = 0, travel = 0, spread_min = 0, spread_max = 0, spread_force = 0;
   long steps = 0;
   std::atomic<bool> stop{false};
   struct Stopped {};  // thrown out of a step once stop is set
@@ -116,9 +233,19 @@ struct LiftTest::Impl {
     if (m) mj_deleteModel(m);
   }
 
+  const motion::ReachPlanner& planner(double clearance) {
+    auto& p = planners[std::lround(clearance * 1000)];
+    if (!p) {
+      motion::ReachParams r = reach;
+      r.clearance = clearance;
+      p = std::make_unique<motion::ReachPlanner>(arm::ArmModel::from_string(urdf, urdf_name, "world", "flange"), r);
+    }
+    return *p;
+  }
+
   int id(mjtObj type, const std::string& name) const {
     const int i = mj_name2id(m, type, name.c_str());
-    if (i < 0) throw LiftTestError("lift test: the hand model has no " + std::string(mju_type2Str(type)) + " named '" + name + "'");
+    if (i < 0) throw LiftTestError("lift test: the robot's world has no " + std::string(mju_type2Str(type)) + " named '" + name + "'");
     return i;
   }
 
@@ -126,25 +253,19 @@ struct LiftTest::Impl {
     const char* n = mj_id2name(m, mjOBJ_GEOM, g);
     return n ? n : "geom " + std::to_string(g);
   }
+  // The object's boxes are named object_N: one name for all in messages.
+  std::string part_name(int g) const { return is_object(g) ? "the object" : g == table_geom ? "the table" : geom_name(g); }
 
-  bool is_hand(int geom) const { return m->body_rootid[m->geom_bodyid[geom]] == palm_body; }
+  bool is_robot(int geom) const { return m->body_rootid[m->geom_bodyid[geom]] == robot_root; }
   bool is_object(int geom) const { return m->geom_bodyid[geom] == object_body; }
 
-  bool hand_touches_table() const {
-    for (int i = 0; i < d->ncon; ++i) {
-      const mjContact& c = d->contact[i];
-      if (c.dist <= 0 && ((is_hand(c.geom1) && c.geom2 == table_geom) || (is_hand(c.geom2) && c.geom1 == table_geom))) return true;
-    }
-    return false;
-  }
-
-  // The first contact between the hand and anything, as "<hand part> touches <other>"; empty if none.
-  std::string hand_collision() const {
+  // The first contact of the robot with the table or the object, as "<part> touches <other>".
+  std::string robot_collision() const {
     for (int i = 0; i < d->ncon; ++i) {
       const mjContact& c = d->contact[i];
       if (c.dist > 0) continue;  // within the margin, not touching
-      for (auto [h, o] : {std::pair{c.geom1, c.geom2}, std::pair{c.geom2, c.geom1}})
-        if (is_hand(h) && !is_hand(o)) return geom_name(h) + " touches " + (is_object(o) ? "the object" : geom_name(o));
+      for (auto [r, o] : {std::pair{c.geom1, c.geom2}, std::pair{c.geom2, c.geom1}})
+        if (is_robot(r) && !is_robot(o)) return geom_name(r) + " touches " + part_name(o);
     }
     return {};
   }
@@ -153,8 +274,8 @@ struct LiftTest::Impl {
     std::vector<ExecutedContact> out;
     for (int i = 0; i < d->ncon; ++i) {
       const mjContact& c = d->contact[i];
-      const bool object_second = is_hand(c.geom1) && is_object(c.geom2);
-      if (!object_second && !(is_hand(c.geom2) && is_object(c.geom1))) continue;
+      const bool object_second = is_robot(c.geom1) && is_object(c.geom2);
+      if (!object_second && !(is_robot(c.geom2) && is_object(c.geom1))) continue;
       mjtNum f[6];
       mj_contactForce(m, d, i, f);
       if (f[0] <= 0) continue;
@@ -173,115 +294,217 @@ struct LiftTest::Impl {
     const mjtNum* p = d->xipos + 3 * object_body;
     return {p[0], p[1], p[2]};
   }
-  Eigen::Vector3d palm_position() const {
-    const mjtNum* p = d->xpos + 3 * palm_body;
-    return {p[0], p[1], p[2]};
+  Eigen::Isometry3d body_pose(int body) const {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    const Eigen::Map<const Eigen::Matrix<mjtNum, 3, 3, Eigen::RowMajor>> r(d->xmat + 9 * body);
+    t.linear() = r;
+    t.translation() << d->xpos[3 * body], d->xpos[3 * body + 1], d->xpos[3 * body + 2];
+    return t;
   }
-  Eigen::Vector3d wrist_position() const { return {d->mocap_pos[3 * mocap], d->mocap_pos[3 * mocap + 1], d->mocap_pos[3 * mocap + 2]}; }
+  Eigen::Vector3d in_palm(const Eigen::Vector3d& world) const { return body_pose(palm_body).inverse() * world; }
 
   bool unstable() const { return d->warning[mjWARN_BADQACC].number > 0; }
+
+  // The slide travel at which a pad's inner surface is half_opening from the palm's centre.
+  double travel_for(double half_opening) const { return std::clamp(knuckle_x - pad_radius - half_opening, 0.0, travel); }
+
+  // The arm at q, still; the hand open by `open_travel` with the fingers `spread` apart. No time passes.
+  void pose(const Eigen::VectorXd& q, double open_travel, double spread) {
+    for (std::size_t i = 0; i < arm_qpos.size(); ++i) d->qpos[arm_qpos[i]] = q(static_cast<Eigen::Index>(i));
+    const double half = std::clamp(spread, spread_min, spread_max) / 2;
+    for (std::size_t f = 0; f < 3; ++f) {
+      const auto& finger = fingers[f];
+      d->qpos[m->jnt_qposadr[finger.close_joint]] = open_travel;
+      for (int act : finger.phalanx_actuators) d->ctrl[act] = 0;
+      if (finger.spread_joint >= 0) {
+        const double offset = f == 1 ? half : -half;
+        d->qpos[m->jnt_qposadr[finger.spread_joint]] = offset;
+        d->ctrl[finger.spread_actuator] = offset;
+      }
+    }
+    mj_forward(m, d);
+  }
 };
 
-LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, const LiftTestParams& params,
-                   const std::string& hand_mjcf)
+LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, const LiftTestParams& params, const RobotSetup& robot)
     : impl_(std::make_unique<Impl>()) {
   install_mujoco_handlers();
   if (mesh.triangles.empty()) throw LiftTestError("lift test: the object mesh has no triangles");
-  if (!(params.mass > 0) || !(params.friction > 0) || !(params.lift_height > 0) || !(params.hold_s >= 0) ||
-      !(params.lift_s > 0) || !(params.finger_force > 0) || !(params.drop_distance > 0) || !(params.clearance >= 0) ||
-      !(params.contact_tolerance > 0) ||
-      !(params.pregrasp_distance >= 0))
-    throw std::invalid_argument("lift test: mass, friction, lift height, lift time, finger force, drop distance and contact "
-                                "tolerance must be "
-                                "positive, hold time, clearance and pregrasp distance not negative");
+  if (!(params.mass > 0) || !(params.friction > 0) || !(params.lift_height > 0) || !(params.hold_s >= 0) || !(params.finger_force > 0) ||
+      !(params.drop_distance > 0) || !(params.clearance >= 0) || !(params.contact_tolerance > 0) || !(params.voxel_size > 0))
+    throw std::invalid_argument("lift test: mass, friction, lift height, finger force, drop distance, contact tolerance and voxel size "
+                                "must be positive, hold time and clearance not negative");
   auto& s = *impl_;
   s.params = params;
   s.object = place_on_table(mesh, placement);
 
-  // The scene: the hand model with the object added as a free body. The mesh's vertices are
-  // given relative to the body, placed at the centre of the mesh's bounds; MuJoCo collides with
-  // their convex hull and spreads the mass over the mesh's volume.
-  Eigen::AlignedBox3d box;
-  for (const auto& v : s.object.vertices) box.extend(v.cast<double>());
-  const Eigen::Vector3d centre = box.center();
-  std::string scene = hand_mjcf.empty() ? hand_model() : hand_mjcf;
-  const auto end = scene.rfind("</mujoco>");
-  if (end == std::string::npos) throw LiftTestError("lift test: the hand model is not MJCF: no </mujoco> found");
-  scene.insert(end, fmt::format(R"(
-  <asset><mesh name="object" file="object.stl"/></asset>
-  <worldbody>
-    <body name="object" pos="{} {} {}">
-      <freejoint name="object"/>
-      <geom name="object" type="mesh" mesh="object" mass="{}" contype="1" conaffinity="3" condim="4" rgba="0.8 0.3 0.2 1"/>
-    </body>
-  </worldbody>
-)", centre.x(), centre.y(), centre.z(), params.mass));
+  // The object as boxes: its voxelisation merged, whose fit is known.
+  geometry::BoxDecomposition pieces;
+  try {
+    pieces = geometry::decompose_into_boxes(s.object, params.voxel_size);
+  } catch (const std::invalid_argument& e) {
+    throw LiftTestError(std::string("lift test: the object cannot be given to MuJoCo: ") + e.what());
+  }
+  s.pieces = {pieces.boxes.size(), pieces.voxel_size, pieces.iou, pieces.volume, pieces.mesh_volume};
 
-  const geometry::Decimated physics = geometry::decimate(s.object, kPhysicsTriangles);
-  if (physics.cell > 0)
-    s.physics_note = fmt::format("the object's {} triangles were decimated to {} for MuJoCo (at most {}), by vertex clustering on a "
-                                 "{:.2f} mm grid",
-                                 s.object.triangles.size(), physics.mesh.triangles.size(), kPhysicsTriangles, physics.cell * 1e3);
+  // The robot: its one description, with the measured transforms in place.
+  const std::string name = robot.urdf.empty() ? "wrist_camera_arm.urdf (built in)" : robot.urdf_name.empty() ? "the robot's URDF" : robot.urdf_name;
+  std::string urdf;
+  try {
+    urdf = arm::with_fixed_joint_origins(robot.urdf.empty() ? robot_urdf() : robot.urdf, robot.origins, name);
+    const arm::ArmModel to_flange = arm::ArmModel::from_string(urdf, name, "world", "flange");
+    const arm::ArmModel to_palm = arm::ArmModel::from_string(urdf, name, "world", "palm");
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(to_flange.size()));
+    motion::ReachParams& reach = s.reach;
+    reach.flange_from_palm = to_flange.forward(zero).inverse() * to_palm.forward(zero);
+    reach.clearance = params.clearance;
+    reach.lift_height = params.lift_height;
+    reach.hold_s = params.hold_s;
+    reach.finger_force = params.finger_force;
+    reach.retreat = false;  // the verdict is in at the hold's end
+    // The model is the object itself, not a visual hull larger than it: no allowance around the
+    // contacts, where the fingers would touch the model before they touch the object.
+    reach.contact_allowance = 0;
+    if (params.start_joints.empty()) {
+      // The hand pointing down over the workspace, its fingertips kStartClearance above the table.
+      const Eigen::VectorXd home = Eigen::Map<const Eigen::VectorXd>(kArmHome.data(), static_cast<Eigen::Index>(kArmHome.size()));
+      const Eigen::Isometry3d palm_on_flange = to_flange.forward(zero).inverse() * to_palm.forward(zero);
+      Eigen::Isometry3d palm = Eigen::Isometry3d::Identity();
+      palm.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;  // z down, x along the world's x
+      palm.translation() << 0, 0, kStartClearance + kFingerReach;
+      const auto ready = to_flange.inverse(palm * palm_on_flange.inverse(), home);
+      if (!ready.ok) throw LiftTestError("lift test: no start joints: the hand over the workspace is out of the arm's reach: " + ready.why);
+      s.start = ready.joints;
+    } else {
+      s.start = Eigen::Map<const Eigen::VectorXd>(params.start_joints.data(), static_cast<Eigen::Index>(params.start_joints.size()));
+      if (const std::string bad = to_flange.limit_violation(s.start); !bad.empty())
+        throw std::invalid_argument("lift test: the start joints are not usable: " + bad);
+    }
+    s.urdf = urdf;
+    s.urdf_name = name;
+    s.planner(params.clearance);
+  } catch (const arm::ArmModelError& e) {
+    throw LiftTestError(std::string("lift test: ") + e.what());
+  } catch (const std::invalid_argument& e) {  // a robot reach planning cannot check
+    throw LiftTestError(std::string("lift test: ") + e.what());
+  }
+  s.obstacles = motion::ReachPlanner::obstacles(octree_of(pieces.grid));
+
+  // The world: the robot, the table and the object's boxes.
+  try {
+    s.mjcf = robot_world_mjcf(urdf, name, WorldObject{pieces.boxes, params.mass, pieces.centroid, pieces.inertia, params.friction});
+  } catch (const RobotWorldError& e) {
+    throw LiftTestError(std::string("lift test: ") + e.what());
+  }
   std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
   mj_defaultVFS(vfs.get());
-  add_file(*vfs, "scene.xml", scene);
-  add_file(*vfs, "object.stl", binary_stl(physics.mesh, centre));
+  add_file(*vfs, "world.xml", s.mjcf);
   char error[1024] = "";
-  s.m = mj_loadXML("scene.xml", vfs.get(), error, sizeof error);
-  if (!s.m) throw LiftTestError(std::string("lift test: MuJoCo does not compile the scene: ") + error);
+  s.m = mj_loadXML("world.xml", vfs.get(), error, sizeof error);
+  if (!s.m) throw LiftTestError(std::string("lift test: MuJoCo does not compile the robot's world: ") + error);
   s.d = mj_makeData(s.m);
   if (!s.d) throw LiftTestError("lift test: MuJoCo could not allocate the simulation data");
 
-  for (int g = 0; g < s.m->ngeom; ++g) s.m->geom_friction[3 * g] = params.friction;
   s.palm_body = s.id(mjOBJ_BODY, "palm");
-  s.palm_joint = s.id(mjOBJ_JOINT, "palm");
-  s.mocap = s.m->body_mocapid[s.id(mjOBJ_BODY, "wrist")];
-  if (s.mocap < 0) throw LiftTestError("lift test: the hand model's body 'wrist' is not a mocap body");
-  if (s.m->jnt_type[s.palm_joint] != mjJNT_FREE) throw LiftTestError("lift test: the hand model's joint 'palm' is not a free joint");
   s.object_body = s.id(mjOBJ_BODY, "object");
   s.table_geom = s.id(mjOBJ_GEOM, "table");
+  s.robot_root = s.m->body_rootid[s.palm_body];
+  for (const std::string& joint : s.planner(params.clearance).arm().joint_names()) {
+    const int j = s.id(mjOBJ_JOINT, joint);
+    const int a = s.id(mjOBJ_ACTUATOR, joint);
+    s.arm_names.push_back(joint);
+    s.arm_qpos.push_back(s.m->jnt_qposadr[j]);
+    s.arm_dof.push_back(s.m->jnt_dofadr[j]);
+    s.arm_actuator.push_back(a);
+    s.arm_effort.push_back(s.m->actuator_ctrlrange[2 * a + 1]);
+  }
   const char* names[3] = {"thumb", "finger_a", "finger_b"};
   for (int f = 0; f < 3; ++f) {
     auto& finger = s.fingers[static_cast<std::size_t>(f)];
     finger.name = names[f];
     finger.close_joint = s.id(mjOBJ_JOINT, finger.name + "_close");
     finger.close_actuator = s.id(mjOBJ_ACTUATOR, finger.name + "_close");
+    finger.gear = f == 0 ? 2 : 1;
     for (const char* k : {"_1", "_2", "_3"}) finger.phalanx_actuators.push_back(s.id(mjOBJ_ACTUATOR, finger.name + k));
     if (f > 0) {
       finger.spread_joint = s.id(mjOBJ_JOINT, finger.name + "_spread");
       finger.spread_actuator = s.id(mjOBJ_ACTUATOR, finger.name + "_spread");
     }
   }
-  const int thumb_base = s.id(mjOBJ_BODY, "thumb_base");
-  s.base_x = -s.m->body_pos[3 * thumb_base];
-  s.pad_distance = s.m->body_pos[3 * thumb_base + 2] + s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_2") + 2] +
-                   s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_3") + 2] + s.m->site_pos[3 * s.id(mjOBJ_SITE, "thumb_pad") + 2];
+  s.knuckle_x = -s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_carriage")];
   s.pad_radius = s.m->geom_size[3 * s.id(mjOBJ_GEOM, "thumb_3")];
-  s.pad_to_end = s.m->site_pos[3 * s.id(mjOBJ_SITE, "thumb_pad") + 2];
+  s.travel = s.m->jnt_range[2 * s.fingers[0].close_joint + 1];
   const int spread = s.fingers[1].spread_joint;
   s.spread_min = 2 * s.m->jnt_range[2 * spread];
   s.spread_max = 2 * s.m->jnt_range[2 * spread + 1];
-  s.travel = s.m->jnt_range[2 * s.fingers[0].close_joint + 1];
+  s.spread_force = s.m->actuator_forcerange[2 * s.fingers[1].spread_actuator + 1];
 }
 
 LiftTest::~LiftTest() = default;
 
 const TriangleMesh& LiftTest::object() const { return impl_->object; }
-const std::string& LiftTest::physics_note() const { return impl_->physics_note; }
+const ObjectPieces& LiftTest::pieces() const { return impl_->pieces; }
 double LiftTest::simulated_s() const { return static_cast<double>(impl_->steps) * impl_->m->opt.timestep; }
 long LiftTest::steps() const { return impl_->steps; }
+const std::string& LiftTest::plan_note() const { return impl_->plan_note; }
+const std::string& LiftTest::world_mjcf() const { return impl_->mjcf; }
+const std::vector<std::string>& LiftTest::arm_joints() const { return impl_->arm_names; }
+Eigen::VectorXd LiftTest::start_joints() const { return impl_->start; }
+
+Eigen::Isometry3d LiftTest::body_pose(const std::string& link, const Eigen::VectorXd& joints) {
+  auto& s = *impl_;
+  if (joints.size() != static_cast<Eigen::Index>(s.arm_qpos.size()))
+    throw std::invalid_argument("lift test: " + std::to_string(joints.size()) + " joint positions given, the arm has " +
+                                std::to_string(s.arm_qpos.size()));
+  mj_resetData(s.m, s.d);
+  s.pose(joints, 0, s.spread_min);
+  return s.body_pose(s.id(mjOBJ_BODY, link));
+}
 
 void LiftTest::stop() { impl_->stop.store(true); }
 
 GraspExecution LiftTest::run(const Grasp& grasp) {
   auto& s = *impl_;
+  for (const auto& c : grasp.contacts)
+    if (!c.position.allFinite() || !c.normal.allFinite())
+      throw std::invalid_argument("lift test: a grasp contact has a non-finite position or normal");
+  if (!grasp.approach.allFinite() || grasp.approach.norm() < 1e-9)
+    throw std::invalid_argument("lift test: the grasp's approach direction is zero or not finite");
+  if (!std::isfinite(grasp.aperture)) throw std::invalid_argument("lift test: the grasp's aperture is not finite");
+  s.plan_note.clear();
+  s.steps = 0;
+  if (s.stop.load()) return execute({}, {}, &grasp);
+  // Standing in for the motion stage: the pregrasp opened a centimetre a side wider at a time
+  // while the way in meets the object (a finger whose contact normal is far from its closing
+  // direction passes the surface closer than its contact), up to the hand's widest.
+  const double widest = 2 * (s.knuckle_x - s.pad_radius);
+  motion::ReachPlan plan;
+  for (double clearance = s.params.clearance;; clearance += 0.01) {
+    plan = s.planner(clearance).plan(grasp, s.obstacles, s.start);
+    const bool object_in_the_way = plan.refusal == motion::Refusal::Approach || plan.refusal == motion::Refusal::Collision;
+    if (plan.ok || !object_in_the_way || plan.opening >= widest - 1e-9) break;
+  }
+  if (!plan.ok) {
+    GraspExecution result;
+    result.reason = std::string("the arm cannot take the grasp (") + motion::to_string(plan.refusal) + "): " + plan.why;
+    s.plan_note = "refused";
+    return result;
+  }
+  s.plan_note = fmt::format("{:.2f} s of motion, path {:.2f} rad{}, planned in {:.3f} s", plan.trajectory.points.back().time,
+                            plan.figures.path_length, plan.figures.direct ? " (straight)" : "", plan.figures.planning_s);
+  return execute(plan.trajectory, plan.hand, &grasp);
+}
+
+GraspExecution LiftTest::execute(const JointTrajectory& trajectory, const std::vector<HandCommand>& commands, const Grasp* planned) {
+  auto& s = *impl_;
+  s.steps = 0;
   try {
     if (s.stop.load()) throw Impl::Stopped{};
-    return run_steps(grasp);
+    return run_steps(trajectory, commands, planned);
   } catch (const Impl::Stopped&) {
     // Open the hand: every closing slide back to its stop, and the simulation ends there.
     for (int i = 0; i < static_cast<int>(0.2 / s.m->opt.timestep); ++i) {
-      for (const auto& finger : s.fingers) s.d->ctrl[finger.close_actuator] = -s.params.finger_force;
+      for (const auto& finger : s.fingers) s.d->ctrl[finger.close_actuator] = -s.params.finger_force * finger.gear;
       mj_step(s.m, s.d);
       ++s.steps;
     }
@@ -291,240 +514,222 @@ GraspExecution LiftTest::run(const Grasp& grasp) {
   }
 }
 
-GraspExecution LiftTest::run_steps(const Grasp& grasp) {
+GraspExecution LiftTest::run_steps(const JointTrajectory& trajectory, const std::vector<HandCommand>& commands, const Grasp* planned) {
   auto& s = *impl_;
   mjModel* m = s.m;
   mjData* d = s.d;
   const auto& p = s.params;
   const double dt = m->opt.timestep;
   GraspExecution result;
+
+  // The trajectory's columns of the arm's joints, in the arm's order.
+  if (trajectory.points.empty()) throw std::invalid_argument("lift test: the trajectory has no waypoint");
+  std::vector<int> column;
+  for (const std::string& joint : s.arm_names) {
+    const auto it = std::find(trajectory.names.begin(), trajectory.names.end(), joint);
+    if (it == trajectory.names.end())
+      throw std::invalid_argument("lift test: the trajectory has no joint '" + joint + "' of the arm's");
+    column.push_back(static_cast<int>(it - trajectory.names.begin()));
+  }
+  for (std::size_t i = 0; i < trajectory.points.size(); ++i) {
+    const auto& pt = trajectory.points[i];
+    if (pt.positions.size() != trajectory.names.size() || (!pt.velocities.empty() && pt.velocities.size() != trajectory.names.size()))
+      throw std::invalid_argument("lift test: waypoint " + std::to_string(i) + " has " + std::to_string(pt.positions.size()) +
+                                  " positions and " + std::to_string(pt.velocities.size()) + " velocities for " +
+                                  std::to_string(trajectory.names.size()) + " joints");
+    if (i > 0 && !(pt.time > trajectory.points[i - 1].time))
+      throw std::invalid_argument("lift test: the trajectory's times must increase; waypoint " + std::to_string(i) + " is at " +
+                                  std::to_string(pt.time) + " s after " + std::to_string(trajectory.points[i - 1].time) + " s");
+  }
+  Reference reference(trajectory, column);
+  std::vector<HandCommand> schedule = commands;
+  std::stable_sort(schedule.begin(), schedule.end(), [](const HandCommand& a, const HandCommand& b) { return a.time < b.time; });
+  double close_time = INFINITY;
+  for (const auto& c : schedule)
+    if (c.action == HandCommand::Action::Close) {
+      close_time = c.time;
+      break;
+    }
+  const Phases phases = phases_after(reference, close_time);
+  // A release before the hold's end ends the verdict there.
+  double end = std::isfinite(close_time) ? phases.hold_end : reference.end();
+  for (const auto& c : schedule)
+    if (c.action == HandCommand::Action::Open && c.time > close_time) end = std::min(end, c.time);
+
+  // The hand's state: open by open_travel with the fingers `spread` apart, or closing with `force`.
+  bool closing = false;
+  HandCommand::Mode mode = HandCommand::Mode::Basic;
+  double open_travel = 0, spread = s.spread_min, force = p.finger_force;
+  if (!schedule.empty() && schedule.front().action == HandCommand::Action::Open && schedule.front().time <= 0) {
+    open_travel = s.travel_for(schedule.front().opening / 2);
+    spread = schedule.front().spread;
+  }
+  auto spread_for = [&](const HandCommand& c) {
+    switch (c.mode) {
+      case HandCommand::Mode::Pinch: return s.spread_min;
+      case HandCommand::Mode::Wide:
+      case HandCommand::Mode::Scissor: return s.spread_max;
+      case HandCommand::Mode::Basic: break;
+    }
+    return c.spread;
+  };
+
   s.steps = 0;
   mj_resetData(m, d);
+  for (int g = 0; g < m->ngeom; ++g) m->geom_friction[3 * g] = p.friction;
+  Eigen::VectorXd q_ref, v_ref, a_ref;
+  reference.sample(0, q_ref, v_ref, a_ref);
+  s.pose(q_ref, open_travel, spread);
 
-  for (const auto& c : grasp.contacts)
-    if (!c.position.allFinite() || !c.normal.allFinite())
-      throw std::invalid_argument("lift test: a grasp contact has a non-finite position or normal");
-  if (!grasp.approach.allFinite() || grasp.approach.norm() < 1e-9)
-    throw std::invalid_argument("lift test: the grasp's approach direction is zero or not finite");
-  if (!std::isfinite(grasp.aperture)) throw std::invalid_argument("lift test: the grasp's aperture is not finite");
-
-  // The palm's frame: z along the approach, x from the thumb to the fingers, y = z cross x.
-  const Eigen::Vector3d a = grasp.approach.normalized();
-  const Eigen::Vector3d thumb = grasp.contacts[0].position;
-  const Eigen::Vector3d mid = (grasp.contacts[1].position + grasp.contacts[2].position) / 2;
-  Eigen::Vector3d u = (mid - thumb) - a * a.dot(mid - thumb);
-  const double width = u.norm();  // thumb to fingers, across the approach
-  if (width < 1e-4) {
-    result.reason = "the thumb and the fingers' contacts are not apart across the approach";
-    return result;
-  }
-  u /= width;
-  const Eigen::Vector3d y = a.cross(u);
-  Eigen::Matrix3d r;
-  r << u, y, a;
-  // finger_a is on the palm's +y side.
-  std::array<Eigen::Vector3d, 2> finger_contacts = {grasp.contacts[1].position, grasp.contacts[2].position};
-  if ((finger_contacts[0] - mid).dot(y) < (finger_contacts[1] - mid).dot(y)) std::swap(finger_contacts[0], finger_contacts[1]);
-  const double spread = (finger_contacts[0] - finger_contacts[1]).dot(y);
-  if (spread > s.spread_max + 1e-9) {
-    result.reason = "the fingers' contacts are " + format_m(spread) + " apart, beyond the hand's spread of " + format_m(s.spread_max);
-    return result;
-  }
-  // Closer than the fingers can come: they close side by side at the smallest spread.
-  const double half_spread = std::max(spread, s.spread_min) / 2;
-
-  // The slide travel at which a pad's inner surface is half_opening from the palm's centre.
-  auto travel_for = [&](double half_opening) { return s.base_x - s.pad_radius - half_opening; };
-  if (travel_for(width / 2) < 0) {
-    result.reason = "the contacts are " + format_m(width) + " apart across the approach, beyond the hand's opening of " +
-                    format_m(2 * (s.base_x - s.pad_radius));
-    return result;
-  }
-  const double aperture = std::max(grasp.aperture, width + 2 * p.clearance);
-  const double initial_travel = std::clamp(travel_for(aperture / 2), 0.0, s.travel);
-  const double depth = s.pad_distance;
-  double along = 0;
-  for (const auto& c : grasp.contacts) along += c.position.dot(a) / 3;
-  const Eigen::Vector3d centre = u * (thumb.dot(u) + mid.dot(u)) / 2 + y * mid.dot(y) + a * along;
-  Eigen::Vector3d grasp_palm = centre - a * depth;
-
-  // The hand at the pregrasp: palm pose, fingers open, spread set.
-  const Eigen::Quaterniond q(r);
-  auto set_palm = [&](const Eigen::Vector3d& pos) {
-    for (int k = 0; k < 3; ++k) d->mocap_pos[3 * s.mocap + k] = pos[k];
-  };
-  // The hand posed kinematically (no time passes): palm at pos, every finger open by travel.
-  const double quat[4] = {q.w(), q.x(), q.y(), q.z()};
-  auto pose_hand = [&](const Eigen::Vector3d& pos, double travel) {
-    set_palm(pos);
-    mjtNum* palm_qpos = d->qpos + m->jnt_qposadr[s.palm_joint];
-    for (int k = 0; k < 4; ++k) d->mocap_quat[4 * s.mocap + k] = palm_qpos[3 + k] = quat[k];
-    for (int k = 0; k < 3; ++k) palm_qpos[k] = pos[k];
-    for (std::size_t f = 0; f < 3; ++f) {
-      const auto& finger = s.fingers[f];
-      d->qpos[m->jnt_qposadr[finger.close_joint]] = travel;
-      for (int act : finger.phalanx_actuators) d->ctrl[act] = 0;
-      if (finger.spread_joint >= 0) {
-        const double offset = f == 1 ? half_spread : -half_spread;
-        d->qpos[m->jnt_qposadr[finger.spread_joint]] = offset;
-        d->ctrl[finger.spread_actuator] = offset;
+  double t0 = 0;  // the trajectory's start on the simulation's clock
+  std::size_t next_command = 0;
+  const int nv = m->nv;
+  std::vector<mjtNum> acc(static_cast<std::size_t>(nv), 0), torque(static_cast<std::size_t>(nv), 0);
+  auto step = [&](bool follow) {
+    mj_step1(m, d);
+    const double t = d->time - t0;
+    if (follow) reference.sample(t, q_ref, v_ref, a_ref);
+    for (; follow && next_command < schedule.size() && schedule[next_command].time <= t + 1e-9; ++next_command) {
+      const HandCommand& c = schedule[next_command];
+      mode = c.mode;
+      if (c.action == HandCommand::Action::Open) {
+        closing = false;
+        open_travel = s.travel_for(c.opening / 2);
+        spread = spread_for(c);
+      } else {
+        closing = true;
+        force = c.force > 0 ? c.force : p.finger_force;
       }
     }
-    mj_forward(m, d);
-  };
-  // The fingers are straight, so they may touch nearer their tips than the pads: where the pads at
-  // the contacts would put a fingertip on the table (a low object, such as a banana lying flat),
-  // the hand stays higher, by at most what keeps the contacts on the fingers' straight part. How
-  // high depends on the opening: with the approach tilted, a finger opened wider reaches lower.
-  constexpr double kStep = 0.001, kMargin = 0.003;
-  auto palm_at_grasp = [&](double travel) {
-    for (double raise = 0; raise <= s.pad_to_end - kMargin; raise += kStep) {
-      pose_hand(centre - a * (depth + raise), travel);
-      if (!s.hand_touches_table()) return Eigen::Vector3d(centre - a * (depth + raise));
+    // The arm: computed torque within the effort limits.
+    std::fill(acc.begin(), acc.end(), 0.0);
+    for (std::size_t i = 0; i < s.arm_dof.size(); ++i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      const int dof = s.arm_dof[i];
+      acc[static_cast<std::size_t>(dof)] =
+          a_ref(k) + kArmKp * (q_ref(k) - d->qpos[s.arm_qpos[i]]) + kArmKd * (v_ref(k) - d->qvel[dof]);
     }
-    return grasp_palm;  // no height clears the table: the way in below names what touches it
-  };
-
-  double open_travel = initial_travel;
-  // Closing slides: hold the pregrasp opening (proportional; the joints' damping damps it), or push
-  // with the finger force once closing.
-  bool closing = false;
-  constexpr double kHoldGain = 2000;  // newtons per metre
-  auto step = [&] {
+    mj_mulM(m, d, torque.data(), acc.data());
+    for (std::size_t i = 0; i < s.arm_dof.size(); ++i) {
+      const int dof = s.arm_dof[i];
+      d->ctrl[s.arm_actuator[i]] = std::clamp(torque[static_cast<std::size_t>(dof)] + d->qfrc_bias[dof], -s.arm_effort[i], s.arm_effort[i]);
+    }
+    // The hand: the closing slides hold the opening or push with the force; in scissor mode the
+    // thumb stays open and the two fingers close on each other with it.
+    const bool scissor = mode == HandCommand::Mode::Scissor;
     for (std::size_t f = 0; f < 3; ++f) {
       const auto& finger = s.fingers[f];
+      const double limit = force * finger.gear;
+      const bool pushes = closing && !scissor;
       d->ctrl[finger.close_actuator] =
-          closing ? p.finger_force
-                  : std::clamp(kHoldGain * (open_travel - d->qpos[m->jnt_qposadr[finger.close_joint]]), -p.finger_force,
-                               p.finger_force);
+          pushes ? limit : std::clamp(kHoldGain * (open_travel - d->qpos[m->jnt_qposadr[finger.close_joint]]), -limit, limit);
+      if (finger.spread_actuator >= 0) {
+        const double half = (closing && scissor ? 0.0 : std::clamp(spread, s.spread_min, s.spread_max) / 2);
+        d->ctrl[finger.spread_actuator] = f == 1 ? half : -half;
+        m->actuator_forcerange[2 * finger.spread_actuator + 1] = closing && scissor ? force : s.spread_force;
+        m->actuator_forcerange[2 * finger.spread_actuator] = -(closing && scissor ? force : s.spread_force);
+      }
     }
     if (s.stop.load()) throw Impl::Stopped{};
-    mj_step(m, d);
+    mj_step2(m, d);
     ++s.steps;
   };
-  auto time_text = [&] { return fmt::format("t={:.2f} s", d->time); };
+  auto when = [&] { return seconds(d->time - t0); };
 
-  // Let the object settle on the table first, the hand far back along the approach: the way in is
-  // checked against the object where it rests. Checked before it settled, a banana that then
-  // rolled 3 mm met the thumb on the way in.
-  pose_hand(centre - a * (depth + 1.0), open_travel);
-  for (int i = 0; i < static_cast<int>(0.2 / dt); ++i) step();
+  // Let the object settle on the table first, the arm holding its start.
+  for (int i = 0; i < static_cast<int>(kSettle_s / dt); ++i) step(false);
+  const Eigen::Vector3d start = s.object_centre();
+  t0 = d->time;
 
-  // The pregrasp opening: the grasp's aperture if the way in is clear, else wider (as far as the
-  // hand opens): a finger whose contact normal is far from its closing direction passes the
-  // surface closer than its contact. The way in is checked at poses along it.
-  std::string hit;
-  bool hit_at_pregrasp = false;
-  Eigen::Vector3d pregrasp_palm;
-  for (;; open_travel = std::max(open_travel - 0.01, 0.0)) {
-    const Eigen::Vector3d palm = palm_at_grasp(open_travel);
-    pregrasp_palm = palm - a * p.pregrasp_distance;
-    hit.clear();
-    constexpr int kChecks = 10;
-    for (int i = 0; i <= kChecks && hit.empty(); ++i) {
-      pose_hand(pregrasp_palm + (palm - pregrasp_palm) * i / kChecks, open_travel);
-      hit = s.hand_collision();
-      hit_at_pregrasp = i == 0;
+  // Until the fingers close: any contact of the robot with the table or the object is a collision.
+  auto run_until = [&](double until, const std::function<bool()>& each) {
+    while (d->time - t0 < until - 1e-9) {
+      step(true);
+      if (!each()) return false;
     }
-    if (hit.empty()) grasp_palm = palm;
-    if (hit.empty() || open_travel == 0) break;
-  }
-  if (!hit.empty()) {
-    result.reason = (hit_at_pregrasp ? "collision at the pregrasp, even with the hand fully open: "
-                                     : "no collision-free way in along the approach, even with the hand fully open: ") + hit;
+    return true;
+  };
+  std::string hit;
+  const bool clear = run_until(std::min(close_time, end), [&] {
+    hit = s.robot_collision();
+    return hit.empty();
+  });
+  if (!clear) {
+    result.reason = "collision before the fingers closed, at " + when() + " on the trajectory: " + hit;
     return result;
   }
-  pose_hand(pregrasp_palm, open_travel);
-
-  // Move in along the approach.
-  const Eigen::Vector3d start = s.object_centre();
-  const int approach_steps = static_cast<int>(std::ceil(0.5 / dt));
-  for (int i = 1; i <= approach_steps; ++i) {
-    set_palm(pregrasp_palm + (grasp_palm - pregrasp_palm) * smoothstep(double(i) / approach_steps));
-    step();
-    if (const auto hit = s.hand_collision(); !hit.empty()) {
-      result.reason = "collision while moving in at " + time_text() + ": " + hit;
-      return result;
-    }
+  if (!std::isfinite(close_time)) {
+    result.reason = "the hand was not told to close";
+    return result;
   }
-
-  // Close under force control until every slide has stopped (on the object or at its limit).
-  closing = true;
-  const int min_close = static_cast<int>(0.15 / dt), max_close = static_cast<int>(1.5 / dt), still_needed = static_cast<int>(0.05 / dt);
-  int still = 0;
-  for (int i = 0; i < max_close && still < still_needed; ++i) {
-    step();
-    bool moving = false;
-    for (const auto& finger : s.fingers) moving |= std::abs(d->qvel[m->jnt_dofadr[finger.close_joint]]) > 0.002;
-    still = (moving || i < min_close) ? 0 : still + 1;
-  }
+  // The fingers close while the arm waits; the contacts when the lift begins.
+  run_until(std::min(phases.lift_start, end), [] { return true; });
   if (s.unstable()) {
-    result.reason = "the simulation became unstable at " + time_text();
+    result.reason = "the simulation became unstable at " + when();
     return result;
   }
   result.contacts = s.object_contacts();
   if (result.contacts.empty()) {
-    result.reason = "no contact with the object after closing the fingers (" + time_text() + ")";
+    result.reason = "no contact with the object after closing the fingers (" + when() + ")";
     return result;
   }
-  // The hand must have taken the planned grasp, not another one (a wide-open hand can close
-  // around the whole object). Where along its length a finger touches does not matter, so the
-  // distance is measured across the approach.
-  const std::array<Eigen::Vector3d, 3> planned = {thumb, finger_contacts[0], finger_contacts[1]};
-  for (std::size_t f = 0; f < 3; ++f) {
-    double nearest = INFINITY;
-    for (const auto& c : result.contacts) {
-      if (c.link.rfind(s.fingers[f].name + "_", 0) != 0) continue;
-      const Eigen::Vector3d off = c.position - planned[f];
-      nearest = std::min(nearest, (off - a * a.dot(off)).norm());
-    }
-    if (nearest > p.contact_tolerance) {
-      result.reason = std::isinf(nearest) ? s.fingers[f].name + " did not touch the object"
-                                          : fmt::format("{} touched the object {:.3f} m (across the approach) from its planned "
-                                                        "contact, more than the {:.3f} m allowed: not the planned grasp",
-                                                        s.fingers[f].name, nearest, p.contact_tolerance);
-      return result;
+  // The hand must have taken the planned grasp, not another one (a wide-open hand can close around
+  // the whole object). Where along its length a finger touches does not matter, so the distance is
+  // measured across the approach.
+  if (planned) {
+    const Eigen::Vector3d a = planned->approach.normalized();
+    const Eigen::Vector3d thumb = planned->contacts[0].position;
+    const Eigen::Vector3d mid = (planned->contacts[1].position + planned->contacts[2].position) / 2;
+    const Eigen::Vector3d y = a.cross(((mid - thumb) - a * a.dot(mid - thumb)).normalized());
+    // finger_a is on the palm's +y side.
+    std::array<Eigen::Vector3d, 3> at = {thumb, planned->contacts[1].position, planned->contacts[2].position};
+    if ((at[1] - mid).dot(y) < (at[2] - mid).dot(y)) std::swap(at[1], at[2]);
+    for (std::size_t f = 0; f < 3; ++f) {
+      double nearest = INFINITY;
+      for (const auto& c : result.contacts) {
+        if (c.link.rfind(s.fingers[f].name + "_", 0) != 0) continue;
+        const Eigen::Vector3d off = c.position - at[f];
+        nearest = std::min(nearest, (off - a * a.dot(off)).norm());
+      }
+      if (nearest > p.contact_tolerance) {
+        result.reason = std::isinf(nearest) ? s.fingers[f].name + " did not touch the object"
+                                            : fmt::format("{} touched the object {:.3f} m (across the approach) from its planned "
+                                                          "contact, more than the {:.3f} m allowed: not the planned grasp",
+                                                          s.fingers[f].name, nearest, p.contact_tolerance);
+        return result;
+      }
     }
   }
 
-  // Lift straight up, then hold; the object is out of the hand once it moved drop_distance
-  // relative to the palm since the fingers closed.
-  auto in_palm = [&] {
-    const Eigen::Map<const Eigen::Matrix<mjtNum, 3, 3, Eigen::RowMajor>> palm(d->xmat + 9 * s.palm_body);
-    return Eigen::Vector3d(palm.transpose() * (s.object_centre() - s.palm_position()));
-  };
-  const Eigen::Vector3d grasped = in_palm();
-  const Eigen::Vector3d lift_start = s.wrist_position();
-  auto dropped = [&](const char* phase) {
-    if (s.unstable()) {
-      result.reason = "the simulation became unstable at " + time_text();
-      return true;
-    }
-    const double moved = (in_palm() - grasped).norm();
-    if (moved <= p.drop_distance) return false;
-    result.reason = fmt::format("dropped at {} while {} (moved {:.3f} m in the hand)", time_text(), phase, moved);
-    return true;
-  };
-  const int lift_steps = static_cast<int>(std::ceil(p.lift_s / dt));
+  // The lift, then the hold; the object is out of the hand once it moved drop_distance relative
+  // to the palm since the fingers closed.
+  const Eigen::Vector3d grasped = s.in_palm(s.object_centre());
+  const double palm_start = s.body_pose(s.palm_body).translation().z();
+  auto moved = [&] { return (s.in_palm(s.object_centre()) - grasped).norm(); };
   bool lost = false;
-  for (int i = 1; i <= lift_steps && !lost; ++i) {
-    set_palm(lift_start + Eigen::Vector3d::UnitZ() * p.lift_height * smoothstep(double(i) / lift_steps));
-    step();
-    lost = dropped("lifting");
-  }
-  const Eigen::Vector3d hold_start = in_palm();
-  const int hold_steps = static_cast<int>(std::llround(p.hold_s / dt));
-  int held_steps = 0;
-  for (; held_steps < hold_steps && !lost; ++held_steps) {
-    step();
-    lost = dropped("holding");
-  }
-  result.hold_s = (lost ? std::max(held_steps - 1, 0) : held_steps) * dt;
-  result.slip_m = (in_palm() - hold_start).norm();
+  auto watch = [&](const char* phase) {
+    return [&, phase] {
+      if (s.unstable()) {
+        result.reason = "the simulation became unstable at " + when();
+        return !(lost = true);
+      }
+      if (moved() <= p.drop_distance) return true;
+      result.reason = fmt::format("dropped at {} while {} (moved {:.3f} m in the hand)", when(), phase, moved());
+      return !(lost = true);
+    };
+  };
+  run_until(std::min(phases.lift_end, end), watch("lifting"));
+  const Eigen::Vector3d hold_start = s.in_palm(s.object_centre());
+  const double held_from = d->time;
+  if (!lost) run_until(end, watch("holding"));
+  result.hold_s = std::max(0.0, d->time - held_from - (lost ? dt : 0.0));
+  result.slip_m = (s.in_palm(s.object_centre()) - hold_start).norm();
   result.lift_height_m = s.object_centre().z() - start.z();
-  result.held = !lost && result.lift_height_m >= p.lift_height / 2;
+  const double palm_rise = s.body_pose(s.palm_body).translation().z() - palm_start;
+  result.held = !lost && palm_rise > 1e-3 && result.lift_height_m >= palm_rise / 2;
   if (!lost && !result.held)
-    result.reason = fmt::format("the object rose only {:.3f} m of the {:.3f} m lift", result.lift_height_m, p.lift_height);
+    result.reason = palm_rise > 1e-3 ? fmt::format("the object rose only {:.3f} m of the hand's {:.3f} m", result.lift_height_m, palm_rise)
+                                     : "the arm did not lift the hand after closing";
   return result;
 }
 

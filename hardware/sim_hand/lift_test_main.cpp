@@ -1,11 +1,14 @@
-// fba-lift-test: lift tests from the shell, timed. Without --grasp it executes the ring grasp
-// (three contacts 120 degrees apart at mid height, approached from above), so that it doubles as
-// the benchmark of one lift test's wall time; with --grasp it lift-tests a run's selected grasp
-// (its summary.json) or a grasp given as JSON; with --synthesise N it runs grasp synthesis
-// (plugins/grasp) on N samples of the true surface and lift-tests its best candidates.
+// fba-lift-test: lift tests from the shell, timed, in sim.hand's world: the whole robot (arm, camera,
+// hand on the flange) executing reach planning's plan for the grasp, the object as boxes. Without
+// --grasp it executes the ring grasp (three contacts 120 degrees apart at mid height, approached
+// from above), so that it doubles as the benchmark of one lift test's wall time; with --grasp it
+// lift-tests a run's selected grasp (its summary.json) or a grasp given as JSON; with
+// --synthesise N it runs grasp synthesis (plugins/grasp) on N samples of the true surface and
+// lift-tests its best candidates.
 //
 //   fba-lift-test MESH [--grasp summary.json | --synthesise N [--candidates K]] [--x M] [--y M]
 //                      [--yaw DEG] [--rest upright|side] [--mass KG] [--force N] [--height F] [--thumb-angle DEG] [--repeat N]
+//                      [--voxel MM]
 #include <cerrno>
 #include <charconv>
 #include <chrono>
@@ -35,6 +38,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: fba-lift-test MESH [--grasp FILE.json | --synthesise N [--candidates K]] [--x M] [--y M] [--yaw DEG]\n"
     "                     [--rest upright|side] [--mass KG] [--force N] [--height F] [--thumb-angle DEG] [--repeat N]\n"
+    "                     [--voxel MM]\n"
     "  --grasp        a run's summary.json (the grasp a component reported, grasp.synthesis' results.grasp, or its\n"
     "                 \"grasp\" member) or a grasp as JSON (\"contacts\", ...), in the table frame: give the run's\n"
     "                 object pose (--x, --y, --yaw, --rest) so that the object stands where the run stood it;\n"
@@ -47,6 +51,7 @@ constexpr const char* kUsage =
     "  --height       the ring grasp's height, a fraction of the object's in [0, 1] (default 0.5);\n"
     "  --thumb-angle  the ring grasp's thumb, degrees in [-360, 360] (default 180)\n"
     "  --repeat       run the same lift test N times, 1 to 10000, and report the mean wall time\n"
+    "  --voxel        the edge of the voxels whose boxes the object collides as, mm in [0.5, 20] (default 3)\n"
     "Exit status: 0 held, 1 not held, 2 a bad command line, mesh or grasp.\n";
 
 // A command line that asks for nothing sensible: refused with what was expected and what was found.
@@ -99,6 +104,10 @@ void print(const fba::GraspExecution& r) {
               r.lift_height_m, r.hold_s, r.contacts.size(), r.reason.empty() ? "" : ": ", r.reason.c_str());
 }
 
+void print_plan(const fba::sim_hand::LiftTest& test) {
+  if (!test.plan_note().empty()) std::printf("reach plan: %s\n", test.plan_note().c_str());
+}
+
 // Synthesis on the true surface, then the lift test of its best candidates: how often what
 // synthesis selects holds in physics.
 int synthesised(fba::sim_hand::LiftTest& test, int samples, int candidates) {
@@ -120,6 +129,7 @@ int synthesised(fba::sim_hand::LiftTest& test, int samples, int candidates) {
     held += r.held;
     std::printf("candidate %d (score %.2f, epsilon %.3f): ", tried, c.grasp.scores.total, surface.evaluate(c.grasp.contacts).epsilon);
     print(r);
+    print_plan(test);
   }
   std::printf("held %d of %d synthesised grasps\n", held, tried);
   return held == tried ? 0 : 1;
@@ -134,7 +144,8 @@ int main(int argc, char** argv) {
   }
   std::map<std::string, std::string> opt{{"--x", "0"},    {"--y", "0"},      {"--yaw", "0"},         {"--mass", "0.3"},
                                          {"--force", "10"}, {"--height", "0.5"}, {"--thumb-angle", "180"}, {"--repeat", "1"},
-                                         {"--grasp", ""}, {"--synthesise", "0"}, {"--candidates", "1"}, {"--rest", "upright"}};
+                                         {"--grasp", ""}, {"--synthesise", "0"}, {"--candidates", "1"}, {"--rest", "upright"},
+                                         {"--voxel", "3"}};
   try {
     const std::string mesh_file = argv[1];
     if (mesh_file.rfind("-", 0) == 0) throw UsageError("expected the mesh file first; found the option '" + mesh_file + "'");
@@ -151,6 +162,7 @@ int main(int argc, char** argv) {
     fba::sim_hand::LiftTestParams params;
     params.mass = number("--mass", opt["--mass"], 0.001, 10);
     params.finger_force = number("--force", opt["--force"], 0.1, 100);
+    params.voxel_size = number("--voxel", opt["--voxel"], 0.5, 20) * 1e-3;
     const fba::sim_hand::ObjectPlacement placement{number("--x", opt["--x"], -1, 1), number("--y", opt["--y"], -1, 1),
                                                    number("--yaw", opt["--yaw"], -360, 360) * M_PI / 180, opt["--rest"]};
     if (placement.rest != "upright" && placement.rest != "side")
@@ -168,8 +180,11 @@ int main(int argc, char** argv) {
     const auto build_start = std::chrono::steady_clock::now();
     const auto mesh = fba::geometry::load_mesh(mesh_file);
     fba::sim_hand::LiftTest test(mesh, placement, params);
-    std::printf("scene built (mesh loaded, MuJoCo model compiled) in %.3f s wall time\n",
+    std::printf("scene built (mesh loaded, voxelised into boxes, MuJoCo model compiled) in %.3f s wall time\n",
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count());
+    const auto& pieces = test.pieces();
+    std::printf("object: %zu boxes of %.1f mm voxels, volume IoU %.4f against the mesh (%.1f of %.1f cm^3)\n", pieces.boxes,
+                pieces.voxel_size * 1e3, pieces.iou, pieces.volume * 1e6, pieces.mesh_volume * 1e6);
     if (samples > 0) return synthesised(test, samples, candidates);
     fba::Grasp grasp;
     if (given) {
@@ -184,6 +199,7 @@ int main(int argc, char** argv) {
     for (int i = 0; i < repeat; ++i) r = test.run(grasp);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / repeat;
     print(r);
+    print_plan(test);
     for (const auto& c : r.contacts)
       std::printf("  %-11s at (%.4f, %.4f, %.4f) normal (%.2f, %.2f, %.2f) force %.2f N\n", c.link.c_str(), c.position.x(),
                   c.position.y(), c.position.z(), c.normal.x(), c.normal.y(), c.normal.z(), c.force);

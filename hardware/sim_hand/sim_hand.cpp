@@ -1,15 +1,24 @@
 // sim.hand: the simulated twin of a three-fingered hand (hw.robotiq_3f). Executes each fba.Grasp
-// in the MuJoCo physics engine on the scene's object standing on a table: pregrasp, move in, close
-// under force control, lift and hold (the lift test, lift_test.hpp), and reports what happened.
+// in the MuJoCo physics engine with the whole robot, the table and the scene's object: the arm
+// carries the hand to the grasp on reach planning's trajectory, the fingers close under force
+// control, the arm lifts and holds (the lift test, lift_test.hpp); it reports what happened.
 #include <cmath>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include <fba/component.hpp>
 #include <fba/types/grasp.hpp>
 #include <fba/types/grasp_execution.hpp>
+#include <fba/types/hand_command.hpp>
+#include <fba/types/joint_trajectory.hpp>
 
+#include "arm_model.hpp"
 #include "fba/geometry/mesh_io.hpp"
 #include "hand_ports.hpp"
 #include "lift_test.hpp"
@@ -29,14 +38,19 @@ nlohmann::json to_json(const fba::GraspExecution& e) {
           {"hold_s", e.hold_s}, {"reason", e.reason}, {"contacts", std::move(contacts)}};
 }
 
+nlohmann::json to_json(const fba::sim_hand::ObjectPieces& p) {
+  return {{"boxes", p.boxes}, {"voxel_m", p.voxel_size}, {"iou", p.iou}, {"volume_m3", p.volume}, {"mesh_volume_m3", p.mesh_volume}};
+}
+
+
 class SimHand final : public fba::Component {
  public:
   static constexpr auto kGrasp = fba::hand::kGrasp;  // grasps in the frame the 'world' parameter names
   static constexpr auto kResult = fba::hand::kResult;
   static constexpr auto kHeld = fba::hand::kHeld;
   static constexpr auto kDropped = fba::hand::kDropped;
-  // A reach plan's hand commands and the arm's trajectory, declared as hw.robotiq_3f does (the twins'
-  // ports alike); not executed here yet: each command is logged.
+  // A reach plan's hand commands and the arm's trajectory, as hw.robotiq_3f takes them: the arm in
+  // the world follows the trajectory, the hand the commands at their times on it.
   static constexpr auto kCommands = fba::hand::kCommands;
   static constexpr auto kTrajectory = fba::hand::kTrajectory;
   static constexpr fba::Param<std::filesystem::path> kMesh{
@@ -59,6 +73,23 @@ class SimHand final : public fba::Component {
           .choices({"table", "mesh"});
   static constexpr auto kFingerForce =
       fba::Param<double>("finger_force", 10.0, "force at each finger's pad when closing, newtons; the thumb pushes twice as hard").range(0.1, 100);
+  static constexpr fba::Param<std::filesystem::path> kUrdf{
+      "urdf", "", "the robot's URDF (the arm, its camera and the hand on its flange); empty: the project's wrist_camera_arm.urdf, built in"};
+  // The measured transforms (docs/hardware.md, "Where the robot's parts are"): empty, the URDF's own.
+  static inline const auto kBasePose = fba::Param<std::vector<double>>(
+      "base_pose", std::vector<double>{},
+      "the arm's base on the table (the URDF's joint world_to_base): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's");
+  static inline const auto kFlangeToPalm = fba::Param<std::vector<double>>(
+      "flange_to_palm", std::vector<double>{},
+      "the palm on the flange (the URDF's joint flange_to_palm): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's");
+  static inline const auto kFlangeToCamera = fba::Param<std::vector<double>>(
+      "flange_to_camera", std::vector<double>{},
+      "the camera on the flange, hand-eye (the URDF's joint flange_to_camera): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's");
+  static constexpr auto kVoxelSize = fba::Param<double>(
+      "voxel_size", 0.003, "the edge of the voxels whose boxes the object collides as in MuJoCo, metres").range(0.0005, 0.02);
+  static inline const auto kStartJoints = fba::Param<std::vector<double>>(
+      "start_joints", std::vector<double>{},
+      "the arm's joints where each grasp's reach plan starts, in the URDF's order; empty: sim.arm's initial pose drawn back 20 cm");
 
   static fba::Spec spec() {
     return fba::Spec::actuator("sim.hand",
@@ -66,38 +97,86 @@ class SimHand final : public fba::Component {
                              "holds it, and reports the real contacts, whether it held and how far it slipped "
                              "(the twin of hw.robotiq_3f).")
         .add(kGrasp, kCommands, kTrajectory, kResult, kHeld, kDropped, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kMass, kFriction, kLiftHeight, kHoldTime,
-             kFingerForce, kWorld);
+             kFingerForce, kWorld, kUrdf, kBasePose, kFlangeToPalm, kFlangeToCamera, kVoxelSize, kStartJoints);
   }
 
   explicit SimHand(fba::Context& ctx) : ctx_(ctx), test_(make_test(ctx, table_shift_)) {
     if (ctx(kWorld) == "table") table_shift_ = 0;
     ctx.log().info("{}: {} triangles on the table at ({:.3f}, {:.3f}), yaw {:.1f} deg, {}", ctx(kMesh).stem().string(),
                    test_.object().triangles.size(), ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw), ctx(kObjectRest));
-    if (!test_.physics_note().empty()) ctx.log().info("{}: {}", ctx(kMesh).stem().string(), test_.physics_note());
+    const auto& pieces = test_.pieces();
+    ctx.log().info("{}: MuJoCo collides it as {} boxes of {:.1f} mm voxels, volume IoU {:.4f} against the mesh ({:.1f} of {:.1f} cm^3)",
+                   ctx(kMesh).stem().string(), pieces.boxes, pieces.voxel_size * 1e3, pieces.iou, pieces.volume * 1e6,
+                   pieces.mesh_volume * 1e6);
   }
 
   // Opens the hand and ends the simulation, as the real hand opens on its way out of a run.
   void safe_state() override { test_.stop(); }
 
+  // Without commands connected, each grasp is executed on the world's own reach plan (the lift
+  // test). With them, a grasp names the planned contacts, a trajectory starts a new plan, and the
+  // plan runs in the world at its close (once its trajectory is in, when one is connected): the
+  // commands' times count from the trajectory's start, as the arm's motion does.
   void process() override {
-    if (auto in = ctx_(kCommands); in.has())
-      ctx_.log().info("hand command ({} at {:.3f} s on the trajectory): not executed by sim.hand yet",
-                      in.get().action == fba::HandCommand::Action::Close ? "close" : "open", in.get().time);
-    if (!ctx_(kGrasp).has()) return;
-    fba::Grasp grasp = ctx_(kGrasp).get();
-    for (auto& c : grasp.contacts) c.position.z() += table_shift_;
-    fba::GraspExecution result = test_.run(grasp);
+    if (auto in = ctx_(kGrasp); in.has()) {
+      fba::Grasp grasp = in.get();
+      for (auto& c : grasp.contacts) c.position.z() += table_shift_;
+      if (!ctx_(kCommands).connected()) return finish(test_.run(grasp));
+      planned_ = grasp;
+    }
+    if (auto in = ctx_(kTrajectory); in.has()) {  // a new plan: its commands follow
+      trajectory_ = in.get();
+      commands_.clear();
+    }
+    if (auto in = ctx_(kCommands); in.has()) {
+      const bool timed = ctx_(kTrajectory).connected();
+      if (!timed && done_) commands_.clear();  // without trajectories, a close ends a plan
+      done_ = false;
+      commands_.push_back(in.get());
+      if (in.get().action != fba::HandCommand::Action::Close) return;
+      done_ = true;
+      if (timed && !trajectory_) {
+        fba::GraspExecution refused;
+        refused.reason = "a close before any trajectory: its time counts from the trajectory's arrival";
+        return finish(std::move(refused));
+      }
+    } else {
+      return;
+    }
+    const fba::Grasp* planned = planned_ ? &*planned_ : nullptr;
+    try {
+      if (trajectory_) return finish(test_.execute(*trajectory_, commands_, planned));
+      // No trajectory to follow: the arm stands where it starts while the hand opens and closes,
+      // the close a second after the open.
+      fba::JointTrajectory still;
+      still.names = test_.arm_joints();
+      const Eigen::VectorXd q = test_.start_joints();
+      std::vector<fba::HandCommand> timed = commands_;
+      for (auto& c : timed) c.time = c.action == fba::HandCommand::Action::Close ? 1.0 : 0.0;
+      for (double t : {0.0, 3.0}) still.points.push_back({t, {q.data(), q.data() + q.size()}, std::vector<double>(q.size(), 0.0)});
+      finish(test_.execute(still, timed, planned));
+    } catch (const std::invalid_argument& e) {  // a trajectory this arm cannot follow: the arm refuses it too
+      fba::GraspExecution refused;
+      refused.reason = std::string("the trajectory cannot be followed: ") + e.what();
+      finish(std::move(refused));
+    }
+  }
+
+ private:
+  void finish(fba::GraspExecution result) {
     for (auto& c : result.contacts) c.position.z() -= table_shift_;
     result.stamp = static_cast<double>(ctx_.now_ns()) * 1e-9;
-    ctx_.log().info("lift test: {} after {:.2f} simulated s ({} steps){}", result.held ? "held" : "failed", test_.simulated_s(),
-                    test_.steps(), result.reason.empty() ? "" : ": " + result.reason);
-    const std::string json = to_json(result).dump();
+    ctx_.log().info("lift test: {} after {:.2f} simulated s ({} steps){}{}", result.held ? "held" : "failed", test_.simulated_s(),
+                    test_.steps(), test_.plan_note().empty() ? "" : ", reach plan: " + test_.plan_note(),
+                    result.reason.empty() ? "" : ": " + result.reason);
+    nlohmann::json report = to_json(result);
+    report["object"] = to_json(test_.pieces());
+    const std::string json = report.dump();
     ctx_.report("lift", json);  // the field's ground truth for "the grasp works"
     ctx_.emit(result.held ? kHeld : kDropped, json);
     ctx_(kResult).emit(std::move(result));
   }
 
- private:
   static fba::sim_hand::ObjectPlacement placement(fba::Context& ctx) {
     return {ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw) * kDegree, ctx(kObjectRest)};
   }
@@ -112,12 +191,36 @@ class SimHand final : public fba::Component {
     p.lift_height = ctx(kLiftHeight);
     p.hold_s = ctx(kHoldTime);
     p.finger_force = ctx(kFingerForce);
-    return fba::sim_hand::LiftTest(loaded.mesh, placement(ctx), p);
+    p.voxel_size = ctx(kVoxelSize);
+    p.start_joints = ctx(kStartJoints);
+    fba::sim_hand::RobotSetup robot;
+    if (!ctx(kUrdf).empty()) {
+      std::ifstream in(ctx(kUrdf), std::ios::binary);
+      std::ostringstream text;
+      text << in.rdbuf();
+      if (!in) throw std::runtime_error("parameter 'urdf': cannot read " + ctx(kUrdf).string());
+      robot.urdf = text.str();
+      robot.urdf_name = ctx(kUrdf).string();
+    }
+    const std::map<std::string, const fba::Param<std::vector<double>>*> measured{
+        {"world_to_base", &kBasePose}, {"flange_to_palm", &kFlangeToPalm}, {"flange_to_camera", &kFlangeToCamera}};
+    for (const auto& [joint, param] : measured) {
+      const std::vector<double> v = ctx(*param);
+      if (v.empty()) continue;
+      robot.origins[joint] = fba::arm::pose_from_xyz_rpy(v, "parameter '" + std::string(param->name) + "'");
+    }
+    return fba::sim_hand::LiftTest(loaded.mesh, placement(ctx), p, robot);
   }
 
   fba::Context& ctx_;
   double table_shift_ = 0;  // z from the grasp's frame to the table's
   fba::sim_hand::LiftTest test_;
+  // The plan being received: the grasp it is for, its trajectory, its commands so far, and whether
+  // it ran (at its close).
+  std::optional<fba::Grasp> planned_;
+  std::optional<fba::JointTrajectory> trajectory_;
+  std::vector<fba::HandCommand> commands_;
+  bool done_ = false;
 };
 
 }  // namespace

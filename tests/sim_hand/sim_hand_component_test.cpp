@@ -11,10 +11,13 @@
 #include <fba/testing.hpp>
 #include <fba/types/grasp.hpp>
 #include <fba/types/grasp_execution.hpp>
+#include <fba/types/hand_command.hpp>
+#include <fba/types/joint_trajectory.hpp>
 
 #include "fba/geometry/mesh_io.hpp"
 #include "lift_test.hpp"
 #include "ring_grasp.hpp"
+#include "scenes.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
@@ -54,10 +57,14 @@ TEST(SimHand, GoodGraspHoldsAndSaysSo) {
   EXPECT_EQ(payload["held"], true);
   EXPECT_EQ(payload["contacts"].size(), results[0].contacts.size());
   EXPECT_DOUBLE_EQ(payload["slip_m"].get<double>(), results[0].slip_m);
+  // What MuJoCo collided the object as: its boxes and their fit to the mesh.
+  EXPECT_GT(payload["object"]["boxes"].get<int>(), 10);
+  EXPECT_DOUBLE_EQ(payload["object"]["voxel_m"].get<double>(), 0.003);
+  EXPECT_GT(payload["object"]["iou"].get<double>(), 0.95);
 }
 
-// An OBJ beyond MuJoCo's 200,000 faces: before, MuJoCo refused the scene ("perhaps this is an
-// ASCII file?"); the hand now holds the object.
+// An OBJ beyond MuJoCo's 200,000 faces: once MuJoCo refused the scene ("perhaps this is an ASCII
+// file?"); MuJoCo is now given the object's voxels as boxes, whatever its triangles.
 TEST(SimHand, AMeshOverMuJoCosFaceLimitIsGrasped) {
   fba::test::TempDir dir;
   const auto obj = dir.path() / "fine_sphere.obj";
@@ -134,6 +141,47 @@ TEST(SimHand, AnObjectLaidOnItsSideRestsOnTheTable) {
   EXPECT_NEAR(lying.sizes().z(), upright.sizes().y(), 1e-4);
   side.rest = "sideways";
   EXPECT_THROW(fba::sim_hand::place_on_table(mesh, side), std::invalid_argument);
+}
+
+// A reach plan as motion.reach_planner sends it: the grasp names the contacts, the trajectory and
+// the commands drive the arm and the hand in the world, and the close ends in held.
+TEST(SimHand, AReachPlansTrajectoryAndCommandsAreExecutedInTheWorld) {
+  fba::test::TempDir dir;
+  const auto obj = dir.path() / "box.obj";
+  const Eigen::Vector3d size(0.06, 0.06, 0.10);
+  fba::test::write_obj(fba::sim_hand::test::box_mesh(size), obj);
+  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", obj.string()}}, {"commands", "trajectory"});
+  const fba::Grasp g = fba::sim_hand::test::box_grasp(size, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.06);
+  const fba::sim_hand::LiftTest world(fba::sim_hand::test::box_mesh(size), {});
+  const auto plan = fba::sim_hand::test::planner().plan(g, fba::sim_hand::test::box_model(size), world.start_joints());
+  ASSERT_TRUE(plan.ok) << plan.why;
+  h.push<fba::Grasp>("grasp", g);
+  h.push<fba::JointTrajectory>("trajectory", plan.trajectory);
+  for (const auto& c : plan.hand) h.push<fba::HandCommand>("commands", c);
+  h.run();
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);  // at the close
+  EXPECT_TRUE(results[0].held) << results[0].reason;
+  EXPECT_TRUE(find_event(h.events(), "held"));
+}
+
+// Commands without a trajectory connected: the arm stays where it starts, and the hand closes
+// there, on nothing.
+TEST(SimHand, CommandsWithoutATrajectoryCloseWhereTheArmStands) {
+  ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}}, {"commands"});
+  fba::HandCommand open;
+  open.opening = 0.1;
+  open.spread = 0.04;
+  fba::HandCommand close;
+  close.action = fba::HandCommand::Action::Close;
+  close.force = 10;
+  h.push<fba::HandCommand>("commands", open);
+  h.push<fba::HandCommand>("commands", close);
+  h.run();
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_FALSE(results[0].held);
+  EXPECT_NE(results[0].reason.find("no contact with the object"), std::string::npos) << results[0].reason;
 }
 
 TEST(SimHand, MissingMeshIsAClearError) {
