@@ -285,6 +285,13 @@ struct LiftTest::Impl {
       // The contact frame's normal points from geom1 to geom2.
       e.normal = Eigen::Vector3d(c.frame[0], c.frame[1], c.frame[2]) * (object_second ? 1.0 : -1.0);
       e.force = f[0];
+      // Two of the object's boxes that overlap under a finger give the same contact twice, the
+      // force shared between them: one contact, with their force.
+      auto same = [&](const ExecutedContact& o) { return o.link == e.link && (o.position - e.position).norm() < 1e-9; };
+      if (auto it = std::find_if(out.begin(), out.end(), same); it != out.end()) {
+        it->force += e.force;
+        continue;
+      }
       out.push_back(std::move(e));
     }
     return out;

@@ -78,13 +78,16 @@ class SimHand final : public fba::Component {
   // The measured transforms (docs/hardware.md, "Where the robot's parts are"): empty, the URDF's own.
   static inline const auto kBasePose = fba::Param<std::vector<double>>(
       "base_pose", std::vector<double>{},
-      "the arm's base on the table (the URDF's joint world_to_base): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's");
+      "the arm's base on the table (the URDF's joint world_to_base): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's")
+      .size({0, 6});
   static inline const auto kFlangeToPalm = fba::Param<std::vector<double>>(
       "flange_to_palm", std::vector<double>{},
-      "the palm on the flange (the URDF's joint flange_to_palm): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's");
+      "the palm on the flange (the URDF's joint flange_to_palm): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's")
+      .size({0, 6});
   static inline const auto kFlangeToCamera = fba::Param<std::vector<double>>(
       "flange_to_camera", std::vector<double>{},
-      "the camera on the flange, hand-eye (the URDF's joint flange_to_camera): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's");
+      "the camera on the flange, hand-eye (the URDF's joint flange_to_camera): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's")
+      .size({0, 6});
   static constexpr auto kVoxelSize = fba::Param<double>(
       "voxel_size", 0.003, "the edge of the voxels whose boxes the object collides as in MuJoCo, metres").range(0.0005, 0.02);
   static inline const auto kStartJoints = fba::Param<std::vector<double>>(
