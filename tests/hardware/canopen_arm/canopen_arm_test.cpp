@@ -33,6 +33,7 @@
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 #include "support/contains.hpp"
+#include "support/emulated_canopen_arm.hpp"
 #include "support/joint_trajectories.hpp"
 
 using fba::testing::ComponentHarness;
@@ -55,35 +56,7 @@ std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::
   return out;
 }
 
-// The emulator in a thread of its own, behind an SLCAN adapter on a new pseudo-terminal.
-class Emulator {
- public:
-  explicit Emulator(fba::emulators::CanopenArmOptions options = {}) : pty_(fba::can::open_pty()) {
-    auto adapter = std::make_unique<fba::can::slcan::SlcanAdapter>(std::move(pty_.master), "emulator");
-    noise_ = fba::emulators::noise_for(*adapter);
-    adapter_ = std::move(adapter);
-    options.nodes = {1, 2, 3, 4, 5, 6};
-    emulator_ = std::make_unique<fba::emulators::CanopenArmEmulator>(*adapter_, options, noise_);
-    thread_ = std::thread([this] { emulator_->run(); });
-  }
-  ~Emulator() {
-    emulator_->stop();
-    thread_.join();
-  }
-  std::string device() const { return "slcan:" + pty_.slave_path; }
-  fba::emulators::CanopenArmEmulator* operator->() { return emulator_.get(); }
-  fba::emulators::CanopenArmEmulator& operator*() { return *emulator_; }
-  bool quick_stopped(int node) { return (emulator_->statusword(node) & 0x6F) == 0x07; }
-  bool enabled(int node) { return (emulator_->statusword(node) & 0x6F) == 0x27; }
-  bool in_fault(int node) { return (emulator_->statusword(node) & 0x4F) == 0x08; }
-
- private:
-  fba::can::Pty pty_;
-  std::unique_ptr<fba::can::CanBus> adapter_;
-  std::function<void()> noise_;
-  std::unique_ptr<fba::emulators::CanopenArmEmulator> emulator_;
-  std::thread thread_;
-};
+using Emulator = fba::test::EmulatedCanopenArm;
 
 class CanopenArmComponent : public ::testing::Test {
  protected:

@@ -344,6 +344,11 @@ std::vector<can::Frame> CanopenArmEmulator::heard() const {
   return {heard_.begin(), heard_.end()};
 }
 
+std::vector<Clock::time_point> CanopenArmEmulator::heard_at() const {
+  std::lock_guard lock(mutex_);
+  return {heard_at_.begin(), heard_at_.end()};
+}
+
 std::string CanopenArmEmulator::run() {
   try {
     {
@@ -369,7 +374,8 @@ std::string CanopenArmEmulator::run() {
       std::lock_guard lock(mutex_);
       if (frame) {
         heard_.push_back(*frame);
-        if (heard_.size() > kHeardKept) heard_.pop_front();
+        heard_at_.push_back(Clock::now());
+        if (heard_.size() > kHeardKept) heard_.pop_front(), heard_at_.pop_front();
         handle(*frame);
       }
       update(Clock::now());
@@ -589,7 +595,7 @@ void CanopenArmEmulator::handle(const can::Frame& frame) {
   if (frame.id == kSync) {
     const std::uint64_t sync = ++syncs_;
     const auto now = Clock::now();
-    SyncSetPoints taken{sync, {}, 0};
+    SyncSetPoints taken{sync, now, {}, 0};
     for (auto& [id, n] : nodes_) {
       if (n->silent || n->nmt != kOperational) continue;
       n->took_set_point = false;

@@ -123,7 +123,7 @@ void Robotiq3fEmulator::handle(const std::uint8_t* request, int length) {
     for (int i = 0; i < count; ++i)
       command_[address - base + i] =
           static_cast<std::uint16_t>(request[header + 6 + 2 * i] << 8 | request[header + 7 + 2 * i]);
-    commands_.push_back({command_, state_});
+    commands_.push_back({command_, state_, std::chrono::steady_clock::now()});
     if (commands_.size() > kCommandsKept) commands_.pop_front();
   }
   if (corrupt_ != 0) {

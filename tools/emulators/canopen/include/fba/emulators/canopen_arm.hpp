@@ -46,6 +46,7 @@ struct CanopenArmOptions {
 // The set-points the drives took on one SYNC, in node order: (node, 0x607A in drive units).
 struct SyncSetPoints {
   std::uint64_t sync = 0;  // the SYNC's number, from 1
+  std::chrono::steady_clock::time_point when;  // when it was heard, to order it against another device's records
   std::vector<std::pair<int, std::int32_t>> set_points;
   std::int8_t mode = 0;  // 8: cyclic synchronous position; 1: profile position (new set-points only)
 };
@@ -84,6 +85,8 @@ class CanopenArmEmulator {
   // reached the drives.
   static constexpr std::size_t kHeardKept = 4096;
   std::vector<can::Frame> heard() const;
+  // When each of heard()'s frames was heard, in the same order.
+  std::vector<std::chrono::steady_clock::time_point> heard_at() const;
   // The set-points taken, per SYNC on which any drive took one, oldest first (the last kHeardKept).
   std::vector<SyncSetPoints> set_points() const;
 
@@ -102,6 +105,7 @@ class CanopenArmEmulator {
   mutable std::mutex mutex_;  // guards the nodes and the requests below
   std::vector<std::function<void()>> requests_;
   std::deque<can::Frame> heard_;
+  std::deque<std::chrono::steady_clock::time_point> heard_at_;
   std::deque<SyncSetPoints> set_points_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> syncs_{0};

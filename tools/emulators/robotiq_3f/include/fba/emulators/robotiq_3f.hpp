@@ -94,6 +94,7 @@ class Robotiq3fEmulator {
   struct CommandSeen {
     std::array<std::uint16_t, 8> registers{};  // from 1000 (0x03E8), as written
     State before;
+    std::chrono::steady_clock::time_point when;  // when it arrived, to order it against another device's records
     bool go() const { return (registers[0] >> 8) & 0x08; }
     int request_a() const { return registers[1] & 0xFF; }  // byte 3: finger A's (or all fingers') position
   };
