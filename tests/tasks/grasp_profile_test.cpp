@@ -46,7 +46,8 @@ TEST(GraspTask, CheckShowsTheParametersAndEachSlotsTypeAndInterface) {
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* line : {"parameter depth = 7  (int, --set)\n", "parameter scene.mesh = ", "  (path, profile default)\n", "profile sim (",
                            "slot arm: sim.arm\n", "slot camera: sim.camera\n    inputs:  pose (fba.Pose, optional)\n    outputs: frame (fba.Frame)\n",
-                           "slot hand: sim.hand\n    inputs:  grasp (fba.Grasp)\n    outputs: result (fba.GraspExecution)\n"
+                           "slot hand: sim.hand\n    inputs:  commands (fba.HandCommand, optional), grasp (fba.Grasp), trajectory (fba.JointTrajectory, "
+                           "optional)\n    outputs: result (fba.GraspExecution)\n"
                            "    events:  dropped, held, error, finished\n"})
     EXPECT_NE(r.output.find(line), std::string::npos) << line << " in:\n" << r.output;
 }
