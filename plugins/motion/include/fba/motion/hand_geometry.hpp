@@ -1,7 +1,10 @@
-// The three-fingered hand of hardware/robots/three_finger_hand.xml as collision shapes, each of its
-// dimensions named once here (tests/plugins/motion checks them against the MJCF).
+// The three-fingered hand on the robot's flange as collision shapes: the hand the robot's URDF
+// describes (hardware/robots/wrist_camera_arm.urdf), from which the lift test's MuJoCo world is
+// generated. Its dimensions are constants here for the planner's code; each is checked against the
+// URDF's (tests/sim_hand/hand_geometry_test.cpp), until reach planning takes the hand's shapes
+// from the URDF as it takes the arm's.
 //
-// Palm frame (as the MJCF and the lift test use it): z is the approach (the fingers point along
+// Palm frame (as the URDF and the lift test use it): z is the approach (the fingers point along
 // +z), x runs from the thumb to the two fingers, y = z cross x. The thumb stands at -x and the two
 // fingers at +x, finger_a on the +y side; each closes along x on a straight slide.
 #pragma once
