@@ -279,7 +279,10 @@ double CanopenArm::move_to(const std::vector<double>& targets, double speed) {
                            fmt::format("{}: did not acknowledge its set-point within {} ms of the SYNC that carried it "
                                        "(statusword 0x{:04X}, bit 12 clear)",
                                        joint_name(joints_[missing]), master_.options().sdo_timeout.count(), word));
-      master_.spin_for(options_.sync_period);
+      // The next SYNC a period on, or at the deadline: a missing acknowledge is found then, not a
+      // period after it.
+      master_.spin_for(std::clamp(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()),
+                                  std::chrono::milliseconds(0), options_.sync_period));
       sync(master_.options().sdo_timeout);
     }
     set_point(base);

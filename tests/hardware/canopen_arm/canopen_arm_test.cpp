@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -635,6 +636,23 @@ class CanopenArmStartUp : public ::testing::Test {
     }
     return "";
   }
+  // The figure (measured, not asserted): from the last frame `detected_at` matches (what the
+  // failure was found by; `wait_ms` later for a wait that ran out) to every drive's quick stop heard.
+  template <class F>
+  void print_figure(const std::string& what, F detected_at, double wait_ms = 0) {
+    const auto heard = (*emulator_)->heard();
+    const auto at = (*emulator_)->heard_at();
+    long from = -1;
+    for (long i = 0; i < static_cast<long>(heard.size()); ++i)
+      if (detected_at(heard[static_cast<std::size_t>(i)])) from = i;
+    std::chrono::steady_clock::time_point stopped{};
+    for (int node = 1; node <= 6; ++node)
+      if (const long i = fba::test::last_quick_stop(heard, node); i >= 0) stopped = std::max(stopped, at[static_cast<std::size_t>(i)]);
+    if (from < 0 || stopped == std::chrono::steady_clock::time_point{}) return;
+    std::cout << "measured: " << what << " to every quick stop heard: "
+              << std::chrono::duration<double, std::milli>(stopped - at[static_cast<std::size_t>(from)]).count() - wait_ms
+              << " ms\n";
+  }
   std::optional<Emulator> emulator_;
 };
 
@@ -663,12 +681,17 @@ TEST_F(CanopenArmStartUp, ANodeThatIsNotACia402DriveOrDoesNotBootIsADeviceError)
   std::string why = construct(other);
   EXPECT_TRUE(contains(why, "joint 'shoulder_lift_joint' (node 2): device type 0x00020191 (0x1000) is device profile 401"))
       << why;
+  print_figure("not a CiA 402 drive, 0x1000's read", [](const fba::can::Frame& f) {
+    return f.id == 0x602 && f.data[0] == 0x40 && f.data[1] == 0x00 && f.data[2] == 0x10;
+  });
   fba::emulators::CanopenArmOptions silent;
   silent.silent = {6};
   why = construct(silent);
   EXPECT_TRUE(contains(why, "could not start its device")) << why;
   EXPECT_TRUE(contains(why, "no boot-up message within 1000 ms of an NMT reset communication from joint 'wrist_3_joint' (node 6)"))
       << why;
+  print_figure("a node that does not boot, its NMT reset (+ the 1000 ms boot-up wait)",
+               [](const fba::can::Frame& f) { return f.id == 0 && f.data[0] == 0x82 && f.data[1] == 6; }, 1000);
 }
 
 TEST_F(CanopenArmStartUp, AnAdapterThatDoesNotAnswerIsADeviceError) {

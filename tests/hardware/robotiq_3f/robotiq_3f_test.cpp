@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <iostream>
 #include <fba/task.hpp>
 #include <fba/testing.hpp>
 #include <fba/types/grasp.hpp>
@@ -423,26 +425,45 @@ TEST(Robotiq3fFaults, AGripperThatNeverActivatesReportsAFaultOrAnswersGarbledIsR
     ADD_FAILURE() << "the gripper started";
     return std::string();
   };
+  // The figures (measured, not asserted): from the failure to the reset the gripper heard.
+  using Clock = std::chrono::steady_clock;
+  auto figure = [](const std::string& what, Clock::duration d) {
+    std::cout << "measured: " << what << " to the reset heard: " << std::chrono::duration<double, std::milli>(d).count()
+              << " ms\n";
+  };
   {
     Robotiq3fOptions o = EmulatedHand::quick();
     o.activates = false;
     EmulatedHand hand(o);
     EXPECT_NE(start_failure(hand, {{"activation_timeout", 0.3}}).find("activation: not done within 0.3 s"),
               std::string::npos);
+    const auto seen = hand.emulator().commands();
+    if (seen.size() >= 2)
+      figure("a gripper that never activates, activation_timeout (0.3 s) ended", seen.back().when - seen[seen.size() - 2].when -
+                                                                                    std::chrono::milliseconds(300));
   }
   {
     Robotiq3fOptions o = EmulatedHand::quick();
     o.activation_s = 60;  // the fault comes first
     EmulatedHand hand(o);
-    When fault(hand.emulator(), [](const Robotiq3fEmulator::State& s) { return s.imc == 1; },
-               [&] { hand.emulator().inject_fault(0x0D); });
-    EXPECT_NE(start_failure(hand).find("fault 0x0D activation fault"), std::string::npos);
+    std::atomic<Clock::rep> injected{0};
+    {
+      When fault(hand.emulator(), [](const Robotiq3fEmulator::State& s) { return s.imc == 1; }, [&] {
+        hand.emulator().inject_fault(0x0D);
+        injected = Clock::now().time_since_epoch().count();
+      });
+      EXPECT_NE(start_failure(hand).find("fault 0x0D activation fault"), std::string::npos);
+    }
     EXPECT_EQ(hand.emulator().state().fault, 0) << "the reset clears it";
+    figure("a fault code during activation (polled every 0.01 s), from the fault",
+           hand.emulator().commands().back().when - Clock::time_point(Clock::duration(injected.load())));
   }
   {
     EmulatedHand hand;
     hand.emulator().corrupt_replies(-1);
     EXPECT_NE(start_failure(hand).find("the answer's CRC was wrong"), std::string::npos);
+    const auto seen = hand.emulator().commands();
+    figure("answers with bad CRCs, from the first request (found after its 2 tries)", seen.back().when - seen.front().when);
   }
 }
 
