@@ -97,3 +97,23 @@ TEST(FbaCanopenCommand, MovesADriveAndReportsAnAbortByName) {
   EXPECT_EQ(bad.wait(0, 30s), 2);
   EXPECT_NE(bad.read_until("", 0ms).find("node id '200'"), std::string::npos) << bad.read_until("", 0ms);
 }
+
+// A drive left in fault: fba-canopen move refuses it naming its error code and how to reset it;
+// reset does, saying which code it had; then the move goes.
+TEST(FbaCanopenCommand, MoveRefusesADriveInFaultNamingItsCodeAndResetClearsIt) {
+  auto [emulator, path] = start_emulator({"--fault-at-start", "2:7121"});
+  Child refused({fba::test::program("fba-canopen"), "--bus", "slcan:" + path, "move", "2", "4000", "400000"});
+  EXPECT_EQ(refused.wait(0, 30s), 1) << refused.read_until("", 0ms);
+  const std::string why = refused.read_until("", 0ms);
+  EXPECT_NE(why.find("node 2: the drive is in fault, error code 0x7121 (motor blocked); 'fba-canopen reset 2' resets it"),
+            std::string::npos)
+      << why;
+  Child reset({fba::test::program("fba-canopen"), "--bus", "slcan:" + path, "reset", "2"});
+  EXPECT_EQ(reset.wait(0, 30s), 0) << reset.read_until("", 0ms);
+  EXPECT_NE(reset.read_until("", 0ms).find("node 2: fault reset (its error code was 0x7121: motor blocked)"),
+            std::string::npos)
+      << reset.read_until("", 0ms);
+  Child move({fba::test::program("fba-canopen"), "--bus", "slcan:" + path, "move", "2", "4000", "400000"});
+  EXPECT_EQ(move.wait(0, 30s), 0) << move.read_until("", 0ms);
+  EXPECT_NE(move.read_until("", 0ms).find("node 2: at 4000"), std::string::npos) << move.read_until("", 0ms);
+}
