@@ -8,7 +8,6 @@
 #include <functional>
 #include <map>
 #include <mutex>
-#include <string_view>
 
 #include <fmt/format.h>
 #include <mujoco/mujoco.h>

@@ -1,10 +1,8 @@
 #include "robot_world.hpp"
 
-#include <array>
 #include <cmath>
-#include <map>
 #include <mutex>
-#include <sstream>
+#include <vector>
 
 #include <console_bridge/console.h>
 #include <fmt/format.h>
@@ -225,8 +223,6 @@ class CollectMessages final : public console_bridge::OutputHandler {
 };
 
 }  // namespace
-
-bool is_hand_joint(const std::string& name) { return role_of(name) != Role::Arm; }
 
 std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& origin_name, const WorldObject& object) {
   urdf::ModelInterfaceSharedPtr model;

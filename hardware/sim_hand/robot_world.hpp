@@ -46,9 +46,4 @@ struct WorldObject {
 // slides, a position servo for the phalanges' springs and the scissor's slides.
 std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& origin_name, const WorldObject& object);
 
-// The joints of the robot's hand, by role, as the URDF names them: the thumb's closing slide is
-// "thumb_close", the fingers' "finger_a_close" and "finger_b_close", their scissor's slides
-// "finger_a_spread" and "finger_b_spread", the phalanges' hinges "<finger>_1" to "_3".
-bool is_hand_joint(const std::string& name);
-
 }  // namespace fba::sim_hand
