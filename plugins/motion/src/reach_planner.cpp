@@ -170,28 +170,37 @@ struct ReachPlanner::Impl {
     return {};
   }
 
-  // The start's hand is in the model: back out along the flange's -z axis, in straight steps
-  // checked against the table and the arm itself (the model's leaves the hand is in lie on the way
-  // out), until a pose clear of everything, within max_backout. Returns why not, or "" with `path`
+  // The start's hand is in the model: back out, in straight steps checked against the table and
+  // the arm itself (the model's leaves the hand is in lie on the way out), until a pose clear of
+  // everything, within max_backout: along the flange's -z axis (the wrist camera's line of sight,
+  // backwards), else, where the arm cannot go that way (a view on the far side of the object
+  // stretches it towards the end of its reach), straight up. Returns why not, or "" with `path`
   // filled (the current joints first, the clear pose last). `robot` checks the model again after.
   std::string back_out(const Eigen::VectorXd& current, RobotCollision& robot, std::vector<Eigen::VectorXd>& path,
                        ReachFigures& figures) const {
     const Eigen::Isometry3d flange = arm.forward(current);
     const Eigen::Isometry3d palm = flange * params.flange_from_palm;
-    const Eigen::Isometry3d out = Eigen::Translation3d(-params.max_backout * flange.linear().col(2)) * palm;
-    std::string still;  // what the last pose reached still touches
-    auto clear = [&](const Eigen::VectorXd& q) {
-      robot.check_model(true);
-      still = robot.collision(q);
+    const Eigen::Vector3d back = -flange.linear().col(2);
+    std::string why;
+    for (const auto& [way, direction] : {std::pair{"along the flange's axis", back}, std::pair{"straight up", Eigen::Vector3d::UnitZ().eval()}}) {
+      if (!why.empty() && back.dot(direction) > std::cos(M_PI / 180)) break;  // the same way again
+      const Eigen::Isometry3d out = Eigen::Translation3d(params.max_backout * direction) * palm;
+      std::string still;  // what the last pose reached still touches
+      auto clear = [&](const Eigen::VectorXd& q) {
+        robot.check_model(true);
+        still = robot.collision(q);
+        robot.check_model(false);
+        return still.empty();
+      };
       robot.check_model(false);
-      return still.empty();
-    };
-    robot.check_model(false);
-    std::string why = line(palm, out, current, robot, path, figures, clear);
-    robot.check_model(true);
-    if (!why.empty()) return why;
-    if (!still.empty()) return text::metres(params.max_backout) + " back (max_backout), it still puts " + into(still);
-    return {};
+      std::string failed = line(palm, out, current, robot, path, figures, clear);
+      robot.check_model(true);
+      if (failed.empty() && still.empty()) return {};
+      if (failed.empty()) failed = text::metres(params.max_backout) + " back (max_backout), it still puts " + into(still);
+      why += std::string(why.empty() ? "" : "; ") + way + ": " + failed;
+    }
+    path.clear();
+    return why;
   }
 };
 
@@ -252,8 +261,7 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
                     "the current joints collide, with the hand open for the pregrasp: " + (fixed.empty() ? c : fixed));
     if (std::string why = s.back_out(current, robot, plan.backout_path, plan.figures); !why.empty())
       return refuse(std::move(plan), Refusal::Start,
-                    "the current joints put " + into(c) + " (the hand open for the pregrasp), and backing out along the flange's axis "
-                    "fails: " + why);
+                    "the current joints put " + into(c) + " (the hand open for the pregrasp), and backing out of it fails: " + why);
     plan.start_joints = plan.backout_path.back();
     plan.figures.backout = (s.arm.forward(plan.start_joints).translation() - s.arm.forward(current).translation()).norm();
   }
@@ -283,6 +291,7 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
       if (first == Refusal::None) first = r;
       return why;
     };
+    if (p.first_solution && !accepted.empty()) return std::string("one solution is enough");
     robot.set_hand(hand.opening, hand.spread);
     robot.check_model(true);
     if (std::string c = collision(q); !c.empty()) return no(Refusal::Collision, c);

@@ -140,7 +140,7 @@ TEST(ReachPlanner, ParametersOutOfRangeAreRefusedByName) {
 // At a view pose the open hand's fingers reach 24 cm past the flange, into space the views have not
 // carved yet above the object: the arm backs out along the flange's axis until the hand is clear,
 // and plans from there; the trajectory begins with that retreat. Backing out less than it takes is
-// refused with the reason.
+// refused with the reason, each way tried.
 TEST(ReachPlanner, AStartWhoseFingersAreInSpaceNotYetCarvedBacksOutAlongTheFlangesAxisFirst) {
   const auto box = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, kBox.z() / 2), kBox);
   // A slab above the box, between where the thumb and the fingers come down for the grasp below
@@ -187,11 +187,43 @@ TEST(ReachPlanner, AStartWhoseFingersAreInSpaceNotYetCarvedBacksOutAlongTheFlang
   EXPECT_EQ(refused.refusal, Refusal::Start);
   EXPECT_EQ(refused.why.rfind("the current joints put the ", 0), 0u) << refused.why;
   EXPECT_NE(refused.why.find(" into the model at ("), std::string::npos) << refused.why;
-  EXPECT_NE(refused.why.find("backing out along the flange's axis fails: 0.010 m back (max_backout), it still puts the "), std::string::npos)
+  EXPECT_NE(refused.why.find(", and backing out of it fails: along the flange's axis: 0.010 m back (max_backout), it still puts the "),
+            std::string::npos)
       << refused.why;
+  EXPECT_NE(refused.why.find("; straight up: 0.010 m back (max_backout), it still puts the "), std::string::npos) << refused.why;
   // Not at all: refused as before.
   near.max_backout = 0;
   const ReachPlan kept = ReachPlanner(arm_urdf(), near).plan(grasp, model, home());
   EXPECT_EQ(kept.refusal, Refusal::Start);
   EXPECT_EQ(kept.why, "the current joints collide, with the hand open for the pregrasp: " + touches);
+}
+
+// A view on the far side of the object, where the arm is stretched towards the end of its reach
+// (the task's second view): it cannot back out along the flange's axis, away from its base, so it
+// backs out straight up, and plans from there.
+TEST(ReachPlanner, AStartTheArmCannotBackOutOfAlongTheFlangesAxisBacksOutStraightUp) {
+  Eigen::VectorXd far(6);
+  far << -0.2328, -0.7103, 0.6413, -0.4664, -1.5849, 3.1332;
+  const auto box = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, kBox.z() / 2), kBox);
+  // Not carved yet: a slab beside the box, on the far side, where the fingers are.
+  const auto uncarved = fba::grasp::test::box_sdf(Eigen::Vector3d(0.07, 0, 0.15), Eigen::Vector3d(0.06, 0.16, 0.06));
+  const fba::Octree model = fba::grasp::test::voxelise([&](const Eigen::Vector3d& p) { return std::min(box(p), uncarved(p)); }, workspace(), 6);
+  const fba::Grasp grasp = box_grasp(kBox, Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitZ(), 0.07);
+  const ReachParams& p = planner().params();
+  RobotCollision robot(planner().arm(), p.flange_from_palm);
+  robot.set_hand(place_hand(grasp, p.clearance).opening, grasp.spread);
+  robot.set_model(ReachPlanner::obstacles(model));
+  ASSERT_NE(robot.collision(far).find("touches the model"), std::string::npos);
+  const Eigen::Isometry3d start = planner().arm().forward(far);
+  ASSERT_GT(start.translation().x(), 0.2);  // beyond the object, seen from the arm's base at x = -0.45
+  ASSERT_LT(start.linear().col(2).x(), -0.8);  // looking back towards it: backing out goes away from the base
+
+  const ReachPlan plan = planner().plan(grasp, model, far);
+  expect_a_sound_plan(planner(), plan, grasp, model, far);
+  ASSERT_GE(plan.backout_path.size(), 2u);
+  for (std::size_t i = 1; i < plan.backout_path.size(); ++i) {
+    const Eigen::Vector3d moved = planner().arm().forward(plan.backout_path[i]).translation() - start.translation();
+    EXPECT_NEAR(moved.z(), p.cartesian_step * static_cast<double>(i), 1e-3) << i;
+    EXPECT_LT(moved.head<2>().norm(), 1e-3) << i;
+  }
 }

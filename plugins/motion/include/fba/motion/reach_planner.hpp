@@ -60,6 +60,11 @@ struct ReachParams {
   // flange's -z axis (the wrist camera's line of sight, backwards) at most this far, in
   // cartesian_step steps, each an IK solution, until clear of the model. 0: such a start is refused.
   double max_backout = 0.2;
+  // The pregrasp's IK: the first solution found from which the straight approach and lift work,
+  // rather than the one nearest the current joints among all ik_attempts. A yes-or-no check
+  // (grasp synthesis's) at a fraction of the cost: the lines are then checked for one solution, not
+  // for every one the attempts find. Whatever it accepts, the nearest search accepts too.
+  bool first_solution = false;
 };
 
 // Why a grasp was refused, for counting.
