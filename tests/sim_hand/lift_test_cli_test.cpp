@@ -40,6 +40,7 @@ TEST(LiftTestCli, EveryNumberIsCheckedAgainstItsRangeBeforeAnyWork) {
       {"--synthesise 2", "--synthesise must be in [3, 1000000] (0: off); found 2"},
       {"--candidates 0", "--candidates must be in [1, 1000]; found 0"},
       {"--rest flat", "--rest must be upright or side; found 'flat'"},
+      {"--voxel 0.1", "--voxel must be in [0.5, 20]; found 0.1"},
       {"--grasp g.json --synthesise 100", "--grasp and --synthesise: expected one of them; found both"},
       {"--bogus 1", "unknown option '--bogus'; expected one of --candidates, --force, --grasp"},
       {"--x", "--x: expected a value after it; found the end of the line"}};
