@@ -123,7 +123,9 @@ JointPath plan_joint_path(const Eigen::VectorXd& from, const Eigen::VectorXd& to
   // Exact nearest neighbours by a linear scan: GNAT's pivots are drawn from the shared sequence.
   // (This sets the planner up.)
   planner->setNearestNeighbors<ompl::NearestNeighborsLinear>();
-  const ob::PlannerStatus status = planner->ob::Planner::solve(options.time_limit);
+  const ob::PlannerStatus status = planner->solve(ob::plannerOrTerminationCondition(
+      ob::timedPlannerTerminationCondition(options.time_limit),
+      ob::PlannerTerminationCondition([&] { return checked >= options.max_checks; })));
   if (status != ob::PlannerStatus::EXACT_SOLUTION) {
     result.checks += checked;
     std::size_t total = 0;
@@ -132,8 +134,11 @@ JointPath plan_joint_path(const Eigen::VectorXd& from, const Eigen::VectorXd& to
       total += r.second;
       if (!most || r.second > most->second) most = &r;
     }
-    char limit[32];
-    std::snprintf(limit, sizeof limit, "%g s", options.time_limit);
+    char limit[64];
+    if (checked >= options.max_checks)
+      std::snprintf(limit, sizeof limit, "%zu poses checked", options.max_checks);
+    else
+      std::snprintf(limit, sizeof limit, "%g s", options.time_limit);
     result.why = std::string("no collision-free path found in ") + limit + ": " +
                  (most ? std::to_string(total) + " of " + std::to_string(checked) + " poses tried collide, most often " +
                              most->first + " (" + std::to_string(most->second) + ")"

@@ -108,6 +108,7 @@ struct ReachPlanner::Impl {
     check(p.hold_s >= 0 && p.hand_s >= 0, "hold_s and hand_s must be >= 0");
     check(p.clearance >= 0 && p.contact_allowance >= 0, "clearance and contact_allowance must be >= 0");
     check(p.planning_time > 0, "planning_time must be > 0, found " + format("%g", p.planning_time));
+    check(p.path_checks > 0, "path_checks must be > 0, found 0");
     check(p.ik_attempts >= 1, "ik_attempts must be >= 1");
     check(p.cartesian_step > 0 && p.max_joint_step > 0 && p.collision_step > 0,
           "cartesian_step, max_joint_step and collision_step must be > 0");
@@ -344,7 +345,7 @@ ReachPlan ReachPlanner::plan(const Grasp& grasp, std::shared_ptr<const ModelObst
   const std::array<Eigen::Vector3d, 3> contacts{grasp.contacts[0].position, grasp.contacts[1].position, grasp.contacts[2].position};
   robot.set_model(std::move(model), contacts, p.contact_allowance);
   const JointPath path = plan_joint_path(plan.start_joints, plan.pregrasp_joints, s.arm.limits(), s.checker(robot),
-                                         JointPathOptions{p.planning_time, p.collision_step, p.seed});
+                                         JointPathOptions{p.path_checks, p.planning_time, p.collision_step, p.seed});
   plan.figures.planning_s = path.planning_s;
   plan.figures.direct = path.direct;
   plan.figures.collision_checks += path.checks;

@@ -16,7 +16,11 @@
 namespace fba::motion {
 
 struct JointPathOptions {
-  double time_limit = 0.5;       // s of wall time for the search
+  // The search's effort, in poses checked for collision: a bound that ends it at the same point on
+  // any machine, so a plan is the same on a loaded one or under a sanitizer (a wall-time bound
+  // was not: it failed searches there that succeed here).
+  std::size_t max_checks = 20000;
+  double time_limit = 30;        // s of wall time: a guard only, for a collision check gone slow
   double collision_step = 0.02;  // rad (Euclidean in joint space) between the poses checked along a motion
   std::uint32_t seed = 1;        // OMPL's random numbers
 };

@@ -47,7 +47,8 @@ struct ReachParams {
   // The fingers may touch the model within this distance of their contacts (the model is the
   // object's visual hull: near a contact the finger is about to touch the object).
   double contact_allowance = 0.02;
-  double planning_time = 0.5;    // s: the path search's limit
+  std::size_t path_checks = 20000;  // poses the path search may check: its deterministic bound
+  double planning_time = 30;       // s: a guard on the path search's wall time
   std::uint32_t seed = 1;        // OMPL's random numbers (and the IK's random starts): the same plan every run
   int ik_attempts = 32;          // IK starts: the current joints, then random ones within the limits
   double cartesian_step = 0.01;  // m between the IK solutions along a straight line
