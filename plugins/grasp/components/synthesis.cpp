@@ -3,6 +3,8 @@
 // the reliability threshold on a resolved part of the model is selected; otherwise it says where
 // information is missing (regions of interest: the carver's grasp-specific criterion and the
 // exploration planner's request for a new view), until max_views, when it gives up with the reason.
+// With the arm's joints (joint_state), a candidate the arm cannot reach from where it stands is
+// passed over (FBA_GRASP_REACH: the grasp plugin is linked with fba::motion, the reach planner).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,6 +13,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -33,6 +37,13 @@
 #include "fba/grasp/grasp_json.hpp"
 #include "fba/grasp/model_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
+
+#if FBA_GRASP_REACH
+#include <fba/types/joint_state.hpp>
+
+#include "fba/motion/reach_parameters.hpp"
+#include "fba/motion/reach_planner.hpp"
+#endif
 
 namespace {
 
@@ -66,6 +77,40 @@ std::string bounds_reached(const fba::Octree& model) {
   for (std::size_t i = 0; i < faces.size(); ++i) text += (i == 0 ? "" : i + 1 == faces.size() ? " and " : ", ") + faces[i];
   return text;
 }
+
+// The candidates passed over because the arm cannot reach them, on one model: how many of each
+// refusal (motion::Refusal's names), with the first one's reason.
+struct PassedOver {
+  struct Kind {
+    int count = 0;
+    std::string example;
+  };
+  std::map<std::string, Kind> kinds;
+  std::size_t checked = 0;  // candidates checked
+  int total = 0;            // passed over
+  double seconds = 0;       // the checks' wall time, the model's obstacles included
+
+  void add(const std::string& kind, const std::string& why) {
+    Kind& k = kinds[kind];
+    if (k.count++ == 0) k.example = why;
+    ++total;
+  }
+  nlohmann::json json() const {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& [name, k] : kinds) j[name] = {{"count", k.count}, {"example", k.example}};
+    return j;
+  }
+  // "2 (ik 1: no IK solution ...; approach 1: the straight approach fails: ...)"
+  std::string text() const {
+    std::string t = std::to_string(total) + " (";
+    bool first = true;
+    for (const auto& [name, k] : kinds) {
+      t += (first ? "" : "; ") + name + " " + std::to_string(k.count) + ", e.g. " + k.example;
+      first = false;
+    }
+    return t + ")";
+  }
+};
 
 class GraspSynthesisFilter final : public fba::Component {
  public:
@@ -132,11 +177,36 @@ class GraspSynthesisFilter final : public fba::Component {
       "uncertain_regions, regions_requested, points_requested (contacts to graze), best_total, seconds (wall time of the analysis), best (the best candidate's S1, S3, S4 and whether it is uncertain)"};
   static constexpr fba::EventOut kGraspSelected{"grasp_selected", "a reliable grasp was selected; payload: the grasp as JSON"};
   static constexpr fba::EventOut kFailed{"grasp_synthesis_failed", "the search gave up; payload: the reason"};
+#if FBA_GRASP_REACH
+  static constexpr fba::OptionalIn<fba::JointState> kJointState{
+      "joint_state",
+      "the arm's joints (the newest is used): once one has arrived, a candidate the arm cannot reach from there is passed over "
+      "(its pregrasp has no IK solution, or no collision-free approach or lift: motion.reach_planner's reachable(), with the reach "
+      "parameters below, which the planner shares). Best candidates first, until one is reachable"};
+  static constexpr fba::EventOut kUnreachable{
+      "unreachable",
+      "no candidate on the model is reachable by the arm from where it stands; synthesis asks for views as when none is reliable. "
+      "Payload (JSON): views, candidates, checked, passed_over (per refusal: count and an example reason), unchecked (beyond "
+      "reach_checks), seconds"};
+  static constexpr auto kReachChecks = fba::Param<int>(
+      "reach_checks", 8,
+      "with joint_state: at most this many candidates of one model are checked as far as the arm's inverse kinematics (tens of "
+      "milliseconds each when there is no solution), best first; the ones after them are neither selected on that model nor passed "
+      "over").range(1, 1000);
+#endif
 
   static fba::Spec spec() {
-    return fba::Spec::filter("grasp.synthesis",
-                             "Selects a reliable three-finger grasp on an octree model, or asks for views where the model lacks detail.")
-        .add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
+    fba::Spec spec = fba::Spec::filter("grasp.synthesis",
+                                       "Selects a reliable three-finger grasp on an octree model, or asks for views where the model lacks "
+                                       "detail."
+#if FBA_GRASP_REACH
+                                       " With the arm's joints (joint_state), only grasps the arm can reach."
+#else
+                                       " Built without the reach check (plugins/motion was left out of the build: OMPL, FCL or KDL "
+                                       "missing), so it has no joint_state input and selects grasps the arm may not reach."
+#endif
+    );
+    spec.add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
              kMaxViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kTableZ, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
@@ -146,6 +216,11 @@ class GraspSynthesisFilter final : public fba::Component {
         })
         .stages({"visual_analysis", "grasp_synthesis", "exploration_movement"},
                 {{"visual_analysis", "grasp_synthesis"}, {"grasp_synthesis", "exploration_movement"}, {"exploration_movement", "grasp_synthesis"}});
+#if FBA_GRASP_REACH
+    spec.add(kJointState, kUnreachable, kReachChecks);
+    fba::motion::ReachParameters::add(spec);  // motion.reach_planner's, declared once
+#endif
+    return spec;
   }
 
   explicit GraspSynthesisFilter(fba::Context& ctx)
@@ -162,6 +237,16 @@ class GraspSynthesisFilter final : public fba::Component {
     // The model's surface and the search borrow the task's threads, as carving does: the loop waits
     // on each analysis, and the other core would sit idle.
     params_.parallel_for = ctx.thread_pool().as_parallel_for();
+#if FBA_GRASP_REACH
+    // The arm's reach, when its joints are wired: the planner's check, with its parameters.
+    if (ctx(kJointState).connected()) {
+      fba::motion::ReachParams quick;
+      quick.first_solution = true;  // whether the arm reaches a candidate, not yet how
+      reach_.emplace(fba::motion::ReachParameters::planner(ctx, quick));
+      reach_checks_ = ctx(kReachChecks);
+      params_.pregrasp_distance = reach_->params().standoff;  // the table's check at the pregrasp, where the path ends
+    }
+#endif
   }
 
   void process() override {
@@ -224,11 +309,28 @@ class GraspSynthesisFilter final : public fba::Component {
                      "(best total {:.3f}); left out: {} into the table, {} blocked by the model, {} not force closure",
                      views, surface.leaves - surface.unsupported_leaves, surface.leaves, observed.samples.size(), r.regions.size(),
                      r.candidates.size(), total_of(best), r.below_table, r.hand_blocked, r.not_force_closure);
+    // The arm's reach, checked as the selection comes to each candidate, best first: the best
+    // reachable candidate is the one the others are weighed against, and the one selected must be
+    // reachable. Those passed over are reported (with the result, whatever it is) and asked no
+    // views for.
+    Reach reach = reach_check(model, r.candidates);
+    struct ReportReach {  // on every way out below: the checks made are known once the decision is
+      GraspSynthesisFilter& self;
+      Reach& reach;
+      int views;
+      ~ReportReach() { self.report_reach(reach, views); }
+    } report_reach_at_end{*this, reach, views};
+    std::optional<std::size_t> first_reachable;
+    for (std::size_t i = 0; i < r.candidates.size() && !first_reachable; ++i)
+      if (reach.reachable(i)) first_reachable = i;
+    if (reach.active && !r.candidates.empty() && !first_reachable) say_unreachable(reach, views, r.candidates.size());
     const fba::grasp::GraspCandidate* best_resolved = nullptr;  // by total, of those on resolved surface
-    const double best_epsilon = r.candidates.empty() ? 0.0 : r.candidates.front().model_epsilon;
-    for (const auto& c : r.candidates) {  // best first
+    const double best_epsilon = first_reachable ? r.candidates[*first_reachable].model_epsilon : 0.0;
+    for (std::size_t i = 0; i < r.candidates.size(); ++i) {  // best first
+      const auto& c = r.candidates[i];
       if (c.uncertain) continue;
       if (c.grasp.scores.total >= threshold_) {
+        if (!reach.reachable(i)) continue;
         if (views < max_views_ && c.model_epsilon < stability_share_ * best_epsilon) {
           ctx_.log().info("not selected yet: the most stable reliable candidate on resolved surface has epsilon {:.4f} on the "
                           "model, below {:.2f} of the best reliable candidate's {:.4f}, whose surface is not all resolved",
@@ -248,14 +350,20 @@ class GraspSynthesisFilter final : public fba::Component {
       // views, with rim_deg), though the surface around them is not all resolved yet: on thin,
       // curved objects such as the banana two rims cross on little of the surface, and a whole
       // neighbourhood is rarely pinned.
-      for (const auto& c : r.candidates)
-        if (!c.contacts_uncertain && c.grasp.scores.total >= threshold_) {
+      for (std::size_t i = 0; i < r.candidates.size(); ++i)
+        if (const auto& c = r.candidates[i]; !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i)) {
           ctx_.log().info("selected after the last view, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
                           "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
                           c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                           c.model_epsilon);
           return select(c.grasp, views, "contacts");
         }
+      if (reach.active && !r.candidates.empty() && !first_reachable)
+        return fail("no grasp the arm can reach after " + std::to_string(views) + " views: none of the " +
+                    std::to_string(r.candidates.size()) + " candidates is reachable from where it stands; passed over: " +
+                    reach.passed.text() + reach.unchecked_text());
+      // The candidates the arm cannot reach, whatever else held the others back.
+      const std::string passed = reach.passed.total > 0 ? "; passed over as out of the arm's reach: " + reach.passed.text() : "";
       std::string reason = "no reliable grasp after " + std::to_string(views) + " views: ";
       // Which criteria held it back: what a user tunes (weights, hand geometry) or learns about the object.
       auto criteria = [](const fba::grasp::GraspCandidate& c) {
@@ -265,12 +373,12 @@ class GraspSynthesisFilter final : public fba::Component {
       if (r.candidates.empty()) {  // what removed them, not a best total of nothing
         if (r.below_table > 0)
           return fail(reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
-                      " would put the hand into the table");
+                      " would put the hand into the table" + passed);
         if (r.hand_blocked > 0 || r.not_force_closure > 0)
           return fail(reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) +
                       " blocked by the model in the hand's way, " + std::to_string(r.not_force_closure) +
-                      " not force closure on the model");
-        return fail(reason + "no candidate the hand can reach");
+                      " not force closure on the model" + passed);
+        return fail(reason + "no candidate the hand can reach" + passed);
       }
       if (!best_resolved) {
         // Nothing to weigh against the threshold: the model never resolved where the candidates are.
@@ -278,12 +386,12 @@ class GraspSynthesisFilter final : public fba::Component {
                     " candidates has its contacts and the surface around them resolved" +
                     (rim_deg_ > 0 ? " (pinned by two views' rims)" : "") + ", nor a reliable one its contacts; the best, of total " +
                     fixed(total_of(best)) + criteria(*best) + ", touches a part of the model not yet resolved (threshold " +
-                    fixed(threshold_) + ")");
+                    fixed(threshold_) + ")" + passed);
       }
       reason += "best total " + fixed(total_of(best_resolved)) + criteria(*best_resolved) + " < threshold " + fixed(threshold_);
       if (total_of(best) > total_of(best_resolved))
         reason += " (a candidate of total " + fixed(total_of(best)) + " touches a part of the model not yet resolved)";
-      return fail(reason);
+      return fail(reason + passed);
     }
     // One request per view: the carver's refinement on it brings a new model of the same views,
     // whose regions differ a little again; answering each would circle between the two for ever.
@@ -294,13 +402,17 @@ class GraspSynthesisFilter final : public fba::Component {
     // Where more information would help: the unresolved regions of the best candidates, else every
     // unresolved region, else (all resolved, none reliable) the best candidates' regions, else (no
     // candidate at all) the whole model: more views may still carve it to a size the hand takes.
+    // The candidates the arm cannot reach are left out: views that resolve them would not help.
+    std::vector<const fba::grasp::GraspCandidate*> kept;
+    for (std::size_t i = 0; i < r.candidates.size(); ++i)
+      if (!reach.passed_over(i)) kept.push_back(&r.candidates[i]);
     std::set<std::size_t> wanted;
-    for (const auto& c : r.candidates)
-      for (std::size_t g : c.regions)
+    for (const auto* c : kept)
+      for (std::size_t g : c->regions)
         if (r.regions[g].uncertain_share > 0) wanted.insert(g);
     if (wanted.empty()) wanted.insert(r.uncertain_regions.begin(), r.uncertain_regions.end());
     if (wanted.empty())
-      for (const auto& c : r.candidates) wanted.insert(c.regions.begin(), c.regions.end());
+      for (const auto* c : kept) wanted.insert(c->regions.begin(), c->regions.end());
     fba::RegionsOfInterest roi;
     const Eigen::Vector3d margin = Eigen::Vector3d::Constant(surface.finest_edge);
     for (std::size_t g : wanted) roi.boxes.emplace_back(r.regions[g].box.min() - margin, r.regions[g].box.max() + margin);
@@ -316,10 +428,10 @@ class GraspSynthesisFilter final : public fba::Component {
     if (rim_deg_ > 0 && !rims.empty()) {
       const auto& samples = observed.samples;
       constexpr std::size_t kMostCandidates = 5, kFewCandidates = 3;
-      const bool any_reliable = !r.candidates.empty() && r.candidates.front().grasp.scores.total >= threshold_;
+      const bool any_reliable = !kept.empty() && kept.front()->grasp.scores.total >= threshold_;
       const double r2 = surface.radius * surface.radius;
-      for (std::size_t i = 0; i < r.candidates.size() && i < (any_reliable ? kMostCandidates : kFewCandidates); ++i) {
-        const auto& c = r.candidates[i];
+      for (std::size_t i = 0; i < kept.size() && i < (any_reliable ? kMostCandidates : kFewCandidates); ++i) {
+        const auto& c = *kept[i];
         if (any_reliable && c.grasp.scores.total < threshold_) break;
         for (const auto& x : samples) {
           if (!x.unpinned) continue;
@@ -347,6 +459,11 @@ class GraspSynthesisFilter final : public fba::Component {
                      {"points_requested", points},
                      {"best_total", total_of(best)},
                      {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
+    if (reach.active)
+      j["reach"] = {{"checked", reach.passed.checked},
+                    {"passed_over", reach.passed.json()},
+                    {"unchecked", reach.unchecked},
+                    {"seconds", reach.passed.seconds}};
     if (!r.candidates.empty()) {
       const auto& b = r.candidates.front();
       j["best"] = {{"symmetry", b.grasp.scores.symmetry},
@@ -354,8 +471,131 @@ class GraspSynthesisFilter final : public fba::Component {
                    {"curvature", b.grasp.scores.curvature},
                    {"uncertain", b.uncertain}};
     }
-    ctx_.emit(kPlanningPerformed, j.dump());
+    ctx_.emit(kPlanningPerformed, j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     stages_.go("exploration_movement");
+  }
+
+  // Which candidates the arm reaches from where it stands: each checked when the selection first
+  // asks, and remembered; inactive (everything reachable) without the reach check or a joint state.
+  // The candidates after the one asked for are checked with it on the task's other threads (their
+  // verdicts count once asked for: the results do not depend on the threads). At most `budget`
+  // checks on a model get as far as inverse kinematics (the costly ones, tens of milliseconds each
+  // when the solver finds no solution); beyond them the rest are not checked, so not selected on
+  // this model, nor passed over.
+  struct Reach {
+    struct Verdict {
+      bool ok = true;
+      bool costly = false;  // it needed inverse kinematics
+      std::string refusal, why;
+    };
+    bool active = false;
+    PassedOver passed;
+    std::size_t budget = 0, costly = 0;
+    std::size_t unchecked = 0;       // candidates asked for once the budget was spent
+    std::vector<signed char> state;  // per candidate: -1 not asked yet, 0 passed over, 1 reachable, 2 not checked
+    std::vector<std::optional<Verdict>> ahead;
+    std::function<void()> prepare;  // once, before the first check (the model's obstacles)
+    std::function<Verdict(std::size_t)> check;  // thread-safe
+    fba::ParallelFor parallel_for;
+    std::size_t batch = 1;
+    spdlog::logger* log = nullptr;
+
+    bool reachable(std::size_t i) {
+      if (!active) return true;
+      if (state[i] >= 0) return state[i] == 1;
+      if (costly >= budget) {
+        state[i] = 2;
+        ++unchecked;
+        return false;
+      }
+      if (!ahead[i]) run(i);
+      const Verdict v = *ahead[i];
+      log->debug("candidate {}: {}{}{}", i, v.ok ? "reachable" : "passed over, " + v.refusal, v.ok ? "" : ": ", v.why);
+      ++passed.checked;
+      costly += v.costly ? 1 : 0;
+      state[i] = v.ok ? 1 : 0;
+      if (!v.ok) passed.add(v.refusal, v.why);
+      return v.ok;
+    }
+    bool passed_over(std::size_t i) const { return active && state[i] == 0; }
+    std::string unchecked_text() const {
+      return unchecked == 0 ? "" : "; " + std::to_string(unchecked) + " not checked (reach_checks: " + std::to_string(budget) + ")";
+    }
+
+   private:
+    // Candidate i and the next ones not asked for yet, one per thread.
+    void run(std::size_t i) {
+      const auto start = std::chrono::steady_clock::now();
+      if (prepare) std::exchange(prepare, nullptr)();
+      std::vector<std::size_t> next{i};
+      for (std::size_t j = i + 1; j < state.size() && next.size() < batch; ++j)
+        if (state[j] < 0 && !ahead[j]) next.push_back(j);
+      auto one = [&](std::size_t k) { ahead[next[k]] = check(next[k]); };
+      if (parallel_for && next.size() > 1) parallel_for(next.size(), one);
+      else for (std::size_t k = 0; k < next.size(); ++k) one(k);
+      passed.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+  };
+
+  Reach reach_check([[maybe_unused]] const fba::Octree& model, [[maybe_unused]] const std::vector<fba::grasp::GraspCandidate>& candidates) {
+    Reach reach;
+#if FBA_GRASP_REACH
+    const fba::JointState* state = reach_ ? ctx_(kJointState).latest() : nullptr;
+    if (reach_ && !state && !told_no_joints_) {
+      ctx_.log().info("no joint state has arrived yet: the candidates are not checked for the arm's reach");
+      told_no_joints_ = true;
+    }
+    if (!state) return reach;
+    reach.active = true;
+    reach.log = &ctx_.log();
+    reach.budget = static_cast<std::size_t>(reach_checks_);
+    reach.state.assign(candidates.size(), -1);
+    reach.ahead.resize(candidates.size());
+    reach.parallel_for = params_.parallel_for;
+    reach.batch = static_cast<std::size_t>(ctx_.thread_pool().size()) + 1;
+    std::string why;
+    const std::optional<Eigen::VectorXd> joints = fba::motion::arm_joints(reach_->arm(), *state, why);
+    // The model's obstacles, built once for the checks of this model.
+    auto obstacles = std::make_shared<std::shared_ptr<const fba::motion::ModelObstacles>>();
+    reach.prepare = [&model, obstacles] { *obstacles = fba::motion::ReachPlanner::obstacles(model); };
+    reach.check = [this, &candidates, joints, why, obstacles](std::size_t i) -> Reach::Verdict {
+      if (!joints) return {false, false, fba::motion::to_string(fba::motion::Refusal::Start), why};
+      const fba::motion::ReachPlan plan = reach_->reachable(candidates[i].grasp, *obstacles, *joints);
+      return {plan.ok, plan.figures.ik_attempts > 0, fba::motion::to_string(plan.refusal), plan.why};
+    };
+#endif
+    return reach;
+  }
+
+  void say_unreachable([[maybe_unused]] const Reach& reach, [[maybe_unused]] int views, [[maybe_unused]] std::size_t candidates) {
+#if FBA_GRASP_REACH
+    ctx_.log().info("none of the {} candidates is reachable by the arm from where it stands, passed over: {}{}", candidates,
+                    reach.passed.text(), reach.unchecked_text());
+    ctx_.emit(kUnreachable, nlohmann::json{{"views", views},
+                                           {"candidates", candidates},
+                                           {"checked", reach.passed.checked},
+                                           {"passed_over", reach.passed.json()},
+                                           {"unchecked", reach.unchecked},
+                                           {"seconds", reach.passed.seconds}}
+                                .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+#endif
+  }
+
+  // The reach check's figures on the model analysed last (the one a grasp was selected on, or the
+  // search gave up on), as the result "reach". Called from a destructor: throws nothing.
+  void report_reach(const Reach& reach, int views) noexcept {
+    if (!reach.active) return;
+    try {
+      ctx_.report("reach", nlohmann::json{{"views", views},
+                                          {"checked", reach.passed.checked},
+                                          {"passed_over_count", reach.passed.total},
+                                          {"passed_over", reach.passed.json()},
+                                          {"unchecked", reach.unchecked},
+                                          {"seconds", reach.passed.seconds}}
+                               .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+    } catch (const std::exception& e) {
+      ctx_.log().error("could not report the reach check: {}", e.what());
+    }
   }
 
   // resolved: what the model had resolved (and two views pinned, with rim_deg) under the fingers:
@@ -456,6 +696,11 @@ class GraspSynthesisFilter final : public fba::Component {
   std::vector<int> view_index_;  // the silhouettes' view indices, in arrival order (their images are not kept)
   int requested_views_ = -1;      // the model views of the last regions request
   bool done_ = false;
+#if FBA_GRASP_REACH
+  std::optional<fba::motion::ReachPlanner> reach_;  // with joint_state connected
+  int reach_checks_ = 0;
+  bool told_no_joints_ = false;
+#endif
 };
 
 }  // namespace

@@ -1,0 +1,168 @@
+// grasp.synthesis with the arm's joints: it passes over the candidates the arm cannot reach from
+// where it stands (the reach planner's reachable(), with motion.reach_planner's parameters), counts
+// them by refusal, says `unreachable` when none is reachable and asks for views; without joints it
+// selects as before. Scenes: boxes carved exactly in the task's workspace at depth 6, the arm at
+// sim.arm's initial pose (the camera 0.35 m from the origin, 60 degrees up on the arm's side).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "reach_scene.hpp"
+
+FBA_COMPONENT(fba::grasp::test::reach::SceneSensor);
+
+namespace reach = fba::grasp::test::reach;
+using fba::motion::test::home;
+
+namespace {
+
+const fba::motion::ReachPlanner& reach_planner() {
+  static const fba::motion::ReachPlanner p(fba::motion::test::arm_urdf());
+  return p;
+}
+
+bool same_contacts(const fba::Grasp& a, const fba::Grasp& b) {
+  for (int i = 0; i < 3; ++i)
+    if (!a.contacts[i].position.isApprox(b.contacts[i].position, 1e-12)) return false;
+  return true;
+}
+
+}  // namespace
+
+// Synthesis's own table check off (no table_z): the best candidate takes the box low from the
+// side, its palm below the table. The arm's planner knows the table: synthesis passes over that
+// one and those like it, and selects a worse one the arm reaches.
+TEST(GraspSynthesisReach, TheBestCandidateWhosePalmWouldGoIntoTheTableIsPassedOverForAReachableOne) {
+  const std::vector<double> box = reach::standing({0.06, 0.06, 0.06});
+  const reach::Outcome before = reach::synthesise(box, {});
+  ASSERT_EQ(before.grasps.size(), 1u) << before.run.reason;
+  const fba::motion::ReachPlan refused = reach_planner().reachable(before.grasps[0], reach::box_model_of(box), home());
+  ASSERT_EQ(refused.refusal, fba::motion::Refusal::Table) << refused.why;
+  ASSERT_EQ(refused.why, "the pregrasp puts the palm into the table");
+
+  const reach::Outcome after = reach::synthesise(box, home());
+  ASSERT_EQ(after.grasps.size(), 1u) << after.run.reason;
+  EXPECT_FALSE(same_contacts(after.grasps[0], before.grasps[0]));
+  const fba::motion::ReachPlan plan = reach_planner().plan(after.grasps[0], reach::box_model_of(box), home());
+  EXPECT_TRUE(plan.ok) << plan.why;  // the path too, which synthesis does not search
+  EXPECT_TRUE(after.events("unreachable").empty());
+
+  const auto report = nlohmann::json::parse(after.result("reach"));
+  EXPECT_EQ(report["views"], 8);
+  ASSERT_TRUE(report["passed_over"].contains("table")) << report;
+  EXPECT_GE(report["passed_over"]["table"]["count"], 1);
+  EXPECT_EQ(report["passed_over"]["table"]["example"], "the pregrasp puts the palm into the table");
+  // Best first, until one is reachable: every candidate checked but the selected one was passed over.
+  EXPECT_EQ(report["passed_over_count"].get<int>() + 1, report["checked"].get<int>()) << report;
+  EXPECT_GT(report["seconds"], 0.0);
+}
+
+// A tall box beyond the object's centre from the arm's base: the best candidate comes at it from
+// the far side, where the arm does not reach (no IK solution for the pregrasp); the next one it
+// reaches.
+TEST(GraspSynthesisReach, TheBestCandidateBehindTheObjectBeyondTheArmsReachIsPassedOver) {
+  const std::vector<double> box = reach::standing({0.06, 0.06, 0.14}, 0.08);
+  const std::string table = "table_z: [0.001]";  // the box's lowest leaves reach down to it
+  const reach::Outcome before = reach::synthesise(box, {}, table);
+  ASSERT_EQ(before.grasps.size(), 1u) << before.run.reason;
+  EXPECT_LT(before.grasps[0].approach.x(), -0.9);  // from the far side, towards the arm
+  EXPECT_EQ(reach_planner().reachable(before.grasps[0], reach::box_model_of(box), home()).refusal, fba::motion::Refusal::Ik);
+
+  const reach::Outcome after = reach::synthesise(box, home(), table);
+  ASSERT_EQ(after.grasps.size(), 1u) << after.run.reason;
+  EXPECT_FALSE(same_contacts(after.grasps[0], before.grasps[0]));
+  EXPECT_TRUE(reach_planner().reachable(after.grasps[0], reach::box_model_of(box), home()).ok);
+  const auto report = nlohmann::json::parse(after.result("reach"));
+  ASSERT_TRUE(report["passed_over"].contains("ik")) << report;
+  EXPECT_EQ(report["passed_over"]["ik"]["example"].get<std::string>().rfind("no IK solution within the joint limits for the pregrasp at (", 0),
+            0u)
+      << report;
+
+  // One check as far as the inverse kinematics per model: the best candidate's spends it, and the
+  // others are left for the next model, neither selected nor passed over.
+  const reach::Outcome one = reach::synthesise(box, home(), table + ", reach_checks: 1");
+  EXPECT_TRUE(one.grasps.empty());
+  ASSERT_EQ(one.events("unreachable").size(), 1u);
+  const auto payload = nlohmann::json::parse(one.events("unreachable")[0].payload);
+  EXPECT_EQ(payload["checked"], 1);
+  EXPECT_EQ(payload["passed_over"]["ik"]["count"], 1);
+  EXPECT_EQ(payload["unchecked"].get<int>() + 1, payload["candidates"].get<int>()) << payload;
+  EXPECT_EQ(one.regions.size(), 1u);
+}
+
+// A flat box: every candidate's fingers would reach into the table. Synthesis says `unreachable`
+// with the counts and asks for views as when none is reliable; after the last view it gives up
+// with the counts.
+TEST(GraspSynthesisReach, WhenNoCandidateIsReachableItSaysSoAndAsksForViews) {
+  const std::vector<double> flat = reach::standing({0.06, 0.06, 0.04});
+  const std::string table = "table_z: [0.001]";
+  ASSERT_EQ(reach::synthesise(flat, {}, table).regions.size(), 1u);  // without the arm: none reliable, views asked for too
+
+  const reach::Outcome o = reach::synthesise(flat, home(), table);
+  EXPECT_TRUE(o.grasps.empty());
+  const auto unreachable = o.events("unreachable");
+  ASSERT_EQ(unreachable.size(), 1u);
+  const auto payload = nlohmann::json::parse(unreachable[0].payload);
+  EXPECT_EQ(payload["views"], 8);
+  EXPECT_GT(payload["candidates"], 0);
+  EXPECT_EQ(payload["checked"], payload["candidates"]);
+  ASSERT_TRUE(payload["passed_over"].contains("table")) << payload;
+  EXPECT_EQ(payload["passed_over"]["table"]["count"], payload["candidates"]) << payload;
+  EXPECT_EQ(payload["passed_over"]["table"]["example"].get<std::string>().rfind("the grasp puts the ", 0), 0u) << payload;
+  // Views asked for: the regions, and planning_performed with the counts.
+  ASSERT_EQ(o.regions.size(), 1u);
+  EXPECT_FALSE(o.regions[0].boxes.empty());
+  const auto planning = o.events("planning_performed");
+  ASSERT_EQ(planning.size(), 1u);
+  EXPECT_EQ(nlohmann::json::parse(planning[0].payload)["reach"]["passed_over"], payload["passed_over"]);
+  EXPECT_EQ(nlohmann::json::parse(o.result("reach"))["passed_over"], payload["passed_over"]);
+
+  // The last view: it gives up, saying why with the counts.
+  const reach::Outcome last = reach::synthesise(flat, home(), table + ", max_views: 8");
+  const auto failed = last.events("grasp_synthesis_failed");
+  ASSERT_EQ(failed.size(), 1u);
+  const std::string n = std::to_string(payload["candidates"].get<int>());
+  EXPECT_EQ(failed[0].payload.rfind("no grasp the arm can reach after 8 views: none of the " + n +
+                                        " candidates is reachable from where it stands; passed over: " + n + " (table " + n +
+                                        ", e.g. the grasp puts the ",
+                                    0),
+            0u)
+      << failed[0].payload;
+  EXPECT_EQ(last.events("unreachable").size(), 1u);
+}
+
+// Without a joint state (the input not wired, or wired with none arrived yet) nothing changes: the
+// same grasp as before, and no reach result.
+TEST(GraspSynthesisReach, WithoutAJointStateTheSameGraspIsSelectedAsBefore) {
+  const std::vector<double> box = reach::standing({0.06, 0.06, 0.06});
+  const reach::Outcome unwired = reach::synthesise(box, {});
+  const reach::Outcome waiting = reach::synthesise(box, {}, "", true);
+  ASSERT_EQ(unwired.grasps.size(), 1u);
+  ASSERT_EQ(waiting.grasps.size(), 1u);
+  EXPECT_TRUE(same_contacts(unwired.grasps[0], waiting.grasps[0]));
+  EXPECT_EQ(unwired.grasps[0].approach, waiting.grasps[0].approach);
+  EXPECT_EQ(unwired.result("reach"), "");
+  EXPECT_EQ(waiting.result("reach"), "");
+}
+
+// The reach parameters synthesis checks with are motion.reach_planner's: the same names, defaults,
+// ranges and docs, declared once (fba/motion/reach_parameters.hpp).
+TEST(GraspSynthesisReach, ItsReachParametersAreTheReachPlannersOwn) {
+  const auto synthesis = reach::reach_registry().find("grasp.synthesis");
+  const auto planner = reach::reach_registry().find("motion.reach_planner");
+  ASSERT_TRUE(synthesis && planner);
+  int shared = 0;
+  for (const auto& p : planner->spec.params()) {
+    const fba::ParamSpec* s = synthesis->spec.find_param(p.name);
+    if (!s) continue;
+    ++shared;
+    EXPECT_EQ(s->default_value, p.default_value) << p.name;
+    EXPECT_EQ(s->min, p.min) << p.name;
+    EXPECT_EQ(s->max, p.max) << p.name;
+    EXPECT_EQ(s->sizes, p.sizes) << p.name;
+    EXPECT_EQ(s->doc, p.doc) << p.name;
+  }
+  EXPECT_EQ(shared, 10);  // urdf, base_link, flange_link, flange_to_palm, standoff, lift_height, contact_allowance, max_backout, seed, ik_attempts
+  EXPECT_NE(synthesis->spec.find_input("joint_state"), nullptr);
+  EXPECT_NE(synthesis->spec.find_event("unreachable"), nullptr);
+}
