@@ -2,6 +2,7 @@
 // the master: SLCAN over a pseudo-terminal (the serial path) or a socketpair (the SocketCAN path).
 #pragma once
 
+#include <chrono>
 #include <memory>
 #include <string>
 #include <thread>
@@ -38,6 +39,10 @@ class EmulatedArm {
     }
     emulator_ = std::make_unique<emulators::CanopenArmEmulator>(*device_, options, noise_);
     thread_ = std::thread([this] { emulator_->run(); });
+    // The drives' power-on boot-ups go out before the master's first request (as when a master
+    // opens a bus whose drives are on): one arriving after a reset the master sends would be taken
+    // for its answer, and the answer for a reboot nobody asked for.
+    while (!emulator_->started()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     // Generous answer times: the emulator's thread may wait for a core on a loaded machine.
     if (transport == Transport::slcan_pty) {
       try {

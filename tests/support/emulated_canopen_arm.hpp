@@ -3,6 +3,7 @@
 // in another (fba-run), and the test reads what the drives heard and did.
 #pragma once
 
+#include <chrono>
 #include <functional>
 #include <memory>
 #include <string>
@@ -23,6 +24,9 @@ class EmulatedCanopenArm {
     options.nodes = {1, 2, 3, 4, 5, 6};
     emulator_ = std::make_unique<emulators::CanopenArmEmulator>(*adapter_, options, noise_);
     thread_ = std::thread([this] { emulator_->run(); });
+    // The drives' power-on boot-ups go out before a driver's first request, as on a bus whose
+    // drives are on when the task starts.
+    while (!emulator_->started()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   ~EmulatedCanopenArm() {
     emulator_->stop();

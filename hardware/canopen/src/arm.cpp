@@ -281,8 +281,8 @@ double CanopenArm::move_to(const std::vector<double>& targets, double speed) {
                                        joint_name(joints_[missing]), master_.options().sdo_timeout.count(), word));
       // The next SYNC a period on, or at the deadline: a missing acknowledge is found then, not a
       // period after it.
-      master_.spin_for(std::clamp(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()),
-                                  std::chrono::milliseconds(0), options_.sync_period));
+      master_.spin_for(std::clamp(std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()),
+                                  std::chrono::milliseconds(1), options_.sync_period));
       sync(master_.options().sdo_timeout);
     }
     set_point(base);

@@ -359,6 +359,7 @@ std::string CanopenArmEmulator::run() {
         n->nmt = kPreOperational;
         n->last_heartbeat = n->last_update = now;
       }
+      started_ = true;
     }
     while (!stop_) {
       {

@@ -79,6 +79,8 @@ class CanopenArmEmulator {
   // How many SDO downloads (writes) the node has heard: a driver's commands.
   std::uint64_t sdo_downloads(int node) const;
   std::uint64_t syncs_seen() const { return syncs_; }
+  // Whether run() has sent the nodes' power-on boot-up messages.
+  bool started() const { return started_; }
   // Whether silence(node) has taken effect.
   bool silent(int node) const;
   // The frames it heard, oldest first (the last kHeardKept): the order in which a driver's requests
@@ -109,6 +111,7 @@ class CanopenArmEmulator {
   std::deque<SyncSetPoints> set_points_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> syncs_{0};
+  std::atomic<bool> started_{false};
   bool disconnect_ = false;
 };
 
