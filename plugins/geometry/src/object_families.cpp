@@ -62,12 +62,6 @@ void quad(TriangleMesh& m, int a, int b, int c, int d) {
   triangle(m, a, c, d);
 }
 
-std::vector<Vector3f> box_corners(const Vector3d& lo, const Vector3d& hi) {
-  std::vector<Vector3f> out;
-  for (int i = 0; i < 8; ++i) out.push_back(at(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z()));
-  return out;
-}
-
 // A prism from z0 to z1 on a counter-clockwise loop. Without `inner`, each cap is a fan from
 // `kernel`, a point that sees every edge of the loop (inside its kernel, off every edge's line).
 // With `inner` (a counter-clockwise loop with as many points, the i-th on the ray from a common
@@ -145,13 +139,30 @@ std::vector<double> rectangle_corner_angles(const Vector2d& centre, double hx, d
   return out;
 }
 
-void centre_on_bounds(Shape& s) {
+ConvexPart box_part(const Vector3d& lo, const Vector3d& hi) {
+  ConvexPart p;
+  p.kind = ConvexPart::Kind::box;
+  p.centre = (lo + hi) / 2;
+  p.half = (hi - lo) / 2;
+  return p;
+}
+
+ConvexPart hull_part(const TriangleMesh& m) {
+  ConvexPart p;
+  p.points = m.vertices;
+  return p;
+}
+
+// The object moved so that its bounding box is centred on the origin, its parts with it.
+void centre_on_bounds(TriangleMesh& m, std::vector<ConvexPart>& parts) {
   Eigen::AlignedBox3f box;
-  for (const auto& v : s.mesh.vertices) box.extend(v);
+  for (const auto& v : m.vertices) box.extend(v);
   const Vector3f c = box.center();
-  for (auto& v : s.mesh.vertices) v -= c;
-  for (auto& piece : s.pieces)
-    for (auto& v : piece) v -= c;
+  for (auto& v : m.vertices) v -= c;
+  for (auto& p : parts) {
+    p.centre -= c.cast<double>();
+    for (auto& v : p.points) v -= c;
+  }
 }
 
 double radius(const TriangleMesh& m) {
@@ -192,28 +203,22 @@ std::uint64_t object_seed(std::uint64_t set_seed, ObjectFamily family, int index
   return splitmix64(splitmix64(splitmix64(set_seed) ^ h) ^ static_cast<std::uint64_t>(index));
 }
 
-Shape make_box_shape(double sx, double sy, double sz) {
+TriangleMesh make_box_shape(double sx, double sy, double sz) {
   require(sx > 0 && sy > 0 && sz > 0, "box: expected sizes > 0, found " + text(sx) + " x " + text(sy) + " x " + text(sz));
   const std::vector<Vector2d> loop = {{-sx / 2, -sy / 2}, {sx / 2, -sy / 2}, {sx / 2, sy / 2}, {-sx / 2, sy / 2}};
-  Shape s;
   // Not geometry::make_box: the same prism as the other families, its caps fanned from the centre.
-  s.mesh = prism(loop, nullptr, Vector2d::Zero(), -sz / 2, sz / 2);
-  s.pieces.push_back(box_corners(Vector3d(-sx / 2, -sy / 2, -sz / 2), Vector3d(sx / 2, sy / 2, sz / 2)));
-  return s;
+  return prism(loop, nullptr, Vector2d::Zero(), -sz / 2, sz / 2);
 }
 
-Shape make_cylinder_shape(double radius, double height, int segments) {
+TriangleMesh make_cylinder_shape(double radius, double height, int segments) {
   require(radius > 0 && height > 0 && segments >= 3,
           "cylinder: expected radius > 0, height > 0, segments >= 3; found " + text(radius) + ", " + text(height) + ", " + std::to_string(segments));
   std::vector<Vector2d> loop;
   for (int k = 0; k < segments; ++k) loop.emplace_back(radius * std::cos(2 * kPi * k / segments), radius * std::sin(2 * kPi * k / segments));
-  Shape s;
-  s.mesh = prism(loop, nullptr, Vector2d::Zero(), -height / 2, height / 2);
-  s.pieces.push_back(s.mesh.vertices);
-  return s;
+  return prism(loop, nullptr, Vector2d::Zero(), -height / 2, height / 2);
 }
 
-Shape make_superquadric_shape(const Eigen::Vector3d& semi, double e1, double e2, int n) {
+TriangleMesh make_superquadric_shape(const Eigen::Vector3d& semi, double e1, double e2, int n) {
   require(semi.minCoeff() > 0 && e1 > 0 && e1 <= 2 && e2 > 0 && e2 <= 2 && n >= 1,
           "superquadric: expected semi-axes > 0 and exponents in (0, 2]; found " + text(semi.x()) + ", " + text(semi.y()) + ", " +
               text(semi.z()) + " and " + text(e1) + ", " + text(e2));
@@ -225,11 +230,11 @@ Shape make_superquadric_shape(const Eigen::Vector3d& semi, double e1, double e2,
     const double f = std::pow(xy, e2 / e1) + std::pow(std::abs(d.z() / semi.z()), 2 / e1);
     return (std::pow(f, -e1 / 2) * d).cast<float>();
   };
-  Shape s;
+  TriangleMesh s;
   std::vector<int> index(static_cast<std::size_t>((n + 1) * (n + 1) * (n + 1)), -1);
   const auto vertex = [&](const Eigen::Vector3i& p) {
     int& id = index[static_cast<std::size_t>((p.x() * (n + 1) + p.y()) * (n + 1) + p.z())];
-    if (id < 0) id = add(s.mesh, surface_point(p.x(), p.y(), p.z()));
+    if (id < 0) id = add(s, surface_point(p.x(), p.y(), p.z()));
     return id;
   };
   for (int a = 0; a < 3; ++a) {
@@ -246,65 +251,50 @@ Shape make_superquadric_shape(const Eigen::Vector3d& semi, double e1, double e2,
             p[c] = v + dv[k];
             q[k] = vertex(p);
           }
-          if (side == n) quad(s.mesh, q[0], q[1], q[2], q[3]);
-          else quad(s.mesh, q[3], q[2], q[1], q[0]);
+          if (side == n) quad(s, q[0], q[1], q[2], q[3]);
+          else quad(s, q[3], q[2], q[1], q[0]);
         }
   }
-  s.pieces.push_back(s.mesh.vertices);
   return s;
 }
 
-Shape make_ring_shape(double major, double tube_radial, double tube_vertical, int major_segments, int minor_segments) {
+TriangleMesh make_ring_shape(double major, double tube_radial, double tube_vertical, int major_segments, int minor_segments) {
   require(tube_radial > 0 && tube_vertical > 0 && major > tube_radial && major_segments >= 3 && minor_segments >= 3,
           "ring: expected tube half-widths > 0 and a major radius above the radial one; found major " + text(major) + ", tube " +
               text(tube_radial) + " x " + text(tube_vertical));
-  Shape s;
+  TriangleMesh s;
   const auto id = [&](int i, int j) { return (i % major_segments) * minor_segments + j % minor_segments; };
   for (int i = 0; i < major_segments; ++i) {
     const double t = 2 * kPi * i / major_segments;
     for (int j = 0; j < minor_segments; ++j) {
       const double p = 2 * kPi * j / minor_segments;
       const double r = major + tube_radial * std::cos(p);
-      add(s.mesh, at(r * std::cos(t), r * std::sin(t), tube_vertical * std::sin(p)));
+      add(s, at(r * std::cos(t), r * std::sin(t), tube_vertical * std::sin(p)));
     }
   }
-  for (int i = 0; i < major_segments; ++i) {
-    for (int j = 0; j < minor_segments; ++j) quad(s.mesh, id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-    // A piece: the hull of two neighbouring cross-sections.
-    std::vector<Vector3f> piece;
-    for (int k : {i, i + 1})
-      for (int j = 0; j < minor_segments; ++j) piece.push_back(s.mesh.vertices[static_cast<std::size_t>(id(k, j))]);
-    s.pieces.push_back(std::move(piece));
-  }
+  for (int i = 0; i < major_segments; ++i)
+    for (int j = 0; j < minor_segments; ++j) quad(s, id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
   return s;
 }
 
-Shape make_l_shape(double length_x, double width_x, double length_y, double width_y, double thickness) {
+TriangleMesh make_l_shape(double length_x, double width_x, double length_y, double width_y, double thickness) {
   require(width_x > 0 && width_y > 0 && thickness > 0 && length_x > width_y && length_y > width_x,
           "L shape: expected widths and thickness > 0, each bar longer than the other is wide; found bars " + text(length_x) + " x " +
               text(width_x) + " and " + text(width_y) + " x " + text(length_y) + ", thickness " + text(thickness));
   const std::vector<Vector2d> loop = {{0, 0}, {length_x, 0}, {length_x, width_x}, {width_y, width_x}, {width_y, length_y}, {0, length_y}};
-  Shape s;
-  s.mesh = prism(loop, nullptr, Vector2d(width_y / 2, width_x / 2), 0, thickness);
-  s.pieces.push_back(box_corners(Vector3d(0, 0, 0), Vector3d(length_x, width_x, thickness)));
-  s.pieces.push_back(box_corners(Vector3d(0, 0, 0), Vector3d(width_y, length_y, thickness)));
-  return s;
+  return prism(loop, nullptr, Vector2d(width_y / 2, width_x / 2), 0, thickness);
 }
 
-Shape make_t_shape(double bar_length, double bar_width, double stem_length, double stem_width, double thickness) {
+TriangleMesh make_t_shape(double bar_length, double bar_width, double stem_length, double stem_width, double thickness) {
   require(bar_width > 0 && stem_length > 0 && stem_width > 0 && thickness > 0 && bar_length > stem_width,
           "T shape: expected sizes > 0 and a bar longer than the stem is wide; found bar " + text(bar_length) + " x " + text(bar_width) +
               ", stem " + text(stem_length) + " x " + text(stem_width) + ", thickness " + text(thickness));
   const double b = bar_length / 2, w = stem_width / 2;
   const std::vector<Vector2d> loop = {{-w, -stem_length}, {w, -stem_length}, {w, 0}, {b, 0}, {b, bar_width}, {-b, bar_width}, {-b, 0}, {-w, 0}};
-  Shape s;
-  s.mesh = prism(loop, nullptr, Vector2d(0, bar_width / 2), 0, thickness);
-  s.pieces.push_back(box_corners(Vector3d(-b, 0, 0), Vector3d(b, bar_width, thickness)));
-  s.pieces.push_back(box_corners(Vector3d(-w, -stem_length, 0), Vector3d(w, 0, thickness)));
-  return s;
+  return prism(loop, nullptr, Vector2d(0, bar_width / 2), 0, thickness);
 }
 
-Shape make_tool_shape(double handle_radius, double handle_length, double head_x, double head_y, double head_z, int segments) {
+TriangleMesh make_tool_shape(double handle_radius, double handle_length, double head_x, double head_y, double head_z, int segments) {
   require(handle_radius > 0 && handle_length > 0 && head_x > 0 && 2 * handle_radius < std::min(head_y, head_z) && segments >= 3,
           "tool: expected sizes > 0 and a handle narrower than the head's face; found handle radius " + text(handle_radius) + ", length " +
               text(handle_length) + ", head " + text(head_x) + " x " + text(head_y) + " x " + text(head_z));
@@ -313,8 +303,8 @@ Shape make_tool_shape(double handle_radius, double handle_length, double head_x,
   const double hu = head_y / 2, hv = head_z / 2;
   const std::vector<double> angles = ray_angles(segments, rectangle_corner_angles(Vector2d::Zero(), hu, hv));
   const int n = static_cast<int>(angles.size());
-  Shape s;
-  const auto put = [&](double u, double v, double w) { return add(s.mesh, at(w, u, v)); };
+  TriangleMesh s;
+  const auto put = [&](double u, double v, double w) { return add(s, at(w, u, v)); };
   std::vector<Vector2d> face, circle;
   for (double a : angles) {
     face.push_back(rectangle_ray(Vector2d::Zero(), hu, hv, a));
@@ -328,22 +318,16 @@ Shape make_tool_shape(double handle_radius, double handle_length, double head_x,
   const int top = put(0, 0, head_x), end = put(0, 0, -handle_length);
   for (int i = 0; i < n; ++i) {
     const int j = (i + 1) % n;
-    quad(s.mesh, o0[i], o0[j], o1[j], o1[i]);  // the head's sides
-    triangle(s.mesh, top, o1[i], o1[j]);       // the head's far face (+w)
-    quad(s.mesh, c0[i], c0[j], o0[j], o0[i]);  // the head's near face (-w) around the handle
-    quad(s.mesh, c1[i], c1[j], c0[j], c0[i]);  // the handle's side
-    triangle(s.mesh, end, c1[j], c1[i]);       // the handle's end (-w)
+    quad(s, o0[i], o0[j], o1[j], o1[i]);  // the head's sides
+    triangle(s, top, o1[i], o1[j]);       // the head's far face (+w)
+    quad(s, c0[i], c0[j], o0[j], o0[i]);  // the head's near face (-w) around the handle
+    quad(s, c1[i], c1[j], c0[j], c0[i]);  // the handle's side
+    triangle(s, end, c1[j], c1[i]);       // the handle's end (-w)
   }
-  std::vector<Vector3f> head, handle;
-  for (int i : o0) head.push_back(s.mesh.vertices[static_cast<std::size_t>(i)]);
-  for (int i : o1) head.push_back(s.mesh.vertices[static_cast<std::size_t>(i)]);
-  for (int i : c0) handle.push_back(s.mesh.vertices[static_cast<std::size_t>(i)]);
-  for (int i : c1) handle.push_back(s.mesh.vertices[static_cast<std::size_t>(i)]);
-  s.pieces = {head, handle};
   return s;
 }
 
-Shape make_holed_box_shape(double sx, double sy, double sz, bool round, double hole_size, double hole_x, double hole_y, int segments) {
+TriangleMesh make_holed_box_shape(double sx, double sy, double sz, bool round, double hole_size, double hole_x, double hole_y, int segments) {
   const double hx = sx / 2, hy = sy / 2;
   // A round hole reaches its radius along x and y from its centre, a square one its half-side.
   require(sz > 0 && hole_size > 0 && std::abs(hole_x) + hole_size < hx && std::abs(hole_y) + hole_size < hy && segments >= 3,
@@ -361,20 +345,7 @@ Shape make_holed_box_shape(double sx, double sy, double sz, bool round, double h
     const Vector2d d(std::cos(a), std::sin(a));
     inner.push_back(c + (round ? hole_size : hole_size / std::max(std::abs(d.x()), std::abs(d.y()))) * d);
   }
-  Shape s;
-  s.mesh = prism(outer, &inner, Vector2d::Zero(), -sz / 2, sz / 2);
-  // A piece per sector between two neighbouring rays: the quad between the loops, a prism.
-  const int n = static_cast<int>(angles.size());
-  for (int i = 0; i < n; ++i) {
-    std::vector<Vector3f> piece;
-    for (int k : {i, (i + 1) % n})
-      for (double z : {-sz / 2, sz / 2}) {
-        piece.push_back(at(outer[k].x(), outer[k].y(), z));
-        piece.push_back(at(inner[k].x(), inner[k].y(), z));
-      }
-    s.pieces.push_back(std::move(piece));
-  }
-  return s;
+  return prism(outer, &inner, Vector2d::Zero(), -sz / 2, sz / 2);
 }
 
 SolidProperties solid_properties(const TriangleMesh& mesh) {
@@ -424,7 +395,8 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
       p.emplace_back(key, v);
       return v;
     };
-    Shape s;
+    TriangleMesh s;
+    std::vector<ConvexPart> parts;
     switch (family) {
       case ObjectFamily::box: {
         // Blocks: each side 3-15 cm, log-uniform (every aspect ratio, cubes to sticks); plates:
@@ -434,6 +406,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         const double sy = draw("size_y", mm10(even ? d.log_uniform(0.03, 0.15) : d.uniform(0.04, 0.15)));
         const double sz = draw("size_z", mm10(even ? d.log_uniform(0.03, 0.15) : d.uniform(0.01, 0.03)));
         s = make_box_shape(sx, sy, sz);
+        parts = {box_part(Vector3d(-sx, -sy, -sz) / 2, Vector3d(sx, sy, sz) / 2)};
         break;
       }
       case ObjectFamily::cylinder: {
@@ -445,11 +418,18 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         const double h = draw("height", mm10(2 * r * aspect));
         if (h < 0.015) continue;
         s = make_cylinder_shape(r, h);
+        parts.emplace_back();
+        parts[0].kind = ConvexPart::Kind::cylinder;
+        parts[0].half = Vector3d(r, r, h / 2);
         break;
       }
       case ObjectFamily::sphere: {
         o.kind = "sphere";
-        s = make_superquadric_shape(Vector3d::Constant(draw("radius", mm10(d.uniform(0.02, 0.07)))), 1, 1);
+        const double r = draw("radius", mm10(d.uniform(0.02, 0.07)));
+        s = make_superquadric_shape(Vector3d::Constant(r), 1, 1);
+        parts.emplace_back();
+        parts[0].kind = ConvexPart::Kind::ellipsoid;
+        parts[0].half = Vector3d::Constant(r);
         break;
       }
       case ObjectFamily::ellipsoid: {
@@ -459,6 +439,9 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         const double b = draw("semi_y", mm10(d.log_uniform(0.015, 0.075)));
         const double c = draw("semi_z", mm10(d.log_uniform(0.015, 0.075)));
         s = make_superquadric_shape(Vector3d(a, b, c), 1, 1);
+        parts.emplace_back();
+        parts[0].kind = ConvexPart::Kind::ellipsoid;
+        parts[0].half = Vector3d(a, b, c);
         break;
       }
       case ObjectFamily::superquadric: {
@@ -470,6 +453,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         const double e1 = draw("exponent_ns", hundredths(d.uniform(0.2, 2.0)));
         const double e2 = draw("exponent_ew", hundredths(d.uniform(0.2, 2.0)));
         s = make_superquadric_shape(Vector3d(a, b, c), e1, e2);
+        parts = {hull_part(s)};
         break;
       }
       case ObjectFamily::ring: {
@@ -482,6 +466,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         const double major = mm10(hole + radial);
         p.insert(p.begin(), {"major_radius", major});
         s = make_ring_shape(major, radial, vertical);
+        parts = {hull_part(s)};
         break;
       }
       case ObjectFamily::l_shape: {
@@ -495,6 +480,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         const double t = draw("thickness", mm10(d.uniform(0.015, 0.05)));
         if (lx < wy + 0.015 || ly < wx + 0.015) continue;
         s = make_l_shape(lx, wx, ly, wy, t);
+        parts = {box_part(Vector3d(0, 0, 0), Vector3d(lx, wx, t)), box_part(Vector3d(0, 0, 0), Vector3d(wy, ly, t))};
         break;
       }
       case ObjectFamily::t_shape: {
@@ -508,6 +494,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         const double t = draw("thickness", mm10(d.uniform(0.015, 0.05)));
         if (bl < sw + 0.03) continue;
         s = make_t_shape(bl, bw, sl, sw, t);
+        parts = {box_part(Vector3d(-bl / 2, 0, 0), Vector3d(bl / 2, bw, t)), box_part(Vector3d(-sw / 2, -sl, 0), Vector3d(sw / 2, 0, t))};
         break;
       }
       case ObjectFamily::tool: {
@@ -521,6 +508,13 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         const double hz = draw("head_z", mm10(d.uniform(0.02, 0.05)));
         if (std::min(hy, hz) < 2 * rh + 0.006) continue;
         s = make_tool_shape(rh, lh, hx, hy, hz);
+        parts = {box_part(Vector3d(0, -hy / 2, -hz / 2), Vector3d(hx, hy / 2, hz / 2))};
+        ConvexPart handle;  // along x: its own z is the object's x (its x, y the object's y, z)
+        handle.kind = ConvexPart::Kind::cylinder;
+        handle.centre = Vector3d(-lh / 2, 0, 0);
+        handle.axes << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+        handle.half = Vector3d(rh, rh, lh / 2);
+        parts.push_back(handle);
         break;
       }
       case ObjectFamily::holed: {
@@ -536,13 +530,15 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         const double x = draw("hole_x", mm10(d.uniform(-mx, mx)));
         const double y = draw("hole_y", mm10(d.uniform(-my, my)));
         s = make_holed_box_shape(sx, sy, sz, even, size, x, y);
+        parts = {box_part(Vector3d(-sx, -sy, -sz) / 2, Vector3d(sx, sy, sz) / 2)};  // its hull
         break;
       }
     }
-    centre_on_bounds(s);
-    if (radius(s.mesh) > kMaxObjectRadius) continue;
+    centre_on_bounds(s, parts);
+    if (radius(s) > kMaxObjectRadius) continue;
     o.parameters = std::move(p);
-    o.shape = std::move(s);
+    o.mesh = std::move(s);
+    o.parts = std::move(parts);
     return o;
   }
   throw std::logic_error("object families: no " + o.name + " within " + text(kMaxObjectRadius) + " m of its centre in 10000 draws");

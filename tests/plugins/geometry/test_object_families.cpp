@@ -1,12 +1,11 @@
 // The object families (issue 31): every mesh one closed, consistently outward surface of positive
 // volume that reads back closed from an OBJ, the volume its parameters give, within the documented
 // ranges and the grasp task's workspace, the same for the same seed.
+#include <algorithm>
 #include <cmath>
-#include <map>
 #include <numbers>
 #include <set>
 #include <string>
-#include <tuple>
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -20,27 +19,6 @@ namespace fba::geometry::test {
 namespace {
 
 using std::numbers::pi;
-
-// What is wrong with the mesh as a closed, consistently oriented surface ("" when nothing): each
-// directed edge once, and its reverse once (so each edge has two triangles, which run it in opposite
-// directions); no degenerate triangle; no two vertices at one position.
-std::string closed_surface_fault(const TriangleMesh& m) {
-  std::map<std::pair<int, int>, int> directed;
-  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
-    const auto& tri = m.triangles[t];
-    const Eigen::Vector3d a = m.vertices[tri[0]].cast<double>(), b = m.vertices[tri[1]].cast<double>(), c = m.vertices[tri[2]].cast<double>();
-    if (!((b - a).cross(c - a).norm() / 2 > 1e-10)) return "triangle " + std::to_string(t) + " is degenerate";
-    for (int k = 0; k < 3; ++k)
-      if (++directed[{tri[k], tri[(k + 1) % 3]}] > 1)
-        return "edge " + std::to_string(tri[k]) + "-" + std::to_string(tri[(k + 1) % 3]) + " runs the same way in two triangles";
-  }
-  for (const auto& [e, n] : directed)
-    if (!directed.count({e.second, e.first})) return "edge " + std::to_string(e.first) + "-" + std::to_string(e.second) + " has one triangle";
-  std::set<std::tuple<float, float, float>> at;
-  for (const auto& v : m.vertices)
-    if (!at.emplace(v.x(), v.y(), v.z()).second) return "two vertices at one position";
-  return "";
-}
 
 struct ObjectCase {
   ObjectFamily family;
@@ -60,16 +38,15 @@ TEST(ObjectFamilies, EveryObjectIsOneClosedOutwardSurfaceCentredWithinTheRadius)
   for (const auto& c : many_objects()) {
     const FamilyObject o = make_family_object(c.family, c.seed, c.index);
     SCOPED_TRACE(o.name + " of seed " + std::to_string(c.seed));
-    EXPECT_EQ(closed_surface_fault(o.shape.mesh), "");
-    const double volume = signed_volume(o.shape.mesh);
+    EXPECT_EQ(closed_surface_fault(o.mesh), "");
+    const double volume = signed_volume(o.mesh);
     EXPECT_GT(volume, 1e-6);  // positive: the triangles face outward
-    EXPECT_NEAR(solid_properties(o.shape.mesh).volume, volume, 1e-9 * std::max(1.0, volume));
-    const auto box = mesh_bounds(o.shape.mesh);
+    EXPECT_NEAR(solid_properties(o.mesh).volume, volume, 1e-9 * std::max(1.0, volume));
+    const auto box = mesh_bounds(o.mesh);
     EXPECT_LT(box.center().norm(), 1e-6);
     double r = 0;
-    for (const auto& v : o.shape.mesh.vertices) r = std::max(r, v.cast<double>().norm());
+    for (const auto& v : o.mesh.vertices) r = std::max(r, v.cast<double>().norm());
     EXPECT_LE(r, kMaxObjectRadius);
-    EXPECT_FALSE(o.shape.pieces.empty());
   }
 }
 
@@ -82,12 +59,12 @@ TEST(ObjectFamilies, EveryObjectReadsBackFromAnObjAsTheSameClosedSurface) {
       const FamilyObject o = make_family_object(f, 5, i);
       SCOPED_TRACE(o.name);
       const auto path = dir.path() / (o.name + ".obj");
-      fba::test::write_obj(o.shape.mesh, path);
+      fba::test::write_obj(o.mesh, path);
       const TriangleMesh back = load_mesh(path);
-      EXPECT_EQ(back.vertices.size(), o.shape.mesh.vertices.size());
-      EXPECT_EQ(back.triangles.size(), o.shape.mesh.triangles.size());
+      EXPECT_EQ(back.vertices.size(), o.mesh.vertices.size());
+      EXPECT_EQ(back.triangles.size(), o.mesh.triangles.size());
       EXPECT_EQ(closed_surface_fault(back), "");
-      EXPECT_NEAR(signed_volume(back), signed_volume(o.shape.mesh), 1e-12);
+      EXPECT_NEAR(signed_volume(back), signed_volume(o.mesh), 1e-12);
     }
 }
 
@@ -104,36 +81,36 @@ double polygon_area(int sides, double r) { return sides / 2.0 * r * r * std::sin
 TEST(ObjectFamilies, VolumesAreWhatTheParametersGive) {
   for (int i = 0; i < 6; ++i) {
     const auto box = make_family_object(ObjectFamily::box, 3, i);
-    EXPECT_NEAR(signed_volume(box.shape.mesh), param(box, "size_x") * param(box, "size_y") * param(box, "size_z"), 1e-9) << box.name;
+    EXPECT_NEAR(signed_volume(box.mesh), param(box, "size_x") * param(box, "size_y") * param(box, "size_z"), 1e-9) << box.name;
     const auto cyl = make_family_object(ObjectFamily::cylinder, 3, i);
-    EXPECT_NEAR(signed_volume(cyl.shape.mesh), polygon_area(64, param(cyl, "radius")) * param(cyl, "height"), 1e-9) << cyl.name;
+    EXPECT_NEAR(signed_volume(cyl.mesh), polygon_area(64, param(cyl, "radius")) * param(cyl, "height"), 1e-9) << cyl.name;
     const auto sphere = make_family_object(ObjectFamily::sphere, 3, i);
     const double r = param(sphere, "radius");
     // Its vertices lie on the sphere: a polyhedron inscribed, within 1.5% of the ball.
-    EXPECT_LT(signed_volume(sphere.shape.mesh), 4.0 / 3 * pi * r * r * r) << sphere.name;
-    EXPECT_GT(signed_volume(sphere.shape.mesh), 0.985 * 4.0 / 3 * pi * r * r * r) << sphere.name;
+    EXPECT_LT(signed_volume(sphere.mesh), 4.0 / 3 * pi * r * r * r) << sphere.name;
+    EXPECT_GT(signed_volume(sphere.mesh), 0.985 * 4.0 / 3 * pi * r * r * r) << sphere.name;
     const auto ring = make_family_object(ObjectFamily::ring, 3, i);
     const double torus = 2 * pi * pi * param(ring, "major_radius") * param(ring, "tube_radial") * param(ring, "tube_vertical");
-    EXPECT_NEAR(signed_volume(ring.shape.mesh), torus, 0.015 * torus) << ring.name;
+    EXPECT_NEAR(signed_volume(ring.mesh), torus, 0.015 * torus) << ring.name;
     const auto l = make_family_object(ObjectFamily::l_shape, 3, i);
     const double l_area = param(l, "length_x") * param(l, "width_x") + param(l, "width_y") * (param(l, "length_y") - param(l, "width_x"));
-    EXPECT_NEAR(signed_volume(l.shape.mesh), l_area * param(l, "thickness"), 1e-9) << l.name;
+    EXPECT_NEAR(signed_volume(l.mesh), l_area * param(l, "thickness"), 1e-9) << l.name;
     const auto t = make_family_object(ObjectFamily::t_shape, 3, i);
     const double t_area = param(t, "bar_length") * param(t, "bar_width") + param(t, "stem_length") * param(t, "stem_width");
-    EXPECT_NEAR(signed_volume(t.shape.mesh), t_area * param(t, "thickness"), 1e-9) << t.name;
+    EXPECT_NEAR(signed_volume(t.mesh), t_area * param(t, "thickness"), 1e-9) << t.name;
     const auto holed = make_family_object(ObjectFamily::holed, 3, i);
     const double box_v = param(holed, "size_x") * param(holed, "size_y") * param(holed, "size_z");
     if (holed.kind == "square hole") {
       const double s = param(holed, "hole_half_side");
-      EXPECT_NEAR(signed_volume(holed.shape.mesh), box_v - 4 * s * s * param(holed, "size_z"), 1e-9) << holed.name;
+      EXPECT_NEAR(signed_volume(holed.mesh), box_v - 4 * s * s * param(holed, "size_z"), 1e-9) << holed.name;
     } else {
       const double hole = pi * std::pow(param(holed, "hole_radius"), 2) * param(holed, "size_z");
-      EXPECT_NEAR(signed_volume(holed.shape.mesh), box_v - hole, 0.01 * hole) << holed.name;
+      EXPECT_NEAR(signed_volume(holed.mesh), box_v - hole, 0.01 * hole) << holed.name;
     }
     const auto tool = make_family_object(ObjectFamily::tool, 3, i);
     const double head = param(tool, "head_x") * param(tool, "head_y") * param(tool, "head_z");
     const double handle = pi * std::pow(param(tool, "handle_radius"), 2) * param(tool, "handle_length");
-    EXPECT_NEAR(signed_volume(tool.shape.mesh), head + handle, 0.01 * handle) << tool.name;
+    EXPECT_NEAR(signed_volume(tool.mesh), head + handle, 0.01 * handle) << tool.name;
   }
 }
 
@@ -148,8 +125,8 @@ TEST(ObjectFamilies, SuperquadricsAreInscribedInTheirSurfaceAndCloseToItsVolume)
     EXPECT_LE(e1, 2.0);
     const double v = 2 * param(o, "semi_x") * param(o, "semi_y") * param(o, "semi_z") * e1 * e2 * std::beta(e1 / 2 + 1, e1) *
                      std::beta(e2 / 2, e2 / 2);
-    EXPECT_LT(signed_volume(o.shape.mesh), v) << o.name << " e " << e1 << " " << e2;
-    EXPECT_GT(signed_volume(o.shape.mesh), 0.93 * v) << o.name << " e " << e1 << " " << e2;
+    EXPECT_LT(signed_volume(o.mesh), v) << o.name << " e " << e1 << " " << e2;
+    EXPECT_GT(signed_volume(o.mesh), 0.93 * v) << o.name << " e " << e1 << " " << e2;
   }
 }
 
@@ -215,8 +192,8 @@ TEST(ObjectFamilies, TheSameSeedMakesTheSameObjectAndAnotherSeedAnother) {
     const auto a = make_family_object(f, 42, 5), b = make_family_object(f, 42, 5), c = make_family_object(f, 43, 5);
     EXPECT_EQ(a.name, std::string(family_name(f)) + "-05");
     EXPECT_EQ(a.parameters, b.parameters);
-    ASSERT_EQ(a.shape.mesh.vertices.size(), b.shape.mesh.vertices.size());
-    for (std::size_t i = 0; i < a.shape.mesh.vertices.size(); ++i) ASSERT_EQ(a.shape.mesh.vertices[i], b.shape.mesh.vertices[i]);
+    ASSERT_EQ(a.mesh.vertices.size(), b.mesh.vertices.size());
+    for (std::size_t i = 0; i < a.mesh.vertices.size(); ++i) ASSERT_EQ(a.mesh.vertices[i], b.mesh.vertices[i]);
     EXPECT_NE(a.parameters, c.parameters) << a.name;
     EXPECT_NE(object_seed(42, f, 5), object_seed(42, f, 6));
   }
@@ -251,8 +228,7 @@ TEST(ObjectFamilies, ParametersThatGiveNoSolidAreRefusedByName) {
 }
 
 TEST(ObjectFamilies, SolidPropertiesOfABoxAreItsOwn) {
-  const Shape s = make_box_shape(0.1, 0.06, 0.02);
-  TriangleMesh m = s.mesh;
+  TriangleMesh m = make_box_shape(0.1, 0.06, 0.02);
   for (auto& v : m.vertices) v += Eigen::Vector3f(0.01f, -0.02f, 0.03f);
   const SolidProperties p = solid_properties(m);
   EXPECT_NEAR(p.volume, 0.1 * 0.06 * 0.02, 1e-6 * 0.1 * 0.06 * 0.02);  // float vertices
@@ -263,22 +239,40 @@ TEST(ObjectFamilies, SolidPropertiesOfABoxAreItsOwn) {
   EXPECT_NEAR(p.inertia(0, 1), 0, 1e-9);
 }
 
-// The pieces physics collides are where the mesh is: every vertex of the mesh lies in the bounds of
-// a piece, and every piece's points within the mesh's bounds.
-TEST(ObjectFamilies, ConvexPiecesCoverTheMesh) {
+// The parts physics collides are the object: every vertex of the mesh lies in a part, and every part
+// within the mesh's bounds (0.1 mm either way: the cylinders and spheres are the polygons' circles).
+TEST(ObjectFamilies, ConvexPartsAreTheObject) {
+  constexpr double tolerance = 1e-4;
   for (ObjectFamily f : all_families())
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < 6; ++i) {
       const FamilyObject o = make_family_object(f, 9, i);
-      std::vector<Eigen::AlignedBox3f> boxes;
-      for (const auto& piece : o.shape.pieces) {
-        Eigen::AlignedBox3f b;
-        for (const auto& v : piece) b.extend(v);
-        boxes.push_back(b);
+      SCOPED_TRACE(o.name);
+      ASSERT_FALSE(o.parts.empty());
+      const auto in_part = [&](const ConvexPart& p, const Eigen::Vector3d& v) {
+        const Eigen::Vector3d q = p.axes.transpose() * (v - p.centre);
+        switch (p.kind) {
+          case ConvexPart::Kind::box: return (q.cwiseAbs() - p.half).maxCoeff() <= tolerance;
+          case ConvexPart::Kind::cylinder: return q.head<2>().norm() <= p.half.x() + tolerance && std::abs(q.z()) <= p.half.z() + tolerance;
+          case ConvexPart::Kind::ellipsoid: return q.cwiseQuotient(p.half + Eigen::Vector3d::Constant(tolerance)).norm() <= 1;
+          case ConvexPart::Kind::hull: return std::find(p.points.begin(), p.points.end(), v.cast<float>()) != p.points.end();
+        }
+        return false;
+      };
+      for (const auto& v : o.mesh.vertices)
+        ASSERT_TRUE(std::any_of(o.parts.begin(), o.parts.end(), [&](const ConvexPart& p) { return in_part(p, v.cast<double>()); }))
+            << "vertex " << v.transpose() << " is in no part";
+      const Eigen::AlignedBox3d bounds = mesh_bounds(o.mesh);
+      for (const auto& p : o.parts) {
+        Eigen::AlignedBox3d part;
+        if (p.kind == ConvexPart::Kind::hull)
+          for (const auto& v : p.points) part.extend(v.cast<double>());
+        else
+          for (int c = 0; c < 8; ++c)
+            part.extend(p.centre + p.axes * Eigen::Vector3d(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1).cwiseProduct(p.half));
+        EXPECT_LE(bounds.exteriorDistance(part.min()), tolerance);
+        EXPECT_LE(bounds.exteriorDistance(part.max()), tolerance);
+        EXPECT_NEAR(p.axes.determinant(), 1, 1e-12);
       }
-      const Eigen::AlignedBox3d all = mesh_bounds(o.shape.mesh);
-      for (const auto& b : boxes) EXPECT_TRUE(all.cast<float>().exteriorDistance(b.min()) < 1e-6f && all.cast<float>().exteriorDistance(b.max()) < 1e-6f) << o.name;
-      for (const auto& v : o.shape.mesh.vertices)
-        EXPECT_TRUE(std::any_of(boxes.begin(), boxes.end(), [&](const auto& b) { return b.exteriorDistance(v) < 1e-6f; })) << o.name;
     }
 }
 
