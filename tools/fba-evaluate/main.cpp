@@ -15,6 +15,9 @@
 //       Grasp quality on the true surface (grasp.cpp; see its --help).
 //   fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR]
 //       The grasp loop over objects and poses, run by fba-run, and the targets' table (grasp_batch.cpp).
+//   fba-evaluate families --seed S -o DIR [--per-family 10] [--poses 3] [--families ...] [--with-ycb]
+//       Object meshes by family, each resting as it settles in MuJoCo, and a batch list over them
+//       at random poses (families.cpp).
 
 #include <cmath>
 #include <cstdio>
@@ -300,9 +303,11 @@ int run_model(const std::vector<std::string>& args) {
 
 }  // namespace
 
-// The grasp subcommand lives in grasp.cpp (grasp quality on the true surface).
+// The grasp subcommand lives in grasp.cpp (grasp quality on the true surface), the families one in
+// families.cpp.
 namespace fba::evaluate {
 int run_grasp(const std::vector<std::string>& args);
+int run_families(const std::vector<std::string>& args);
 }
 
 int main(int argc, char** argv) {
@@ -311,6 +316,7 @@ int main(int argc, char** argv) {
       "       fba-evaluate model --model carved.ply [--mesh truth.obj] [--images set] [--task T.yaml [--set c.p=v]] [--depth 6]\n"
       "       fba-evaluate grasp --mesh M.obj (--summary run/summary.json | --random 1000 | --synthesise)\n"
       "       fba-evaluate grasp --batch LIST.yaml [--jobs N] [-o DIR]\n"
+      "       fba-evaluate families --seed S -o DIR [--per-family 10] [--poses 3] [--families box ring ...] [--with-ycb]\n"
       "       fba-evaluate <command> --help\n";
   if (argc < 2) {
     std::cerr << usage;
@@ -322,6 +328,7 @@ int main(int argc, char** argv) {
     if (command == "synthetic") return run_synthetic(args);
     if (command == "model") return run_model(args);
     if (command == "grasp") return evaluate::run_grasp(args);
+    if (command == "families") return evaluate::run_families(args);
     if (command == "--help" || command == "-h") {
       std::cout << usage;
       return 0;
