@@ -3,7 +3,7 @@
 // the reliability threshold on a resolved part of the model is selected; otherwise it says where
 // information is missing (regions of interest: the carver's grasp-specific criterion and the
 // exploration planner's request for a new view), until max_views, when it gives up with the reason.
-// With the arm's joints (joint_state), a candidate the arm cannot reach from where it stands is
+// With the arm's joints (joint_state), a candidate the arm cannot reach is
 // passed over (FBA_GRASP_REACH: the grasp plugin is linked with fba::motion, the reach planner).
 #include <algorithm>
 #include <chrono>
@@ -180,19 +180,21 @@ class GraspSynthesisFilter final : public fba::Component {
 #if FBA_GRASP_REACH
   static constexpr fba::OptionalIn<fba::JointState> kJointState{
       "joint_state",
-      "the arm's joints (the newest is used): once one has arrived, a candidate the arm cannot reach from there is passed over "
-      "(its pregrasp has no IK solution, or no collision-free approach or lift: motion.reach_planner's reachable(), with the reach "
-      "parameters below, which the planner shares). Best candidates first, until one is reachable"};
+      "the arm's joints (the newest is used): once one has arrived, a candidate the arm cannot reach is passed over (its pregrasp "
+      "has no IK solution near these joints, or the arm there, the approach or the lift collides: motion.reach_planner's "
+      "reachable(), with the reach parameters below, which the planner shares). Best candidates first, until one is reachable. "
+      "Whether the arm can start from where it stands (its hand clear of the model, or backed out of it) is checked for the one "
+      "selected and reported (result 'reach', 'start'), not held against the candidates: no grasp clears a start"};
   static constexpr fba::EventOut kUnreachable{
       "unreachable",
-      "no candidate on the model is reachable by the arm from where it stands; synthesis asks for views as when none is reliable. "
+      "no candidate on the model is reachable by the arm; synthesis asks for views as when none is reliable. "
       "Payload (JSON): views, candidates, checked, passed_over (per refusal: count and an example reason), unchecked (beyond "
       "reach_checks), seconds"};
   static constexpr auto kReachChecks = fba::Param<int>(
-      "reach_checks", 8,
+      "reach_checks", 4,
       "with joint_state: at most this many candidates of one model are checked as far as the arm's inverse kinematics (tens of "
       "milliseconds each when there is no solution), best first; the ones after them are neither selected on that model nor passed "
-      "over").range(1, 1000);
+      "over (4: about 0.1 s a model at depth 6 on the grasp task, two threads)").range(1, 1000);
 #endif
 
   static fba::Spec spec() {
@@ -240,9 +242,14 @@ class GraspSynthesisFilter final : public fba::Component {
 #if FBA_GRASP_REACH
     // The arm's reach, when its joints are wired: the planner's check, with its parameters.
     if (ctx(kJointState).connected()) {
+      // Whether the arm reaches a candidate, not yet how: the grasp alone (its pregrasp, approach and
+      // lift), from where the arm stands; whether it can start from there, for the one selected.
       fba::motion::ReachParams quick;
-      quick.first_solution = true;  // whether the arm reaches a candidate, not yet how
+      quick.first_solution = true;
+      quick.check_start = false;
       reach_.emplace(fba::motion::ReachParameters::planner(ctx, quick));
+      quick.check_start = true;
+      reach_start_.emplace(fba::motion::ReachParameters::planner(ctx, quick));
       reach_checks_ = ctx(kReachChecks);
       params_.pregrasp_distance = reach_->params().standoff;  // the table's check at the pregrasp, where the path ends
     }
@@ -341,6 +348,7 @@ class GraspSynthesisFilter final : public fba::Component {
                         "({:.3f}, {:.3f}, {:.3f})",
                         c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                         c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
+        reach.start_for(i);
         return select(c.grasp, views, "surface");
       }
       if (c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
@@ -356,11 +364,12 @@ class GraspSynthesisFilter final : public fba::Component {
                           "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
                           c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                           c.model_epsilon);
+          reach.start_for(i);
           return select(c.grasp, views, "contacts");
         }
       if (reach.active && !r.candidates.empty() && !first_reachable)
         return fail("no grasp the arm can reach after " + std::to_string(views) + " views: none of the " +
-                    std::to_string(r.candidates.size()) + " candidates is reachable from where it stands; passed over: " +
+                    std::to_string(r.candidates.size()) + " candidates is reachable by the arm; passed over: " +
                     reach.passed.text() + reach.unchecked_text());
       // The candidates the arm cannot reach, whatever else held the others back.
       const std::string passed = reach.passed.total > 0 ? "; passed over as out of the arm's reach: " + reach.passed.text() : "";
@@ -496,6 +505,8 @@ class GraspSynthesisFilter final : public fba::Component {
     std::vector<std::optional<Verdict>> ahead;
     std::function<void()> prepare;  // once, before the first check (the model's obstacles)
     std::function<Verdict(std::size_t)> check;  // thread-safe
+    std::function<Verdict(std::size_t)> check_start;  // the same from where the arm stands
+    nlohmann::json start;  // for the candidate selected: whether the arm starts from where it stands
     fba::ParallelFor parallel_for;
     std::size_t batch = 1;
     spdlog::logger* log = nullptr;
@@ -518,6 +529,15 @@ class GraspSynthesisFilter final : public fba::Component {
       return v.ok;
     }
     bool passed_over(std::size_t i) const { return active && state[i] == 0; }
+    // Whether the arm can start the selected candidate's reach from where it stands: its hand clear
+    // of the model, or backed out of it. When it cannot, motion.reach_planner refuses the plan from
+    // there; no other candidate would do better, so it is selected all the same, and said.
+    void start_for(std::size_t i) {
+      if (!active || !check_start) return;
+      const Verdict v = check_start(i);
+      start = v.ok ? nlohmann::json("clear") : nlohmann::json{{"refusal", v.refusal}, {"reason", v.why}};
+      if (!v.ok) log->warn("the arm cannot start the selected grasp's reach from where it stands ({}): {}", v.refusal, v.why);
+    }
     std::string unchecked_text() const {
       return unchecked == 0 ? "" : "; " + std::to_string(unchecked) + " not checked (reach_checks: " + std::to_string(budget) + ")";
     }
@@ -558,18 +578,22 @@ class GraspSynthesisFilter final : public fba::Component {
     // The model's obstacles, built once for the checks of this model.
     auto obstacles = std::make_shared<std::shared_ptr<const fba::motion::ModelObstacles>>();
     reach.prepare = [&model, obstacles] { *obstacles = fba::motion::ReachPlanner::obstacles(model); };
-    reach.check = [this, &candidates, joints, why, obstacles](std::size_t i) -> Reach::Verdict {
-      if (!joints) return {false, false, fba::motion::to_string(fba::motion::Refusal::Start), why};
-      const fba::motion::ReachPlan plan = reach_->reachable(candidates[i].grasp, *obstacles, *joints);
-      return {plan.ok, plan.figures.ik_attempts > 0, fba::motion::to_string(plan.refusal), plan.why};
+    auto check_with = [&candidates, joints, why, obstacles](const fba::motion::ReachPlanner& planner) {
+      return [&planner, &candidates, joints, why, obstacles](std::size_t i) -> Reach::Verdict {
+        if (!joints) return {false, false, fba::motion::to_string(fba::motion::Refusal::Start), why};
+        const fba::motion::ReachPlan plan = planner.reachable(candidates[i].grasp, *obstacles, *joints);
+        return {plan.ok, plan.figures.ik_attempts > 0, fba::motion::to_string(plan.refusal), plan.why};
+      };
     };
+    reach.check = check_with(*reach_);
+    reach.check_start = check_with(*reach_start_);
 #endif
     return reach;
   }
 
   void say_unreachable([[maybe_unused]] const Reach& reach, [[maybe_unused]] int views, [[maybe_unused]] std::size_t candidates) {
 #if FBA_GRASP_REACH
-    ctx_.log().info("none of the {} candidates is reachable by the arm from where it stands, passed over: {}{}", candidates,
+    ctx_.log().info("none of the {} candidates is reachable by the arm, passed over: {}{}", candidates,
                     reach.passed.text(), reach.unchecked_text());
     ctx_.emit(kUnreachable, nlohmann::json{{"views", views},
                                            {"candidates", candidates},
@@ -591,6 +615,7 @@ class GraspSynthesisFilter final : public fba::Component {
                                           {"passed_over_count", reach.passed.total},
                                           {"passed_over", reach.passed.json()},
                                           {"unchecked", reach.unchecked},
+                                          {"start", reach.start},
                                           {"seconds", reach.passed.seconds}}
                                .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     } catch (const std::exception& e) {
@@ -697,7 +722,7 @@ class GraspSynthesisFilter final : public fba::Component {
   int requested_views_ = -1;      // the model views of the last regions request
   bool done_ = false;
 #if FBA_GRASP_REACH
-  std::optional<fba::motion::ReachPlanner> reach_;  // with joint_state connected
+  std::optional<fba::motion::ReachPlanner> reach_, reach_start_;  // with joint_state connected: the grasp alone, and with the start
   int reach_checks_ = 0;
   bool told_no_joints_ = false;
 #endif

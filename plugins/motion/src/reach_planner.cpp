@@ -253,7 +253,7 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
   // The hand opens for the pregrasp where the arm stands; where it would touch the model (at a
   // view pose, space not yet carved), the arm first backs out of it along the flange's axis.
   plan.start_joints = current;
-  if (std::string c = robot.collision(current); !c.empty()) {
+  if (std::string c = p.check_start ? robot.collision(current) : std::string(); !c.empty()) {
     robot.check_model(false);
     const std::string fixed = robot.collision(current);  // the table or the arm itself: no way out
     robot.check_model(true);

@@ -123,12 +123,33 @@ TEST(GraspSynthesisReach, WhenNoCandidateIsReachableItSaysSoAndAsksForViews) {
   ASSERT_EQ(failed.size(), 1u);
   const std::string n = std::to_string(payload["candidates"].get<int>());
   EXPECT_EQ(failed[0].payload.rfind("no grasp the arm can reach after 8 views: none of the " + n +
-                                        " candidates is reachable from where it stands; passed over: " + n + " (table " + n +
+                                        " candidates is reachable by the arm; passed over: " + n + " (table " + n +
                                         ", e.g. the grasp puts the ",
                                     0),
             0u)
       << failed[0].payload;
   EXPECT_EQ(last.events("unreachable").size(), 1u);
+}
+
+// At sim.arm's initial pose the open hand's fingers stand in a tall box. Where the arm starts is
+// not held against the candidates (no grasp clears it): it backs out of the box, or, when it may
+// not (max_backout 0), the grasp is selected all the same and the result says the start is refused.
+TEST(GraspSynthesisReach, AStartInTheModelIsCheckedForTheGraspSelectedNotHeldAgainstTheCandidates) {
+  const std::vector<double> tall = reach::standing({0.06, 0.12, 0.20});
+  const std::string table = "table_z: [0.001]";
+  const reach::Outcome backs_out = reach::synthesise(tall, home(), table);
+  ASSERT_EQ(backs_out.grasps.size(), 1u) << backs_out.run.reason;
+  EXPECT_EQ(nlohmann::json::parse(backs_out.result("reach"))["start"], "clear");
+
+  const reach::Outcome stuck = reach::synthesise(tall, home(), table + ", max_backout: 0");
+  ASSERT_EQ(stuck.grasps.size(), 1u) << stuck.run.reason;
+  EXPECT_TRUE(same_contacts(stuck.grasps[0], backs_out.grasps[0]));
+  const auto report = nlohmann::json::parse(stuck.result("reach"));
+  EXPECT_FALSE(report["passed_over"].contains("start")) << report;
+  EXPECT_EQ(report["start"]["refusal"], "start") << report;
+  EXPECT_EQ(report["start"]["reason"].get<std::string>().rfind("the current joints collide, with the hand open for the pregrasp: ", 0), 0u)
+      << report;
+  EXPECT_NE(report["start"]["reason"].get<std::string>().find(" touches the model at ("), std::string::npos) << report;
 }
 
 // Without a joint state (the input not wired, or wired with none arrived yet) nothing changes: the

@@ -196,6 +196,12 @@ TEST(ReachPlanner, AStartWhoseFingersAreInSpaceNotYetCarvedBacksOutAlongTheFlang
   const ReachPlan kept = ReachPlanner(arm_urdf(), near).plan(grasp, model, home());
   EXPECT_EQ(kept.refusal, Refusal::Start);
   EXPECT_EQ(kept.why, "the current joints collide, with the hand open for the pregrasp: " + touches);
+  // The grasp alone (check_start off, as grasp synthesis asks): reachable, from where the arm stands.
+  near.check_start = false;
+  const ReachPlan alone = ReachPlanner(arm_urdf(), near).reachable(grasp, model, home());
+  EXPECT_TRUE(alone.ok) << alone.why;
+  EXPECT_TRUE(alone.backout_path.empty());
+  EXPECT_EQ(alone.start_joints, home());
 }
 
 // A view on the far side of the object, where the arm is stretched towards the end of its reach

@@ -66,6 +66,11 @@ struct ReachParams {
   // (grasp synthesis's) at a fraction of the cost: the lines are then checked for one solution, not
   // for every one the attempts find. Whatever it accepts, the nearest search accepts too.
   bool first_solution = false;
+  // Whether reachable() checks the current joints (and backs out of the model): false judges the
+  // grasp alone, whatever the arm's pose now (the pregrasp's IK still starts from the current
+  // joints). Grasp synthesis asks so, since no choice of grasp clears a start that cannot be. Not
+  // for plan(), whose path must start free.
+  bool check_start = true;
 };
 
 // Why a grasp was refused, for counting.
