@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -135,7 +136,14 @@ SettleResult settle(const TriangleMesh& mesh, const std::vector<geometry::Convex
     throw std::runtime_error("settle: MuJoCo's virtual file system refused the model");
   std::memcpy(vfs->filedata[mj_findFileVFS(vfs.get(), "settle.xml")], mjcf.data(), mjcf.size());
   char error[1000] = "";
-  std::unique_ptr<mjModel, ModelDeleter> m(mj_loadXML("settle.xml", vfs.get(), error, sizeof error));
+  std::unique_ptr<mjModel, ModelDeleter> m;
+  {
+    // MuJoCo's XML loader keeps the last model it parsed in a global (for mj_saveLastXML): one load
+    // at a time, when --jobs settles several objects at once. Stepping needs no lock.
+    static std::mutex loading;
+    const std::lock_guard lock(loading);
+    m.reset(mj_loadXML("settle.xml", vfs.get(), error, sizeof error));
+  }
   if (!m) throw std::runtime_error(std::string("settle: MuJoCo refused the object's model: ") + error);
   std::unique_ptr<mjData, DataDeleter> d(mj_makeData(m.get()));
 
