@@ -125,13 +125,17 @@ struct RunSpec {
   std::vector<std::string> set;
 };
 
-// The mesh where the run had it: stood on the table (z = 0) at (x, y), turned by yaw, exactly as
-// sim.camera and sim.hand place it with frame: table (the grasps' frame).
-TriangleMesh placed_on_table(const RunSpec& r) {
+// The mesh where the run had it: stood on the table (z = 0) at (x, y), turned by yaw, and laid on
+// its side when the run's command line set scene.rest=side (a variant's or the run's own --set),
+// exactly as sim.camera and sim.hand place it with frame: table (the grasps' frame). The rest was
+// once left out: a run on its side was judged on the mesh standing upright.
+TriangleMesh placed_on_table(const RunSpec& r, const std::vector<std::string>& argv) {
   sim_hand::ObjectPlacement p;
   p.x = r.x;
   p.y = r.y;
   p.yaw = r.yaw * std::numbers::pi / 180;
+  for (std::size_t i = 0; i + 1 < argv.size(); ++i)
+    if (argv[i] == "--set" && argv[i + 1].rfind("scene.rest=", 0) == 0) p.rest = argv[i + 1].substr(11);
   return sim_hand::place_on_table(load_closed_mesh(r.mesh), p);
 }
 
@@ -686,7 +690,7 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
       row.selected = true;
       row.score = g->scores.total;
       if (!g->views.empty()) row.views = static_cast<int>(g->views.size());
-      const grasp::ObjectSurface surface(placed_on_table(*j.run));
+      const grasp::ObjectSurface surface(placed_on_table(*j.run, j.argv));
       std::array<GraspContact, 3> placed;
       for (int k = 0; k < 3; ++k) {
         row.contacts.push_back(surface.place(g->contacts[k]));

@@ -252,6 +252,25 @@ TEST_F(EvaluateGraspBatch, AHungOrCrashedRunIsARowAndTheBatchGoesOn) {
   EXPECT_NE(row.find("killed by signal 11"), std::string::npos) << row;
 }
 
+// A run laid on its side (scene.rest=side in its --set) is judged on the mesh laid on its side, as
+// the run had it: the true surface was once placed upright whatever the run's rest, so the same
+// grasp's contacts moved the same distance onto either.
+TEST_F(EvaluateGraspBatch, ARunOnItsSideIsJudgedOnTheMeshOnItsSide) {
+  const fs::path l = dir_ / "list.yaml";
+  std::ofstream(l) << "task: " << fba::test::tasks_dir() << "/grasp.yaml\n"
+                   << "runs:\n  - { mesh: " << mustard() << " }\n  - { mesh: " << mustard() << ", set: [scene.rest=side] }\n";
+  const fs::path stand_in = write_fba_run_stand_in(dir_ / "grasps.sh", R"(printf '{"run_id": "%s", "outcome": "success", "grasp": {"contacts": [
+      {"position": [-0.03, 0, 0.05], "normal": [1, 0, 0]}, {"position": [0.03, 0.02, 0.05], "normal": [-1, 0, 0]},
+      {"position": [0.03, -0.02, 0.05], "normal": [-1, 0, 0]}]}}' "$id" > "$dir/summary.json")");
+  const Result r = evaluate_grasp("--batch " + l.string() + " --random 0 --fba-run " + stand_in.string() + " -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream in(dir_ / "out" / "runs.json");
+  const auto rows = nlohmann::json::parse(in, nullptr, false);
+  ASSERT_EQ(rows.size(), 2u) << rows.dump();
+  ASSERT_TRUE(rows[0].contains("contacts") && rows[1].contains("contacts")) << rows.dump();
+  EXPECT_NE(rows[0]["contacts"][0]["moved_mm"], rows[1]["contacts"][0]["moved_mm"]) << rows.dump();
+}
+
 // A run's summary.json is taken only when it carries the run id the batch gave the run: a run that
 // failed before writing one is not reported with the summary an earlier run left in its folder.
 TEST_F(EvaluateGraspBatch, ARunIsReportedWithItsOwnSummaryOnlyNeverAnOlderRunsOrAnothers) {
