@@ -54,11 +54,10 @@ use_ccache() {
 # case spent more time loading OpenCV's 150 shared libraries than testing.
 # A unity build (CMAKE_UNITY_BUILD): each target's sources compile in batches of eight as one file,
 # so the headers (Eigen, OpenCV, nlohmann/json, spdlog, GoogleTest) are parsed and their templates
-# compiled once a batch, not once a file. With nothing cached (a new machine, 2 cores), the plain
-# build took 607 s file by file and 427 s in batches (the whole CI run's figures: below).
-# The price is paid when iterating: an edit recompiles its whole batch (a grasp source: 48 s at -O2
-# rather than 21 s). For a quicker edit-build loop, configure a build of your own with
-# -DCMAKE_UNITY_BUILD=OFF.
+# compiled once a batch, not once a file: a third less compile time with nothing cached. The price
+# is paid when iterating: an edit recompiles its whole batch. For a quicker edit-build loop,
+# configure a build of your own with -DCMAKE_UNITY_BUILD=OFF. (The figures behind each build choice
+# here are in docs/results.md, "CI time".)
 configure() {
   local name=$1
   shift
@@ -80,26 +79,21 @@ stage() {
 # The sanitizer builds: -O0 -g1, and -O2 for the targets that compute (FBA_COMPUTE_FLAGS, marked by
 # fba_compute_target: their tests need optimised code to run in minutes); line tables are all a
 # sanitizer report needs. Optimising is most of an instrumented build's compile time, which is most
-# of a CI run on a cold cache: with nothing cached, the ASan+UBSan build took 1,188 s of CPU all at
-# -O1 and 698 s all at -O0 (which ran the grasp tests 7 times slower); a whole CI run 1,942 s with
-# the sanitizer builds at -O1, 1,567 s with the computing targets at -O1 and the rest at -O0, 1,532 s
-# with them at -O2 (their compile 6% more CPU, the ASan tests 239 s against 269 s).
-# They are compiled by clang, the sanitizers' home, which instruments faster than GCC (the grasp
-# library's largest batch under ASan+UBSan: 70 s of CPU against 104 s), and as fast at -O2 as at -O1.
+# of a CI run on a cold cache; the tests of the code that computes would crawl unoptimised.
+# They are compiled by clang, the sanitizers' home, which instruments faster than GCC.
 # The plain build stays with the system's compiler (GCC on Debian), so CI compiles with both.
 sanitized=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
   -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O0 -g1 -DNDEBUG" -DFBA_COMPUTE_FLAGS=-O2)
 # The plain build: optimised as a user runs it, with line tables (-g1: backtraces, perf and crash
-# reports name file and line) rather than full debug info, which costs a third more compile time
-# (a grasp component: 15.5 s of CPU at -O2 -g, 10.3 s at -O2 -g1). Configure your own build for gdb.
+# reports name file and line) rather than full debug info, which costs a third more compile time.
+# Configure your own build for gdb.
 plain=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG")
 
 build() { cmake --build "build/$1" --parallel "$jobs" "${@:2}"; }
 
 # behind <log> <command...>: runs the next stage's work (a sanitizer build, the fuzzer) while this
-# stage's tests run, at the lowest priority, so that it takes mostly what the tests leave idle: on 2
-# cores the plain tests use 73% of them (108 s of wall, 158 s of CPU: the hardware tests wait on
-# timeouts, the last binary runs alone), the ASan tests 88%, the TSan tests 72%. Its output goes to
+# stage's tests run, at the lowest priority, so that it takes mostly what the tests leave idle (the
+# hardware tests wait on timeouts, the last binary runs alone). Its output goes to
 # <log>, which wait_behind prints. It runs in a session of its own, so that a failing stage stops
 # it and its children.
 behind_pid=""
@@ -195,7 +189,7 @@ case "$cmd" in
     stage "ThreadSanitizer: the runtime's concurrency tests, the hardware drivers' threads, grasp's parallel loops"
     wait_build tsan
     # The fuzzer explores behind these tests: a bound in inputs run, not seconds, so that its share
-    # of the cores does not change how much it explores (18,000: about 30 s on one core here).
+    # of the cores does not change how much it explores.
     [ -z "${FBA_FUZZ_SECONDS:-}" ] ||
       echo "== warning: FBA_FUZZ_SECONDS=$FBA_FUZZ_SECONDS is no longer read; the bound is FBA_FUZZ_RUNS, inputs (default 18000)"
     behind build/asan/fuzz.log bash tests/fuzz/run.sh build/asan 600 "${FBA_FUZZ_RUNS:-18000}"
