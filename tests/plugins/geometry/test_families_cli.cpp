@@ -57,7 +57,7 @@ TEST(FamiliesCli, WritesClosedMeshesAManifestAndAListTheBatchReads) {
     const TriangleMesh mesh = load_mesh(out / o["file"].get<std::string>());
     EXPECT_EQ(closed_surface_fault(mesh), "");
     EXPECT_NEAR(signed_volume(mesh), o["volume_m3"].get<double>(), 1e-9);
-    const auto size = mesh_bounds(mesh).sizes();
+    const Eigen::Vector3d size = mesh_bounds(mesh).sizes();  // a value: sizes() of a temporary box is an expression over it
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(size[k], o["size_m"][k].get<double>(), 1e-6);
     ASSERT_EQ(o["drops"].size(), 2u);
     for (const auto& rest : o["rests"]) {
