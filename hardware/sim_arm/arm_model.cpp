@@ -1,4 +1,5 @@
 #include "arm_model.hpp"
+#include "urdf_text.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -171,13 +172,9 @@ ArmModel::ArmModel(const std::filesystem::path& urdf, const std::string& base_li
 
 ArmModel ArmModel::from_string(const std::string& xml, const std::string& origin, const std::string& base_link,
                                const std::string& tip_link) {
-  urdf::ModelInterfaceSharedPtr model;
-  {
-    CollectMessages messages;
-    model = urdf::parseURDF(xml);
-    if (!model)
-      throw ArmModelError("URDF " + origin + " does not parse: " + (messages.text().empty() ? "no robot in it" : messages.text()));
-  }
+  std::string problem;
+  const urdf::ModelInterfaceSharedPtr model = parse_urdf(xml, problem);
+  if (!model) throw ArmModelError("URDF " + origin + " does not parse: " + problem);
   std::vector<urdf::LinkSharedPtr> links;
   model->getLinks(links);
   for (const std::string& name : {base_link, tip_link}) {
@@ -479,6 +476,17 @@ void JointTrajectory::sample(double t, Eigen::VectorXd& positions, Eigen::Vector
   const Eigen::VectorXd d = goal_ - start_;
   positions = start_ + d * s;
   velocities = d * ds;
+}
+
+}  // namespace fba::arm
+
+namespace fba::arm {
+
+urdf::ModelInterfaceSharedPtr parse_urdf(const std::string& xml, std::string& problem) {
+  CollectMessages messages;
+  urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(xml);
+  if (!model) problem = messages.text().empty() ? "no robot in it" : messages.text();
+  return model;
 }
 
 }  // namespace fba::arm

@@ -1,10 +1,10 @@
 #include "robot_world.hpp"
 
+#include "urdf_text.hpp"
+
 #include <cmath>
-#include <mutex>
 #include <vector>
 
-#include <console_bridge/console.h>
 #include <fmt/format.h>
 #include <urdf_parser/urdf_parser.h>
 
@@ -202,36 +202,13 @@ struct Writer {
   }
 };
 
-// urdfdom reports why a file does not parse through console_bridge: collected for the message.
-class CollectMessages final : public console_bridge::OutputHandler {
- public:
-  CollectMessages() : lock_(mutex()), previous_(console_bridge::getOutputHandler()) { console_bridge::useOutputHandler(this); }
-  ~CollectMessages() override { console_bridge::useOutputHandler(previous_); }
-  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
-    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) text_ += (text_.empty() ? "" : "; ") + text;
-  }
-  const std::string& text() const { return text_; }
-
- private:
-  static std::mutex& mutex() {
-    static std::mutex m;
-    return m;
-  }
-  std::lock_guard<std::mutex> lock_;
-  console_bridge::OutputHandler* previous_;
-  std::string text_;
-};
 
 }  // namespace
 
 std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& origin_name, const WorldObject& object) {
-  urdf::ModelInterfaceSharedPtr model;
-  {
-    CollectMessages messages;
-    model = urdf::parseURDF(urdf_xml);
-    if (!model)
-      throw RobotWorldError("URDF " + origin_name + " does not parse: " + (messages.text().empty() ? "no robot in it" : messages.text()));
-  }
+  std::string problem;
+  const urdf::ModelInterfaceSharedPtr model = arm::parse_urdf(urdf_xml, problem);
+  if (!model) throw RobotWorldError("URDF " + origin_name + " does not parse: " + problem);
   const auto root = model->getRoot();
   if (!root) throw RobotWorldError("URDF " + origin_name + " has no root link");
   Writer w{*model, {}, {}};
