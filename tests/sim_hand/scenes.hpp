@@ -16,12 +16,14 @@
 #include "fba/types/joint_trajectory.hpp"
 #include "fba/types/octree.hpp"
 #include "plugins/grasp/voxel_shapes.hpp"
+#include "support/box_scene.hpp"
 #include "support/wrist_camera_arm.hpp"
 
 namespace fba::sim_hand::test {
 
-// The task's workspace (tasks/grasp.yaml): a 26 cm cube on the table.
-inline Eigen::AlignedBox3d workspace() { return {Eigen::Vector3d(-0.13, -0.13, -0.02), Eigen::Vector3d(0.13, 0.13, 0.24)}; }
+using fba::test::box_grasp;
+using fba::test::box_model;
+using fba::test::workspace;
 
 // A box standing on the table, centred on (x, y).
 inline TriangleMesh box_mesh(const Eigen::Vector3d& size, double x = 0, double y = 0) {
@@ -29,28 +31,6 @@ inline TriangleMesh box_mesh(const Eigen::Vector3d& size, double x = 0, double y
 }
 
 // The same box carved exactly, 4 mm leaves: reach planning's model of it.
-inline Octree box_model(const Eigen::Vector3d& size, double x = 0, double y = 0) {
-  return grasp::test::voxelise(grasp::test::box_sdf(Eigen::Vector3d(x, y, size.z() / 2), size), workspace(), 6);
-}
-
-// A grasp on a box standing on the table at (x, y): the thumb on the face at -u (in the table's
-// plane), the fingers on the face at +u, 2 cm either side, all at height h, the hand coming along
-// `approach` (perpendicular to u).
-inline Grasp box_grasp(const Eigen::Vector3d& size, const Eigen::Vector3d& u, const Eigen::Vector3d& approach, double h, double x = 0,
-                       double y = 0) {
-  const Eigen::Vector3d centre(x, y, h);
-  const double half = std::abs(u.dot(size)) / 2;
-  const Eigen::Vector3d side = approach.cross(u).normalized();
-  Grasp g;
-  g.contacts[0] = {centre - u * half, u};
-  g.contacts[1] = {centre + u * half + side * 0.02, -u};
-  g.contacts[2] = {centre + u * half - side * 0.02, -u};
-  g.approach = approach.normalized();
-  g.spread = 0.04;
-  g.aperture = 2 * half + 0.02;
-  return g;
-}
-
 // Reach planning for the project's robot, as sim.hand's own plans are made (no retreat: the
 // verdict is in at the hold's end).
 inline motion::ReachPlanner planner() {

@@ -20,9 +20,14 @@
 #include "fba/types/grasp.hpp"
 #include "fba/types/octree.hpp"
 #include "plugins/grasp/voxel_shapes.hpp"
+#include "support/box_scene.hpp"
 #include "support/build_paths.hpp"
 
 namespace fba::motion::test {
+
+using fba::test::box_grasp;
+using fba::test::box_model;
+using fba::test::workspace;
 
 inline std::string arm_urdf() { return fba::test::source_dir() + "/hardware/robots/wrist_camera_arm.urdf"; }
 
@@ -44,36 +49,11 @@ inline Eigen::VectorXd ready() {
   return q;
 }
 
-// The task's workspace (tasks/grasp.yaml): a 26 cm cube on the table, 4 mm leaves at depth 6.
-inline Eigen::AlignedBox3d workspace() { return {Eigen::Vector3d(-0.13, -0.13, -0.02), Eigen::Vector3d(0.13, 0.13, 0.24)}; }
-
 // The boxes the tests grasp: 6 cm square, 10 cm and 14 cm tall.
 inline const Eigen::Vector3d kBox(0.06, 0.06, 0.10);
 inline const Eigen::Vector3d kTallBox(0.06, 0.06, 0.14);
 
 // A box standing on the table, centred on (x, y), carved exactly: every other leaf is empty.
-inline Octree box_model(const Eigen::Vector3d& size, double x = 0, double y = 0, int depth = 6) {
-  return grasp::test::voxelise(grasp::test::box_sdf(Eigen::Vector3d(x, y, size.z() / 2), size), workspace(), depth);
-}
-
-// A grasp on a box standing on the table at (x, y): the thumb on the face at -u (in the table's
-// plane), the fingers on the face at +u, 2 cm either side, all at height h, the hand coming along
-// `approach` (perpendicular to u).
-inline Grasp box_grasp(const Eigen::Vector3d& size, const Eigen::Vector3d& u, const Eigen::Vector3d& approach, double h, double x = 0,
-                       double y = 0) {
-  const Eigen::Vector3d centre(x, y, h);
-  const double half = std::abs(u.dot(size)) / 2;
-  const Eigen::Vector3d side = approach.cross(u).normalized();
-  Grasp g;
-  g.contacts[0] = {centre - u * half, u};
-  g.contacts[1] = {centre + u * half + side * 0.02, -u};
-  g.contacts[2] = {centre + u * half - side * 0.02, -u};
-  g.approach = approach.normalized();
-  g.spread = 0.04;
-  g.aperture = 2 * half + 0.02;
-  return g;
-}
-
 // The project's arm with other joint limits: `limits` gives [lower, upper] for each joint in the
 // arm's order.
 inline arm::ArmModel arm_with_limits(const std::vector<std::pair<double, double>>& limits) {
