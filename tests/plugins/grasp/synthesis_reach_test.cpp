@@ -54,7 +54,7 @@ TEST(GraspSynthesisReach, TheBestCandidateWhosePalmWouldGoIntoTheTableIsPassedOv
   EXPECT_EQ(report["passed_over"]["table"]["example"], "the pregrasp puts the palm into the table");
   // Best first, until one is reachable: every candidate checked but the selected one was passed over.
   EXPECT_EQ(report["passed_over_count"].get<int>() + 1, report["checked"].get<int>()) << report;
-  EXPECT_GT(report["seconds"], 0.0);
+  EXPECT_TRUE(report["seconds"].is_number()) << report;  // the check's time is reported (its size is a benchmark's)
 }
 
 // A tall box beyond the object's centre from the arm's base: the best candidate comes at it from
