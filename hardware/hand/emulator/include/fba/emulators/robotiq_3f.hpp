@@ -2,7 +2,7 @@
 // line, with the gripper's command registers (1000, function 16) and status registers (2000, functions
 // 3 and 4), activation, grasping modes, individual finger and scissor control, finger motion at the
 // commanded speed, and an object that stops the fingers it touches (object detection per finger).
-// Written from the gripper's manual, not from the driver in hardware/robotiq_3f, so the driver's tests
+// Written from the gripper's manual, not from the driver in hardware/hand/robotiq_3f, so the driver's tests
 // against it check both readings of the manual.
 //
 // The object's section in the fingers' plane is an ellipse: `object_width` from the thumb's side to
