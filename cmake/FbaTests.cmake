@@ -40,3 +40,82 @@ function(fba_add_gtest target)
     endif()
   endif()
 endfunction()
+
+# Each module's tests live beside it, in its tests/ folder (core/tests, libs/<lib>/tests,
+# plugins/<plugin>/tests, hardware/<device>/tests, tools/<tool>/tests); tests/ holds only what
+# belongs to no single module (shared helpers, the task files' graph tests, the broken-task corpus,
+# the fuzzer, the install test). Test code is compiled as below wherever it lives.
+#
+# fba_test_code(<target>): marks a target as test code. What the tests check (the core, plugins and
+# programs) is built as users build it; the tests' own code is optimised less in an optimised build,
+# because it is half of what CI compiles and runs little: -O1 (tests/tasks/cli_test.cpp: 8.8 s of
+# CPU at -O2, 6.6 s at -O1). Under the sanitizers (tools/dev.sh) the tests compile at -O0 but for
+# those whose own checks compute (fba_compute_target, whose -O2 comes after this -O1 and wins), and
+# the slowest tests carve smaller problems (FBA_TEST_SANITIZED).
+# Not -O0 in a GCC build: under GCC's ASan, Eigen's aligned_malloc adds its own header (its Memory.h
+# trusts malloc's alignment only without __SANITIZE_ADDRESS__) while KDL, built without ASan, frees
+# with free(); at -O0 a test binary's out-of-line aligned_malloc was exported and interposed KDL's,
+# and every arm test aborted with an ASan bad-free in ChainIkSolverPos_LMA. clang's sanitizer builds
+# export no such symbol from a test (nm -D), and the arm tests would abort if one did.
+# The target joins fba_tests (fba_add_test_folders), which a sanitizer build builds alone.
+function(fba_test_code target)
+  if(FBA_SANITIZE)
+    target_compile_definitions(${target} PRIVATE FBA_TEST_SANITIZED=1)
+  else()
+    target_compile_options(${target} PRIVATE $<$<CONFIG:Release,RelWithDebInfo,MinSizeRel>:-O1>)
+  endif()
+  set_property(GLOBAL APPEND PROPERTY FBA_TEST_TARGETS ${target})
+endfunction()
+
+# fba_add_test(<target> SOURCES <file>... [LIBRARIES <lib>...] [DEPENDS <target>...]
+#              LABELS <label>... [TIMEOUT <seconds>] [COST <seconds>] [COMPUTE])
+# One GoogleTest executable: built from SOURCES as test code (fba_test_code), linked with LIBRARIES,
+# GoogleTest's main and the build's paths (tests/support/build_paths.hpp; tests/ is on its include
+# path, so `#include "support/..."`), built after DEPENDS (the programs and plugins it runs), and
+# registered with CTest (fba_add_gtest: LABELS, TIMEOUT, COST). COMPUTE: its own checks compute, so
+# it is optimised in the sanitizer builds too (fba_compute_target).
+function(fba_add_test target)
+  cmake_parse_arguments(ARG "COMPUTE" "TIMEOUT;COST" "SOURCES;LIBRARIES;DEPENDS;LABELS" ${ARGN})
+  if(NOT ARG_SOURCES)
+    message(FATAL_ERROR "fba_add_test(${target}): give its SOURCES")
+  endif()
+  add_executable(${target} ${ARG_SOURCES})
+  target_link_libraries(${target} PRIVATE ${ARG_LIBRARIES} GTest::gtest_main fba_build_paths)
+  if(ARG_DEPENDS)
+    add_dependencies(${target} ${ARG_DEPENDS})
+  endif()
+  fba_test_code(${target})
+  if(ARG_COMPUTE)
+    fba_compute_target(${target})
+  endif()
+  set(options LABELS ${ARG_LABELS})
+  if(ARG_TIMEOUT)
+    list(APPEND options TIMEOUT ${ARG_TIMEOUT})
+  endif()
+  if(ARG_COST)
+    list(APPEND options COST ${ARG_COST})
+  endif()
+  fba_add_gtest(${target} ${options})
+endfunction()
+
+# fba_add_test_folders(): every module's tests/ folder, then tests/, and the target fba_tests that
+# builds every test target (fba_test_code), so that a sanitizer build builds what its tests run and
+# nothing else (fba-run, the programs and the plugins come in as their dependencies). Called once,
+# after every module is configured: a test may need any program or plugin, wherever it is defined,
+# and some tests are left out when what they test is (if(TARGET ...)).
+function(fba_add_test_folders)
+  file(GLOB folders LIST_DIRECTORIES true RELATIVE ${PROJECT_SOURCE_DIR}
+       ${PROJECT_SOURCE_DIR}/core/tests ${PROJECT_SOURCE_DIR}/libs/*/tests ${PROJECT_SOURCE_DIR}/plugins/*/tests
+       ${PROJECT_SOURCE_DIR}/hardware/*/tests ${PROJECT_SOURCE_DIR}/tools/*/tests)
+  foreach(folder IN LISTS folders)
+    if(EXISTS ${PROJECT_SOURCE_DIR}/${folder}/CMakeLists.txt)
+      add_subdirectory(${PROJECT_SOURCE_DIR}/${folder} ${PROJECT_BINARY_DIR}/${folder})
+    endif()
+  endforeach()
+  add_subdirectory(${PROJECT_SOURCE_DIR}/tests ${PROJECT_BINARY_DIR}/tests)
+  get_property(targets GLOBAL PROPERTY FBA_TEST_TARGETS)
+  add_custom_target(fba_tests)
+  if(targets)
+    add_dependencies(fba_tests ${targets})
+  endif()
+endfunction()

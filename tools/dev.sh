@@ -160,7 +160,7 @@ case "$cmd" in
     stage "plain build and tests"
     configure release "${plain[@]}"
     build release
-    # The sanitizer builds compile only what their tests run (fba_tests: every target under tests/,
+    # The sanitizer builds compile only what their tests run (fba_tests: every test target, cmake/FbaTests.cmake,
     # with fba-run, fba-evaluate and the plugins as dependencies). Their vision tests carve smaller
     # problems than the plain build's (FBA_TEST_SANITIZED), which keeps the full-size targets.
     # The task loader's fuzzer is built here too; its seeds replay among the tests (label fuzz).
@@ -179,7 +179,7 @@ case "$cmd" in
     # The grasp library's parallel loops on the task's pool too (fba_grasp_threads_tests): it needs
     # the vision libraries configured, though only these targets and what they link are built.
     configure tsan "${sanitized[@]}" -DFBA_SANITIZE=thread -DFBA_BUILD_BENCHMARKS=OFF
-    tsan_tests=(fba_core_tests fba_task_tests fba_can_tests fba_canopen_tests fba_canopen_program_tests
+    tsan_tests=(fba_core_tests fba_task_tests fba_inspect_tests fba_can_tests fba_canopen_tests fba_canopen_program_tests
       fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests fba_grasp_threads_tests)
     build_behind tsan --target "${tsan_tests[@]}"
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \

@@ -1,7 +1,7 @@
 // The connections' storage (Buffer): a sample pushed by a producer, popped by its consumer, under
 // each connection's policy (lossless, drop_oldest, latest) and byte budget. Apart from the nodes
 // and the graph because it is the one piece every hop goes through twice, and the one a test
-// checks alone (tests/core/data_path_test.cpp).
+// checks alone (core/tests/data_path_test.cpp).
 #include "buffer.hpp"
 
 #include <vector>

@@ -8,7 +8,7 @@
 
 #include "fba/types/grasp.hpp"
 #include "fba/types/octree.hpp"
-#include "plugins/grasp/voxel_shapes.hpp"
+#include "support/voxel_shapes.hpp"
 
 namespace fba::test {
 

@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fba_run_process.hpp"
+#include "support/fba_run_process.hpp"
 #include "support/build_paths.hpp"
 
 namespace {
@@ -128,7 +128,7 @@ TEST(Cli, ATimeoutThatIsNotANumberIsRefused) {
 
 // A number too large for a double is as much "no limit" as inf, which is taken: 1e400 was refused
 // by the option parser. A stop grace too long for the clock likewise waits for ever (it overflowed
-// the nanoseconds and acted as no grace at all: tests/core/shutdown_test.cpp).
+// the nanoseconds and acted as no grace at all: core/tests/shutdown_test.cpp).
 TEST(Cli, TimesTooLargeForADoubleAreNoLimitLikeInfinity) {
   for (const char* option : {"--timeout", "--stop-grace"})
     for (const char* value : {"1e400", "inf", "1e10"}) {
@@ -181,7 +181,7 @@ TEST(Cli, SigintAndSigtermStopInOrderWith130And143) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Misbehaving components (tests/plugins/misbehaving): every way out ends with the documented
+// Misbehaving components (tests/tasks/misbehaving): every way out ends with the documented
 // exit status, a valid summary.json naming the cause, and the actuator's safe state attempted.
 
 const char* kMisbehaving = R"(

@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fba_run_process.hpp"
+#include "support/fba_run_process.hpp"
 
 namespace {
 

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fba_run_process.hpp"
+#include "support/fba_run_process.hpp"
 #include "support/build_paths.hpp"
 
 namespace {

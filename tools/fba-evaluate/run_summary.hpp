@@ -2,7 +2,7 @@
 // be a regular file first (opening a FIFO blocks until a writer comes, maybe forever), the JSON
 // parsed, and the grasp in it: its "grasp" object, else the grasp a component reported
 // (grasp.synthesis: components.NAME.results.grasp, as fba-run writes it).
-// Header only, so that fba-lift-test (hardware/sim_hand) shares it without linking fba-evaluate.
+// Header only, so that fba-lift-test (hardware/hand/sim) shares it without linking fba-evaluate.
 #pragma once
 
 #include <filesystem>

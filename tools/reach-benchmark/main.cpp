@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "fba/motion/reach_planner.hpp"
-#include "plugins/grasp/voxel_shapes.hpp"
+#include "support/voxel_shapes.hpp"
 #include "support/build_paths.hpp"
 
 using namespace fba::motion;

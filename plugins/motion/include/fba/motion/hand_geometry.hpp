@@ -1,7 +1,7 @@
 // The three-fingered hand on the robot's flange as collision shapes: the hand the robot's URDF
 // describes (hardware/robots/wrist_camera_arm.urdf), from which the lift test's MuJoCo world is
 // generated. Its dimensions are constants here for the planner's code; each is checked against the
-// URDF's (tests/sim_hand/hand_geometry_test.cpp), until reach planning takes the hand's shapes
+// URDF's (hardware/hand/tests/hand_geometry_test.cpp), until reach planning takes the hand's shapes
 // from the URDF as it takes the arm's.
 //
 // Palm frame (as the URDF and the lift test use it): z is the approach (the fingers point along

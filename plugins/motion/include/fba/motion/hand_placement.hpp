@@ -1,5 +1,5 @@
 // Where the palm goes to take a grasp, by the convention of the lift test
-// (hardware/sim_hand/lift_test.cpp): the palm frame's z along the approach, x from the thumb's
+// (hardware/hand/sim/lift_test.cpp): the palm frame's z along the approach, x from the thumb's
 // contact to the fingers' midpoint across the approach; the pads at the contacts' mean depth along
 // the approach, centred between the thumb and the fingers across it and on the fingers' midpoint
 // beside it.

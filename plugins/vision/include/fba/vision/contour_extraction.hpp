@@ -90,7 +90,7 @@ cv::Mat binarise(const cv::Mat& image, const BinariseParams& p);
 // empty. Throws std::invalid_argument when scale_px <= 0.
 // Accuracy: a binary mask knows the outline only to +-0.5 px, and on a curve of radius r that
 // error comes in runs of up to sqrt(2 r) px, so the scale must be a fair share of r. On a disc of
-// radius 150 px (every point; tests/plugins/vision) the curvature is within 0.55..1.28 of 1/r at
+// radius 150 px (every point; plugins/vision/tests) the curvature is within 0.55..1.28 of 1/r at
 // scale 8, 0.92..1.04 at 16, 0.96..1.03 at 20 (the default), 0.98..1.03 at 24. Smoothing also
 // shrinks a circle a little: its curvature comes out exp(scale^2 / (2 r^2)) / r (+0.9% for r = 150
 // at 20 px; a hole's magnitude likewise).
