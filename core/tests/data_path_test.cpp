@@ -4,8 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <fstream>
@@ -16,6 +14,7 @@
 
 #include "graph.hpp"
 #include "fixture_components.hpp"
+#include "support/child_process.hpp"
 
 using fba::ExecutorKind;
 using fba::Outcome;
@@ -426,27 +425,23 @@ connections: [ src.out -> sink.in ]
   fba::RunOptions o = with(ExecutorKind::Threaded);
   o.threads = 200;
   fba::Task task(config, o);
-  const pid_t child = fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
+  const auto child = fba::test::in_child_process([&] {
     std::size_t vm_kib = 0;
     std::ifstream status("/proc/self/status");
     for (std::string key; status >> key;)
       if (key == "VmSize:") status >> vm_kib;
     const rlim_t limit = (vm_kib + 64 * 1024) * 1024;  // 64 MiB more: a few 8 MiB stacks
     const rlimit rl{limit, limit};
-    if (setrlimit(RLIMIT_AS, &rl) != 0) _exit(10);
+    if (setrlimit(RLIMIT_AS, &rl) != 0) return 10;
     const auto r = task.run();
     bool safe = false;
     for (const auto& e : r.events) safe |= e.source == "sink" && e.name == "safe_state";
-    if (r.outcome != Outcome::RuntimeError) _exit(11);
-    if (r.reason.find("could not start worker thread") == std::string::npos) _exit(12);
-    _exit(safe ? 0 : 13);
-  }
-  int status = 0;
-  ASSERT_EQ(waitpid(child, &status, 0), child);
-  ASSERT_TRUE(WIFEXITED(status)) << "the child died of signal " << WTERMSIG(status);
-  EXPECT_EQ(WEXITSTATUS(status), 0) << "10: no limit set, 11: not a runtime error, 12: no message, 13: no safe state";
+    if (r.outcome != Outcome::RuntimeError) return 11;
+    if (r.reason.find("could not start worker thread") == std::string::npos) return 12;
+    return safe ? 0 : 13;
+  });
+  ASSERT_EQ(child.signal, 0) << "the child died of signal " << child.signal;
+  EXPECT_EQ(child.status, 0) << "10: no limit set, 11: not a runtime error, 12: no message, 13: no safe state";
 }
 #endif
 

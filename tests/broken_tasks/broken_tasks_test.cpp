@@ -5,10 +5,6 @@
 //   # expect: text                   (a substring of the message)
 //   # why: the mistake it plays
 #include <gtest/gtest.h>
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -16,8 +12,7 @@
 #include <string>
 #include <vector>
 #include "support/build_paths.hpp"
-
-extern char** environ;
+#include "support/child_process.hpp"
 
 namespace fs = std::filesystem;
 
@@ -26,36 +21,9 @@ namespace {
 const fs::path kBrokenDir = fba::test::source_dir() + "/tests/broken_tasks";
 const fs::path kExampleDir = fba::test::tasks_dir() + "/examples";
 
-struct Outcome {
-  int wait_status = 0;
-  std::string err;
-};
-
-// fba-run --check FILE, with stderr captured and stdout discarded.
-Outcome check(const fs::path& file) {
-  int pipe_fds[2];
-  if (pipe(pipe_fds) != 0) throw std::runtime_error("pipe failed");
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDERR_FILENO);
-  posix_spawn_file_actions_addclose(&actions, pipe_fds[0]);
-  posix_spawn_file_actions_addclose(&actions, pipe_fds[1]);
-  std::string exe = fba::test::program("fba-run"), flag = "--check", task = file.string();
-  char* argv[] = {exe.data(), flag.data(), task.data(), nullptr};
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv, environ);
-  posix_spawn_file_actions_destroy(&actions);
-  close(pipe_fds[1]);
-  Outcome run;
-  if (rc == 0) {
-    char buf[4096];
-    for (ssize_t n; (n = read(pipe_fds[0], buf, sizeof buf)) > 0;) run.err.append(buf, static_cast<std::size_t>(n));
-    waitpid(pid, &run.wait_status, 0);
-  }
-  close(pipe_fds[0]);
-  if (rc != 0) throw std::runtime_error("cannot start " + exe);
-  return run;
+// fba-run --check FILE, with stderr apart (its stdout is not looked at).
+fba::test::Result check(const fs::path& file) {
+  return fba::test::run({fba::test::program("fba-run"), "--check", file.string()}, {.stderr_apart = true});
 }
 
 std::vector<fs::path> yaml_files(const fs::path& dir) {
@@ -100,10 +68,9 @@ TEST_P(BrokenTask, FailsTheCheckAtTheExpectedLine) {
   ASSERT_GT(x.line, 0) << "header needs '# expect-line: N'";
   ASSERT_FALSE(x.text.empty()) << "header needs '# expect: text'";
   ASSERT_FALSE(x.why.empty()) << "header needs '# why: ...'";
-  const Outcome run = check(GetParam());
-  ASSERT_FALSE(WIFSIGNALED(run.wait_status)) << "fba-run died of signal " << WTERMSIG(run.wait_status) << "\n" << run.err;
-  ASSERT_TRUE(WIFEXITED(run.wait_status));
-  EXPECT_EQ(WEXITSTATUS(run.wait_status), 2) << run.err;
+  const auto run = check(GetParam());
+  ASSERT_EQ(run.signal, 0) << "fba-run died of signal " << run.signal << "\n" << run.err;
+  EXPECT_EQ(run.status, 2) << run.err;
   const std::string place = x.file.string() + ":" + std::to_string(x.line) + ":";
   EXPECT_NE(run.err.find(place), std::string::npos) << "expected an error at " << place << "\n" << run.err;
   EXPECT_NE(run.err.find(x.text), std::string::npos) << "expected '" << x.text << "'\n" << run.err;
@@ -116,9 +83,9 @@ TEST(BrokenTaskCorpus, HasAtLeast40Cases) { EXPECT_GE(yaml_files(kBrokenDir).siz
 class ExampleTask : public testing::TestWithParam<fs::path> {};
 
 TEST_P(ExampleTask, PassesTheCheck) {
-  const Outcome run = check(GetParam());
-  ASSERT_TRUE(WIFEXITED(run.wait_status)) << run.err;
-  EXPECT_EQ(WEXITSTATUS(run.wait_status), 0) << run.err;
+  const auto run = check(GetParam());
+  ASSERT_EQ(run.signal, 0) << run.err;
+  EXPECT_EQ(run.status, 0) << run.err;
 }
 
 // The task files only; composites/ holds what they include.

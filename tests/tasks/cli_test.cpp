@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "support/fba_run_process.hpp"
+#include "support/fba_run.hpp"
 #include "support/build_paths.hpp"
 
 namespace {
@@ -168,7 +168,7 @@ TEST(Cli, ThreadsOutOfRangeIsRefusedAsTheOption) {
 TEST(Cli, SigintAndSigtermStopInOrderWith130And143) {
   for (int sig : {SIGINT, SIGTERM}) {
     const fs::path out = temp_dir("sig");
-    Process p({write_task("long.yaml", kLong), "--output-dir", out.string()}, {}, true);
+    Child p(fba_run_command({write_task("long.yaml", kLong), "--output-dir", out.string()}), {.signals_blocked = true});
     p.signal(sig);
     const auto r = p.wait();
     EXPECT_EQ(r.status, sig == SIGINT ? 130 : 143) << r.output;
@@ -329,8 +329,8 @@ connections: [ src.out -> act.in ]
 TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
   for (int sig : {SIGINT, SIGTERM}) {
     const fs::path out = temp_dir("sig-running");
-    Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
-               out.string()});
+    Child p(fba_run_command({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
+               out.string()}));
     ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
     p.signal(sig);
     const auto r = p.wait();
@@ -346,8 +346,8 @@ TEST(CliMisbehaving, ASignalWhileRunningPutsTheActuatorInItsSafeState) {
 // script could not tell that its user stopped the run, and the summary had no 'signal'.
 TEST(CliMisbehaving, SigtermWhileASafeStateBlocksExits143NamingTheCall) {
   const fs::path out = temp_dir("sigterm-safe-state");
-  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
-             out.string(), "--set", "act.mode=block_safe_state", "--stop-grace", "0.2"});
+  Child p(fba_run_command({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
+             out.string(), "--set", "act.mode=block_safe_state", "--stop-grace", "0.2"}));
   ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
   p.signal(SIGTERM);
   const auto r = p.wait();
@@ -365,8 +365,8 @@ TEST(CliMisbehaving, SigtermWhileASafeStateBlocksExits143NamingTheCall) {
 
 TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) {
   const fs::path out = temp_dir("second-sigint");
-  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
-             out.string(), "--set", "bad.mode=block_process", "--stop-grace", "600"});
+  Child p(fba_run_command({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
+             out.string(), "--set", "bad.mode=block_process", "--stop-grace", "600"}));
   ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
   p.signal(SIGINT);
   ASSERT_TRUE(p.wait_for_output("SIGINT received")) << p.output();
@@ -390,8 +390,8 @@ TEST(CliMisbehaving, ASecondSigintForcesTheExitWhileAComponentHoldsTheStopBack) 
 // exits at once with 130 and a summary.json naming that call, written by the signal thread.
 TEST(CliMisbehaving, ASecondSigintWhileASafeStateBlocksExitsWithTheSummary) {
   const fs::path out = temp_dir("second-sigint-safe-state");
-  Process p({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
-             out.string(), "--set", "act.mode=block_safe_state", "--stop-grace", "600"});
+  Child p(fba_run_command({write_task("t.yaml", kMisbehaving), "--plugin-path", misbehaving_plugins(), "--output-dir",
+             out.string(), "--set", "act.mode=block_safe_state", "--stop-grace", "600"}));
   ASSERT_TRUE(p.wait_for_file(out / "running.act")) << p.output();
   p.signal(SIGINT);
   ASSERT_TRUE(p.wait_for_file(out / "safe_state.act")) << p.output();
@@ -420,7 +420,7 @@ TEST(CliMisbehaving, ASecondSigintWhileASafeStateBlocksExitsWithTheSummary) {
 // stops the run in order (safe states, summary), not a forced exit.
 TEST(CliMisbehaving, TheSameSignalTwiceAtOnceFromOneSenderIsOneRequest) {
   const fs::path out = temp_dir("double-sigterm");
-  Process p({task("chain.yaml"), "--set", "source.rate=10", "--output-dir", out.string()}, {}, /*signals_blocked=*/true);
+  Child p(fba_run_command({task("chain.yaml"), "--set", "source.rate=10", "--output-dir", out.string()}), {.signals_blocked = true});
   p.signal(SIGTERM);
   p.signal(SIGTERM);
   const auto r = p.wait();
@@ -437,22 +437,11 @@ TEST(Cli, AStderrReaderThatWentAwayDoesNotStopTheRun) {
   int fds[2];
   ASSERT_EQ(pipe(fds), 0);
   close(fds[0]);  // the reader is gone before the first line: every write fails with EPIPE
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
-  std::vector<std::string> args{fba::test::program("fba-run"), task("chain.yaml"), "--output-dir", out.string(), "--log-level", "debug"};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, args[0].c_str(), &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
+  Child p(fba_run_command({task("chain.yaml"), "--output-dir", out.string(), "--log-level", "debug"}), {.output_fd = fds[1]});
   close(fds[1]);
-  int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+  const auto r = p.wait();
+  ASSERT_EQ(r.signal, 0) << "ended by signal " << r.signal;
+  EXPECT_EQ(r.status, 0);
   EXPECT_NE(read_file(out / "summary.json").find("\"outcome\": \"success\""), std::string::npos);
 }
 

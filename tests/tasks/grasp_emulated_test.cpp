@@ -42,7 +42,7 @@
 #include "support/emulated_canopen_arm.hpp"
 #include "support/joint_trajectories.hpp"
 #include "support/temp_dir.hpp"
-#include "support/fba_run_process.hpp"
+#include "support/fba_run.hpp"
 
 namespace {
 
@@ -227,9 +227,9 @@ TEST(GraspEmulated, CtrlCWhileTheHandActivatesStopsAtOnceWithTheSafeStatesInTheS
   ASSERT_NE(hand.read_until("(link " + hand_link + ")").find("Modbus RTU slave 9"), std::string::npos);
 
   const auto out = temp.path() / "out";
-  fba::test::Process run({fba::test::tasks_dir() + "/grasp.yaml", "--profile", "emulated", "--set",
+  fba::test::Child run(fba::test::fba_run_command({fba::test::tasks_dir() + "/grasp.yaml", "--profile", "emulated", "--set",
                           "arm_bus=slcan:" + arm_link, "--set", "hand_device=" + hand_link, "--output-dir",
-                          out.string()});
+                          out.string()}));
   ASSERT_TRUE(run.wait_for_output(": activating (")) << run.output();
   run.signal(SIGINT);
   const auto r = run.wait();

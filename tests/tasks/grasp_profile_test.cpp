@@ -6,7 +6,7 @@
 #include <fba/task.hpp>
 
 #include "support/built_plugins.hpp"
-#include "support/fba_run_process.hpp"
+#include "support/fba_run.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
 

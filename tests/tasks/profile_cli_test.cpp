@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "support/fba_run_process.hpp"
+#include "support/fba_run.hpp"
 
 namespace {
 

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "support/fba_run_process.hpp"
+#include "support/fba_run.hpp"
 #include "support/build_paths.hpp"
 
 namespace {
@@ -43,7 +43,7 @@ TEST(RandomSignal, EveryTerminatingSignalAtRandomMomentsEndsTheRunInOrder) {
     sent.insert(sig);
     const auto delay = std::chrono::microseconds(delay_us(random));
     const fs::path out = dir / std::to_string(i);
-    Process p({task.string(), "--plugin-path", misbehaving_plugins(), "--output-dir", out.string()}, {}, true);
+    Child p(fba_run_command({task.string(), "--plugin-path", misbehaving_plugins(), "--output-dir", out.string()}), {.signals_blocked = true});
     std::this_thread::sleep_for(delay);
     p.signal(sig);
     const auto r = p.wait();
@@ -77,7 +77,7 @@ TEST(RandomSignal, AFaultSignalPendingSinceExecStopsTheRunInOrder) {
   std::ofstream(task) << kTask;
   for (const int sig : {SIGSYS, SIGTRAP, SIGSEGV, SIGABRT, SIGBUS, SIGFPE, SIGILL}) {
     const fs::path out = dir / std::to_string(sig);
-    Process p({task.string(), "--plugin-path", misbehaving_plugins(), "--output-dir", out.string()}, {}, true);
+    Child p(fba_run_command({task.string(), "--plugin-path", misbehaving_plugins(), "--output-dir", out.string()}), {.signals_blocked = true});
     p.signal(sig);
     const auto r = p.wait();
     const std::string what = std::string(strsignal(sig)) + ":\n" + r.output;

@@ -13,7 +13,7 @@
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
 #include "support/mesh_files.hpp"
-#include "support/run_command.hpp"
+#include "support/child_process.hpp"
 #include "support/temp_dir.hpp"
 
 namespace {
@@ -128,7 +128,7 @@ TEST(SimCamera, TheGraspTaskRefusesAnObjectOutsideItsWorkspaceAtTheCamerasLine) 
   for (const char* type : {"sim.arm", "sim.hand", "grasp.synthesis", "examples.counter"})
     if (!fba::test::built_plugins().find(type)) GTEST_SKIP() << type << " is not built";
   fba::test::TempDir dir;
-  const auto r = fba::test::run_command("'" + fba::test::program("fba-run") + "' '" + fba::test::tasks_dir() +
+  const auto r = fba::test::run_shell("'" + fba::test::program("fba-run") + "' '" + fba::test::tasks_dir() +
                                         "/grasp.yaml' --set scene.x=0.3 -o '" + dir.path().string() + "'");
   EXPECT_EQ(r.status, 2) << r.output;  // a configuration error
   EXPECT_NE(r.output.find("profiles/sim.yaml:"), std::string::npos) << r.output;

@@ -17,7 +17,6 @@
 #include "support/build_paths.hpp"
 #include "support/child_process.hpp"
 #include "support/data_sets.hpp"
-#include "support/run_command.hpp"
 #include "support/temp_dir.hpp"
 
 namespace {
@@ -45,7 +44,7 @@ TEST(LiftTestCli, EveryNumberIsCheckedAgainstItsRangeBeforeAnyWork) {
       {"--bogus 1", "unknown option '--bogus'; expected one of --candidates, --force, --grasp"},
       {"--x", "--x: expected a value after it; found the end of the line"}};
   for (const auto& [args, says] : cases) {
-    const auto r = fba::test::run_command("'" + fba::test::program("fba-lift-test") + "' '" + kCan + "' " + args);
+    const auto r = fba::test::run_shell("'" + fba::test::program("fba-lift-test") + "' '" + kCan + "' " + args);
     EXPECT_EQ(r.status, 2) << args << "\n" << r.output;
     EXPECT_NE(r.output.find("fba-lift-test: " + says), std::string::npos) << args << "\n" << r.output;
     EXPECT_EQ(r.output.find("scene built"), std::string::npos) << args << ": refused after the work\n" << r.output;
@@ -63,7 +62,7 @@ TEST(LiftTestCli, AGraspThatIsNotARegularFileIsRefusedNotWaitedOn) {
   EXPECT_EQ(status, 2) << output;
   EXPECT_NE(output.find("--grasp: expected a regular file; '" + fifo + "' is a FIFO"), std::string::npos) << output;
 
-  const auto r = fba::test::run_command("'" + fba::test::program("fba-lift-test") + "' '" + kCan + "' --grasp '" + dir.path().string() + "'");
+  const auto r = fba::test::run_shell("'" + fba::test::program("fba-lift-test") + "' '" + kCan + "' --grasp '" + dir.path().string() + "'");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("' is a folder"), std::string::npos) << r.output;
 }
@@ -83,13 +82,13 @@ TEST(LiftTestCli, AGraspIsReadFromARunsSummaryAsTheComponentReportedIt) {
       {"components", {{"camera", {{"type", "sim.camera"}}}, {"synthesis", {{"type", "grasp.synthesis"}, {"results", {{"grasp", grasp}}}}}}}};
   const fba::test::TempDir dir;
   const std::string file = dir.file("summary.json", summary.dump(2));
-  const auto r = fba::test::run_command("'" + fba::test::program("fba-lift-test") + "' '" + kCan + "' --grasp '" + file + "'");
+  const auto r = fba::test::run_shell("'" + fba::test::program("fba-lift-test") + "' '" + kCan + "' --grasp '" + file + "'");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("held yes"), std::string::npos) << r.output;
 
   // A run that selected no grasp: said so, not a parse error deep in the JSON.
   const std::string none = dir.file("none.json", R"({"run_id": "b", "outcome": "failure", "components": {"synthesis": {"results": {}}}})");
-  const auto n = fba::test::run_command("'" + fba::test::program("fba-lift-test") + "' '" + kCan + "' --grasp '" + none + "'");
+  const auto n = fba::test::run_shell("'" + fba::test::program("fba-lift-test") + "' '" + kCan + "' --grasp '" + none + "'");
   EXPECT_EQ(n.status, 2) << n.output;
   EXPECT_NE(n.output.find("--grasp: expected a run's summary.json with a grasp"), std::string::npos) << n.output;
   EXPECT_NE(n.output.find("found none in '" + none + "'"), std::string::npos) << n.output;

@@ -10,10 +10,9 @@
 #include <assimp/Importer.hpp>
 #include <assimp/scene.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include "fba/geometry/mesh_io.hpp"
+#include "support/child_process.hpp"
 #include "support/geometry_checks.hpp"
 
 namespace fba::geometry {
@@ -47,15 +46,12 @@ unsigned char first_data_byte(const std::filesystem::path& p) {
 // Whether assimp reads the file to `triangles` triangles, in a child process: on a misread
 // file it crashes or aborts, which must not take the test down.
 bool assimp_reads(const std::filesystem::path& p, std::size_t triangles) {
-  const pid_t pid = fork();
-  if (pid == 0) {
+  const auto read = fba::test::in_child_process([&] {
     Assimp::Importer importer;
     const aiScene* scene = importer.ReadFile(p.string(), 0);
-    _exit(scene && scene->mNumMeshes == 1 && scene->mMeshes[0]->mNumFaces == triangles ? 0 : 1);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    return scene && scene->mNumMeshes == 1 && scene->mMeshes[0]->mNumFaces == triangles ? 0 : 1;
+  });
+  return read.status == 0;
 }
 
 // A box whose first vertex's x encodes with 0x0A first, as a carved model's can.

@@ -1,10 +1,7 @@
 // fba-evaluate's command line: every argument is checked as fba-run checks parameters (a value out
 // of range, NaN, inverted bounds or an option that would be ignored is refused with exit status 2
 // and a message naming it), and negative numbers are values, not options.
-#include <fcntl.h>
-#include <spawn.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 
 #include <cstring>
 #include <ostream>
@@ -24,41 +21,13 @@
 #include "support/child_process.hpp"
 #include "support/data_sets.hpp"
 
-extern char** environ;
-
 namespace {
 
-struct Result {
-  int status = -1;  // exit status, or 128 + signal
-  std::string output;
-};
+using fba::test::Result;
 
 Result fba_evaluate(std::vector<std::string> args) {
-  const fba::test::TempDir dir;
-  const std::string log = dir.file("output.log");
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
   args.insert(args.begin(), fba::test::program("fba-evaluate"));
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  Result r;
-  const int spawned = posix_spawn(&pid, args[0].c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) {
-    ADD_FAILURE() << "cannot start " << fba::test::program("fba-evaluate");
-    return r;
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  std::stringstream ss;
-  ss << std::ifstream(log).rdbuf();
-  r.output = ss.str();
-  return r;
+  return fba::test::run(std::move(args));
 }
 
 const std::string kBanana = fba::test::ycb_mesh("YcbBanana");

@@ -10,12 +10,12 @@
 #include <thread>
 
 #include "support/build_paths.hpp"
-#include "support/run_command.hpp"
+#include "support/child_process.hpp"
 
 namespace fba::test {
 
-inline CommandResult evaluate_grasp(const std::string& args) {
-  return run_command("'" + program("fba-evaluate") + "' grasp " + args);
+inline Result evaluate_grasp(const std::string& args) {
+  return run_shell("'" + program("fba-evaluate") + "' grasp " + args);
 }
 
 // A stand-in for fba-run: a shell script that finds its output folder and run id in its arguments

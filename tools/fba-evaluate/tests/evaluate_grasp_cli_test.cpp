@@ -18,7 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-using Result = fba::test::CommandResult;
+using Result = fba::test::Result;
 
 using fba::test::evaluate_grasp;
 

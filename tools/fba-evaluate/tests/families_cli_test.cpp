@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fba/geometry/mesh_io.hpp"
-#include "support/run_command.hpp"
+#include "support/child_process.hpp"
 #include "support/geometry_checks.hpp"
 
 namespace fba::geometry::test {
@@ -21,8 +21,8 @@ namespace fs = std::filesystem;
 
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
-fba::test::CommandResult families(const std::string& args) {
-  return fba::test::run_command(quoted(fba::test::program("fba-evaluate")) + " families " + args);
+fba::test::Result families(const std::string& args) {
+  return fba::test::run_shell(quoted(fba::test::program("fba-evaluate")) + " families " + args);
 }
 
 std::string task() { return quoted(fba::test::tasks_dir() + "/grasp.yaml"); }
@@ -36,8 +36,8 @@ std::string text_of(const fs::path& p) {
 std::size_t lines(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
 
 // The batch's dry run over the list: each run's fba-run command line.
-fba::test::CommandResult dry_run(const fs::path& list) {
-  return fba::test::run_command(quoted(fba::test::program("fba-evaluate")) + " grasp --batch " + quoted(list.string()) +
+fba::test::Result dry_run(const fs::path& list) {
+  return fba::test::run_shell(quoted(fba::test::program("fba-evaluate")) + " grasp --batch " + quoted(list.string()) +
                                 " --dry-run --fba-run /bin/true");
 }
 

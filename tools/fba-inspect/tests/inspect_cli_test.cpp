@@ -2,16 +2,17 @@
 // data types' pages.
 #include <gtest/gtest.h>
 
-#include "support/fba_run_process.hpp"
 #include "support/build_paths.hpp"
+#include "support/child_process.hpp"
+#include "support/fba_run.hpp"
 
 namespace {
 
 using namespace fba::test;
 
 Result inspect(std::vector<std::string> args) {
-  Process p(std::move(args), {}, false, fba::test::program("fba-inspect"));
-  return p.wait();
+  args.insert(args.begin(), fba::test::program("fba-inspect"));
+  return run(std::move(args));
 }
 
 TEST(InspectCli, PrintsItsVersion) {
