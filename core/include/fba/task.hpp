@@ -20,6 +20,7 @@ namespace fba {
 namespace detail {
 class Graph;
 }
+class LatestSample;  // fba/view.hpp
 
 enum class Outcome { Success, Failure, ConfigError, RuntimeError, Interrupted };
 const char* to_string(Outcome o);
@@ -160,6 +161,9 @@ class Task {
   // them, or only the newest `keep` (a test that needs the final model need not hold every
   // intermediate one). Call before run(); read after.
   const std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
+  // The newest sample leaving "component.output", for a reader on another thread while run()
+  // runs (a live view); never holds the producer back. Call before run(); each call makes its own.
+  std::shared_ptr<LatestSample> watch(const std::string& port);
 
   // Runs to the end; the result says how it ended. May be called once.
   RunResult run();
