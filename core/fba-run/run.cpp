@@ -4,6 +4,7 @@
 #include "run.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <iostream>
@@ -18,6 +19,8 @@
 #include "fba/message_text.hpp"
 #include "fba/registry.hpp"
 #include "fba/task.hpp"
+#include "live_graph.hpp"
+#include "monitor.hpp"
 #include "options.hpp"
 #include "run_state.hpp"
 #include "signals.hpp"
@@ -26,6 +29,9 @@
 namespace fba_run {
 
 namespace {
+
+// How often the running task is sampled for its views; --dot-every's shorter period if given.
+constexpr std::chrono::milliseconds kMonitorPeriod{100};
 
 // A mistake on the command line or in the task: said, written into the summary, exit 2.
 int refuse(const std::string& message, bool usage = true) {
@@ -156,6 +162,18 @@ std::unique_ptr<fba::Task> construct(const fba::TaskConfig& config, const fba::R
   }
 }
 
+// The views of the running task on the Monitor's one thread (the live graph), started.
+void start_monitor(Monitor& monitor, const Options& o) {
+  auto& st = state();
+  using Duration = Monitor::Duration;
+  const Duration dot_every = o.dot_every > 0 ? std::chrono::duration_cast<Duration>(std::chrono::duration<double>(o.dot_every))
+                                             : Monitor::kOnRequest;
+  if (!st.live_dot.empty()) watch_live_graph(monitor, dot_every);
+  monitor.start(std::min<Duration>(kMonitorPeriod, std::max<Duration>(dot_every, Duration(1))));
+  std::lock_guard lock(st.mutex);
+  st.monitor.store(&monitor);
+}
+
 // The end of a run: where it was and the signal that stopped it noted, the summary written and the
 // last line said. Returns the exit status.
 int report(fba::RunResult& result) {
@@ -237,16 +255,18 @@ int run(int argc, char** argv) {
     else
       st.phase.store("running");
   }
-  st.dot_every.store(o.dot_every);
   // Registered again now: handlers run newest first, so this one runs before the plugins'
   // static destructors, while the components still have what they use.
   std::atexit(on_unexpected_exit);
 
+  Monitor monitor([&task] { return task->snapshot(); });
+  start_monitor(monitor, o);
   fba::RunResult result = task->run();
-  if (o.dot_every > 0) {
-    std::optional<fba::RunResult> none;  // the last dump: rates over the whole run
-    dump_live_graph(none);
+  {
+    std::lock_guard lock(st.mutex);  // SIGUSR1 asks it no more
+    st.monitor.store(nullptr);
   }
+  monitor.finish(result);
   status = report(result);
   if (!result.stuck.empty() || st.exit_taken.load()) leave(status);  // threads still run in components
   {
