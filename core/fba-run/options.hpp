@@ -8,6 +8,7 @@
 
 #include "fba/task.hpp"
 #include "fba/task_config.hpp"
+#include "listen_address.hpp"
 
 namespace fba_run {
 
@@ -26,6 +27,7 @@ struct Options {
   double dot_every = 0;
   int threads = 0;
   std::optional<fba::ExecutorKind> executor;
+  std::optional<fba::serve::ListenAddress> serve;  // --serve: the live view's address
   // The first value refused (--timeout, --stop-grace, --threads, --dot-every, --executor), as
   // fba-run says it: refused once the output folder can hold the summary that says so.
   std::string invalid;

@@ -20,6 +20,7 @@
 #include "fba/registry.hpp"
 #include "fba/task.hpp"
 #include "live_graph.hpp"
+#include "live_view.hpp"
 #include "monitor.hpp"
 #include "options.hpp"
 #include "run_state.hpp"
@@ -238,6 +239,12 @@ int run(int argc, char** argv) {
     std::lock_guard lock(st.mutex);  // the watcher reads it for live dumps
     st.config = config;
   }
+  std::optional<LiveView> live;  // --serve's server starts here, so that the page shows the construction too
+  try {
+    live.emplace(o, config);
+  } catch (const std::runtime_error& e) {
+    return refuse(std::string("fba-run: ") + e.what(), false);
+  }
   if (interrupted_early(status)) return status;
   options.threads = o.threads;
   options.timeout_s = o.timeout;
@@ -260,6 +267,7 @@ int run(int argc, char** argv) {
   std::atexit(on_unexpected_exit);
 
   Monitor monitor([&task] { return task->snapshot(); });
+  live->watch(*task, monitor);
   start_monitor(monitor, o);
   fba::RunResult result = task->run();
   {
@@ -267,7 +275,9 @@ int run(int argc, char** argv) {
     st.monitor.store(nullptr);
   }
   monitor.finish(result);
+  live->before_summary();
   status = report(result);
+  live->end(result);
   if (!result.stuck.empty() || st.exit_taken.load()) leave(status);  // threads still run in components
   {
     std::lock_guard lock(st.mutex);  // a live dump in progress finishes first

@@ -66,12 +66,16 @@ const PageFile* PageFiles::find(std::string_view name) const {
   return it == files_.end() ? nullptr : &it->second;
 }
 
-fs::path find_web_dir() {
-  if (const char* dir = std::getenv("FBA_WEB_DIR"); dir && *dir) return dir;
+fs::path share_dir() {
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
   if (ec) return {};
-  return (self.parent_path() / ".." / "share" / "fba" / "web").lexically_normal();
+  return (self.parent_path() / ".." / "share" / "fba").lexically_normal();
+}
+
+fs::path find_web_dir() {
+  if (const char* dir = std::getenv("FBA_WEB_DIR"); dir && *dir) return dir;
+  return share_dir() / "web";
 }
 
 // Plain text of the live stream, for when the front end is not built: the components with their

@@ -33,8 +33,10 @@ class PageFiles {
   bool built_ = false;
 };
 
-// Where the built page is: FBA_WEB_DIR when set, else share/fba/web beside the program's bin
-// folder (the build tree and an installation alike).
+// share/fba beside the program's bin folder (the build tree and an installation alike): the page
+// in web/, the robots' URDFs in robots/.
+std::filesystem::path share_dir();
+// Where the built page is: FBA_WEB_DIR when set, else share_dir()/web.
 std::filesystem::path find_web_dir();
 
 // What a file's name says it holds, for Content-Type.

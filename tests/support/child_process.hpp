@@ -48,18 +48,23 @@ class Child {
   // Output until `needle` appears, the output ends, or `limit` passes (a hung program, not a speed check).
   std::string read_until(const std::string& needle, std::chrono::milliseconds limit = std::chrono::seconds(60)) {
     const auto deadline = std::chrono::steady_clock::now() + limit;
-    while (output_.find(needle) == std::string::npos) {
-      const auto left =
-          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-      if (left.count() <= 0) break;
-      pollfd p{out_, POLLIN, 0};
-      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) break;
-      char buffer[512];
-      const ssize_t n = ::read(out_, buffer, sizeof buffer);
-      if (n <= 0) break;
-      output_.append(buffer, static_cast<std::size_t>(n));
+    while (output_.find(needle) == std::string::npos && read_more(deadline)) {
     }
     return output_;
+  }
+  // The whole line that holds `needle`, without its newline, once it has all come; empty if the
+  // output ends or `limit` passes first (a line written in pieces is waited for whole).
+  std::string read_line_with(const std::string& needle, std::chrono::milliseconds limit = std::chrono::seconds(60)) {
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    for (;;) {
+      if (const auto at = output_.find(needle); at != std::string::npos)
+        if (const auto end = output_.find('\n', at); end != std::string::npos) {
+          const auto start = output_.rfind('\n', at);
+          const std::size_t from = start == std::string::npos ? 0 : start + 1;
+          return output_.substr(from, end - from);
+        }
+      if (!read_more(deadline)) return {};
+    }
   }
   // The exit status after `signal` (0: none sent) once it ends; -1 if it did not end within `limit`
   // (a hang detector, not a speed check).
@@ -79,6 +84,19 @@ class Child {
   }
 
  private:
+  // Reads what the program wrote next; false when its output ended or the deadline passed.
+  bool read_more(std::chrono::steady_clock::time_point deadline) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return false;
+    pollfd p{out_, POLLIN, 0};
+    if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return false;
+    char buffer[512];
+    const ssize_t n = ::read(out_, buffer, sizeof buffer);
+    if (n <= 0) return false;
+    output_.append(buffer, static_cast<std::size_t>(n));
+    return true;
+  }
+
   pid_t pid_ = -1;
   int out_ = -1;
   std::string output_;
