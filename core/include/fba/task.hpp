@@ -145,6 +145,12 @@ ActiveCall active_call() noexcept;
 // dumps). Rates are since `earlier` (a previous snapshot), or since the start without one.
 std::string to_dot(const TaskConfig& task, const RunResult& now, const RunResult* earlier = nullptr);
 
+// fba-run --check's construction: every filter of the task constructed, as a run would, and
+// destroyed again; sensors, actuators and blocking types, which own devices, are not. Throws
+// ConfigError listing what the constructors said (a handle missing from the spec, a refused
+// configuration). See core/src/construction_check.cpp for why only filters.
+void check_construction(const TaskConfig& config);
+
 // summary.json: outcome, final event, wall time, per-component counts and rates.
 std::string summary_json(const RunResult& result, const TaskConfig& task);
 
