@@ -104,7 +104,10 @@ std::optional<Options> parse_options(int argc, char** argv, int& status) {
       "serve the run's live view (docs/live-view.md) at [ADDR:]PORT: 127.0.0.1 unless ADDR is given, PORT 0 for a free "
       "one; the page's address, with its token, is said on stderr")(
       "threads", po::value(&o.threads), "worker threads of the threaded executor, 0 to 256 (default: the task file's, else one per core)")(
-      "log-level", po::value(&o.log_level), "trace, debug, info, warn, error, critical, off");
+      "log-level", po::value(&o.log_levels)->composing(),
+      "LEVEL for every component and fba-run itself, or COMPONENT=LEVEL for one component of the task (a composite "
+      "instance: the components inside it); LEVEL is trace, debug, info (the default), warn, error, critical or off "
+      "(repeatable: --log-level warn --log-level carver=debug)");
   po::options_description hidden;
   hidden.add_options()("task", po::value<std::string>(), "task file");
   po::options_description all;

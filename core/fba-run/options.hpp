@@ -20,7 +20,7 @@ struct Options {
   std::string output_dir;  // empty: none
   std::string profile;
   bool profile_given = false;  // --profile was given, if empty: refused, not the task's own
-  std::string log_level = "info";
+  std::vector<std::string> log_levels;  // --log-level: LEVEL or COMPONENT=LEVEL, in the order given
   std::string run_id;  // --run-id, else a random one
   double timeout = 0;
   double stop_grace = fba::RunOptions{}.stop_grace_s;

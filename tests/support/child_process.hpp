@@ -1,8 +1,11 @@
-// A program run by a test (an emulator, fba-run): its stdout and stderr on a pipe, read with a
-// bound that detects a hang (not a speed check); killed and reaped when it goes out of scope.
+// A program run by a test (an emulator, fba-run): its stdout and stderr on a pipe (or a
+// pseudo-terminal, for what a program does on a terminal), read with a bound that detects a hang
+// (not a speed check); killed and reaped when it goes out of scope.
 #pragma once
 
 #include <poll.h>
+#include <pty.h>
+#include <termios.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -18,12 +21,26 @@ extern char** environ;
 
 namespace fba::test {
 
-// A child process with its stdout and stderr on a pipe; killed and reaped when it goes out of scope.
+// A child process with its stdout and stderr on a pipe or a terminal; killed and reaped when it
+// goes out of scope.
 class Child {
  public:
-  explicit Child(std::vector<std::string> args) {
+  // Terminal: a pseudo-terminal of 200 columns in raw mode (isatty() is true in the child, and what
+  // it writes arrives unchanged: "\n" stays "\n").
+  enum class Output { Pipe, Terminal };
+
+  explicit Child(std::vector<std::string> args, Output output = Output::Pipe) {
     int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
+    if (output == Output::Terminal) {
+      termios raw{};
+      cfmakeraw(&raw);
+      winsize size{};
+      size.ws_col = 200;
+      size.ws_row = 50;
+      if (::openpty(&fds[0], &fds[1], nullptr, &raw, &size) != 0) throw std::runtime_error("openpty failed");
+    } else if (::pipe(fds) != 0) {
+      throw std::runtime_error("pipe failed");
+    }
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
