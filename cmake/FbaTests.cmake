@@ -41,7 +41,7 @@ function(fba_add_gtest target)
   endif()
 endfunction()
 
-# Each module's tests live beside it, in its tests/ folder (core/tests, libs/<lib>/tests,
+# Each module's tests live beside it, in its tests/ folder (core/tests, core/<part>/tests, libs/<lib>/tests,
 # plugins/<plugin>/tests, hardware/<device>/tests, tools/<tool>/tests); tests/ holds only what
 # belongs to no single module (shared helpers, the task files' graph tests, the broken-task corpus,
 # the fuzzer, the install test). Test code is compiled as below wherever it lives.
@@ -105,7 +105,7 @@ endfunction()
 # and some tests are left out when what they test is (if(TARGET ...)).
 function(fba_add_test_folders)
   file(GLOB folders LIST_DIRECTORIES true RELATIVE ${PROJECT_SOURCE_DIR}
-       ${PROJECT_SOURCE_DIR}/core/tests ${PROJECT_SOURCE_DIR}/libs/*/tests ${PROJECT_SOURCE_DIR}/plugins/*/tests
+       ${PROJECT_SOURCE_DIR}/core/tests ${PROJECT_SOURCE_DIR}/core/*/tests ${PROJECT_SOURCE_DIR}/libs/*/tests ${PROJECT_SOURCE_DIR}/plugins/*/tests
        ${PROJECT_SOURCE_DIR}/hardware/*/tests ${PROJECT_SOURCE_DIR}/tools/*/tests)
   foreach(folder IN LISTS folders)
     if(EXISTS ${PROJECT_SOURCE_DIR}/${folder}/CMakeLists.txt)

@@ -14,7 +14,7 @@ jobs=${FBA_JOBS:-$(nproc)}
 
 packages=(
   build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev
-  libyaml-cpp-dev libboost-program-options-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
+  libyaml-cpp-dev libboost-dev libboost-program-options-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   libeigen3-dev libopencv-dev libassimp-dev libqhull-dev libmujoco-dev
   liburdfdom-dev libkdl-parser-dev liborocos-kdl-dev libmodbus-dev libompl-dev libfcl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
@@ -180,7 +180,7 @@ case "$cmd" in
     # the vision libraries configured, though only these targets and what they link are built.
     configure tsan "${sanitized[@]}" -DFBA_SANITIZE=thread -DFBA_BUILD_BENCHMARKS=OFF
     tsan_tests=(fba_core_tests fba_task_tests fba_inspect_tests fba_can_tests fba_canopen_tests fba_canopen_program_tests
-      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests fba_grasp_threads_tests)
+      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests fba_grasp_threads_tests fba_serve_tests)
     build_behind tsan --target "${tsan_tests[@]}"
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       LSAN_OPTIONS=suppressions=$top/tests/lsan.supp \
@@ -206,10 +206,20 @@ case "$cmd" in
     fuzz_rc=0
     wait_behind build/asan/fuzz.log || fuzz_rc=$?
     ((fuzz_rc != 2)) || { echo "== tests/fuzz/run.sh could not start (above)"; exit 2; }  # its usage errors
-    if ((fuzz_rc)); then
-      for f in build/asan/fuzz-findings/*; do
+    # The live view's request handling, after it: a request parses in microseconds, so a short
+    # exploration of its own, bounded in inputs too (FBA_FUZZ_REQUEST_RUNS).
+    echo "== fuzzing the live view's request handling"
+    request_rc=0
+    bash tests/fuzz/run.sh build/asan 300 "${FBA_FUZZ_REQUEST_RUNS:-100000}" request_handling >build/asan/fuzz-request.log 2>&1 ||
+      request_rc=$?
+    ((request_rc != 2)) || { cat build/asan/fuzz-request.log; echo "== tests/fuzz/run.sh could not start (above)"; exit 2; }
+    grep -E '^(stat::number_of_executed_units|Done|==[0-9]+==)' build/asan/fuzz-request.log || true
+    if ((fuzz_rc || request_rc)); then
+      for f in build/asan/fuzz-findings/* build/asan/fuzz-findings-request_handling/*; do
         [ -f "$f" ] || continue
-        echo "== NEW FUZZ FINDING (commit it as tests/fuzz/corpus/finding-$(basename "$f") with its fix), base64:"
+        corpus=corpus
+        [[ $f != */fuzz-findings-request_handling/* ]] || corpus=corpus_request_handling
+        echo "== NEW FUZZ FINDING (commit it as tests/fuzz/$corpus/finding-$(basename "$f") with its fix), base64:"
         base64 -w 0 "$f"
         echo
       done

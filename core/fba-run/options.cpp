@@ -40,7 +40,8 @@ std::string random_run_id() {
 }
 
 // The first value refused, as fba-run says it; empty when every one is valid. Fills in what each means.
-std::string refusal(Options& o, const std::string& timeout_text, const std::string& stop_grace_text, const std::string& executor) {
+std::string refusal(Options& o, const std::string& timeout_text, const std::string& stop_grace_text, const std::string& executor,
+                    const std::optional<std::string>& serve) {
   // NaN compares false with everything: said, not taken as "no limit". Infinity and values beyond
   // the clock's range (1e400 as well as inf) mean no limit (docs/task-files.md, limits).
   if (!parse_seconds(timeout_text, o.timeout) || !(o.timeout >= 0))
@@ -57,6 +58,11 @@ std::string refusal(Options& o, const std::string& timeout_text, const std::stri
     else if (executor == "deterministic") o.executor = fba::ExecutorKind::Deterministic;
     else return "--executor must be threaded or deterministic, not '" + executor + "'";
   }
+  if (serve) try {
+      o.serve = fba::serve::parse_listen_address(*serve);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
   return {};
 }
 
@@ -94,8 +100,14 @@ std::optional<Options> parse_options(int argc, char** argv, int& status) {
       "seconds that components get to return after a stop, and each actuator's safe state (default 5; inf or over 9e9: "
       "wait for ever)")(
       "executor,e", po::value(&executor), "threaded or deterministic (overrides the task file)")(
+      "serve", po::value<std::string>(),
+      "serve the run's live view (docs/live-view.md) at [ADDR:]PORT: 127.0.0.1 unless ADDR is given, PORT 0 for a free "
+      "one; the page's address, with its token, is said on stderr")(
       "threads", po::value(&o.threads), "worker threads of the threaded executor, 0 to 256 (default: the task file's, else one per core)")(
-      "log-level", po::value(&o.log_level), "trace, debug, info, warn, error, critical, off");
+      "log-level", po::value(&o.log_levels)->composing(),
+      "LEVEL for every component and fba-run itself, or COMPONENT=LEVEL for one component of the task (a composite "
+      "instance: the components inside it); LEVEL is trace, debug, info (the default), warn, error, critical or off "
+      "(repeatable: --log-level warn --log-level carver=debug)");
   po::options_description hidden;
   hidden.add_options()("task", po::value<std::string>(), "task file");
   po::options_description all;
@@ -133,7 +145,8 @@ std::optional<Options> parse_options(int argc, char** argv, int& status) {
   o.dot = vm.count("dot") > 0;
   o.profile_given = vm.count("profile") > 0;  // an empty name is refused, not the default
   if (o.run_id.empty()) o.run_id = random_run_id();
-  o.invalid = refusal(o, timeout_text, stop_grace_text, executor);
+  const std::optional<std::string> serve = vm.count("serve") ? std::optional(vm["serve"].as<std::string>()) : std::nullopt;
+  o.invalid = refusal(o, timeout_text, stop_grace_text, executor, serve);
   return o;
 }
 

@@ -8,6 +8,7 @@
 
 #include "fba/task.hpp"
 #include "fba/task_config.hpp"
+#include "listen_address.hpp"
 
 namespace fba_run {
 
@@ -19,13 +20,14 @@ struct Options {
   std::string output_dir;  // empty: none
   std::string profile;
   bool profile_given = false;  // --profile was given, if empty: refused, not the task's own
-  std::string log_level = "info";
+  std::vector<std::string> log_levels;  // --log-level: LEVEL or COMPONENT=LEVEL, in the order given
   std::string run_id;  // --run-id, else a random one
   double timeout = 0;
   double stop_grace = fba::RunOptions{}.stop_grace_s;
   double dot_every = 0;
   int threads = 0;
   std::optional<fba::ExecutorKind> executor;
+  std::optional<fba::serve::ListenAddress> serve;  // --serve: the live view's address
   // The first value refused (--timeout, --stop-grace, --threads, --dot-every, --executor), as
   // fba-run says it: refused once the output folder can hold the summary that says so.
   std::string invalid;

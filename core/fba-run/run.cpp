@@ -3,7 +3,10 @@
 // signals and the summary file, which every way out shares; this is the one way through.
 #include "run.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <iostream>
@@ -18,6 +21,12 @@
 #include "fba/message_text.hpp"
 #include "fba/registry.hpp"
 #include "fba/task.hpp"
+#include "console.hpp"
+#include "live_graph.hpp"
+#include "log_levels.hpp"
+#include "live_view.hpp"
+#include "monitor.hpp"
+#include "outcome_text.hpp"
 #include "options.hpp"
 #include "run_state.hpp"
 #include "signals.hpp"
@@ -26,6 +35,9 @@
 namespace fba_run {
 
 namespace {
+
+// How often the running task is sampled for its views; --dot-every's shorter period if given.
+constexpr std::chrono::milliseconds kMonitorPeriod{100};
 
 // A mistake on the command line or in the task: said, written into the summary, exit 2.
 int refuse(const std::string& message, bool usage = true) {
@@ -156,6 +168,20 @@ std::unique_ptr<fba::Task> construct(const fba::TaskConfig& config, const fba::R
   }
 }
 
+// The views of the running task on the Monitor's one thread (the progress, the live graph), started.
+void start_monitor(Monitor& monitor, const Options& o, Console& console) {
+  auto& st = state();
+  monitor.watch([&console](const fba::RunResult& now, const fba::RunResult* previous) { console.update(now, previous); },
+                {.every = Monitor::Duration::zero(), .at_end = false});
+  using Duration = Monitor::Duration;
+  const Duration dot_every = o.dot_every > 0 ? std::chrono::duration_cast<Duration>(std::chrono::duration<double>(o.dot_every))
+                                             : Monitor::kOnRequest;
+  if (!st.live_dot.empty()) watch_live_graph(monitor, dot_every);
+  monitor.start(std::min<Duration>(kMonitorPeriod, std::max<Duration>(dot_every, Duration(1))));
+  std::lock_guard lock(st.mutex);
+  st.monitor.store(&monitor);
+}
+
 // The end of a run: where it was and the signal that stopped it noted, the summary written and the
 // last line said. Returns the exit status.
 int report(fba::RunResult& result) {
@@ -167,15 +193,13 @@ int report(fba::RunResult& result) {
     result.reason = "interrupted by " + signal_name(result.signal) + ": " + result.reason;
   int status = result.exit_code();
   const std::string error = write_summary(result);
-  std::cerr << "fba-run: " << fba::to_string(result.outcome) << ": " << fba::escape_controls(result.reason);
-  if (result.final_event && !result.final_event->payload.empty())
-    std::cerr << " (" << fba::escape_controls(result.final_event->payload) << ")";
+  std::cerr << "fba-run: " << outcome_text(result);
   if (result.lost_to_restarts > 0) {
     std::uint64_t restarts = 0;
     for (const auto& c : result.components) restarts += c.restarts;
     std::cerr << "; " << result.lost_to_restarts << " sample(s) lost to " << restarts << " restart(s)";
   }
-  std::fprintf(stderr, " [%.3f s]\n", result.wall_s);
+  std::cerr << std::endl;
   if (!error.empty()) {
     std::cerr << "fba-run: the run failed: could not write the summary " << error << "\n";
     status = kRuntimeError;
@@ -198,21 +222,25 @@ int run(int argc, char** argv) {
     if (const auto end = prepare_output_dir(o, options)) return *end;
   if (!o.invalid.empty()) return refuse(o.invalid);
   options.executor = o.executor;
-  try {
-    fba::set_log_level(o.log_level);
-  } catch (const std::exception& e) {
-    return refuse(e.what());
-  }
+  if (const std::string refused = apply_log_levels(o.log_levels, nullptr); !refused.empty()) return refuse(refused);
   if (interrupted_early(status)) return status;
 
   fba::Registry registry;
   fba::TaskConfig config;
   if (const auto end = load(o, registry, config)) return *end;
+  if (const std::string refused = apply_log_levels(o.log_levels, &config); !refused.empty()) return refuse(refused);
   if (o.dot) {
     std::cout << fba::to_dot(config);
     return 0;
   }
   if (o.check) {
+    try {
+      fba::check_construction(config);  // the filters constructed as a run would, the devices left alone
+    } catch (const fba::ConfigError& e) {
+      std::string reason;
+      for (const auto& d : e.diagnostics()) reason += (reason.empty() ? "" : "\n") + d.str();
+      return refuse(reason, false);
+    }
     print_check(o.task_file, config, registry);
     return 0;
   }
@@ -220,12 +248,21 @@ int run(int argc, char** argv) {
     std::lock_guard lock(st.mutex);  // the watcher reads it for live dumps
     st.config = config;
   }
+  std::optional<LiveView> live;  // --serve's server starts here, so that the page shows the construction too
+  try {
+    live.emplace(o, config);
+  } catch (const std::runtime_error& e) {
+    return refuse(std::string("fba-run: ") + e.what(), false);
+  }
   if (interrupted_early(status)) return status;
   options.threads = o.threads;
   options.timeout_s = o.timeout;
   options.stop_grace_s = o.stop_grace;
   options.stop = st.stop.get_token();
 
+  // The progress on stderr from the construction on, the log lines above it.
+  auto console = std::make_shared<Console>(config, STDERR_FILENO, isatty(STDERR_FILENO) == 1);
+  fba::set_log_sink(Console::log_sink(console, fba::log_sink()));
   std::unique_ptr<fba::Task> task = construct(config, options, status);
   if (!task) return status;
   {
@@ -237,17 +274,23 @@ int run(int argc, char** argv) {
     else
       st.phase.store("running");
   }
-  st.dot_every.store(o.dot_every);
   // Registered again now: handlers run newest first, so this one runs before the plugins'
   // static destructors, while the components still have what they use.
   std::atexit(on_unexpected_exit);
 
+  Monitor monitor([&task] { return task->snapshot(); });
+  live->watch(*task, monitor);
+  start_monitor(monitor, o, *console);
   fba::RunResult result = task->run();
-  if (o.dot_every > 0) {
-    std::optional<fba::RunResult> none;  // the last dump: rates over the whole run
-    dump_live_graph(none);
+  {
+    std::lock_guard lock(st.mutex);  // SIGUSR1 asks it no more
+    st.monitor.store(nullptr);
   }
+  monitor.finish(result);
+  console->close();
+  live->before_summary();
   status = report(result);
+  live->end(result);
   if (!result.stuck.empty() || st.exit_taken.load()) leave(status);  // threads still run in components
   {
     std::lock_guard lock(st.mutex);  // a live dump in progress finishes first

@@ -17,6 +17,8 @@ namespace fba_run {
 
 namespace fs = std::filesystem;
 
+class Monitor;
+
 constexpr int kConfigError = 2;
 constexpr int kRuntimeError = 3;
 
@@ -34,8 +36,8 @@ struct State {
   std::atomic<bool> exit_taken{false};    // an unexpected exit() is being handled
   std::atomic<bool> watching{true};
   std::thread watcher;
-  fs::path live_dot;                // graph-live.dot in --output-dir, written on SIGUSR1 and by --dot-every
-  std::atomic<double> dot_every{0};  // seconds between live dumps; 0 for none
+  fs::path live_dot;                       // graph-live.dot in --output-dir, written on SIGUSR1 and by --dot-every
+  std::atomic<Monitor*> monitor{nullptr};  // samples the task while it runs; set and cleared under `mutex`
   std::stop_source stop;             // the task's RunOptions::stop: reaches constructors too
   std::string run_id;                // summary.json's run_id: which run wrote it
   std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();

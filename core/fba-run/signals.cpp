@@ -22,6 +22,7 @@
 
 #include "fba/log.hpp"
 #include "fba/registry.hpp"
+#include "monitor.hpp"
 #include "run_state.hpp"
 #include "summary_file.hpp"
 
@@ -228,40 +229,23 @@ bool interrupted_early(int& status) {
   return true;
 }
 
-void dump_live_graph(std::optional<fba::RunResult>& previous) {
+void request_live_graph() {
   auto& st = state();
-  std::lock_guard lock(st.mutex);  // the task is not destroyed, nor the folder set, while they are read
+  std::lock_guard lock(st.mutex);  // the monitor is not destroyed while asked
   if (st.live_dot.empty()) {
     std::fprintf(stderr, "fba-run: SIGUSR1: no --output-dir to write graph-live.dot into\n");
     return;
   }
-  fba::Task* task = st.task.load();
-  if (!task) return;  // nothing runs yet, or any more
-  fba::RunResult now = task->snapshot();
-  const std::string text = fba::to_dot(st.config, now, previous ? &*previous : nullptr);
-  previous = std::move(now);
-  const fs::path partial = st.live_dot.string() + ".partial";
-  std::FILE* f = std::fopen(partial.c_str(), "w");
-  bool ok = f && std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  if (f) ok = std::fclose(f) == 0 && ok;
-  if (!ok || std::rename(partial.c_str(), st.live_dot.c_str()) != 0)
-    std::fprintf(stderr, "fba-run: could not write %s: %s\n", st.live_dot.c_str(), std::strerror(errno));
+  if (Monitor* monitor = st.monitor.load()) monitor->request_sample();  // none: nothing runs yet, or any more
 }
 
 void watch_signals(sigset_t signals) {
   auto& st = state();
   const timespec tick{0, 50'000'000};
-  std::optional<fba::RunResult> previous_dump;
   int first_sig = 0;
   pid_t first_pid = 0;
   std::chrono::steady_clock::time_point first_at;
-  auto next_dump = std::chrono::steady_clock::now();
   while (st.watching.load()) {
-    if (const double every = st.dot_every.load(); every > 0 && st.task.load() && std::chrono::steady_clock::now() >= next_dump) {
-      dump_live_graph(previous_dump);
-      next_dump = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                          std::chrono::duration<double>(every));
-    }
     siginfo_t info{};
     if (const int forwarded = g_forwarded.exchange(0)) {
       info.si_signo = forwarded;
@@ -273,7 +257,7 @@ void watch_signals(sigset_t signals) {
     const int sig = info.si_signo;
     if (not_a_request(info)) continue;  // main is done (look at `watching` again), or a write's notice
     if (sig == SIGUSR1) {
-      dump_live_graph(previous_dump);
+      request_live_graph();
       continue;
     }
     // timeout(1) and group kills deliver one request twice: the same signal from the same process

@@ -28,13 +28,12 @@ constexpr int kWakeSignal = SIGUSR2;
 // A signal that arrived while nothing ran yet ends the run here: exit 128 + signal.
 bool interrupted_early(int& status);
 
-// Writes the live graph (states, queue fills, rates since the previous dump) to graph-live.dot,
-// replacing it whole (a viewer never reads half a file). On the watcher thread, and once by main
-// after the run (the final state).
-void dump_live_graph(std::optional<fba::RunResult>& previous);
+// SIGUSR1: the live graph written at once, by the Monitor's thread (see live_graph.hpp); said on
+// stderr when there is no --output-dir to write it into.
+void request_live_graph();
 
 // The watcher thread: takes the stop signals (a first one stops the run in order, a second forces
-// the exit), SIGUSR1 and --dot-every's live graph, until State::watching is cleared.
+// the exit) and SIGUSR1's live graph, until State::watching is cleared.
 void watch_signals(sigset_t signals);
 
 // exit() from a plugin (a static constructor, a component): the run fails, with the summary.

@@ -321,23 +321,37 @@ void Graph::end_ticks(Node* n) {
   if (live_periodic.fetch_sub(1) == 1 && executor_) executor_->poke();
 }
 
-std::vector<Packet>& Graph::tap(const std::string& port, std::size_t keep) {
+OutputState& Graph::output(const std::string& port, const char* what) {
   const auto dot = port.rfind('.');
-  if (dot == std::string::npos) throw std::invalid_argument("tap needs 'component.output', got '" + port + "'");
+  if (dot == std::string::npos) throw std::invalid_argument(std::string(what) + " needs 'component.output', got '" + port + "'");
   Node& n = node(port.substr(0, dot));
   for (auto& out : n.output_states)
-    if (out->spec->name == port.substr(dot + 1)) {
-      taps.emplace_back();
-      auto b = std::make_unique<Buffer>();
-      b->tap = &taps.back();
-      b->tap_keep = keep;
-      b->from = port;
-      b->to = "tap";
-      out->consumers.push_back(b.get());
-      buffers.push_back(std::move(b));
-      return taps.back();
-    }
+    if (out->spec->name == port.substr(dot + 1)) return *out;
   throw std::invalid_argument("component '" + n.config.name + "' has no output '" + port.substr(dot + 1) + "'");
+}
+
+std::vector<Packet>& Graph::tap(const std::string& port, std::size_t keep) {
+  OutputState& out = output(port, "tap");
+  taps.emplace_back();
+  auto b = std::make_unique<Buffer>();
+  b->tap = &taps.back();
+  b->tap_keep = keep;
+  b->from = port;
+  b->to = "tap";
+  out.consumers.push_back(b.get());
+  buffers.push_back(std::move(b));
+  return taps.back();
+}
+
+// Another consumer of the output, costing the other outputs nothing; the output pushes into it
+// like into a `latest` connection, which holds no producer back (not gating).
+std::shared_ptr<LatestSample> Graph::watch(const std::string& port) {
+  if (ran_) throw std::logic_error("watch('" + port + "') after the task ran: call it before run()");
+  OutputState& out = output(port, "watch");
+  auto w = std::make_shared<LatestSample>(port, out.type);
+  out.consumers.push_back(&w->buffer());
+  watches.push_back(w);
+  return w;
 }
 
 ThreadPool& Graph::thread_pool() {
@@ -498,6 +512,7 @@ Task::~Task() {
   kept->push_back(std::move(graph_));
 }
 const std::vector<Packet>& Task::tap(const std::string& port, std::size_t keep) { return graph_->tap(port, keep); }
+std::shared_ptr<LatestSample> Task::watch(const std::string& port) { return graph_->watch(port); }
 RunResult Task::run() { return graph_->run(); }
 void Task::request_stop(Outcome outcome, const std::string& reason) { graph_->request_stop(outcome, reason); }
 void Task::emergency_safe_states() noexcept { graph_->emergency_safe_states(); }

@@ -22,6 +22,7 @@
 #include "fba/task.hpp"
 #include "fba/task_config.hpp"
 #include "fba/thread_pool.hpp"
+#include "fba/view.hpp"
 #include "node.hpp"
 #include "pi_mutex.hpp"
 
@@ -81,6 +82,7 @@ class Graph {
   // The node's periodic ticks are over (finished, or its next tick would never come).
   void end_ticks(Node* n);
   std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
+  std::shared_ptr<LatestSample> watch(const std::string& port);
   // Created on first use, with as many threads as the executor has workers.
   ThreadPool& thread_pool();
   RunResult run();
@@ -101,6 +103,7 @@ class Graph {
   std::vector<std::unique_ptr<Node>> nodes;
   std::vector<std::unique_ptr<Buffer>> buffers;  // destroyed before the nodes (and their libraries)
   std::deque<std::vector<Packet>> taps;
+  std::vector<std::shared_ptr<LatestSample>> watches;  // outputs deliver into them: kept while the graph is
   std::unique_ptr<Executor> executor_;
   std::atomic<int> active{0};  // nodes queued or running
   std::atomic<std::uint64_t> notifications{0};  // Idle -> Queued transitions, for check_idle
@@ -125,6 +128,7 @@ class Graph {
   PiMutex pool_mutex_;
   std::unique_ptr<ThreadPool> pool_;
   Node& node(const std::string& name);
+  OutputState& output(const std::string& port, const char* what);  // "component.output"; `what` for the message
   // After the executor stopped: interrupts, joins within the grace, and safe states; returns
   // the calls that did not return.
   std::vector<StuckCall> stop();

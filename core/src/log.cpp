@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <map>
 #include <mutex>
 #include <stdexcept>
 
@@ -67,7 +68,31 @@ struct Logging {
   std::mutex mutex;
   spdlog::sink_ptr sink = std::make_shared<StderrSink>();
   spdlog::level::level_enum level = spdlog::level::info;
+  std::map<std::string, spdlog::level::level_enum> levels;  // by logger name or composite instance
+
+  // The level for a logger of that name: the longest name in `levels` that is it or a composite
+  // instance it is in, else the one for every logger.
+  spdlog::level::level_enum level_of(const std::string& name) const {
+    std::size_t best = 0;
+    spdlog::level::level_enum found = level;
+    for (const auto& [prefix, lvl] : levels) {
+      const bool fits = name == prefix || (name.size() > prefix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
+                                           name[prefix.size()] == '/');
+      if (fits && prefix.size() >= best) {
+        best = prefix.size();
+        found = lvl;
+      }
+    }
+    return found;
+  }
 };
+
+spdlog::level::level_enum parse_level(const std::string& level) {
+  const auto lvl = spdlog::level::from_str(level);
+  if (lvl == spdlog::level::off && level != "off")
+    throw std::invalid_argument("log level '" + level + "' is not one of trace, debug, info, warn, error, critical, off");
+  return lvl;
+}
 
 Logging& logging() {
   static Logging* l = new Logging;  // alive for loggers destroyed during exit
@@ -81,18 +106,35 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& name) {
   std::lock_guard lock(l.mutex);
   auto logger = std::make_shared<spdlog::logger>(name, l.sink);
   logger->set_pattern("[%H:%M:%S.%e] [%n] %^%l%$: %v");
-  logger->set_level(l.level);
+  logger->set_level(l.level_of(name));
   return logger;
 }
 
 void set_log_level(const std::string& level) {
-  auto lvl = spdlog::level::from_str(level);
-  if (lvl == spdlog::level::off && level != "off")
-    throw std::invalid_argument("log level '" + level + "' is not one of trace, debug, info, warn, error, critical, off");
+  const auto lvl = parse_level(level);
   auto& l = logging();
   std::lock_guard lock(l.mutex);
   l.level = lvl;
   spdlog::set_level(lvl);
+}
+
+void set_log_level(const std::string& name, const std::string& level) {
+  const auto lvl = parse_level(level);
+  auto& l = logging();
+  std::lock_guard lock(l.mutex);
+  l.levels[name] = lvl;
+}
+
+spdlog::sink_ptr log_sink() {
+  auto& l = logging();
+  std::lock_guard lock(l.mutex);
+  return l.sink;
+}
+
+void set_log_sink(spdlog::sink_ptr sink) {
+  auto& l = logging();
+  std::lock_guard lock(l.mutex);
+  l.sink = std::move(sink);
 }
 
 }  // namespace fba

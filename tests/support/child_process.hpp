@@ -1,16 +1,21 @@
 // The one way a test runs another process: a program (fba-run, fba-evaluate, an emulator,
 // fba-lift-test, fba-canopen, a shell command) with its arguments and environment, its output
-// captured, signalled, waited for; or a function of the test run in a forked child, where it may
-// crash or exhaust a limit without taking the test down.
+// captured (or on a pseudo-terminal, for what a program does on a terminal), signalled, waited for;
+// or a function of the test run in a forked child, where it may crash or exhaust a limit without
+// taking the test down.
 //
 // The output goes to a file, not a pipe: a program that prints more than a pipe holds never blocks
 // on a test that is not reading, and a grandchild that keeps the output open (an emulator fba-run
-// started) does not hold a reader up after the child has ended. Waits poll that file and the
-// child's state; their bounds detect a hang, they are no speed check.
+// started) does not hold a reader up after the child has ended. On a terminal, a thread copies what
+// the program writes to that file. Waits poll that file and the child's state; their bounds detect
+// a hang, they are no speed check.
 #pragma once
 
+#include <poll.h>
+#include <pty.h>
 #include <signal.h>
 #include <spawn.h>
+#include <termios.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -23,10 +28,12 @@
 #include <fstream>
 #include <functional>
 #include <memory>
+#include <stop_token>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <atomic>
 #include <utility>
 #include <vector>
 
@@ -47,6 +54,9 @@ struct ChildOptions {
   // stdout and stderr to this descriptor (a pipe the test holds) instead of output(); the test
   // closes its own copy once the child has started.
   int output_fd = -1;
+  // stdout and stderr on a pseudo-terminal of 200 columns in raw mode (isatty() is true in the
+  // child, and what it writes arrives unchanged: "\n" stays "\n"), copied to output().
+  bool terminal = false;
 };
 
 // How a child ended, and what it printed.
@@ -84,9 +94,23 @@ class Child {
       : dir_(std::make_unique<TempDir>("child")), out_(dir_->path() / "output.txt") {
     if (args.empty()) throw std::invalid_argument("Child: no program given");
     if (options.stderr_apart) err_ = dir_->path() / "stderr.txt";
+    int terminal = -1, terminal_end = -1;  // the pseudo-terminal's master and slave
+    if (options.terminal) {
+      termios raw{};
+      cfmakeraw(&raw);
+      winsize size{};
+      size.ws_col = 200;
+      size.ws_row = 50;
+      if (::openpty(&terminal, &terminal_end, nullptr, &raw, &size) != 0)
+        throw std::runtime_error(std::string("openpty failed: ") + std::strerror(errno));
+      ::fcntl(terminal, F_SETFD, FD_CLOEXEC);
+      ::fcntl(terminal_end, F_SETFD, FD_CLOEXEC);
+    }
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    if (options.output_fd >= 0)
+    if (terminal_end >= 0)
+      posix_spawn_file_actions_adddup2(&actions, terminal_end, 1);
+    else if (options.output_fd >= 0)
       posix_spawn_file_actions_adddup2(&actions, options.output_fd, 1);
     else
       posix_spawn_file_actions_addopen(&actions, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -114,9 +138,15 @@ class Child {
     const int rc = posix_spawn(&pid_, args[0].c_str(), &actions, &attr, argv.data(), envp.data());
     posix_spawnattr_destroy(&attr);
     posix_spawn_file_actions_destroy(&actions);
+    if (terminal_end >= 0) ::close(terminal_end);
     if (rc != 0) {
       pid_ = -1;
+      if (terminal >= 0) ::close(terminal);
       throw std::runtime_error("cannot start " + args[0] + ": " + std::strerror(rc));
+    }
+    if (terminal >= 0) {
+      drained_ = false;
+      copier_ = std::jthread([this, terminal](std::stop_token stop) { copy_terminal(terminal, stop); });
     }
   }
   ~Child() {
@@ -152,6 +182,22 @@ class Child {
   bool wait_for_file(const std::filesystem::path& file, std::chrono::milliseconds limit = kNoLimit) const {
     return poll_until([&] { return std::filesystem::exists(file); }, limit);
   }
+  // The whole line that holds `needle`, without its newline, once it has all come; empty if the
+  // child ends or `limit` passes first (a line written in pieces is waited for whole).
+  std::string read_line_with(const std::string& needle, std::chrono::milliseconds limit = std::chrono::seconds(60)) const {
+    std::string line;
+    poll_until([&] {
+      const std::string out = output();
+      const auto at = out.find(needle);
+      const auto end = at == std::string::npos ? at : out.find('\n', at);
+      if (end == std::string::npos) return false;
+      const auto start = out.rfind('\n', at);
+      const std::size_t from = start == std::string::npos ? 0 : start + 1;
+      line = out.substr(from, end - from);
+      return true;
+    }, limit);
+    return line;
+  }
   // The output once it holds `needle`, the child ended, or `limit` passed.
   std::string read_until(const std::string& needle, std::chrono::milliseconds limit = std::chrono::seconds(60)) const {
     wait_for_output(needle, limit);
@@ -176,7 +222,7 @@ class Child {
     const auto start = std::chrono::steady_clock::now();
     for (;;) {
       if (done()) return true;
-      if (!running()) return done();
+      if (!running() && drained_) return done();
       if (limit != kNoLimit && std::chrono::steady_clock::now() - start >= limit) return false;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
@@ -189,15 +235,35 @@ class Child {
       r.signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
       r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + r.signal;
     }
+    while (!drained_) std::this_thread::sleep_for(std::chrono::milliseconds(2));  // the terminal's last output
     r.output = output();
     r.err = err();
     return r;
+  }
+
+  // Copies what the child writes on the terminal to the output file, until the terminal's last
+  // writer has closed it (read fails with EIO) or the Child goes.
+  void copy_terminal(int terminal, std::stop_token stop) {
+    std::ofstream out(out_, std::ios::binary | std::ios::trunc);
+    char buffer[4096];
+    while (!stop.stop_requested()) {
+      pollfd p{terminal, POLLIN, 0};
+      if (::poll(&p, 1, 20) == 0) continue;
+      const ssize_t n = ::read(terminal, buffer, sizeof buffer);
+      if (n <= 0) break;
+      out.write(buffer, n);
+      out.flush();
+    }
+    ::close(terminal);
+    drained_ = true;
   }
 
   std::unique_ptr<TempDir> dir_;  // holds the output files; removed after the child is reaped
   std::filesystem::path out_;
   std::filesystem::path err_;
   pid_t pid_ = -1;
+  std::atomic<bool> drained_ = true;  // false while a terminal's output is still being copied
+  std::jthread copier_;               // last: stopped and joined first when the Child goes
 };
 
 // Runs a program to its end: its status and output.

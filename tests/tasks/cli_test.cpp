@@ -467,6 +467,28 @@ TEST(Cli, CheckValidatesWithoutRunning) {
   EXPECT_NE(r.output.find("ok (8 components"), std::string::npos) << r.output;
 }
 
+// --check constructs the filters (fba::check_construction): a handle a constructor binds but the
+// spec leaves out is the plugin's bug, said before anything runs; the device it would have opened
+// (an actuator's constructor leaving a mark) is not touched.
+TEST(Cli, CheckFindsAHandleAFilterUsesButItsSpecLeavesOut) {
+  // The bad plugin alone in a folder (its neighbours there are refused, one registers examples.counter).
+  const fs::path plugins = temp_dir("plugins");
+  for (const char* file : {"undeclared_handle.so", "undeclared_handle.manifest.json"})
+    fs::copy_file(fba::test::binary_dir() + "/core/tests/bad_plugins/" + file, plugins / file);
+  const fs::path mark = temp_dir("mark") / "constructed";
+  const auto f = write_task("forgetful.yaml", "components:\n"
+                                              "  src: { type: examples.counter, params: { count: 3 } }\n"
+                                              "  forgetful: { type: bad.undeclared_handle }\n"
+                                              "  device: { type: bad.marking_actuator, params: { mark: " + mark.string() + " } }\n"
+                                              "connections: [ src.out -> forgetful.in, forgetful.out -> device.in ]\n");
+  const auto r = fba_run({"--check", "-p", plugins.string(), f});
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("forgetful.yaml:3:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("component 'forgetful' (bad.undeclared_handle): plugin bug in "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("uses output 'forgotten', which its spec does not declare"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(mark));
+}
+
 TEST(Cli, DotPrintsTheGraph) {
   const auto r = fba_run({"--dot", task("composite.yaml")});
   EXPECT_EQ(r.status, 0);

@@ -20,6 +20,7 @@ namespace fba {
 namespace detail {
 class Graph;
 }
+class LatestSample;  // fba/view.hpp
 
 enum class Outcome { Success, Failure, ConfigError, RuntimeError, Interrupted };
 const char* to_string(Outcome o);
@@ -144,6 +145,12 @@ ActiveCall active_call() noexcept;
 // dumps). Rates are since `earlier` (a previous snapshot), or since the start without one.
 std::string to_dot(const TaskConfig& task, const RunResult& now, const RunResult* earlier = nullptr);
 
+// fba-run --check's construction: every filter of the task constructed, as a run would, and
+// destroyed again; sensors, actuators and blocking types, which own devices, are not. Throws
+// ConfigError listing what the constructors said (a handle missing from the spec, a refused
+// configuration). See core/src/construction_check.cpp for why only filters.
+void check_construction(const TaskConfig& config);
+
 // summary.json: outcome, final event, wall time, per-component counts and rates.
 std::string summary_json(const RunResult& result, const TaskConfig& task);
 
@@ -160,6 +167,9 @@ class Task {
   // them, or only the newest `keep` (a test that needs the final model need not hold every
   // intermediate one). Call before run(); read after.
   const std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
+  // The newest sample leaving "component.output", for a reader on another thread while run()
+  // runs (a live view); never holds the producer back. Call before run(); each call makes its own.
+  std::shared_ptr<LatestSample> watch(const std::string& port);
 
   // Runs to the end; the result says how it ended. May be called once.
   RunResult run();

@@ -1,0 +1,95 @@
+// fba-run's last line: the outcome in words, from the final event and the components' results.
+#include "outcome_text.hpp"
+
+#include <gtest/gtest.h>
+
+namespace {
+
+using fba_run::outcome_text;
+
+fba::ComponentStats component(const std::string& name, fba::Kind kind, std::map<std::string, std::string> results = {}) {
+  fba::ComponentStats c;
+  c.name = name;
+  c.kind = kind;
+  c.results = std::move(results);
+  return c;
+}
+
+fba::Event event(const std::string& source, const std::string& name, const std::string& payload) {
+  fba::Event e;
+  e.source = source;
+  e.name = name;
+  e.payload = payload;
+  return e;
+}
+
+TEST(OutcomeText, AHeldObjectIsSaidWithItsViewsScoreAndTime) {
+  fba::RunResult r;
+  r.outcome = fba::Outcome::Success;
+  r.wall_s = 2.8;
+  const std::string lift = R"({"held": true, "slip_m": 0.0017, "contacts": [)" + std::string(1500, ' ') + "]}";
+  r.components = {component("synthesis", fba::Kind::Filter,
+                            {{"views", "5"}, {"grasp", R"({"scores": {"total": 0.5251, "symmetry": 0.05}})"}}),
+                  component("hand", fba::Kind::Actuator, {{"lift", lift}})};
+  r.final_event = event("hand", "held", lift);
+  EXPECT_EQ(outcome_text(r), "held the object after 5 views, grasp score 0.53, 2.8 s");
+}
+
+TEST(OutcomeText, APlainTaskSaysItsEventAndTheSamplesOfItsSensors) {
+  fba::RunResult r;
+  r.outcome = fba::Outcome::Success;
+  r.wall_s = 0.4129;
+  auto source = component("source", fba::Kind::Sensor);
+  source.samples_out = 200000;
+  r.components = {source, component("sink", fba::Kind::Actuator)};
+  r.final_event = event("sink", "done", "200000");
+  EXPECT_EQ(outcome_text(r), "success: event sink.done (200000), 200000 samples in 0.41 s");
+}
+
+TEST(OutcomeText, AComponentThatGaveUpIsNamedWithItsReason) {
+  fba::RunResult r;
+  r.outcome = fba::Outcome::Failure;
+  r.wall_s = 31;
+  r.components = {component("synthesis", fba::Kind::Filter, {{"views", "10"}, {"failure", R"("no reachable grasp")"}})};
+  r.final_event = event("synthesis", "grasp_synthesis_failed", "no reachable grasp");
+  EXPECT_EQ(outcome_text(r), "failed: synthesis gave up after 10 views, 31 s (no reachable grasp)");
+}
+
+TEST(OutcomeText, ADroppedObjectIsAFailureWithTheHandsReason) {
+  fba::RunResult r;
+  r.outcome = fba::Outcome::Failure;
+  r.wall_s = 3.14;
+  r.components = {component("synthesis", fba::Kind::Filter, {{"views", "1"}}),
+                  component("hand", fba::Kind::Actuator, {{"lift", R"({"held": false, "reason": "slipped 4 cm"})"}})};
+  EXPECT_EQ(outcome_text(r), "failed: the object was not held after 1 view, 3.1 s (slipped 4 cm)");
+}
+
+TEST(OutcomeText, ALongPayloadStaysInTheSummary) {
+  fba::RunResult r;
+  r.outcome = fba::Outcome::Failure;
+  r.wall_s = 1;
+  r.final_event = event("check", "bad", std::string(2000, 'x'));
+  EXPECT_EQ(outcome_text(r), "failed: event check.bad, 1 s");
+}
+
+TEST(OutcomeText, AnErrorKeepsItsReasonAndAShortenedMessage) {
+  fba::RunResult r;
+  r.outcome = fba::Outcome::RuntimeError;
+  r.reason = "component 'bad' (examples.faulty) failed: injected fault";
+  r.wall_s = 0.05;
+  r.final_event = event("bad", "error", "injected \x1b[2J fault\nsecond line");
+  const std::string text = outcome_text(r);
+  EXPECT_EQ(text.rfind("runtime_error: component 'bad' (examples.faulty) failed: injected fault (injected ", 0), 0u) << text;
+  EXPECT_EQ(text.find('\x1b'), std::string::npos) << text;  // control bytes escaped
+  EXPECT_EQ(text.find('\n'), std::string::npos) << text;
+  EXPECT_NE(text.find(", 0.05 s"), std::string::npos) << text;
+}
+
+TEST(OutcomeText, DurationsReadAsPeopleWriteThem) {
+  EXPECT_EQ(fba_run::seconds_text(0.0304), "0.03 s");
+  EXPECT_EQ(fba_run::seconds_text(2.84), "2.8 s");
+  EXPECT_EQ(fba_run::seconds_text(42.4), "42 s");
+  EXPECT_EQ(fba_run::seconds_text(192), "3 min 12 s");
+}
+
+}  // namespace

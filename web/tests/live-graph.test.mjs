@@ -1,0 +1,65 @@
+// The live view of a running task: fba-run tasks/examples/chain.yaml --serve 0, endless, in Debian's
+// Chromium. The page draws the task's graph and its rates are live (they change between two reads);
+// the queues show their fill. Conditions are waited for, never a time: a loaded machine only slows it.
+import fs from 'node:fs';
+import { launchBrowser } from './browser.mjs';
+import { FbaRun, testArguments, temporaryFolder } from './fba-run.mjs';
+import { run, step, expect } from './check.mjs';
+
+const { fbaRun, sourceDir } = testArguments();
+const WAIT = { timeout: 600_000, polling: 100 };
+const RATE = /(\d+(?:\.\d+)?) (?:k|M)?Hz/;
+
+run(async (cleanup) => {
+  const dir = temporaryFolder('live-graph');
+  cleanup((error) => (error ? console.log(`kept ${dir}`) : fs.rmSync(dir, { recursive: true, force: true })));
+  // Counts no run reaches: the task runs until the test stops it.
+  const fba = new FbaRun(fbaRun, ['tasks/examples/chain.yaml', '--set', 'source.count=1000000000000', '--set', 'sink.expected=1000000000000',
+    '--serve', '0', '--output-dir', dir], { cwd: sourceDir });
+  cleanup(async () => {
+    const { code, signal } = await fba.stop();
+    console.log(`fba-run stopped: ${code ?? signal}`);
+  });
+  const url = await fba.url;
+  const browser = await launchBrowser();
+  cleanup(() => browser.close());
+  const page = await browser.context.newPage();
+  const pageErrors = [];
+  page.on('pageerror', (e) => pageErrors.push(e.message));
+
+  await step('the page served by fba-run draws the task graph: five components, four connections', async () => {
+    await page.goto(url);
+    await page.waitForFunction(() => window.fbaDebug?.graph.drawn, null, WAIT);
+    const names = await page.$$eval('.node', (nodes) => nodes.map((n) => n.dataset.name).sort());
+    expect(names.join() === 'first,second,sink,source,third', `components drawn: ${names.join()}`);
+    const edges = await page.$$eval('.edge', (e) => e.length);
+    expect(edges === 4, `connections drawn: ${edges}, expected 4`);
+  });
+
+  await step('the sink\'s rate is live: it changes between two reads', async () => {
+    const selector = '.node[data-name="sink"] .node-rates';
+    const read = () => page.$eval(selector, (e) => e.textContent);
+    await page.waitForFunction(([s, re]) => new RegExp(re).test(document.querySelector(s)?.textContent ?? ''), [selector, RATE.source], WAIT);
+    const first = (await read()).match(RATE)[0];
+    await page.waitForFunction(([s, re, f]) => {
+      const m = (document.querySelector(s)?.textContent ?? '').match(new RegExp(re));
+      return m && m[0] !== f;
+    }, [selector, RATE.source, first], WAIT);
+    const second = (await read()).match(RATE)[0];
+    console.log(`   sink: ${first}, then ${second}`);
+    expect(Number(RATE.exec(second)[1]) > 0, `the sink's rate is ${second}: samples flow through the chain`);
+  });
+
+  await step('the task is shown running, and every connection shows its queue fill', async () => {
+    await page.waitForFunction(() => document.getElementById('run-status').textContent === 'running', null, WAIT);
+    await page.waitForFunction(() => [...document.querySelectorAll('.queue-label')].every((l) => /^\d+\/(\d+|∞) · /.test(l.textContent)), null, WAIT);
+    const states = await page.$$eval('.node-state', (s) => s.map((e) => e.textContent));
+    expect(states.every((s) => /^(idle|queued|running|finished)/.test(s)), `component states: ${states.join(', ')}`);
+  });
+
+  await step('no problem with the data and no script error', async () => {
+    const problems = await page.evaluate(() => window.fbaDebug.problems);
+    expect(problems.length === 0, `the page reported: ${problems.join('; ')}`);
+    expect(pageErrors.length === 0, `script errors: ${pageErrors.join('; ')}`);
+  });
+});
