@@ -9,7 +9,7 @@
 #include <fba/task.hpp>
 #include <fba/view.hpp>
 
-#include "test_components.hpp"
+#include "fixture_components.hpp"
 
 using fba::ExecutorKind;
 using fba::Outcome;
