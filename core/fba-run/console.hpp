@@ -5,8 +5,7 @@
 // sink from log_sink()), so the two never garble each other.
 #pragma once
 
-#include <chrono>
-#include <cstdio>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <mutex>
