@@ -180,7 +180,8 @@ case "$cmd" in
     # the vision libraries configured, though only these targets and what they link are built.
     configure tsan "${sanitized[@]}" -DFBA_SANITIZE=thread -DFBA_BUILD_BENCHMARKS=OFF
     tsan_tests=(fba_core_tests fba_task_tests fba_can_tests fba_canopen_tests fba_canopen_program_tests
-      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests fba_grasp_threads_tests fba_serve_tests)
+      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests fba_grasp_threads_tests fba_serve_tests
+      fba_run_views_tests)
     build_behind tsan --target "${tsan_tests[@]}"
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       LSAN_OPTIONS=suppressions=$top/tests/lsan.supp \
