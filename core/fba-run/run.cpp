@@ -263,6 +263,7 @@ int run(int argc, char** argv) {
   // The progress on stderr from the construction on, the log lines above it.
   auto console = std::make_shared<Console>(config, STDERR_FILENO, isatty(STDERR_FILENO) == 1);
   fba::set_log_sink(Console::log_sink(console, fba::log_sink()));
+  st.console.store(console.get());  // kept alive by the sink: a signal's message goes above the line
   std::unique_ptr<fba::Task> task = construct(config, options, status);
   if (!task) return status;
   {
