@@ -36,6 +36,7 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "batch_index.hpp"
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/grasp/object_surface.hpp"
 #include "object_placement.hpp"
@@ -1104,6 +1105,8 @@ int run_grasp_batch(const std::vector<std::string>& args) {
   std::cout << table << std::flush;
   std::ofstream(out / "table.txt") << table;
   std::ofstream(out / "runs.json") << rows_json(rows).dump(2) << "\n";
+  if (const std::string e = write_batch_index(out, table, rows_json(rows)); !e.empty())
+    std::fprintf(stderr, "fba-evaluate grasp --batch: %s\n", e.c_str());
   if (!stopped.empty()) std::fprintf(stderr, "fba-evaluate grasp --batch: %s\n", stopped.c_str());
   // As a program killed by the signal would end, after the table.
   return stop_signal ? 128 + stop_signal : 0;
