@@ -125,7 +125,7 @@ window.fbaDebug = {
   get messages() { return state.messageCount; },
   get problems() { return [...state.problems]; },
   get graph() {
-    return { drawn: graph.drawn, nodes: graph.nodes.size, edges: graph.edges.size, layoutMs: graph.layoutMs };
+    return { drawn: graph.drawn, nodes: graph.nodes.size, edges: graph.edges.size, layoutMs: graph.layoutMs, layoutBy: graph.layoutBy };
   },
   get model() { return { ...scene.stats }; },
   modelPixels: () => scene.modelPixels(),
