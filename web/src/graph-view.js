@@ -55,34 +55,47 @@ export class GraphView {
     this.installPanZoom();
   }
 
+  // Drawn at once by rank, then, for a graph ELK lays out in reasonable time, again by ELK when its
+  // layout is ready: ELK's first layout in a page costs seconds on a loaded machine (its code is
+  // set up then), and the graph should not wait for it.
   async setTask(task, latestStats) {
     const generation = ++this.layoutGeneration;
     this.drawn = false;
-    this.message.textContent = `laying out ${task.components.length} components…`;
-    this.message.hidden = false;
+    this.layoutMs = null;
     const names = task.components.map((c) => c.name);
     const graph = this.elkGraph(task, names);
+    this.message.hidden = task.components.length > 0;
+    this.message.textContent = 'the task has no components';
+    const quick = rankLayout(graph.children, graph.edges, (portId) => this.portY.get(portId));
+    this.show(task, quick, 'rank', latestStats);
+    performance.mark('fba-graph-drawn');
+    if (task.components.length > ELK_MAX_COMPONENTS || !task.components.length) return;
     const start = performance.now();
     let laid;
     try {
-      this.layoutBy = task.components.length > ELK_MAX_COMPONENTS ? 'rank' : 'elk';
-      laid = this.layoutBy === 'elk' ? await elk.layout(graph)
-        : rankLayout(graph.children, graph.edges, (portId) => this.portY.get(portId));
+      laid = await elk.layout(graph);
     } catch (e) {
-      this.message.textContent = `the graph could not be laid out: ${e.message ?? e}`;
+      this.caption.textContent = `laid out by rank: ELK failed (${e.message ?? e})`;
       return;
     }
     if (generation !== this.layoutGeneration) return;  // a newer task arrived meanwhile
     this.layoutMs = performance.now() - start;
-    this.caption.textContent = this.layoutBy === 'rank'
-      ? `${task.components.length} components: laid out by rank, in rows (ELK above ${ELK_MAX_COMPONENTS} would keep you waiting)` : '';
-    this.draw(task, laid, names);
-    this.message.hidden = task.components.length > 0;
-    if (!task.components.length) this.message.textContent = 'the task has no components';
-    this.fit();
+    this.show(task, laid, 'elk', latestStats);
+    performance.mark('fba-graph-laid-out');
+  }
+
+  show(task, laid, by, latestStats) {
+    const selected = this.selected;
+    this.layoutBy = by;
+    this.caption.textContent = by === 'elk' ? '' : task.components.length > ELK_MAX_COMPONENTS
+      ? `${task.components.length} components: laid out by rank, in rows (ELK above ${ELK_MAX_COMPONENTS} would keep you waiting)`
+      : 'laid out by rank until ELK\'s layout is ready…';
+    this.draw(task, laid);
+    // The user's own pan and zoom are kept when ELK's layout replaces the first one.
+    if (by === 'rank' || !this.userMoved) this.fit();
     this.drawn = true;
-    performance.mark('fba-graph-drawn');
-    const stats = latestStats?.();
+    if (selected && this.nodes.has(selected)) this.select(selected);
+    const stats = this.pendingStats ?? latestStats?.();
     if (stats) this.drawStats(stats);
   }
 
@@ -146,7 +159,7 @@ export class GraphView {
     };
   }
 
-  draw(task, laid, names) {
+  draw(task, laid) {
     this.root.replaceChildren();
     this.nodes.clear();
     this.edges.clear();
@@ -272,6 +285,7 @@ export class GraphView {
       if (Math.abs(dx) + Math.abs(dy) > 3) drag.moved = true;
       this.view.x = drag.vx + dx;
       this.view.y = drag.vy + dy;
+      this.userMoved = true;
       this.applyView();
     });
     this.svg.addEventListener('pointerup', () => {
@@ -287,9 +301,13 @@ export class GraphView {
       this.view.x = px - ((px - this.view.x) * k) / this.view.k;
       this.view.y = py - ((py - this.view.y) * k) / this.view.k;
       this.view.k = k;
+      this.userMoved = true;
       this.applyView();
     }, { passive: false });
-    this.svg.addEventListener('dblclick', () => this.fit());
+    this.svg.addEventListener('dblclick', () => {
+      this.userMoved = false;
+      this.fit();
+    });
     new ResizeObserver(() => { if (this.fitted) this.fit(); }).observe(this.container);
   }
 

@@ -136,6 +136,23 @@ window.fbaDebug = {
   get ended() { return !!state.end; },
 };
 
+// Each panel can fill the page and back (its title's button, or Escape).
+for (const panel of document.querySelectorAll('.panel')) {
+  const button = el('button', { class: 'small panel-max', title: 'fill the page with this panel (Escape: back)' }, '⤢');
+  button.addEventListener('click', () => {
+    const on = !panel.classList.contains('maximized');
+    document.querySelectorAll('.panel').forEach((p) => p.classList.remove('maximized'));
+    panel.classList.toggle('maximized', on);
+    document.body.classList.toggle('has-maximized', on);
+  });
+  panel.querySelector('h2').append(button);
+}
+document.addEventListener('keydown', (ev) => {
+  if (ev.key !== 'Escape') return;
+  document.querySelectorAll('.panel').forEach((p) => p.classList.remove('maximized'));
+  document.body.classList.remove('has-maximized');
+});
+
 function replay(messages) {
   if (!Array.isArray(messages)) throw new Error('"messages" must be a list');
   for (const m of messages) state.apply(m);
