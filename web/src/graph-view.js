@@ -188,10 +188,6 @@ export class GraphView {
       outputs.forEach((p, j) => g.append(
         svg('rect', { class: 'port', x: n.width - 4, y: NODE_TOP + PORT_ROW * j + 3, width: 8, height: 8 }),
         svg('text', { class: 'port-label', x: n.width - 8, y: NODE_TOP + PORT_ROW * j + 11, 'text-anchor': 'end' }, p.name)));
-      g.addEventListener('click', (ev) => {
-        ev.stopPropagation();
-        this.select(c.name);
-      });
       nodeLayer.append(g);
       this.nodes.set(c.name, { g, box, dot, state, rates, component: c });
     });
@@ -274,22 +270,26 @@ export class GraphView {
   // Pan with a drag, zoom with the wheel around the pointer, double click to fit.
   installPanZoom() {
     let drag = null;
+    // The pointer is captured only once it moves: a click stays on the component it hit.
     this.svg.addEventListener('pointerdown', (ev) => {
-      drag = { x: ev.clientX, y: ev.clientY, vx: this.view.x, vy: this.view.y, moved: false };
-      this.svg.setPointerCapture(ev.pointerId);
+      drag = { id: ev.pointerId, x: ev.clientX, y: ev.clientY, vx: this.view.x, vy: this.view.y, moved: false };
     });
     this.svg.addEventListener('pointermove', (ev) => {
       if (!drag) return;
       const dx = ev.clientX - drag.x;
       const dy = ev.clientY - drag.y;
-      if (Math.abs(dx) + Math.abs(dy) > 3) drag.moved = true;
+      if (!drag.moved && Math.abs(dx) + Math.abs(dy) > 3) {
+        drag.moved = true;
+        this.svg.setPointerCapture(drag.id);
+      }
+      if (!drag.moved) return;
       this.view.x = drag.vx + dx;
       this.view.y = drag.vy + dy;
       this.userMoved = true;
       this.applyView();
     });
-    this.svg.addEventListener('pointerup', () => {
-      if (drag && !drag.moved) this.select(null);
+    this.svg.addEventListener('pointerup', (ev) => {
+      if (drag && !drag.moved) this.select(ev.target.closest?.('.node')?.dataset.name ?? null);
       drag = null;
     });
     this.svg.addEventListener('wheel', (ev) => {
