@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The two things a developer does, from a fresh Debian 12 machine:
 #   tools/dev.sh run    install what is missing, build, run the main task (tasks/grasp.yaml: the grasp loop in simulation)
-#   tools/dev.sh test   install what is missing, build and run every test: plain, under
-#                       AddressSanitizer + UndefinedBehaviorSanitizer, the runtime's
-#                       concurrency tests under ThreadSanitizer, and the task-loader fuzzer
+#   tools/dev.sh test   install what is missing, build and run every test: plain (with the live
+#                       view's page in headless Chromium), under AddressSanitizer +
+#                       UndefinedBehaviorSanitizer, the runtime's concurrency tests under
+#                       ThreadSanitizer, and the task-loader fuzzer
 # Builds go to build/<config>; FBA_JOBS sets the parallelism (default: all cores). With ccache
 # installed every build goes through it, so a second run recompiles only what changed.
 # FBA_FUZZ_RUNS (default 18000) bounds the fuzzer's exploration, in inputs run.
@@ -19,7 +20,12 @@ packages=(
   liburdfdom-dev libkdl-parser-dev liborocos-kdl-dev libmodbus-dev libompl-dev libfcl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gstreamer1.0-tools gstreamer1.0-plugins-base graphviz bc ccache
+  chromium  # the live view's browser tests (web/tests/, driven by playwright-core from npm)
 )
+# The live view's page (web/) is built with npm and vite: Debian's nodejs and npm, unless a Node.js
+# with npm is there already (NodeSource's nodejs carries its own npm, with which Debian's npm package
+# conflicts). The build installs the page's npm packages itself (npm ci, once per package-lock.json).
+command -v npm >/dev/null || packages+=(nodejs npm)
 
 install_packages() {
   local missing=()
@@ -180,7 +186,8 @@ case "$cmd" in
     # the vision libraries configured, though only these targets and what they link are built.
     configure tsan "${sanitized[@]}" -DFBA_SANITIZE=thread -DFBA_BUILD_BENCHMARKS=OFF
     tsan_tests=(fba_core_tests fba_task_tests fba_inspect_tests fba_can_tests fba_canopen_tests fba_canopen_program_tests
-      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests fba_grasp_threads_tests fba_serve_tests)
+      fba_canopen_arm_tests fba_robotiq_3f_tests fba_robotiq_3f_program_tests fba_grasp_threads_tests fba_serve_tests
+      fba_run_views_tests)
     build_behind tsan --target "${tsan_tests[@]}"
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       LSAN_OPTIONS=suppressions=$top/tests/lsan.supp \

@@ -29,7 +29,7 @@ function reportTemplate() {
       html = html.replace(/<link rel="stylesheet" crossorigin href="([^"]+)">/g, (_, href) => `<style>${read(href).replace(/<\/(style)/gi, '<\\/$1')}</style>`);
       html = html.replace('<title>fba live view</title>', '<title>fba run report</title>');
       if (scripts !== 1) throw new Error(`report.html: expected one module script in index.html, found ${scripts}`);
-      if (/<(script|link)[^>]+(src|href)=/.test(html)) throw new Error('report.html still refers to another file');
+      if (/<(script|link)[^>]+(src|href)="(?!data:)/.test(html)) throw new Error('report.html still refers to another file');
       const markers = html.split(MARKER).length - 1;
       if (markers !== 1) throw new Error(`report.html must hold the marker ${MARKER} exactly once, not ${markers} times`);
       fs.writeFileSync(path.join(outDir, 'report.html'), html);

@@ -8,6 +8,7 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
@@ -139,11 +140,12 @@ void Console::update(const fba::RunResult& now, const fba::RunResult* previous) 
   std::lock_guard lock(mutex_);
   if (closed_) return;
   std::vector<Step> steps = steps_of(now, config_);
+  std::map<std::string_view, const Step*> before;
+  for (const auto& s : steps_) before.emplace(s.component, &s);
   std::string changed;  // the steps that are new since the last sample
   for (const auto& s : steps) {
-    bool same = false;
-    for (const auto& old : steps_) same = same || old == s;
-    if (!same) changed += (changed.empty() ? "" : "; ") + step_text(s);
+    const auto it = before.find(s.component);
+    if (it == before.end() || !(*it->second == s)) changed += (changed.empty() ? "" : "; ") + step_text(s);
   }
   steps_ = std::move(steps);
   if (!changed.empty()) {

@@ -5,8 +5,7 @@
 // sink from log_sink()), so the two never garble each other.
 #pragma once
 
-#include <chrono>
-#include <cstdio>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -36,7 +35,8 @@ std::string step_text(const Step& step);
 
 class Console {
  public:
-  // Writes to `fd`; `terminal`: the progress line is redrawn in place.
+  // Writes to `fd`; `terminal`: the progress line is redrawn in place. `config` is read by update()
+  // only, so it must outlive the run, not the Console (which the log sink keeps to the end).
   Console(const fba::TaskConfig& config, int fd, bool terminal);
 
   // The Monitor's watcher: the progress as of `now`.

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <string>
 
+#include "console.hpp"
 #include "run_state.hpp"
 
 namespace fba_run {
@@ -21,8 +22,11 @@ void write_live_graph(const fba::RunResult& now, const fba::RunResult* previous)
   std::FILE* f = std::fopen(partial.c_str(), "w");
   bool ok = f && std::fwrite(text.data(), 1, text.size(), f) == text.size();
   if (f) ok = std::fclose(f) == 0 && ok;
-  if (!ok || std::rename(partial.c_str(), st.live_dot.c_str()) != 0)
-    std::fprintf(stderr, "fba-run: could not write %s: %s\n", st.live_dot.c_str(), std::strerror(errno));
+  if (ok && std::rename(partial.c_str(), st.live_dot.c_str()) == 0) return;
+  const int error = errno;
+  const std::string said = "fba-run: could not write " + st.live_dot.string() + ": " + std::strerror(error) + "\n";
+  if (Console* console = st.console.load()) console->above([&] { std::fputs(said.c_str(), stderr); });  // not onto the progress line
+  else std::fputs(said.c_str(), stderr);
 }
 
 }  // namespace

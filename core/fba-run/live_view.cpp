@@ -7,6 +7,8 @@
 #include <iostream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "page_files.hpp"
 #include "report_page.hpp"
 #include "run_state.hpp"
@@ -44,7 +46,34 @@ LiveView::LiveView(const Options& o, const fba::TaskConfig& config) : config_(co
   std::fwrite(line.data(), 1, line.size(), stderr);  // one write: a reader never sees half the address
 }
 
-LiveView::~LiveView() = default;
+// A run that ended before its task ran (a constructor refused, a device failed, a signal): the
+// pages are told, with the summary when there is one, instead of waiting for an end that never comes.
+LiveView::~LiveView() {
+  if (!feed_ || ended_) return;
+  try {
+    nlohmann::json summary;
+    if (const fs::path file = state().summary; !file.empty()) {
+      std::ifstream in(file, std::ios::binary);
+      summary = nlohmann::json::parse(in, nullptr, false);
+    }
+    nlohmann::json end{{"type", "end"}};
+    if (summary.is_object() && summary.value("outcome", "running") != "running") {
+      end["outcome"] = summary["outcome"];
+      end["exit_code"] = summary.value("exit_code", -1);
+      end["reason"] = summary.value("reason", "");
+    } else {
+      const int sig = state().signal.load();
+      end["outcome"] = sig ? "interrupted" : "not_run";
+      end["exit_code"] = sig ? 128 + sig : -1;
+      end["reason"] = std::string("the run ended while ") + state().phase.load() + ", before its task ran; fba-run said why on stderr";
+    }
+    end["summary"] = summary.is_object() ? summary : nlohmann::json(nullptr);
+    feed_->end_with(end.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+    if (server_) server_->finish(kEndGrace);
+  } catch (const std::exception& e) {  // a destructor says what failed and goes on
+    std::cerr << "fba-run: live view: " << e.what() << "\n";
+  }
+}
 
 void LiveView::watch(fba::Task& task, Monitor& monitor) {
   if (!feed_) return;
@@ -72,6 +101,7 @@ std::string LiveView::summary_text(const fba::RunResult& result) const {
 
 void LiveView::end(const fba::RunResult& result) {
   if (!feed_) return;
+  ended_ = true;
   feed_->end(result, summary_text(result));
   if (!report_.empty())
     if (const std::string error = fba::serve::write_report(web_dir_, report_, record_.replay().messages); !error.empty()) {

@@ -21,7 +21,7 @@ class LiveView {
   // Without --serve or --output-dir, nothing. With --serve, listens now and says where on stderr;
   // throws std::runtime_error when it cannot.
   LiveView(const Options& o, const fba::TaskConfig& config);
-  ~LiveView();
+  ~LiveView();  // a run that ended before its task ran: its end said to the pages
 
   // Before the run: the task's outputs that have views watched, and the feed sampled by `monitor`
   // (before its start()).
@@ -41,6 +41,7 @@ class LiveView {
   fba::serve::RunRecord record_;
   std::optional<fba::serve::LiveFeed> feed_;
   std::unique_ptr<fba::serve::LiveServer> server_;
+  bool ended_ = false;
 };
 
 }  // namespace fba_run

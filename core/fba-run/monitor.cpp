@@ -80,7 +80,11 @@ void Monitor::loop(std::stop_token stop) {
       requested = std::exchange(requested_, false);
     }
     const auto now = Clock::now();
+    // A schedule counts from the tick it was called at, not from when the thread woke: a watcher
+    // called every period is due at every tick, however late the wake-up.
+    auto called_at = now;
     if (now >= next_tick) {
+      called_at = next_tick;
       next_tick += period_;
       if (next_tick <= now) next_tick = now + period_;  // fell behind (a slow watcher): no burst
     }
@@ -91,7 +95,7 @@ void Monitor::loop(std::stop_token stop) {
     for (auto& e : entries_) {
       if (!e.watcher || (!requested && e.due > now)) continue;
       call(e, sample);
-      if (e.schedule.every != kOnRequest) e.due = now + e.schedule.every;
+      if (e.schedule.every != kOnRequest) e.due = called_at + e.schedule.every;
     }
   }
 }

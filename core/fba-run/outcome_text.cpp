@@ -122,6 +122,7 @@ std::string failure_text(const fba::RunResult& r) {
 
 std::string seconds_text(double s) {
   if (!(s >= 0) || !std::isfinite(s)) return "? s";
+  if (s > 0 && s < 0.01) return number(s * 1000, 2) + " ms";
   if (s < 10) return number(s, 2) + " s";
   if (s < 120) return std::to_string(static_cast<long long>(std::lround(s))) + " s";
   const long long whole = std::llround(s);

@@ -12,7 +12,7 @@ namespace fba_run {
 // The outcome in a sentence, without "fba-run: " and without a newline; control bytes escaped.
 std::string outcome_text(const fba::RunResult& result);
 
-// A duration as people read it: "0.41 s", "2.8 s", "3 min 12 s".
+// A duration as people read it: "1.7 ms", "0.41 s", "2.8 s", "3 min 12 s".
 std::string seconds_text(double s);
 
 }  // namespace fba_run

@@ -172,7 +172,7 @@ std::unique_ptr<fba::Task> construct(const fba::TaskConfig& config, const fba::R
 void start_monitor(Monitor& monitor, const Options& o, Console& console) {
   auto& st = state();
   monitor.watch([&console](const fba::RunResult& now, const fba::RunResult* previous) { console.update(now, previous); },
-                {.every = Monitor::Duration::zero(), .at_end = false});
+                {.every = kMonitorPeriod, .at_end = false});  // not faster with a quick --dot-every
   using Duration = Monitor::Duration;
   const Duration dot_every = o.dot_every > 0 ? std::chrono::duration_cast<Duration>(std::chrono::duration<double>(o.dot_every))
                                              : Monitor::kOnRequest;
@@ -263,6 +263,7 @@ int run(int argc, char** argv) {
   // The progress on stderr from the construction on, the log lines above it.
   auto console = std::make_shared<Console>(config, STDERR_FILENO, isatty(STDERR_FILENO) == 1);
   fba::set_log_sink(Console::log_sink(console, fba::log_sink()));
+  st.console.store(console.get());  // kept alive by the sink: a signal's message goes above the line
   std::unique_ptr<fba::Task> task = construct(config, options, status);
   if (!task) return status;
   {

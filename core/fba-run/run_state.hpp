@@ -17,6 +17,7 @@ namespace fba_run {
 
 namespace fs = std::filesystem;
 
+class Console;
 class Monitor;
 
 constexpr int kConfigError = 2;
@@ -38,6 +39,7 @@ struct State {
   std::thread watcher;
   fs::path live_dot;                       // graph-live.dot in --output-dir, written on SIGUSR1 and by --dot-every
   std::atomic<Monitor*> monitor{nullptr};  // samples the task while it runs; set and cleared under `mutex`
+  std::atomic<Console*> console{nullptr};  // the progress line, which fba-run's own messages go above
   std::stop_source stop;             // the task's RunOptions::stop: reaches constructors too
   std::string run_id;                // summary.json's run_id: which run wrote it
   std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();

@@ -22,6 +22,7 @@
 
 #include "fba/log.hpp"
 #include "fba/registry.hpp"
+#include "console.hpp"
 #include "monitor.hpp"
 #include "run_state.hpp"
 #include "summary_file.hpp"
@@ -279,7 +280,9 @@ void watch_signals(sigset_t signals) {
     std::lock_guard lock(st.mutex);
     st.signal_phase.store(st.phase.load());
     st.signal.store(sig);
-    std::fprintf(stderr, "fba-run: %s received: stopping in order (a second one forces the exit)\n", signal_name(sig).c_str());
+    const std::string said = "fba-run: " + signal_name(sig) + " received: stopping in order (a second one forces the exit)\n";
+    if (Console* console = st.console.load()) console->above([&] { std::fputs(said.c_str(), stderr); });
+    else std::fputs(said.c_str(), stderr);
     if (fba::Task* task = st.task.load()) task->request_stop(fba::Outcome::Interrupted, "interrupted by " + signal_name(sig));
     st.stop.request_stop();  // a constructor waiting on a device gives up
   }

@@ -32,6 +32,8 @@ class LiveFeed {
 
   // The run is over (its last sample given): the end message, with summary.json's text.
   void end(const RunResult& result, const std::string& summary);
+  // An end message made elsewhere: a run that ended before its task ran.
+  void end_with(std::string end_message) { publish(LiveMessage::End, std::move(end_message)); }
 
   // The ports watched, "component.output", in the task's order.
   std::vector<std::string> watched() const;

@@ -3,7 +3,6 @@
 #include "live_server.hpp"
 
 #include <condition_variable>
-#include <deque>
 #include <iostream>
 #include <mutex>
 #include <set>
@@ -17,6 +16,7 @@
 #include <boost/beast/websocket.hpp>
 
 #include "fba/version.hpp"
+#include "outgoing_queue.hpp"
 #include "request_routing.hpp"
 
 namespace fba::serve {
@@ -69,7 +69,8 @@ namespace {
 
 class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(tcp::socket socket, LiveServer::Impl& server) : ws_(std::move(socket)), server_(server) {}
+  WsSession(tcp::socket socket, LiveServer::Impl& server)
+      : ws_(std::move(socket)), server_(server), queue_(server.options.queue_limit, kMaxQueued) {}
 
   void start(Request request) {
     beast::get_lowest_layer(ws_).expires_never();
@@ -82,9 +83,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   // A message published after the client was given the record up to `replayed_`.
   void send(const LiveMessage& m) {
     if (m.seq <= replayed_ || closing_) return;
-    if (queue_.size() >= server_.options.queue_limit) drop_one();
-    if (queue_.size() >= kMaxQueued) return close(websocket::close_code::policy_error);
-    queue_.push_back(m);
+    if (!queue_.push(m, writing_)) return close(websocket::close_code::policy_error);
     if (!writing_) write_next();
   }
 
@@ -100,19 +99,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     server_.clients.insert(shared_from_this());
     RunRecord::Replay replay = server_.record.replay();
     replayed_ = replay.up_to;
-    queue_.assign(replay.messages.begin(), replay.messages.end());
+    queue_.assign(replay.messages);
     read();
     if (server_.finishing) finishing_ = true;
     write_next();
-  }
-
-  // The oldest stats or view message not being written; events, the task and the end are kept.
-  void drop_one() {
-    for (auto it = queue_.begin() + (writing_ ? 1 : 0); it != queue_.end(); ++it)
-      if (it->kind == LiveMessage::Stats || it->kind == LiveMessage::View) {
-        queue_.erase(it);
-        return;
-      }
   }
 
   void write_next() {
@@ -126,7 +116,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     ws_.text(true);
     ws_.async_write(asio::buffer(*queue_.front().text), [self = shared_from_this()](beast::error_code ec, std::size_t) {
       if (ec) return self->server_.remove(self);
-      self->queue_.pop_front();
+      self->queue_.pop();
       self->write_next();
     });
   }
@@ -150,7 +140,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   websocket::stream<beast::tcp_stream> ws_;
   LiveServer::Impl& server_;
   beast::flat_buffer in_;
-  std::deque<LiveMessage> queue_;
+  OutgoingQueue queue_;
   std::uint64_t replayed_ = 0;
   bool writing_ = false, closing_ = false, finishing_ = false;
 };

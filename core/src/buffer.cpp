@@ -38,11 +38,10 @@ void Buffer::push(Packet&& p) {
   const std::size_t b = p.bytes();
   switch (policy) {
     case BufferPolicy::Latest:
-      if (latest) {  // superseded before anyone read it
-        ++dropped;
-        displaced.push_back(std::move(latest));
-      }
-      latest = std::move(p);
+      // A sample superseded before anyone read it goes back in `p`, which the caller destroys
+      // after the lock: no vector allocated on the path of a watched output's every sample.
+      if (latest) ++dropped;
+      std::swap(latest, p);
       queued_bytes = b;
       break;
     case BufferPolicy::DropOldest:

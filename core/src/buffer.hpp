@@ -72,6 +72,8 @@ struct Buffer {
   std::size_t tap_keep = SIZE_MAX;
   std::vector<Packet>* tap = nullptr;  // set for taps: packets are appended, at most tap_keep kept
 
+  // A latest buffer leaves `p` holding the sample it superseded (if any), for the caller to
+  // destroy after the lock; every other policy takes `p`.
   void push(Packet&& p);
   // Pops the head; `was_full` tells the caller to wake a producer held back by this buffer.
   bool pop(Packet& out, bool& was_full);

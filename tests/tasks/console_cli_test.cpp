@@ -4,6 +4,8 @@
 // when the test creates its gate file, so every step is waited for, never timed.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+
 #include <fstream>
 #include <string>
 
@@ -95,6 +97,18 @@ TEST(Console, OnATerminalTheLineIsUpdatedInPlaceAndEachViewKeepsItsOwnLine) {
   const auto outcome = out.rfind("fba-run: success: ");
   ASSERT_NE(outcome, std::string::npos) << out;
   EXPECT_EQ(out.substr(outcome - 4, 4), "\r\033[K") << out;
+}
+
+TEST(Console, OnATerminalASignalsMessageGoesAboveTheProgressLine) {
+  StepperTask task;
+  Child run({fba::test::program("fba-run"), "-p", stepping_plugins(), task.file.string()}, {.terminal = true});
+  run.read_until("view 1 of 3 (");  // the progress line is drawn
+  EXPECT_EQ(run.wait(SIGINT), 130);
+  const std::string out = run.read_until("\x01", std::chrono::milliseconds(0));
+  const auto at = out.find("fba-run: SIGINT received: stopping in order");
+  ASSERT_NE(at, std::string::npos) << out;
+  ASSERT_GE(at, 3u);
+  EXPECT_EQ(out.substr(at - 3, 3), "\033[K") << out;  // the line was erased first, not written onto
 }
 
 TEST(Console, AComponentsLogLevelIsItsOwn) {

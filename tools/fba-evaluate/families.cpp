@@ -267,6 +267,124 @@ std::vector<fs::path> ycb_meshes(const fs::path& dir) {
   return out;
 }
 
+// Every object written on its own, `jobs` at a time, in any order: the same files whatever --jobs.
+std::vector<Written> write_objects(const std::vector<ObjectFamily>& families, int per_family, std::uint64_t seed, int poses,
+                                   const fs::path& dir, int jobs) {
+  std::vector<std::pair<ObjectFamily, int>> todo;
+  for (ObjectFamily f : families)
+    for (int i = 0; i < per_family; ++i) todo.emplace_back(f, i);
+  std::vector<Written> written(todo.size());
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr failed;
+  std::mutex failed_lock;
+  const auto work = [&] {
+    for (std::size_t i; (i = next++) < todo.size();) {
+      try {
+        written[i] = write_object(todo[i].first, seed, todo[i].second, poses, dir);
+      } catch (...) {
+        const std::lock_guard lock(failed_lock);
+        if (!failed) failed = std::current_exception();
+        next = todo.size();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 1; t < std::min<int>(jobs, static_cast<int>(todo.size())); ++t) threads.emplace_back(work);
+  work();
+  for (auto& t : threads) t.join();
+  if (failed) std::rethrow_exception(failed);
+  return written;
+}
+
+// Per family: objects, drops, rests and drops not still, and the settling's seconds; each drop not
+// still and MuJoCo's warnings on stderr. Returns how many drops were not still.
+std::size_t report_settling(const std::vector<ObjectFamily>& families, const std::vector<Written>& written) {
+  std::printf("%-13s %7s %6s %6s %9s %8s\n", "family", "objects", "drops", "rests", "not still", "seconds");
+  std::size_t not_still = 0;
+  for (ObjectFamily f : families) {
+    std::size_t objects = 0, drops = 0, rests = 0, moving = 0;
+    double seconds = 0;
+    for (const auto& w : written) {
+      if (w.object.family != f) continue;
+      ++objects;
+      drops += w.drops.size();
+      rests += w.rests.size();
+      seconds += w.seconds;
+      for (const auto& d : w.drops) moving += !d.result.still;
+    }
+    not_still += moving;
+    std::printf("%-13s %7zu %6zu %6zu %9zu %8.1f\n", std::string(geometry::family_name(f)).c_str(), objects, drops, rests, moving, seconds);
+  }
+  for (const auto& w : written)
+    for (std::size_t k = 0; k < w.drops.size(); ++k) {
+      const auto& d = w.drops[k];
+      if (!d.result.still)
+        std::fprintf(stderr, "fba-evaluate families: warning: %s's drop %zu was still moving after %g s simulated; its pose then is used\n",
+                     w.object.name.c_str(), k, d.result.time);
+      for (const auto& m : d.result.warnings)
+        std::fprintf(stderr, "fba-evaluate families: warning: %s's drop %zu: MuJoCo: %s\n", w.object.name.c_str(), k, m.c_str());
+    }
+  return not_still;
+}
+
+void write_manifest(const fs::path& dir, std::uint64_t seed, int per_family, int poses, const std::vector<ObjectFamily>& families,
+                    const std::vector<Written>& written, const std::vector<fs::path>& ycb) {
+  nlohmann::ordered_json manifest = {{"generator", "fba-evaluate families"},
+                                     {"seed", seed},
+                                     {"per_family", per_family},
+                                     {"poses", poses},
+                                     {"list", "families_random.yaml"}};
+  nlohmann::ordered_json names = nlohmann::ordered_json::array();
+  for (ObjectFamily f : families) names.push_back(std::string(geometry::family_name(f)));
+  manifest["families"] = names;
+  const SettleParams settle_params;
+  manifest["settle"] = {{"drop_height_m", settle_params.drop_height}, {"mass_kg", settle_params.mass}, {"friction", settle_params.friction},
+                        {"timestep_s", settle_params.timestep},      {"still_tilt_deg", settle_params.still_tilt_deg},
+                        {"still_move_m", settle_params.still_move},  {"still_time_s", settle_params.still_time},
+                        {"max_time_s", settle_params.max_time},      {"same_rest_deg", kSameRestDeg}};
+  nlohmann::ordered_json objects = nlohmann::ordered_json::array();
+  for (const auto& w : written) objects.push_back(object_json(w));
+  manifest["objects"] = objects;
+  nlohmann::ordered_json ycb_json = nlohmann::ordered_json::array();
+  for (const auto& m : ycb) ycb_json.push_back(from_list(m, dir));
+  manifest["ycb"] = ycb_json;
+  std::ofstream(dir / "manifest.json") << manifest.dump(2) << "\n";
+}
+
+// The batch list over the written rests (and the YCB meshes); returns its runs.
+std::size_t write_list(const fs::path& dir, std::uint64_t seed, int per_family, int poses, const std::vector<ObjectFamily>& families,
+                       const std::vector<Written>& written, const std::vector<fs::path>& ycb, const std::string& task,
+                       const std::vector<std::string>& variants) {
+  std::ostringstream list;
+  list << "# Written by fba-evaluate families --seed " << seed << " --per-family " << per_family << " --poses " << poses << " ("
+       << families.size() << " families" << (ycb.empty() ? "" : ", with the YCB meshes") << "); manifest.json says what each mesh is.\n"
+       << "# Each family mesh is an object in a rest it came to when dropped onto the table in MuJoCo, turned to stand\n"
+       << "# as it rested (scene.rest upright); x, y and yaw are drawn by the batch from the seed below.\n"
+       << "#\n#   fba-evaluate grasp --batch <this file> --jobs 2 -o out/families\n"
+       << "task: " << from_list(task, dir) << "\n"
+       << "fba_run_args: [-e, deterministic]\n"
+       << "timeout_s: 600\n"
+       << "pose_set:\n  - scene.mesh={mesh}\n  - scene.x={x}\n  - scene.y={y}\n  - scene.yaw={yaw}\n"
+       << "variants:\n";
+  for (const auto& v : variants) list << "  - " << v << "\n";
+  list << "random_runs:\n  meshes:\n";
+  std::size_t runs = 0;
+  for (const auto& w : written)
+    for (std::size_t k = 0; k < w.drops.size(); ++k, ++runs) {
+      const auto& d = w.drops[k];
+      const Eigen::Vector3d up = w.rests[static_cast<std::size_t>(d.rest)].up;
+      char note[160];
+      std::snprintf(note, sizeof note, "   # %s drop %zu: up is (%.3f, %.3f, %.3f) in the object's frame%s", w.object.name.c_str(), k, up.x(), up.y(),
+                    up.z(), d.result.still ? "" : "; still moving when read");
+      list << "    - " << w.rests[static_cast<std::size_t>(d.rest)].file << note << "\n";
+    }
+  for (const auto& m : ycb)
+    for (int k = 0; k < poses; ++k, ++runs) list << "    - " << from_list(m, dir) << "   # as shipped, standing as its file stands\n";
+  list << "  per_mesh: 1\n  x: [-0.025, 0.025]\n  y: [-0.025, 0.025]\n  yaw: [0, 360]\n  seed: " << seed << "\n";
+  std::ofstream(dir / "families_random.yaml") << list.str();
+  return runs;
+}
+
 }  // namespace
 
 int run_families(const std::vector<std::string>& args) {
@@ -312,110 +430,12 @@ int run_families(const std::vector<std::string>& args) {
                         std::to_string(std::distance(fs::directory_iterator(dir), fs::directory_iterator{})) + " entries");
   for (ObjectFamily f : families) fs::create_directories(dir / std::string(geometry::family_name(f)));
 
-  // Every object on its own, in any order: the same files whatever --jobs.
-  std::vector<std::pair<ObjectFamily, int>> todo;
-  for (ObjectFamily f : families)
-    for (int i = 0; i < per_family; ++i) todo.emplace_back(f, i);
-  std::vector<Written> written(todo.size());
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr failed;
-  std::mutex failed_lock;
   const auto start = std::chrono::steady_clock::now();
-  const auto work = [&] {
-    for (std::size_t i; (i = next++) < todo.size();) {
-      try {
-        written[i] = write_object(todo[i].first, seed, todo[i].second, poses, dir);
-      } catch (...) {
-        const std::lock_guard lock(failed_lock);
-        if (!failed) failed = std::current_exception();
-        next = todo.size();
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int t = 1; t < std::min<int>(jobs, static_cast<int>(todo.size())); ++t) threads.emplace_back(work);
-  work();
-  for (auto& t : threads) t.join();
-  if (failed) std::rethrow_exception(failed);
+  const std::vector<Written> written = write_objects(families, per_family, seed, poses, dir, jobs);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  std::printf("%-13s %7s %6s %6s %9s %8s\n", "family", "objects", "drops", "rests", "not still", "seconds");
-  std::size_t not_still = 0;
-  for (ObjectFamily f : families) {
-    std::size_t objects = 0, drops = 0, rests = 0, moving = 0;
-    double seconds = 0;
-    for (const auto& w : written) {
-      if (w.object.family != f) continue;
-      ++objects;
-      drops += w.drops.size();
-      rests += w.rests.size();
-      seconds += w.seconds;
-      for (const auto& d : w.drops) moving += !d.result.still;
-    }
-    not_still += moving;
-    std::printf("%-13s %7zu %6zu %6zu %9zu %8.1f\n", std::string(geometry::family_name(f)).c_str(), objects, drops, rests, moving, seconds);
-  }
-  for (const auto& w : written)
-    for (std::size_t k = 0; k < w.drops.size(); ++k) {
-      const auto& d = w.drops[k];
-      if (!d.result.still)
-        std::fprintf(stderr, "fba-evaluate families: warning: %s's drop %zu was still moving after %g s simulated; its pose then is used\n",
-                     w.object.name.c_str(), k, d.result.time);
-      for (const auto& m : d.result.warnings)
-        std::fprintf(stderr, "fba-evaluate families: warning: %s's drop %zu: MuJoCo: %s\n", w.object.name.c_str(), k, m.c_str());
-    }
-
-  // The manifest.
-  nlohmann::ordered_json manifest = {{"generator", "fba-evaluate families"},
-                                     {"seed", seed},
-                                     {"per_family", per_family},
-                                     {"poses", poses},
-                                     {"list", "families_random.yaml"}};
-  nlohmann::ordered_json names = nlohmann::ordered_json::array();
-  for (ObjectFamily f : families) names.push_back(std::string(geometry::family_name(f)));
-  manifest["families"] = names;
-  const SettleParams settle_params;
-  manifest["settle"] = {{"drop_height_m", settle_params.drop_height}, {"mass_kg", settle_params.mass}, {"friction", settle_params.friction},
-                        {"timestep_s", settle_params.timestep},      {"still_tilt_deg", settle_params.still_tilt_deg},
-                        {"still_move_m", settle_params.still_move},  {"still_time_s", settle_params.still_time},
-                        {"max_time_s", settle_params.max_time},      {"same_rest_deg", kSameRestDeg}};
-  nlohmann::ordered_json objects = nlohmann::ordered_json::array();
-  for (const auto& w : written) objects.push_back(object_json(w));
-  manifest["objects"] = objects;
-  nlohmann::ordered_json ycb_json = nlohmann::ordered_json::array();
-  for (const auto& m : ycb) ycb_json.push_back(from_list(m, dir));
-  manifest["ycb"] = ycb_json;
-  std::ofstream(dir / "manifest.json") << manifest.dump(2) << "\n";
-
-  // The batch list.
-  std::ostringstream list;
-  list << "# Written by fba-evaluate families --seed " << seed << " --per-family " << per_family << " --poses " << poses << " ("
-       << families.size() << " families" << (ycb.empty() ? "" : ", with the YCB meshes") << "); manifest.json says what each mesh is.\n"
-       << "# Each family mesh is an object in a rest it came to when dropped onto the table in MuJoCo, turned to stand\n"
-       << "# as it rested (scene.rest upright); x, y and yaw are drawn by the batch from the seed below.\n"
-       << "#\n#   fba-evaluate grasp --batch <this file> --jobs 2 -o out/families\n"
-       << "task: " << from_list(task, dir) << "\n"
-       << "fba_run_args: [-e, deterministic]\n"
-       << "timeout_s: 600\n"
-       << "pose_set:\n  - scene.mesh={mesh}\n  - scene.x={x}\n  - scene.y={y}\n  - scene.yaw={yaw}\n"
-       << "variants:\n";
-  for (const auto& v : variants) list << "  - " << v << "\n";
-  list << "random_runs:\n  meshes:\n";
-  std::size_t runs = 0;
-  for (const auto& w : written)
-    for (std::size_t k = 0; k < w.drops.size(); ++k, ++runs) {
-      const auto& d = w.drops[k];
-      const Eigen::Vector3d up = w.rests[static_cast<std::size_t>(d.rest)].up;
-      char note[160];
-      std::snprintf(note, sizeof note, "   # %s drop %zu: up is (%.3f, %.3f, %.3f) in the object's frame%s", w.object.name.c_str(), k, up.x(), up.y(),
-                    up.z(), d.result.still ? "" : "; still moving when read");
-      list << "    - " << w.rests[static_cast<std::size_t>(d.rest)].file << note << "\n";
-    }
-  for (const auto& m : ycb)
-    for (int k = 0; k < poses; ++k, ++runs) list << "    - " << from_list(m, dir) << "   # as shipped, standing as its file stands\n";
-  list << "  per_mesh: 1\n  x: [-0.025, 0.025]\n  y: [-0.025, 0.025]\n  yaw: [0, 360]\n  seed: " << seed << "\n";
-  std::ofstream(dir / "families_random.yaml") << list.str();
-
+  const std::size_t not_still = report_settling(families, written);
+  write_manifest(dir, seed, per_family, poses, families, written, ycb);
+  const std::size_t runs = write_list(dir, seed, per_family, poses, families, written, ycb, task, variants);
   std::printf("%zu objects, %zu runs (%zu x %zu variant(s)) in %s/families_random.yaml, manifest.json beside it; %.1f s%s\n", written.size(), runs,
               runs, variants.size(), out_dir.c_str(), wall, not_still ? " (some drops not still: see above)" : "");
   return 0;

@@ -35,6 +35,7 @@
 #include <fba/log.hpp>
 #include <fba/registry.hpp>
 #include <fba/task.hpp>
+#include <fba/view.hpp>
 #include "support/build_paths.hpp"
 
 namespace {
@@ -120,12 +121,15 @@ struct Measured {
   double cpu_s = 0;  // CPU time the run took, all threads
 };
 
-// `threads`: the threaded executor's workers (0: the task's setting).
-Measured run(const std::string& yaml, int threads = 0) {
+// `threads`: the threaded executor's workers (0: the task's setting). `watched`: outputs a live
+// view watches (Task::watch), never read, so that each sample supersedes the last.
+Measured run(const std::string& yaml, int threads = 0, const std::vector<std::string>& watched = {}) {
   fba::RunOptions o;
   o.timeout_s = 600;
   o.threads = threads;
   fba::Task task(fba::load_task_text(yaml, "bench.yaml", ".", registry()), o);
+  std::vector<std::shared_ptr<fba::LatestSample>> watches;
+  for (const auto& port : watched) watches.push_back(task.watch(port));
   const double cpu0 = cpu_s();
   auto r = task.run();
   const double cpu = cpu_s() - cpu0;
@@ -140,12 +144,15 @@ struct PerSample {
   double wall_ns = 1e300, cpu_ns = 0;
 };
 
-// Wall and CPU nanoseconds per sample through the whole chain, from the run with the best wall time of `reps`.
-PerSample per_sample(int hops, long count, Mode mode, int reps) {
+// Wall and CPU nanoseconds per sample through the whole chain, from the run with the best wall time
+// of `reps`; `watched`: with every passthrough's output watched.
+PerSample per_sample(int hops, long count, Mode mode, int reps, bool watched = false) {
   const std::string yaml = chain_yaml(hops, count, 0, "examples.sink", 64, mode);
+  std::vector<std::string> ports;
+  for (int i = 0; watched && i < hops; ++i) ports.push_back("p" + std::to_string(i) + ".out");
   PerSample best;
   for (int i = 0; i < reps; ++i) {
-    const Measured m = run(yaml);
+    const Measured m = run(yaml, 0, ports);
     const double wall = m.result.run_s() * 1e9 / static_cast<double>(count);
     if (wall < best.wall_ns) best = {wall, m.cpu_s * 1e9 / static_cast<double>(count)};
   }
@@ -254,6 +261,9 @@ int main(int argc, char** argv) {
       const double plain = (plain_queue_chain_cpu_ns(50, count, reps) - plain_queue_chain_cpu_ns(1, count, reps)) / 49.0;
       out("plain mutex-guarded deque: CPU per extra hop (K=1..50)", plain, "ns");
       ratios["deterministic CPU per extra hop / plain queue hop"] = (t[2].cpu_ns - t[0].cpu_ns) / 49.0 / plain;
+      // A live view's cost on the producer: every hop's output also handed to a watch (fba-run --serve).
+      const PerSample w1 = per_sample(1, count, mode, reps, true), w50 = per_sample(50, count, mode, reps, true);
+      out(m + " watched: CPU per extra hop (K=1..50)", (w50.cpu_ns - w1.cpu_ns) / 49.0, "ns");
     }
   }
 

@@ -19,6 +19,7 @@ export function connectLive({ token, onMessage, onStatus }) {
       return;
     }
     socket.addEventListener('open', () => {
+      performance.mark('fba-live-open');
       retry = 0;
       onStatus('live', 'live');
       socket.send(JSON.stringify({ type: 'ping' }));
@@ -31,6 +32,7 @@ export function connectLive({ token, onMessage, onStatus }) {
         onStatus('problem', `a message from the server is not JSON: ${e.message}`);
         return;
       }
+      if (msg.type === 'task') performance.mark('fba-task-received');
       if (msg.type === 'end') ended = true;
       onMessage(msg);
     });

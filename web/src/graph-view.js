@@ -1,5 +1,6 @@
 import ELK from 'elkjs/lib/elk.bundled.js';
 import { formatCount, formatRate, svg, el } from './dom.js';
+import { rankLayout } from './rank-layout.js';
 
 // The task's graph laid out by ELK (layered, left to right, ports fixed on the sides), drawn in SVG
 // once per task message; stats messages then only change texts and colours, so that a graph of a
@@ -9,18 +10,28 @@ const NODE_TOP = 62;  // the node's status lines; its port rows start below them
 const PORT_ROW = 14;
 const CHAR = 6.6;     // an estimate of a label's character width, for sizing nodes before drawing
 
+// Above this many components the graph is laid out by rank (rank-layout.js), not by ELK.
+export const ELK_MAX_COMPONENTS = 150;
+
 const elk = new ELK();
 
 // "comp.port" -> [component, port]: the longest component name that prefixes it, since a name
-// inside a composite may itself hold dots.
+// inside a composite may itself hold dots. `names` is a Set.
 function splitEndpoint(endpoint, names) {
-  let best = null;
-  for (const n of names) {
-    if (endpoint.startsWith(n + '.') && (!best || n.length > best.length)) best = n;
+  for (let dot = endpoint.lastIndexOf('.'); dot > 0; dot = endpoint.lastIndexOf('.', dot - 1)) {
+    const name = endpoint.slice(0, dot);
+    if (names.has(name)) return [name, endpoint.slice(dot + 1)];
   }
-  if (best) return [best, endpoint.slice(best.length + 1)];
   const dot = endpoint.lastIndexOf('.');
   return dot < 0 ? [endpoint, ''] : [endpoint.slice(0, dot), endpoint.slice(dot + 1)];
+}
+
+function setText(node, text) {
+  if (node.textContent !== text) node.textContent = text;
+}
+
+function setIfChanged(node, name, value) {
+  if (node.getAttribute(name) !== value) node.setAttribute(name, value);
 }
 
 export const connectionKey = (c) => `${c.from}->${c.to}`;
@@ -33,7 +44,8 @@ export class GraphView {
     this.root = svg('g');
     this.svg.append(this.root);
     this.message = el('div', { class: 'panel-message' }, 'waiting for the task…');
-    container.append(this.svg, this.message);
+    this.caption = el('div', { class: 'graph-caption' });
+    container.append(this.svg, this.message, this.caption);
     this.view = { x: 0, y: 0, k: 1 };
     this.nodes = new Map();
     this.edges = new Map();
@@ -43,45 +55,72 @@ export class GraphView {
     this.installPanZoom();
   }
 
+  // Drawn at once by rank, then, for a graph ELK lays out in reasonable time, again by ELK when its
+  // layout is ready: ELK's first layout in a page costs seconds on a loaded machine (its code is
+  // set up then), and the graph should not wait for it.
   async setTask(task, latestStats) {
     const generation = ++this.layoutGeneration;
     this.drawn = false;
-    this.message.textContent = `laying out ${task.components.length} components…`;
-    this.message.hidden = false;
+    this.layoutMs = null;
     const names = task.components.map((c) => c.name);
     const graph = this.elkGraph(task, names);
+    this.message.hidden = task.components.length > 0;
+    this.message.textContent = 'the task has no components';
+    const quick = rankLayout(graph.children, graph.edges, (portId) => this.portY.get(portId));
+    this.show(task, quick, 'rank', latestStats);
+    performance.mark('fba-graph-drawn');
+    if (task.components.length > ELK_MAX_COMPONENTS || !task.components.length) return;
     const start = performance.now();
     let laid;
     try {
       laid = await elk.layout(graph);
     } catch (e) {
-      this.message.textContent = `the graph could not be laid out: ${e.message ?? e}`;
+      this.caption.textContent = `laid out by rank: ELK failed (${e.message ?? e})`;
       return;
     }
     if (generation !== this.layoutGeneration) return;  // a newer task arrived meanwhile
     this.layoutMs = performance.now() - start;
-    this.draw(task, laid, names);
-    this.message.hidden = task.components.length > 0;
-    if (!task.components.length) this.message.textContent = 'the task has no components';
-    this.fit();
+    this.show(task, laid, 'elk', latestStats);
+    performance.mark('fba-graph-laid-out');
+  }
+
+  show(task, laid, by, latestStats) {
+    const selected = this.selected;
+    this.layoutBy = by;
+    this.caption.textContent = by === 'elk' ? '' : task.components.length > ELK_MAX_COMPONENTS
+      ? `${task.components.length} components: laid out by rank, in rows (ELK above ${ELK_MAX_COMPONENTS} would keep you waiting)`
+      : 'laid out by rank until ELK\'s layout is ready…';
+    this.draw(task, laid);
+    // The user's own pan and zoom are kept when ELK's layout replaces the first one.
+    if (by === 'rank' || !this.userMoved) this.fit();
     this.drawn = true;
-    performance.mark('fba-graph-drawn');
-    const stats = latestStats?.();
-    if (stats) this.updateStats(stats);
+    if (selected && this.nodes.has(selected)) this.select(selected);
+    const stats = this.pendingStats ?? latestStats?.();
+    if (stats) this.drawStats(stats);
   }
 
   elkGraph(task, names) {
+    this.portY = new Map();
+    const nameSet = new Set(names);
+    // Each connection's ends, split once: per component below they are looked up, not searched.
+    const ends = task.connections.map((con) => [splitEndpoint(con.from, nameSet), splitEndpoint(con.to, nameSet)]);
+    const extraOut = new Map();
+    const extraIn = new Map();
+    for (const [[fc, fp], [tc, tp]] of ends) {
+      if (!extraOut.has(fc)) extraOut.set(fc, new Set());
+      if (!extraIn.has(tc)) extraIn.set(tc, new Set());
+      extraOut.get(fc).add(fp);
+      extraIn.get(tc).add(tp);
+    }
     const children = task.components.map((c, i) => {
       const inputs = [...c.inputs];
       const outputs = [...c.outputs];
       // A connection may name a port the interface did not list (an optional one): give it a place.
-      for (const con of task.connections) {
-        const [fc, fp] = splitEndpoint(con.from, names);
-        const [tc, tp] = splitEndpoint(con.to, names);
-        if (fc === c.name && !outputs.some((p) => p.name === fp)) outputs.push({ name: fp, type: '' });
-        if (tc === c.name && !inputs.some((p) => p.name === tp)) inputs.push({ name: tp, type: '' });
-      }
+      for (const p of extraOut.get(c.name) ?? []) if (!outputs.some((o) => o.name === p)) outputs.push({ name: p, type: '' });
+      for (const p of extraIn.get(c.name) ?? []) if (!inputs.some((o) => o.name === p)) inputs.push({ name: p, type: '' });
       c._ports = { inputs, outputs };
+      inputs.forEach((p, j) => this.portY.set(`n${i}:in:${p.name}`, NODE_TOP + PORT_ROW * j + 7));
+      outputs.forEach((p, j) => this.portY.set(`n${i}:out:${p.name}`, NODE_TOP + PORT_ROW * j + 7));
       const longest = Math.max(c.name.length * 1.15, (c.type ?? '').length, 26,
         Math.max(0, ...inputs.map((p) => p.name.length)) + Math.max(0, ...outputs.map((p) => p.name.length)) + 4);
       const width = Math.round(Math.min(320, 20 + longest * CHAR));
@@ -97,12 +136,11 @@ export class GraphView {
     const index = new Map(names.map((n, i) => [n, i]));
     const edges = [];
     task.connections.forEach((con, k) => {
-      const [fc, fp] = splitEndpoint(con.from, names);
-      const [tc, tp] = splitEndpoint(con.to, names);
+      const [[fc, fp], [tc, tp]] = ends[k];
       if (!index.has(fc) || !index.has(tc)) return;
-      edges.push({ id: `e${k}`, sources: [`n${index.get(fc)}:out:${fp}`], targets: [`n${index.get(tc)}:in:${tp}`] });
+      edges.push({ id: `e${k}`, feedback: !!con.feedback, sources: [`n${index.get(fc)}:out:${fp}`], targets: [`n${index.get(tc)}:in:${tp}`] });
     });
-    const big = children.length > 60;
+    const big = children.length > 60;  // wrapped into rows from here: a long chain would be a line
     return {
       id: 'root',
       layoutOptions: {
@@ -121,7 +159,7 @@ export class GraphView {
     };
   }
 
-  draw(task, laid, names) {
+  draw(task, laid) {
     this.root.replaceChildren();
     this.nodes.clear();
     this.edges.clear();
@@ -150,10 +188,6 @@ export class GraphView {
       outputs.forEach((p, j) => g.append(
         svg('rect', { class: 'port', x: n.width - 4, y: NODE_TOP + PORT_ROW * j + 3, width: 8, height: 8 }),
         svg('text', { class: 'port-label', x: n.width - 8, y: NODE_TOP + PORT_ROW * j + 11, 'text-anchor': 'end' }, p.name)));
-      g.addEventListener('click', (ev) => {
-        ev.stopPropagation();
-        this.select(c.name);
-      });
       nodeLayer.append(g);
       this.nodes.set(c.name, { g, box, dot, state, rates, component: c });
     });
@@ -190,16 +224,26 @@ export class GraphView {
     });
   }
 
+  // Stats come up to ten times a second: drawn once a frame at most (the newest wins), and only the
+  // texts and attributes that changed are touched, which keeps a thousand components cheap.
   updateStats(stats) {
-    if (!this.drawn) return;
+    this.pendingStats = stats;
+    if (this.statsFrame || !this.drawn) return;
+    this.statsFrame = requestAnimationFrame(() => {
+      this.statsFrame = 0;
+      this.drawStats(this.pendingStats);
+    });
+  }
+
+  drawStats(stats) {
     for (const c of stats.components ?? []) {
       const n = this.nodes.get(c.name);
       if (!n) continue;
-      n.dot.setAttribute('class', `state-dot state-${c.state ?? 'unknown'}`);
-      n.state.textContent = `${c.state ?? '?'}${c.stage ? ' · ' + c.stage : ''}`;
+      setIfChanged(n.dot, 'class', `state-dot state-${c.state ?? 'unknown'}`);
+      setText(n.state, `${c.state ?? '?'}${c.stage ? ' · ' + c.stage : ''}`);
       const errors = c.errors ? ` · ${formatCount(c.errors)} errors` : '';
-      n.rates.textContent = `in ${formatCount(c.samples_in)} · out ${formatCount(c.samples_out)} · ${formatRate(c.rate_hz)}${errors}`;
-      n.g.classList.toggle('has-errors', (c.errors ?? 0) > 0);
+      setText(n.rates, `in ${formatCount(c.samples_in)} · out ${formatCount(c.samples_out)} · ${formatRate(c.rate_hz)}${errors}`);
+      if ((c.errors ?? 0) > 0 !== n.g.classList.contains('has-errors')) n.g.classList.toggle('has-errors');
       n.stats = c;
     }
     for (const c of stats.connections ?? []) {
@@ -207,11 +251,11 @@ export class GraphView {
       if (!e) continue;
       const capacity = c.capacity || e.connection.capacity || 0;
       const ratio = capacity ? Math.min(1, (c.queued ?? 0) / capacity) : 0;
-      e.fill.setAttribute('width', (30 * ratio).toFixed(1));
-      e.fill.setAttribute('class', `queue-fill ${ratio > 0.85 ? 'full' : ratio > 0.5 ? 'half' : ''}`);
+      setIfChanged(e.fill, 'width', (30 * ratio).toFixed(1));
+      setIfChanged(e.fill, 'class', `queue-fill ${ratio > 0.85 ? 'full' : ratio > 0.5 ? 'half' : ''}`);
       const dropped = c.dropped ? ` · ${formatCount(c.dropped)} dropped` : '';
-      e.label.textContent = `${c.queued ?? 0}/${capacity || '∞'} · ${formatRate(c.rate_hz)}${dropped}`;
-      e.g.classList.toggle('dropping', (c.dropped ?? 0) > 0);
+      setText(e.label, `${c.queued ?? 0}/${capacity || '∞'} · ${formatRate(c.rate_hz)}${dropped}`);
+      if ((c.dropped ?? 0) > 0 !== e.g.classList.contains('dropping')) e.g.classList.toggle('dropping');
       e.stats = c;
     }
     if (this.selected) this.onSelect?.(this.nodes.get(this.selected));
@@ -226,21 +270,26 @@ export class GraphView {
   // Pan with a drag, zoom with the wheel around the pointer, double click to fit.
   installPanZoom() {
     let drag = null;
+    // The pointer is captured only once it moves: a click stays on the component it hit.
     this.svg.addEventListener('pointerdown', (ev) => {
-      drag = { x: ev.clientX, y: ev.clientY, vx: this.view.x, vy: this.view.y, moved: false };
-      this.svg.setPointerCapture(ev.pointerId);
+      drag = { id: ev.pointerId, x: ev.clientX, y: ev.clientY, vx: this.view.x, vy: this.view.y, moved: false };
     });
     this.svg.addEventListener('pointermove', (ev) => {
       if (!drag) return;
       const dx = ev.clientX - drag.x;
       const dy = ev.clientY - drag.y;
-      if (Math.abs(dx) + Math.abs(dy) > 3) drag.moved = true;
+      if (!drag.moved && Math.abs(dx) + Math.abs(dy) > 3) {
+        drag.moved = true;
+        this.svg.setPointerCapture(drag.id);
+      }
+      if (!drag.moved) return;
       this.view.x = drag.vx + dx;
       this.view.y = drag.vy + dy;
+      this.userMoved = true;
       this.applyView();
     });
-    this.svg.addEventListener('pointerup', () => {
-      if (drag && !drag.moved) this.select(null);
+    this.svg.addEventListener('pointerup', (ev) => {
+      if (drag && !drag.moved) this.select(ev.target.closest?.('.node')?.dataset.name ?? null);
       drag = null;
     });
     this.svg.addEventListener('wheel', (ev) => {
@@ -252,9 +301,13 @@ export class GraphView {
       this.view.x = px - ((px - this.view.x) * k) / this.view.k;
       this.view.y = py - ((py - this.view.y) * k) / this.view.k;
       this.view.k = k;
+      this.userMoved = true;
       this.applyView();
     }, { passive: false });
-    this.svg.addEventListener('dblclick', () => this.fit());
+    this.svg.addEventListener('dblclick', () => {
+      this.userMoved = false;
+      this.fit();
+    });
     new ResizeObserver(() => { if (this.fitted) this.fit(); }).observe(this.container);
   }
 

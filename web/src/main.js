@@ -125,7 +125,7 @@ window.fbaDebug = {
   get messages() { return state.messageCount; },
   get problems() { return [...state.problems]; },
   get graph() {
-    return { drawn: graph.drawn, nodes: graph.nodes.size, edges: graph.edges.size, layoutMs: graph.layoutMs };
+    return { drawn: graph.drawn, nodes: graph.nodes.size, edges: graph.edges.size, layoutMs: graph.layoutMs, layoutBy: graph.layoutBy };
   },
   get model() { return { ...scene.stats }; },
   modelPixels: () => scene.modelPixels(),
@@ -135,6 +135,23 @@ window.fbaDebug = {
   get events() { return state.events.length; },
   get ended() { return !!state.end; },
 };
+
+// Each panel can fill the page and back (its title's button, or Escape).
+for (const panel of document.querySelectorAll('.panel')) {
+  const button = el('button', { class: 'small panel-max', title: 'fill the page with this panel (Escape: back)' }, '⤢');
+  button.addEventListener('click', () => {
+    const on = !panel.classList.contains('maximized');
+    document.querySelectorAll('.panel').forEach((p) => p.classList.remove('maximized'));
+    panel.classList.toggle('maximized', on);
+    document.body.classList.toggle('has-maximized', on);
+  });
+  panel.querySelector('h2').append(button);
+}
+document.addEventListener('keydown', (ev) => {
+  if (ev.key !== 'Escape') return;
+  document.querySelectorAll('.panel').forEach((p) => p.classList.remove('maximized'));
+  document.body.classList.remove('has-maximized');
+});
 
 function replay(messages) {
   if (!Array.isArray(messages)) throw new Error('"messages" must be a list');

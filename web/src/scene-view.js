@@ -14,13 +14,13 @@ const COLORS = {
   uncarved: 0x8fa8c8,
   refine: 0xff3d9a,
   regions: 0xff3d9a,
-  frustum: 0x2bb673,
-  latestFrustum: 0x00e08a,
   candidate: 0x7fb8d8,
   selected: [0xe74c3c, 0x27ae60, 0x2e86de, 0xf39c12],
   approach: 0xffd166,
   palm: 0xd0d7e2,
 };
+
+const POSE_COLORS = [0x2bb673, 0x4cc9f0, 0xf4a261, 0xb388eb];
 
 export const LAYERS = [
   ['occupied', 'occupied leaves', '#c99a4a'],
@@ -57,14 +57,14 @@ function labelSprite(text, color) {
   c.textBaseline = 'middle';
   c.fillText(text, 32, 34);
   const sprite = new THREE.Sprite(new THREE.SpriteMaterial({ map: new THREE.CanvasTexture(canvas), depthTest: false }));
-  sprite.scale.set(0.018, 0.018, 1);
+  sprite.scale.set(0.022, 0.022, 1);
   sprite.renderOrder = 10;
   return sprite;
 }
 
 // A camera's frustum in its own frame: OpenCV's convention, looking along +z, y down.
 function frustumGeometry() {
-  const d = 0.035, w = 0.022, h = 0.016;
+  const d = 0.05, w = 0.032, h = 0.024;
   const c = [[-w, -h, d], [w, -h, d], [w, h, d], [-w, h, d]];
   const p = [];
   for (const q of c) p.push(0, 0, 0, ...q);
@@ -292,26 +292,29 @@ export class SceneView {
     disposeTree(group);
     group.clear();
     const frustum = frustumGeometry();  // shared by this pass's frusta, freed with them by the next
-    for (const poses of this.poseLists.values()) {
+    // Each pose port in its own colour (the camera's poses, a planner's targets…), numbered in order.
+    [...this.poseLists.values()].forEach((poses, k) => {
+      const color = new THREE.Color(POSE_COLORS[k % POSE_COLORS.length]);
       const points = [];
       poses.forEach((p, i) => {
         const latest = i === poses.length - 1;
-        const lines = new THREE.LineSegments(frustum, new THREE.LineBasicMaterial({ color: latest ? COLORS.latestFrustum : COLORS.frustum }));
+        const lines = new THREE.LineSegments(frustum, new THREE.LineBasicMaterial({ color: latest ? color.clone().offsetHSL(0, 0, 0.2) : color }));
         lines.position.set(...p.view.position);
         lines.quaternion.copy(quaternion(p.view.rotation));
+        if (latest) lines.scale.setScalar(1.3);
         group.add(lines);
-        const label = labelSprite(String(i + 1), latest ? '#00e08a' : '#9fe3c0');
-        label.position.set(...p.view.position).add(new THREE.Vector3(0, 0, 0.016));
+        const label = labelSprite(String(i + 1), `#${color.getHexString()}`);
+        label.position.set(...p.view.position).add(new THREE.Vector3(0, 0, 0.02));
         group.add(label);
         points.push(new THREE.Vector3(...p.view.position));
       });
       if (points.length > 1) {
         const path = new THREE.Line(new THREE.BufferGeometry().setFromPoints(points),
-          new THREE.LineDashedMaterial({ color: COLORS.frustum, dashSize: 0.01, gapSize: 0.008, transparent: true, opacity: 0.6 }));
+          new THREE.LineDashedMaterial({ color, dashSize: 0.01, gapSize: 0.008, transparent: true, opacity: 0.6 }));
         path.computeLineDistances();
         group.add(path);
       }
-    }
+    });
     this.updateInfo();
     this.invalidate();
   }
@@ -424,12 +427,15 @@ export class SceneView {
     if (s.modelPort) lines.push(`${s.modelPort} #${s.modelSeq ?? '?'}: ${s.occupiedInstances.toLocaleString()} occupied, ` +
       `${s.uncarvedInstances.toLocaleString()} not carved, ${s.refineInstances.toLocaleString()} to refine` +
       (s.regions ? `, ${s.regions} regions` : ''));
-    if (s.poses) lines.push(`${s.poses} camera view${s.poses > 1 ? 's' : ''}`);
+    const posePorts = [...this.poseLists.entries()];
+    if (posePorts.length) lines.push(posePorts.map(([port, list], k) => el('span', {},
+      el('span', { class: 'swatch', style: `background:#${new THREE.Color(POSE_COLORS[k % POSE_COLORS.length]).getHexString()}` }),
+      ` ${port}: ${list.length} pose${list.length === 1 ? '' : 's'}  `)));
     if (s.candidates || s.selected) lines.push(`${s.candidates} candidate grasp${s.candidates === 1 ? '' : 's'}` +
       (this.selectedGrasp ? `, selected: score ${this.selectedGrasp.score?.toFixed?.(4) ?? '?'}` : ', none selected'));
     if (this.robot) lines.push(`robot ${this.robot.name}: ${s.robotLinks} links`);
     if (this.robotError) lines.push(this.robotError);
-    this.info.replaceChildren(...lines.map((l) => el('div', {}, l)));
+    this.info.replaceChildren(...lines.map((l) => el('div', {}, ...[].concat(l))));
   }
 
   // For the browser tests: the pixels the occupied leaves alone paint, against a render of nothing
@@ -439,7 +445,7 @@ export class SceneView {
     if (!this.renderer) return 0;
     const gl = this.renderer.getContext();
     const read = (only) => {
-      this.scene.children.forEach((c) => { c.visible = c === only || c.isLight; });
+      this.scene.children.forEach((c) => { c.visible = c === only || c.isLight === true; });
       this.renderer.render(this.scene, this.camera);
       const px = new Uint8Array(gl.drawingBufferWidth * gl.drawingBufferHeight * 4);
       gl.readPixels(0, 0, gl.drawingBufferWidth, gl.drawingBufferHeight, gl.RGBA, gl.UNSIGNED_BYTE, px);

@@ -21,20 +21,37 @@ function reportMessages(file) {
   return JSON.parse(m[1]).messages;
 }
 
+// fba-run exits as soon as its run ends, and the grasp task in simulation ends in seconds: the
+// browser is started first and the page opened the moment fba-run says where, on the threaded
+// executor (the arm's moves in real time, not on a virtual clock). A run over before the page had
+// its task message could show nothing live: it is said, and the run tried again, three times at most.
+async function startWatchedRun(browser, cleanup, pageErrors) {
+  for (let attempt = 1; attempt <= 3; attempt++) {
+    const dir = temporaryFolder('grasp-run');
+    const page = await browser.context.newPage();
+    page.on('pageerror', (e) => pageErrors.push(`live: ${e.message}`));
+    const fba = new FbaRun(fbaRun, ['tasks/grasp.yaml', '-e', 'threaded', '--serve', '0', '--output-dir', dir], { cwd: sourceDir });
+    cleanup(() => fba.stop());
+    const url = await fba.url;
+    const connected = page.goto(url).then(() => page.waitForFunction(() => window.fbaDebug?.state.task, null, WAIT)).then(() => true, () => false);
+    const got = await Promise.race([connected, fba.exited.then(() => false)]);
+    if (got || await page.evaluate(() => !!window.fbaDebug?.state.task).catch(() => false)) return { dir, page, fba };
+    console.log(`   attempt ${attempt}: the run was over before the page had its task message; again`);
+    await fba.exited;
+    await page.close();
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+  throw new Error('three runs of the grasp task were each over before the page connected');
+}
+
 run(async (cleanup) => {
-  const dir = temporaryFolder('grasp-run');
-  cleanup((error) => (error ? console.log(`kept ${dir}`) : fs.rmSync(dir, { recursive: true, force: true })));
-  const fba = new FbaRun(fbaRun, ['tasks/grasp.yaml', '--serve', '0', '--output-dir', dir], { cwd: sourceDir });
-  cleanup(() => fba.stop());
-  const url = await fba.url;
   const browser = await launchBrowser();
   cleanup(() => browser.close());
-  const live = await browser.context.newPage();
   const pageErrors = [];
-  live.on('pageerror', (e) => pageErrors.push(`live: ${e.message}`));
+  const { dir, page: live, fba } = await startWatchedRun(browser, cleanup, pageErrors);
+  cleanup((error) => (error ? console.log(`kept ${dir}`) : fs.rmSync(dir, { recursive: true, force: true })));
 
   await step('live: the graph of the grasp task is drawn', async () => {
-    await live.goto(url);
     await live.waitForFunction(() => window.fbaDebug?.graph.drawn, null, WAIT);
     const { nodes, components } = await live.evaluate(() => ({ nodes: fbaDebug.graph.nodes, components: fbaDebug.state.task.components.length }));
     expect(nodes === components && nodes > 5, `${nodes} components drawn of the task's ${components}`);

@@ -57,6 +57,13 @@ run(async (cleanup) => {
     expect(states.every((s) => /^(idle|queued|running|finished)/.test(s)), `component states: ${states.join(', ')}`);
   });
 
+  await step('clicking a component shows its type, ports and counts', async () => {
+    await page.click('.node[data-name="second"] .node-name');
+    await page.waitForFunction(() => !document.getElementById('details').hidden, null, WAIT);
+    const text = await page.$eval('#details', (e) => e.textContent);
+    expect(/second/.test(text) && /examples\.passthrough/.test(text) && /samples in \/ out/.test(text), `the details say: ${text}`);
+  });
+
   await step('no problem with the data and no script error', async () => {
     const problems = await page.evaluate(() => window.fbaDebug.problems);
     expect(problems.length === 0, `the page reported: ${problems.join('; ')}`);

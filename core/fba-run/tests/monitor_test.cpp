@@ -92,6 +92,21 @@ TEST(Monitor, AWatcherWithALongerPeriodIsCalledLessOften) {
   EXPECT_EQ(hourly.seen[0], std::make_pair(1.0, -1.0));
 }
 
+TEST(Monitor, AWatcherWhosePeriodIsTheTickIsCalledAtEveryTick) {
+  Samples samples;
+  Monitor m([&] { return samples(); });
+  std::atomic<int> each_tick{0}, every_period{0};
+  std::latch ten(10);
+  m.watch([&](const fba::RunResult&, const fba::RunResult*) { ++every_period; }, {.every = 2ms});
+  m.watch([&](const fba::RunResult&, const fba::RunResult*) {
+    if (++each_tick <= 10) ten.count_down();
+  });
+  m.start(2ms);
+  ten.wait();
+  m.stop();
+  EXPECT_EQ(every_period.load(), each_tick.load());  // however late each wake-up was
+}
+
 TEST(Monitor, StopEndsTheThreadAtOnceWithoutWaitingOutThePeriod) {
   Samples samples;
   Monitor m([&] { return samples(); });

@@ -86,6 +86,7 @@ TEST(OutcomeText, AnErrorKeepsItsReasonAndAShortenedMessage) {
 }
 
 TEST(OutcomeText, DurationsReadAsPeopleWriteThem) {
+  EXPECT_EQ(fba_run::seconds_text(0.00173), "1.7 ms");
   EXPECT_EQ(fba_run::seconds_text(0.0304), "0.03 s");
   EXPECT_EQ(fba_run::seconds_text(2.84), "2.8 s");
   EXPECT_EQ(fba_run::seconds_text(42.4), "42 s");

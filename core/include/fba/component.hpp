@@ -9,13 +9,18 @@
 //     static constexpr auto kFactor = fba::Param<std::int64_t>("factor", 2, "the factor").range(-1000, 1000);
 //     static fba::Spec spec() { return fba::Spec::filter("demo.scale", "Multiplies integers.").add(kIn, kOut, kFactor); }
 //
-//     explicit Scale(fba::Context& ctx) : ctx_(ctx), factor_(ctx(kFactor)) {}
-//     void process() override { ctx_(kOut).emit(ctx_(kIn).get() * factor_); }
+//     explicit Scale(fba::Context& ctx) : in_(ctx(kIn)), out_(ctx(kOut)), factor_(ctx(kFactor)) {}
+//     void process() override { out_.emit(in_.get() * factor_); }
 //    private:
-//     fba::Context& ctx_;
+//     fba::InputOf<std::int64_t> in_;
+//     fba::OutputOf<std::int64_t> out_;
 //     const std::int64_t factor_;
 //   };
 //   FBA_COMPONENT(Scale);
+//
+// The handles are bound in the constructor: a handle the spec does not declare throws PluginBug
+// where it is used, and fba-run --check constructs a task's filters (fba::check_construction), so
+// a use there is found before anything runs; a use first made in process() is found only then.
 #pragma once
 
 #include <cstdint>

@@ -56,6 +56,10 @@ class OctreeCarverFilter final : public fba::Component {
       "pixels: how far from a projection a silhouette pixel still counts; sqrt(2)/2 is safe for exact masks, more allows for "
       "calibration or segmentation error")
                                                    .range(0, 64);
+  static constexpr fba::Param<bool> kCarveOutsideView{
+      "carve_outside_view", true,
+      "a view whose silhouette lies wholly inside its image saw the whole object: it carves what projects outside the image "
+      "(else space no view covers is never carved, and stays an obstacle to the arm); off: outside every image is unknown"};
   static constexpr fba::Param<bool> kCompareUniform{
       "compare_uniform", false,
       "also carve the same views one by one with uniform detail to the same depth (occupancy_threshold 0, no grasp "
@@ -97,7 +101,7 @@ class OctreeCarverFilter final : public fba::Component {
     return fba::Spec::filter("vision.octree_carver",
                              "Carves an octree model from silhouettes; refines where the occupancy or the grasp regions ask for it.")
         .add(kSilhouette, kRegions, kOctree, kMaxDepth, kMinNodeSize, kOccupancyThreshold, kGenericDepth, kGraspContour, kCurvatureThreshold,
-             kSilhouetteTolerance, kCompareUniform, kBounds, kBoundsViews, kBoundsMargin, kDetailAfterViews, kDetailDepth,
+             kSilhouetteTolerance, kCarveOutsideView, kCompareUniform, kBounds, kBoundsViews, kBoundsMargin, kDetailAfterViews, kDetailDepth,
              kMemoryBudgetMiB, kBoundsEstimated, kSuspectModel, kModelWarning, kDetail, kUpdated)
         .check(kBounds, [](const fba::ParamValues& p) {
           const auto b = p(kBounds);
@@ -248,6 +252,7 @@ class OctreeCarverFilter final : public fba::Component {
     p.generic_depth = ctx(kGenericDepth);
     if (ctx(kGraspContour)) p.curvature_threshold = ctx(kCurvatureThreshold);
     p.silhouette_tolerance = ctx(kSilhouetteTolerance);
+    p.carve_outside_view = ctx(kCarveOutsideView);
     p.detail_after_views = ctx(kDetailAfterViews);
     p.detail_depth = ctx(kDetailDepth);
     p.memory_budget = static_cast<std::size_t>(ctx(kMemoryBudgetMiB) * 1024 * 1024);

@@ -30,9 +30,12 @@ struct ViewData {
   cv::Mat mask;                // CV_8U, non-zero inside (for the leaf centre test)
   cv::Mat integral;            // CV_32S, (h+1) x (w+1), of the mask as 0/1
   cv::Mat graspable_integral;  // CV_32S, of contour points with curvature < threshold; empty = off
+  // Pixels outside the image are empty (the silhouette lies inside it: carve_outside_view), not
+  // unknown.
+  bool outside_empty = false;
 };
 
-ViewData make_view(const fba::Silhouette& s, double curvature_threshold);
+ViewData make_view(const fba::Silhouette& s, const CarverParams& p);
 
 // Corners live on a lattice of 2^20 cells per edge, whatever the tree depth, so a corner has the
 // same coordinates (bit for bit) in trees of any depth: ix / 2^20 is exact in binary.
@@ -162,9 +165,10 @@ inline Occupancy occupancy(const ViewData& v, const Rect& r) {
   const std::int64_t area = std::int64_t(r.x1 - r.x0 + 1) * std::int64_t(r.y1 - r.y0 + 1);
   const int cx0 = std::max(r.x0, 0), cx1 = std::min(r.x1, v.width - 1);
   const int cy0 = std::max(r.y0, 0), cy1 = std::min(r.y1, v.height - 1);
-  if (cx0 > cx1 || cy0 > cy1) return {area, area};  // wholly outside the image: unknown
+  const std::int64_t outside = v.outside_empty ? 0 : 1;  // what a pixel outside the image counts
+  if (cx0 > cx1 || cy0 > cy1) return {area * outside, area};  // wholly outside the image
   const std::int64_t in_image = std::int64_t(cx1 - cx0 + 1) * (cy1 - cy0 + 1);
-  return {rect_sum(v.integral, cx0, cy0, cx1, cy1) + (area - in_image), area};
+  return {rect_sum(v.integral, cx0, cy0, cx1, cy1) + (area - in_image) * outside, area};
 }
 
 // The generic criterion's share: the node's projection is the convex hull of its 8 projected
@@ -210,13 +214,14 @@ inline double hull_share(const ViewData& v, const double u[8], const double w[8]
     if (x0 > x1) continue;
     const std::int64_t row = x1 - x0 + 1;
     area += row;
+    const std::int64_t outside = v.outside_empty ? 0 : 1;  // unknown (occupied) unless empty
     if (y < 0 || y >= v.height) {
-      occupied += row;  // outside the image: unknown, occupied
+      occupied += row * outside;
       continue;
     }
     const int cx0 = std::max(x0, 0), cx1 = std::min(x1, v.width - 1);
     const std::int64_t in_image = cx0 <= cx1 ? cx1 - cx0 + 1 : 0;
-    occupied += row - in_image + (in_image > 0 ? rect_sum(v.integral, cx0, y, cx1, y) : 0);
+    occupied += (row - in_image) * outside + (in_image > 0 ? rect_sum(v.integral, cx0, y, cx1, y) : 0);
   }
   const double share = area > 0 ? double(occupied) / double(area) : rect.value();
   return std::clamp(share, 1e-9, 1 - 1e-9);
@@ -240,25 +245,24 @@ inline bool intersects_roi(const fba::RegionsOfInterest& roi, const Lattice& L, 
   return false;
 }
 
-// The leaf test (see octree_carver.hpp). A view may carve a leaf only if it sees the whole node:
-// in front of the camera and its rectangle inside the image, so that every pixel within the
-// tolerance of the projection is known (a node partly outside an image is never carved on that
-// view's evidence).
+// The leaf test (see octree_carver.hpp). A view may carve a leaf only if it knows every pixel
+// within the tolerance of the projection: the node in front of the camera and its rectangle
+// inside the image, or anywhere in front when the pixels outside the image are known empty.
 inline bool rect_inside_image(const ViewData& v, const Rect& r) {
-  return !r.behind && r.x0 >= 0 && r.y0 >= 0 && r.x1 < v.width && r.y1 < v.height;
+  return !r.behind && (v.outside_empty || (r.x0 >= 0 && r.y0 >= 0 && r.x1 < v.width && r.y1 < v.height));
 }
 
 // Whether view v carves a leaf whose rectangle is r and whose centre projects to (u, w): no
 // silhouette pixel's square lies within tol of (u, w). The candidate pixels (centres within
-// tol + 1/2 per axis) are inside r, since the centre projects inside the corners' bounding box,
-// hence inside the image; their integral-image sum settles the common cases, and only a window
+// tol + 1/2 per axis) are inside r, since the centre projects inside the corners' bounding box
+// (those outside the image, when it may carve there, are empty); their integral-image sum settles the common cases, and only a window
 // holding both kinds of pixel is checked pixel by pixel (at most 9 pixels for tol = sqrt(2)/2).
 inline bool leaf_carved_by(const ViewData& v, const Rect& r, double u, double w, double tol) {
   if (!rect_inside_image(v, r)) return false;
   const double g = tol + 0.5;
   const int x0 = std::max(first_pixel(u - g), 0), x1 = std::min(last_pixel(u + g), v.width - 1);
   const int y0 = std::max(first_pixel(w - g), 0), y1 = std::min(last_pixel(w + g), v.height - 1);
-  if (x0 > x1 || y0 > y1) return false;  // not reached (g >= 1/2): unknown, keep
+  if (x0 > x1 || y0 > y1) return v.outside_empty;  // the window is wholly outside the image
   const std::int64_t in = rect_sum(v.integral, x0, y0, x1, y1);
   if (in == 0) return true;
   if (in == std::int64_t(x1 - x0 + 1) * (y1 - y0 + 1)) return false;  // the pixel under (u, w) is in

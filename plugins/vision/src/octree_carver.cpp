@@ -22,7 +22,8 @@ using namespace detail;
 
 namespace detail {
 
-ViewData make_view(const fba::Silhouette& s, double curvature_threshold) {
+ViewData make_view(const fba::Silhouette& s, const CarverParams& p) {
+  const double curvature_threshold = p.curvature_threshold;
   if (!s.frame) throw std::invalid_argument("carving: the silhouette has no frame (camera)");
   if (s.mask.empty() || s.mask.type() != CV_8UC1)
     throw std::invalid_argument("carving: expected an 8-bit single-channel silhouette mask");
@@ -39,6 +40,7 @@ ViewData make_view(const fba::Silhouette& s, double curvature_threshold) {
   v.width = s.mask.cols;
   v.height = s.mask.rows;
   v.mask = s.mask;
+  v.outside_empty = p.carve_outside_view && !s.touches_border;
   cv::Mat ones = s.mask > 0;
   ones /= 255;  // integral of 0/1: pixel counts
   cv::integral(ones, v.integral, CV_32S);
@@ -385,7 +387,7 @@ void OctreeCarver::set_bounds(const Eigen::AlignedBox3d& box) {
 }
 
 void OctreeCarver::add_view(const fba::Silhouette& s) {
-  ViewData v = make_view(s, params_.curvature_threshold);
+  ViewData v = make_view(s, params_);
   std::lock_guard lock(mutex_);
   impl_->views.push_back(std::move(v));
   impl_->stats.views = impl_->views.size();
@@ -394,7 +396,7 @@ void OctreeCarver::add_view(const fba::Silhouette& s) {
 
 void OctreeCarver::add_views(const std::vector<fba::Silhouette>& views) {
   std::vector<ViewData> prepared;
-  for (const auto& s : views) prepared.push_back(make_view(s, params_.curvature_threshold));
+  for (const auto& s : views) prepared.push_back(make_view(s, params_));
   std::lock_guard lock(mutex_);
   const int first = static_cast<int>(impl_->views.size());
   for (auto& v : prepared) impl_->views.push_back(std::move(v));

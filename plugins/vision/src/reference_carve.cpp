@@ -32,6 +32,7 @@ struct View {
   std::size_t step = 0;
   std::vector<std::int64_t> sum;        // (w + 1) x (h + 1): silhouette pixels above-left
   std::vector<std::int64_t> grasp_sum;  // the same for graspable contour points; empty when off
+  bool outside_empty = false;           // pixels outside the image are empty, not unknown
   std::int64_t box(const std::vector<std::int64_t>& s, int x0, int y0, int x1, int y1) const {
     const auto at = [&](int x, int y) { return s[std::size_t(y) * std::size_t(w + 1) + std::size_t(x)]; };
     return at(x1 + 1, y1 + 1) - at(x0, y1 + 1) - at(x1 + 1, y0) + at(x0, y0);
@@ -50,7 +51,8 @@ std::vector<std::int64_t> summed_area(int w, int h, const auto& in) {
   return s;
 }
 
-View prepare(const fba::Silhouette& s, double curvature_threshold) {
+View prepare(const fba::Silhouette& s, const CarverParams& p) {
+  const double curvature_threshold = p.curvature_threshold;
   if (!s.frame) throw std::invalid_argument("reference_carve: the silhouette has no frame (camera)");
   if (s.mask.empty() || s.mask.type() != CV_8UC1 || !s.mask.isContinuous())
     throw std::invalid_argument("reference_carve: expected a continuous 8-bit single-channel silhouette mask");
@@ -59,6 +61,7 @@ View prepare(const fba::Silhouette& s, double curvature_threshold) {
   v.w = s.mask.cols, v.h = s.mask.rows;
   v.mask = s.mask.data;
   v.step = s.mask.step;
+  v.outside_empty = p.carve_outside_view && !s.touches_border;
   v.sum = summed_area(v.w, v.h, [&](int x, int y) { return v.mask[std::size_t(y) * v.step + std::size_t(x)] != 0; });
   if (std::isfinite(curvature_threshold)) {
     // Points of the outer contour and of every hole's contour (both outline of the object).
@@ -117,13 +120,15 @@ struct Carve {
   }
 
   // Silhouette pixels plus pixels outside the image, over the box's area. Nothing is known
-  // outside the image or behind the camera: occupied.
+  // behind the camera, nor outside the image unless the view saw the whole object there
+  // (outside_empty): occupied.
   std::pair<std::int64_t, std::int64_t> occupied(const View& v, const PixelBox& b) const {
     if (b.behind) return {1, 1};
     const std::int64_t area = std::int64_t(b.x1 - b.x0 + 1) * (b.y1 - b.y0 + 1);
     const int x0 = std::max(b.x0, 0), x1 = std::min(b.x1, v.w - 1), y0 = std::max(b.y0, 0), y1 = std::min(b.y1, v.h - 1);
-    if (x0 > x1 || y0 > y1) return {area, area};
-    return {v.box(v.sum, x0, y0, x1, y1) + area - std::int64_t(x1 - x0 + 1) * (y1 - y0 + 1), area};
+    const std::int64_t outside = v.outside_empty ? 0 : 1;
+    if (x0 > x1 || y0 > y1) return {area * outside, area};
+    return {v.box(v.sum, x0, y0, x1, y1) + (area - std::int64_t(x1 - x0 + 1) * (y1 - y0 + 1)) * outside, area};
   }
 
   // The share over the projected node: among the pixels whose centre's ray meets the node's cube
@@ -159,7 +164,7 @@ struct Carve {
         if (t0 > t1) continue;
         ++n;
         const bool outside = x < 0 || y < 0 || x >= v.w || y >= v.h;
-        occupied += outside || v.mask[std::size_t(y) * v.step + std::size_t(x)] != 0;
+        occupied += outside ? !v.outside_empty : v.mask[std::size_t(y) * v.step + std::size_t(x)] != 0;
       }
     return std::clamp(n > 0 ? double(occupied) / double(n) : box_share, 1e-9, 1 - 1e-9);
   }
@@ -176,17 +181,18 @@ struct Carve {
     return std::any_of(roi.boxes.begin(), roi.boxes.end(), [&](const auto& b) { return !b.isEmpty() && b.intersects(box); });
   }
 
-  // A leaf at the limit is carved by a view that sees all of it (box inside the image) when no
+  // A leaf at the limit is carved by a view that sees all of it (box inside the image, or outside
+  // pixels known empty) when no
   // silhouette pixel's square lies within tol of its centre's projection.
   bool leaf_carved(const View& v, const Key& k, const PixelBox& b) const {
-    if (b.behind || b.x0 < 0 || b.y0 < 0 || b.x1 >= v.w || b.y1 >= v.h) return false;
+    if (b.behind || (!v.outside_empty && (b.x0 < 0 || b.y0 < 0 || b.x1 >= v.w || b.y1 >= v.h))) return false;
     const int h = cells(k.depth) / 2;
     const Eigen::Vector3d q = v.P * point(k.x + h, k.y + h, k.z + h).homogeneous();
     if (!(q.z() > 0)) return false;
     const double u = q.x() / q.z(), w = q.y() / q.z(), tol = p.silhouette_tolerance, g = tol + 0.5;
     const int x0 = std::max(up(u - g), 0), x1 = std::min(down(u + g), v.w - 1);
     const int y0 = std::max(up(w - g), 0), y1 = std::min(down(w + g), v.h - 1);
-    if (x0 > x1 || y0 > y1) return false;  // not reached (g >= 1/2): unknown, keep
+    if (x0 > x1 || y0 > y1) return v.outside_empty;  // the window is wholly outside the image
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) {
         const double dx = std::max(std::abs(x - u) - 0.5, 0.0), dy = std::max(std::abs(y - w) - 0.5, 0.0);
@@ -208,7 +214,7 @@ fba::Octree reference_carve(const std::vector<fba::Silhouette>& silhouettes, con
                                 "occupancy_threshold in 0..1");
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<View> views;
-  for (const auto& s : silhouettes) views.push_back(prepare(s, params.curvature_threshold));
+  for (const auto& s : silhouettes) views.push_back(prepare(s, params));
 
   const Eigen::AlignedBox3d cube = geometry::cube_around(bounds);
   const Carve carve{views, params, roi, cube.min(), cube.sizes().x()};

@@ -19,6 +19,12 @@ using namespace fba::vision::detail;
 
 namespace {
 
+CarverParams with_curvature(double threshold) {
+  CarverParams p;
+  p.curvature_threshold = threshold;
+  return p;
+}
+
 // A 640x480 camera 0.6 m from the origin, at the given azimuth and elevation (degrees), looking
 // at the origin.
 std::shared_ptr<fba::Frame> camera_around(double azimuth, double elevation) {
@@ -65,14 +71,14 @@ TEST(HullShare, OfANodeIsNearlyIndependentOfTheViewingAngle) {
         fba::Silhouette t = s;
         t.mask = s.mask.clone();
         return t;
-      }(), -INFINITY);
+      }(), with_curvature(-INFINITY));
       double u[8], w[8];
       ASSERT_TRUE(project_corners_uv(probe, kCube, NodeKey{}, u, w));
       std::vector<cv::Point> pts, hull;
       for (int i = 0; i < 8; ++i) pts.emplace_back(cvRound(u[i] * 256), cvRound(w[i] * 256));
       cv::convexHull(pts, hull);
       cv::fillConvexPoly(s.mask, hull, cv::Scalar(255), cv::LINE_8, 8);
-      const ViewData v = make_view(s, -INFINITY);
+      const ViewData v = make_view(s, with_curvature(-INFINITY));
       const Occupancy rect = occupancy(v, rect_of(u, w, 0));
       ASSERT_FALSE(rect.empty());
       const double h = rect.full() ? 1.0 : hull_share(v, u, w, rect);
@@ -95,7 +101,7 @@ TEST(HullShare, OfAHalfCoveredNodeIsAboutOneHalf) {
     s.frame = camera_around(azimuth, 30);
     s.mask = cv::Mat::zeros(480, 640, CV_8UC1);
     s.mask.colRange(0, 320).setTo(255);  // the origin projects to x = 320
-    const ViewData v = make_view(s, -INFINITY);
+    const ViewData v = make_view(s, with_curvature(-INFINITY));
     double u[8], w[8];
     ASSERT_TRUE(project_corners_uv(v, kCube, NodeKey{}, u, w));
     const Occupancy rect = occupancy(v, rect_of(u, w, 0));
@@ -204,7 +210,7 @@ TEST(GraspCriterion, HoleRimsAreConcaveAndCountAsGraspableContour) {
   ASSERT_TRUE(r.ok()) << r.error;
   const fba::Silhouette& s = *r.silhouette;
   ASSERT_EQ(s.holes.size(), 1u);
-  const ViewData v = make_view(s, 0.0);
+  const ViewData v = make_view(s, with_curvature(0.0));
   const std::int64_t all = rect_sum(v.graspable_integral, 0, 0, v.width - 1, v.height - 1);
   // Every graspable point is within the hole's rim (radius ~81), and the rim's points (1 px
   // apart along ~510 px) take as many pixels, less those that round to the same one.
@@ -213,6 +219,6 @@ TEST(GraspCriterion, HoleRimsAreConcaveAndCountAsGraspableContour) {
   // Without its holes' contours the same mask has no graspable point at threshold 0.
   fba::Silhouette outer_only = s;
   outer_only.holes.clear();
-  const ViewData o = make_view(outer_only, 0.0);
+  const ViewData o = make_view(outer_only, with_curvature(0.0));
   EXPECT_EQ(rect_sum(o.graspable_integral, 0, 0, o.width - 1, o.height - 1), 0);
 }

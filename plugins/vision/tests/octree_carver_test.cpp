@@ -194,14 +194,16 @@ TEST(ConservativeCarve, SphereWithPerfectSilhouettesKeepsEveryVoxelWhoseCentreIs
   }
 }
 
-TEST(PartlyOutsideImage, NodeIsNotCarvedByThatView) {
-  // One camera at the origin looking along +z; the silhouette is all background.
+TEST(PartlyOutsideImage, NodeIsNotCarvedByAViewWhoseObjectLeavesTheImage) {
+  // One camera at the origin looking along +z; the silhouette is all background here, but the
+  // object leaves the image (touches_border), so what lies outside it is unknown.
   auto frame = std::make_shared<fba::Frame>();
   frame->camera.width = 100, frame->camera.height = 100;
   frame->camera.K << 100, 0, 50, 0, 100, 50, 0, 0, 1;
   fba::Silhouette s;
   s.mask = cv::Mat::zeros(100, 100, CV_8UC1);
   s.frame = frame;
+  s.touches_border = true;
   const Eigen::Vector3d h = Eigen::Vector3d::Constant(0.1);
   for (double tolerance : {0.0, CarverParams{}.silhouette_tolerance}) {
     CarverParams p;
@@ -221,6 +223,29 @@ TEST(PartlyOutsideImage, NodeIsNotCarvedByThatView) {
     std::size_t kept = occupied_leaves(*t).size();
     EXPECT_GT(kept, 0u);
     EXPECT_LT(kept, 64u);
+  }
+}
+
+// A view whose silhouette lies wholly inside its image saw the whole object: a node straddling the
+// image's border, or wholly outside it, is carved by it (carve_outside_view), by the fast carver
+// and the reference alike; with the option off it is not.
+TEST(PartlyOutsideImage, NodeIsCarvedByAViewThatSawTheWholeObject) {
+  auto frame = std::make_shared<fba::Frame>();
+  frame->camera.width = 100, frame->camera.height = 100;
+  frame->camera.K << 100, 0, 50, 0, 100, 50, 0, 0, 1;
+  fba::Silhouette s;
+  s.mask = cv::Mat::zeros(100, 100, CV_8UC1);
+  cv::circle(s.mask, {50, 50}, 10, cv::Scalar(255), cv::FILLED);  // the object, inside the image
+  s.frame = frame;
+  const Eigen::Vector3d h = Eigen::Vector3d::Constant(0.1);
+  for (const Eigen::Vector3d centre : {Eigen::Vector3d(-0.5, 0, 1), Eigen::Vector3d(-2.0, 0, 1)}) {  // straddling; outside
+    CarverParams p;
+    p.max_depth = 2;
+    EXPECT_EQ(fast_carve({s}, {centre - h, centre + h}, p)->root.state(), fba::NodeState::Empty) << centre.x();
+    EXPECT_EQ(reference_carve({s}, {centre - h, centre + h}, p).root.state(), fba::NodeState::Empty) << centre.x();
+    p.carve_outside_view = false;
+    EXPECT_NE(fast_carve({s}, {centre - h, centre + h}, p)->root.state(), fba::NodeState::Empty) << centre.x();
+    EXPECT_NE(reference_carve({s}, {centre - h, centre + h}, p).root.state(), fba::NodeState::Empty) << centre.x();
   }
 }
 

@@ -131,6 +131,15 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   EXPECT_GE(neither, 1u) << r.output;
   EXPECT_LE(pairs, both) << r.output;
   EXPECT_TRUE(fs::exists(out / "table.txt"));
+  // index.html beside the table: a row per run, linking its report.html when fba-run wrote one (a
+  // build with the live view's page), else its summary.json.
+  std::ifstream index_file(out / "index.html");
+  std::stringstream index;
+  index << index_file.rdbuf();
+  for (const std::string run : {"loop/01-YcbMustardBottle/", "loop/02-no-such-mesh.obj/", "uniform/01-YcbMustardBottle/"}) {
+    const std::string target = fs::exists(out / run / "report.html") ? "report.html" : "summary.json";
+    EXPECT_NE(index.str().find("href=\"" + run + target + "\""), std::string::npos) << run << "\n" << index.str();
+  }
 }
 
 // The poses a dry run would give fba-run: scene.x, scene.y, scene.yaw of each command line.

@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include "fba/data_type.hpp"
+#include "fba/types/image_views.hpp"
 #include "fba/types/camera.hpp"
 
 namespace fba {

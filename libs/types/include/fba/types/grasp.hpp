@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include "fba/data_type.hpp"
+#include "fba/types/robot_types_views.hpp"
 
 namespace fba {
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "fba/data_type.hpp"
+#include "fba/types/robot_types_views.hpp"
 
 namespace fba {
 

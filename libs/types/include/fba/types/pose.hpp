@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 
 #include "fba/data_type.hpp"
+#include "fba/types/robot_types_views.hpp"
 
 namespace fba {
 

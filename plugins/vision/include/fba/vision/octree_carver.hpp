@@ -18,7 +18,8 @@
 //    image) / rectangle area, from an integral image in O(1). Pixels outside the image count as
 //    occupied because nothing is known there, so a node that is partly outside an image is never
 //    carved on that view's evidence; a node with a corner behind the camera has occupancy 1
-//    (unknown) in that view;
+//    (unknown) in that view. Except (carve_outside_view) for a view whose silhouette lies wholly
+//    inside its image: it saw the whole object, so its pixels outside the image count as empty;
 //  * a node is Empty when some view gives occupancy 0, Full when every view gives 1, else
 //    Partial. Its stored occupancy is the lowest rectangle share over the views (0 when Empty);
 //  * the leaf test: a Partial leaf at the resolution limit (max_depth or min_node_size) is Empty
@@ -89,6 +90,12 @@ struct CarverParams {
   // sqrt(2)/2 keeps the carve conservative for perfect masks of silhouettes at least one pixel
   // diagonal wide; larger values allow for masks that are off by more (calibration, segmentation).
   double silhouette_tolerance = std::numbers::sqrt2 / 2;
+  // A view whose silhouette lies wholly inside its image (Silhouette::touches_border false) saw
+  // the whole object, so whatever projects outside that image is not the object: its pixels
+  // outside the image count as empty, not unknown. Space no view covers is otherwise never
+  // carved, and such a corner of the workspace stays an obstacle to the arm for the whole run.
+  // Off: outside every image is unknown (an object that may extend beyond the views).
+  bool carve_outside_view = true;
   // Detail waits for views: while fewer than detail_after_views views are in, nodes at depth >=
   // detail_depth are not split (the model stops at detail_depth). The first silhouettes bound the
   // object only by their viewing cones, whose surface later views mostly carve away; refining it

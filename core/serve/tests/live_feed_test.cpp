@@ -1,0 +1,103 @@
+// The live feed on a real running task, in this process: the Monitor samples it on its thread, the
+// feed turns each sample into messages, the server sends them to a page on a real socket. Run
+// under ThreadSanitizer by tools/dev.sh test (the sampler, the server and the task's threads).
+#include "live_feed.hpp"
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "fba/view.hpp"
+#include "live_client.hpp"
+#include "monitor.hpp"
+#include "support/built_plugins.hpp"
+#include "support/temp_dir.hpp"
+
+namespace {
+
+using namespace fba::test;
+using nlohmann::json;
+
+constexpr const char* kChain = R"(task: fed
+components:
+  src: { type: examples.counter, params: { count: 20000 } }
+  pass: { type: examples.passthrough }
+  sink: { type: examples.sink, params: { expected: 20000 } }
+connections:
+  - src.out -> pass.in
+  - pass.out -> sink.in
+on:
+  sink.done: stop_success
+)";
+
+// A view of the integers for this test: each one as a pose along x.
+std::string int_as_pose(const fba::Packet& p) {
+  return R"({"kind":"pose","position":[)" + std::to_string(p.get<std::int64_t>()) + R"(,0,0],"rotation":[1,0,0,0]})";
+}
+
+TEST(LiveFeed, ARunningTaskReachesAPageAsTaskStatsViewsEventsAndTheEnd) {
+  fba::register_view("fba.Int", int_as_pose);
+  TempDir dir;
+  const fba::TaskConfig config = fba::load_task_text(kChain, "fed.yaml", dir.path(), built_plugins());
+  fba::serve::RunRecord record;
+  fba::serve::LiveFeed feed(record, config, "feed-run", dir.path());
+  fba::serve::LiveServer server({}, record);
+  feed.publish_to(&server);
+  const LiveUrl url = parse_live_url(server.url());
+  LiveSocket page(url);
+  beast::error_code ec;
+  page.handshake(url.origin(), url.token, ec);
+  ASSERT_FALSE(ec) << ec.message();
+  std::vector<json> messages;
+  std::thread reader([&] {
+    beast::error_code e;
+    for (std::string text = page.read(e); !e; text = page.read(e)) messages.push_back(json::parse(text));
+  });
+
+  fba::Task task(config);
+  feed.watch(task, config);
+  EXPECT_EQ(feed.watched(), (std::vector<std::string>{"src.out", "pass.out"}));  // in the task's order
+  fba_run::Monitor monitor([&task] { return task.snapshot(); });
+  monitor.watch([&feed](const fba::RunResult& now, const fba::RunResult* previous) { feed.sample(now, previous); });
+  monitor.start(std::chrono::milliseconds(1));
+  const fba::RunResult result = task.run();
+  monitor.finish(result);
+  feed.end(result, fba::summary_json(result, config));
+  server.finish(kHangLimit);
+  reader.join();
+  fba::register_view("fba.Int", nullptr);
+
+  ASSERT_GE(messages.size(), 4u);
+  EXPECT_EQ(messages.front()["type"], "task");
+  EXPECT_EQ(messages.front()["run_id"], "feed-run");
+  EXPECT_EQ(messages.back()["type"], "end");
+  EXPECT_EQ(messages.back()["outcome"], "success");
+  EXPECT_EQ(messages.back()["summary"]["outcome"], "success");
+  std::size_t stats = 0, events = 0;
+  std::map<std::string, std::int64_t> last_seq;
+  for (const json& m : messages) {
+    if (m["type"] == "stats") ++stats;
+    if (m["type"] == "event") EXPECT_EQ(m["index"], events++);
+    if (m["type"] != "view") continue;
+    EXPECT_EQ(m["data_type"], "fba.Int");
+    EXPECT_EQ(m["view"]["kind"], "pose");
+    // The newest sample each time: later ones on a port, never an older one again.
+    const std::string port = m["port"];
+    if (last_seq.count(port)) EXPECT_GT(m["seq"].get<std::int64_t>(), last_seq[port]) << m;
+    last_seq[port] = m["seq"];
+    EXPECT_EQ(m["view"]["position"][0], m["seq"]) << m;  // the counter's integers start at 0, as the seqs do
+  }
+  EXPECT_GE(stats, 1u);
+  EXPECT_GE(events, 1u);  // the sink's done
+  // The last sample of each port reached the page: the run's final values.
+  EXPECT_EQ(last_seq["src.out"], 19999);
+  EXPECT_EQ(last_seq["pass.out"], 19999);
+}
+
+}  // namespace

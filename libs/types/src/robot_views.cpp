@@ -1,0 +1,122 @@
+// The views of the robot types: a pose, a joint state, a trajectory, a grasp, regions of interest.
+// World frame, metres, radians, as the types hold them.
+#include <algorithm>
+
+#include "fba/types/grasp.hpp"
+#include "fba/types/joint_state.hpp"
+#include "fba/types/joint_trajectory.hpp"
+#include "fba/types/pose.hpp"
+#include "fba/types/regions_of_interest.hpp"
+#include "view_json.hpp"
+#include "views.hpp"
+
+namespace fba::views {
+
+namespace {
+
+json numbers(const std::vector<double>& values, double scale) {
+  json out = json::array();
+  for (double v : values) out.push_back(number(v, scale));
+  return out;
+}
+
+// GRASP of docs/live-view.md: contacts (thumb first) and their normals (unit, into the object),
+// the palm's approach (unit), the total score; the type carries no palm pose. Besides: each
+// score, the pregrasp and the views the model had.
+json grasp_json(const Grasp& g) {
+  json contacts = json::array(), normals = json::array();
+  for (const GraspContact& c : g.contacts) {
+    contacts.push_back(xyz(c.position));
+    normals.push_back(xyz(c.normal, kUnit));
+  }
+  return {{"contacts", std::move(contacts)},
+          {"normals", std::move(normals)},
+          {"approach", xyz(g.approach, kUnit)},
+          {"score", number(g.scores.total, kUnit)},
+          {"palm", nullptr},
+          {"scores",
+           {{"symmetry", number(g.scores.symmetry, kUnit)},
+            {"safety_margin", number(g.scores.safety_margin, kUnit)},
+            {"curvature", number(g.scores.curvature, kUnit)},
+            {"total", number(g.scores.total, kUnit)}}},
+          {"spread", number(g.spread, kMetres)},
+          {"aperture", number(g.aperture, kMetres)},
+          {"views", g.views}};
+}
+
+// Every view is shown or not, never thrown from: the reader is a live view, not the task.
+template <class F>
+std::string guarded(F&& f) noexcept {
+  try {
+    return f();
+  } catch (...) {
+    return {};
+  }
+}
+
+}  // namespace
+
+std::string pose_view(const Packet& p) {
+  return guarded([&] {
+    const Pose& pose = p.get<Pose>();
+    json v = views::pose(pose.world_from_frame);
+    v["kind"] = "pose";
+    v["stamp"] = number(pose.stamp, kUnit);
+    return dump(v);
+  });
+}
+
+std::string joint_state_view(const Packet& p) {
+  return guarded([&] {
+    const JointState& s = p.get<JointState>();
+    json v = {{"kind", "joints"}, {"names", s.names}, {"positions", numbers(s.positions, kUnit)}, {"stamp", number(s.stamp, kUnit)}};
+    if (!s.velocities.empty()) v["velocities"] = numbers(s.velocities, kUnit);
+    return dump(v);
+  });
+}
+
+std::string trajectory_view(const Packet& p) {
+  return guarded([&] {
+    const JointTrajectory& t = p.get<JointTrajectory>();
+    const std::size_t n = t.points.size();
+    const std::size_t shown = std::min(n, kMaxTrajectoryPoints);
+    json points = json::array();
+    for (std::size_t i = 0; i < shown; ++i) {
+      // Evenly spaced over the whole trajectory, the first and the last included.
+      const std::size_t k = shown < 2 ? i : i * (n - 1) / (shown - 1);
+      points.push_back({{"t", number(t.points[k].time, kUnit)}, {"positions", numbers(t.points[k].positions, kUnit)}});
+    }
+    json v = {{"kind", "trajectory"}, {"names", t.names}, {"points", std::move(points)}, {"stamp", number(t.stamp, kUnit)}};
+    if (shown < n) {
+      v["truncated"] = true;
+      v["point_count"] = n;
+    }
+    return dump(v);
+  });
+}
+
+std::string grasp_view(const Packet& p) {
+  return guarded([&] {
+    const Grasp& g = p.get<Grasp>();
+    return dump({{"kind", "grasps"}, {"candidates", json::array()}, {"selected", grasp_json(g)}, {"stamp", number(g.stamp, kUnit)}});
+  });
+}
+
+std::string regions_view(const Packet& p) {
+  return guarded([&] {
+    const RegionsOfInterest& r = p.get<RegionsOfInterest>();
+    json boxes = json::array();
+    for (const Eigen::AlignedBox3d& b : r.boxes) {
+      if (b.isEmpty()) continue;
+      json box = xyz(b.min());
+      for (const json& c : xyz(b.max())) box.push_back(c);
+      boxes.push_back(std::move(box));
+    }
+    json points = json::array();
+    for (const auto& s : r.points)
+      points.push_back({{"position", xyz(s.position)}, {"normal", xyz(s.normal, kUnit)}, {"group", s.group}});
+    return dump({{"kind", "regions"}, {"boxes", std::move(boxes)}, {"points", std::move(points)}, {"model_views", r.model_views}});
+  });
+}
+
+}  // namespace fba::views
