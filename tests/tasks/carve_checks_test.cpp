@@ -10,11 +10,14 @@
 
 #include <fba/task.hpp>
 #include <fba/types/octree.hpp>
+#include <fba/types/silhouette.hpp>
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/vision/octree_carver.hpp"
 
 #include "support/built_plugins.hpp"
+#include "support/pictures.hpp"
+#include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 
 namespace {
@@ -83,35 +86,69 @@ TEST(CarveChecks, TheDinoAsWrittenPassesEveryCheck) {
   EXPECT_EQ(find_event(r, "model_warning"), nullptr);
 }
 
-// With an output folder the carver writes the last model's surface (model.ply) and a picture of
-// it (model.png); it builds the surface once for both, after releasing the carver, and the file
-// holds exactly the mesh that vision::write_ply writes for the published model.
-TEST(CarveOutputs, ModelPlyIsTheLastModelsSurfaceAndThePictureShowsIt) {
-  const auto dir = std::filesystem::path(::testing::TempDir()) /
-                   ("carve_outputs_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+// With an output folder the carver writes the last model's surface (model.ply: by default the
+// leaves two views saw, ply_leaves: occupied every occupied leaf), a picture of it that frames the
+// object (model.png) and one of the views taken (views.png), each captioned with a legend; the
+// contour extraction a captioned picture per view.
+static void carve_dino_into(const std::filesystem::path& dir, const std::vector<std::string>& sets,
+                     std::vector<fba::Packet>* models = nullptr, std::vector<fba::Packet>* silhouettes = nullptr) {
   fba::LoadOptions lo;
   lo.overrides = {{"carver.max_depth=6"}};
+  for (const auto& s : sets) lo.overrides.push_back({s});
   fba::RunOptions o;
   o.executor = fba::ExecutorKind::Deterministic;
   o.timeout_s = 300;
   o.output_dir = dir;
   fba::Task task(fba::load_task(fba::test::tasks_dir() + "/carve_dino.yaml", built_plugins(), lo), o);
-  const auto& models = task.tap("carver.octree", 1);
+  const auto& m = task.tap("carver.octree", 1);
+  const auto& s = task.tap("contours.silhouette");
   const auto r = task.run();
   ASSERT_EQ(r.outcome, fba::Outcome::Success) << r.reason;
+  if (models) *models = m;
+  if (silhouettes) *silhouettes = s;
+}
+
+TEST(CarveOutputs, ModelPlyHoldsTheLeavesTwoViewsSawAndThePicturesExplainThemselves) {
+  fba::test::TempDir dir;
+  std::vector<fba::Packet> models, silhouettes;
+  carve_dino_into(dir.path(), {}, &models, &silhouettes);
   ASSERT_FALSE(models.empty());
-  const fba::TriangleMesh expected = fba::vision::occupied_surface_mesh(models.back().get<fba::Octree>());
-  const fba::TriangleMesh written = fba::geometry::load_mesh(dir / "model.ply");
+  std::vector<fba::CameraModel> cameras;
+  for (const auto& s : silhouettes) cameras.push_back(s.get<fba::Silhouette>().frame->camera);
+  const fba::TriangleMesh expected =
+      fba::vision::ply_mesh(models.back().get<fba::Octree>(), fba::vision::PlyLeaves::Seen, cameras);
+  const fba::TriangleMesh written = fba::geometry::load_mesh(dir.path() / "model.ply");
   ASSERT_GT(expected.triangles.size(), 1000u);
   EXPECT_EQ(written.vertices, expected.vertices);
   EXPECT_EQ(written.triangles, expected.triangles);
-  const cv::Mat picture = cv::imread((dir / "model.png").string(), cv::IMREAD_GRAYSCALE);
-  ASSERT_FALSE(picture.empty());
-  const int object = cv::countNonZero(picture < 250);  // on a white background
-  EXPECT_GT(object, picture.total() / 50) << "of " << picture.total() << " pixels";
-  std::filesystem::remove_all(dir);
+  for (const char* name : {"model.png", "views.png"}) {
+    const cv::Mat picture = cv::imread((dir.path() / name).string());
+    ASSERT_FALSE(picture.empty()) << name;
+    EXPECT_EQ(picture.size(), fba::vision::captioned_size({800, 600})) << name;
+    EXPECT_GT(fba::test::legend_ink(picture), 0.01) << name;
+  }
+  // The model picture frames the dino, not its surroundings.
+  EXPECT_GT(fba::test::object_share(cv::imread((dir.path() / "model.png").string())), 0.08);
+  // One contour picture per view, of the image's size and captioned.
+  std::size_t contours = 0;
+  for (const auto& f : std::filesystem::directory_iterator(dir.path() / "contours")) {
+    const cv::Mat picture = cv::imread(f.path().string());
+    EXPECT_EQ(picture.size(), fba::vision::captioned_size({640, 480})) << f.path();
+    EXPECT_GT(fba::test::legend_ink(picture), 0.01) << f.path();
+    ++contours;
+  }
+  EXPECT_EQ(contours, silhouettes.size());
+}
+
+TEST(CarveOutputs, PlyLeavesOccupiedWritesEveryOccupiedLeafsSurface) {
+  fba::test::TempDir dir;
+  std::vector<fba::Packet> models;
+  carve_dino_into(dir.path(), {"carver.ply_leaves=occupied"}, &models);
+  ASSERT_FALSE(models.empty());
+  const fba::TriangleMesh expected = fba::vision::occupied_surface_mesh(models.back().get<fba::Octree>());
+  const fba::TriangleMesh written = fba::geometry::load_mesh(dir.path() / "model.ply");
+  EXPECT_EQ(written.vertices, expected.vertices);
+  EXPECT_EQ(written.triangles, expected.triangles);
 }
 
 // Algorithm 2 with the grasp criterion alone: coarse where the contour is convex, fine where it

@@ -2,14 +2,18 @@
 // issue asks for.
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include <fba/registry.hpp>
 
 #include "support/built_plugins.hpp"
+#include "support/pictures.hpp"
 #include "support/temp_dir.hpp"
 #include <fba/task.hpp>
 #include <fba/types/octree.hpp>
@@ -188,15 +192,23 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   EXPECT_EQ(synthesis.stages[2].first, "exploration_movement");
   EXPECT_GE(synthesis.stages[2].second.entered, moves);
   EXPECT_GT(synthesis.stages[2].second.clock_s, 0.0);  // the arm's moves, on the virtual clock
-  // The grasp drawn on the model and on the last camera image: PNGs of the camera's size (the
-  // header's IHDR chunk holds the width and height, big-endian, at bytes 16 and 20).
-  for (const char* name : {"grasp_model.png", "grasp_view.png"}) {
-    std::ifstream in(out.path() / name, std::ios::binary);
-    unsigned char header[24] = {};
-    ASSERT_TRUE(in.read(reinterpret_cast<char*>(header), sizeof header)) << name;
-    EXPECT_EQ(std::string(reinterpret_cast<char*>(header) + 1, 3), "PNG") << name;
-    auto be32 = [&](int at) { return (header[at] << 24) | (header[at + 1] << 16) | (header[at + 2] << 8) | header[at + 3]; };
-    EXPECT_EQ(be32(16), 640) << name;
-    EXPECT_EQ(be32(20), 480) << name;
+  // The loop's pictures, each captioned with a legend: the whole model with the grasp, the views
+  // taken, the grasp over the last camera image (the camera's size between the bands), and a
+  // contour picture per view.
+  for (const auto& [name, size] : {std::pair{"grasp_model.png", cv::Size(800, 600)}, std::pair{"views.png", cv::Size(800, 600)},
+                                   std::pair{"grasp_view.png", cv::Size(640, 480)}}) {
+    const cv::Mat picture = cv::imread((out.path() / name).string());
+    ASSERT_FALSE(picture.empty()) << name;
+    EXPECT_EQ(picture.size(), fba::vision::captioned_size(size)) << name;
+    EXPECT_GT(fba::test::legend_ink(picture), 0.01) << name;
   }
+  EXPECT_GT(fba::test::object_share(cv::imread((out.path() / "grasp_model.png").string())), 0.08);
+  std::size_t contours = 0;
+  for (const auto& f : std::filesystem::directory_iterator(out.path() / "contours")) {
+    const cv::Mat picture = cv::imread(f.path().string());
+    EXPECT_EQ(picture.size(), fba::vision::captioned_size({640, 480})) << f.path();
+    EXPECT_GT(fba::test::legend_ink(picture), 0.01) << f.path();
+    ++contours;
+  }
+  EXPECT_GE(contours, 4u);  // one per view, and the grasp's model had at least 4
 }

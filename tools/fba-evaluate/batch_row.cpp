@@ -4,7 +4,6 @@
 
 #include <sys/wait.h>
 
-#include <array>
 #include <cstring>
 #include <fstream>
 #include <numbers>
@@ -132,12 +131,8 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
       row.score = g->scores.total;
       if (!g->views.empty()) row.views = static_cast<int>(g->views.size());
       const grasp::ObjectSurface surface(placed_on_table(*j.run, j.argv));
-      std::array<GraspContact, 3> placed;
-      for (int k = 0; k < 3; ++k) {
-        row.contacts.push_back(surface.place(g->contacts[k]));
-        placed[k] = row.contacts.back().contact;
-      }
-      const auto q = surface.evaluate(placed, quality);
+      row.on_mesh = grasp::place_grasp(surface, g->contacts, quality);
+      const grasp::GraspQuality& q = row.on_mesh->worse().quality;
       row.force_closure = q.force_closure;
       row.epsilon = q.epsilon;
     }

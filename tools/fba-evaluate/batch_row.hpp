@@ -21,9 +21,11 @@ struct Row {
   std::string reason;
   bool unfinished = false;  // the batch was stopped before the run ended: left out of the figures
   bool selected = false;
+  // The selected grasp on the true mesh, each contact along its normal and at its closest point;
+  // force_closure and epsilon are the worse placement's ("force closure on the true mesh").
+  std::optional<grasp::GraspOnSurface> on_mesh;
   std::optional<bool> force_closure;
   double epsilon = 0, score = 0;
-  std::vector<grasp::ObjectSurface::Placement> contacts;  // the selected grasp's contacts placed on the mesh
   std::optional<bool> held;
   std::string resolved;  // what synthesis had resolved under the fingers: "surface", or "contacts" (after its last view)
   int views = -1;

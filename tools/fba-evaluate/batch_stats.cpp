@@ -36,6 +36,7 @@ Stats stats_of(const std::vector<const Row*>& rows, const std::map<std::string, 
     if (!r->force_closure) continue;
     ++st.evaluated;
     st.fc += *r->force_closure;
+    if (r->on_mesh && r->on_mesh->along_normal.quality.force_closure != r->on_mesh->closest.quality.force_closure) ++st.split;
     eps.push_back(r->epsilon);
     const auto b = baselines.find(r->mesh);
     if (b != baselines.end() && b->second.figures && r->epsilon > b->second.figures->epsilon_p99) ++st.above;

@@ -32,6 +32,7 @@ struct Baseline {
 // The figures of a group of runs (one variant, one object or all).
 struct Stats {
   std::size_t runs = 0, selected = 0, evaluated = 0, fc = 0, above = 0, held = 0;
+  std::size_t split = 0;  // evaluated grasps whose two placements on the mesh disagree on force closure
   double median_eps = NAN, views = NAN, wall = NAN, cpu = NAN, nodes = NAN;
 };
 

@@ -21,13 +21,13 @@ std::string clip(std::string s, std::size_t n) {
 // One line of the summary table: the rows of one variant and one object (or all objects).
 std::string summary_line(int width, const std::string& variant, const std::string& object, const Stats& st, const Baseline* own) {
   char line[512];
-  std::snprintf(line, sizeof line, "%-*s %-18s %4zu %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s", width, variant.c_str(),
+  std::snprintf(line, sizeof line, "%-*s %-18s %4zu %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s %5zu", width, variant.c_str(),
                 object.c_str(), st.runs, percent(st.selected, st.runs).c_str(), percent(st.fc, st.evaluated).c_str(),
                 fixed(st.median_eps, 4).c_str(), own && own->figures ? fixed(own->figures->epsilon_p99, 4).c_str() : "-",
                 percent(st.above, st.evaluated).c_str(),
                 own && own->figures ? fixed(100 * own->figures->force_closure_share, 1, "%").c_str() : "-",
                 percent(st.held, st.runs).c_str(), fixed(st.views, 1).c_str(), fixed(st.wall, 2).c_str(), fixed(st.cpu, 2).c_str(),
-                fixed(st.nodes, 0).c_str());
+                fixed(st.nodes, 0).c_str(), st.split);
   return line;
 }
 
@@ -97,13 +97,17 @@ int variant_width(const BatchList& l) {
 std::string run_lines(int width, const std::vector<Row>& rows) {
   std::string out;
   char line[1024];
-  std::snprintf(line, sizeof line, "%-*s %-18s %-16s %-10s %5s %4s %7s %5s %7s %7s %9s  %s\n", width, "variant", "object", "pose x y yaw",
-                "outcome", "views", "FC", "epsilon", "held", "wall_s", "cpu_s", "nodes", "reason");
+  std::snprintf(line, sizeof line, "%-*s %-18s %-16s %-10s %5s %4s %7s %7s %5s %7s %7s %9s  %s\n", width, "variant", "object",
+                "pose x y yaw", "outcome", "views", "FC", "FC_n/c", "epsilon", "held", "wall_s", "cpu_s", "nodes", "reason");
   out += line;
+  const auto yes_no = [](bool b) { return b ? "yes" : "no"; };
   for (const auto& r : rows) {
-    std::snprintf(line, sizeof line, "%-*s %-18s %-16s %-10s %5s %4s %7s %5s %7s %7s %9s  %s\n", width, r.variant.c_str(), r.object.c_str(),
-                  r.pose.c_str(), r.outcome.c_str(), r.views >= 0 ? std::to_string(r.views).c_str() : "-",
-                  !r.selected ? "-" : !r.force_closure ? "?" : *r.force_closure ? "yes" : "no",
+    const std::string both = r.on_mesh ? std::string(yes_no(r.on_mesh->along_normal.quality.force_closure)) + "/" +
+                                             yes_no(r.on_mesh->closest.quality.force_closure)
+                                       : "-";
+    std::snprintf(line, sizeof line, "%-*s %-18s %-16s %-10s %5s %4s %7s %7s %5s %7s %7s %9s  %s\n", width, r.variant.c_str(),
+                  r.object.c_str(), r.pose.c_str(), r.outcome.c_str(), r.views >= 0 ? std::to_string(r.views).c_str() : "-",
+                  !r.selected ? "-" : !r.force_closure ? "?" : yes_no(*r.force_closure), both.c_str(),
                   r.force_closure ? fixed(r.epsilon, 4).c_str() : "-", !r.held ? "-" : *r.held ? "yes" : "no",
                   fixed(r.wall_s, 2).c_str(), fixed(r.cpu_s, 2).c_str(), r.nodes >= 0 ? std::to_string(r.nodes).c_str() : "-",
                   clip(r.reason, 240).c_str());
@@ -135,8 +139,8 @@ struct Groups {
 std::string summary_lines(int width, const BatchList& l, const Groups& groups) {
   std::string out;
   char line[512];
-  std::snprintf(line, sizeof line, "%-*s %-18s %4s %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s\n", width, "variant", "object", "runs",
-                "grasp", "FC", "med_eps", "rand_p99", ">p99", "rand_FC", "held", "views", "wall_s", "cpu_s", "nodes");
+  std::snprintf(line, sizeof line, "%-*s %-18s %4s %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s %5s\n", width, "variant", "object", "runs",
+                "grasp", "FC", "med_eps", "rand_p99", ">p99", "rand_FC", "held", "views", "wall_s", "cpu_s", "nodes", "split");
   out += line;
   for (const auto& v : l.variants) {
     for (const auto& mesh : groups.objects) {
@@ -201,8 +205,8 @@ std::string normals_block(int width, const BatchList& l, const std::vector<Row>&
     std::vector<double> errors;
     std::size_t off = 0;
     for (const auto& r : rows)
-      if (r.variant == v.name && !r.unfinished)
-        for (const auto& c : r.contacts) {
+      if (r.variant == v.name && !r.unfinished && r.on_mesh)
+        for (const auto& c : r.on_mesh->along_normal.contacts) {
           if (c.displacement >= kOnObject) ++off;
           else if (c.normal_error_deg) errors.push_back(*c.normal_error_deg);
         }
@@ -230,7 +234,10 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
   out << summary_lines(width, l, groups);
   if (l.variants.size() > 1) out << side_by_side(l, groups) << paired_block(l, rows, seed);
   out << normals_block(width, l, rows);
-  out << "\ngrasp: runs with a grasp selected; FC: of those, force closure on the true mesh; med_eps: their median epsilon;\n"
+  out << "\ngrasp: runs with a grasp selected; FC: of those, force closure on the true mesh, where each contact is placed\n"
+         "on the mesh two ways, along its normal and at its closest point, and the grasp counts as the worse placement\n"
+         "(FC_n/c: force closure along the normals / at the closest points; split: grasps the two placements disagree on);\n"
+         "epsilon, med_eps: the worse placement's epsilon, their median;\n"
          "rand_p99, rand_FC: the random contact sets' 99th percentile of epsilon and force-closure share on the same mesh;\n"
          ">p99: selected grasps whose epsilon is above their mesh's rand_p99; held: runs held through the lift test;\n"
          "views: mean views until the grasp was selected; wall_s: the run's wall time (fba-run's summary), cpu_s: the\n"
@@ -248,6 +255,26 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
   return text;
 }
 
+namespace {
+
+// One placement of a grasp on the mesh: its force closure and epsilon, and each contact where it
+// landed, how far it moved and how far the model's normal is off the mesh's there.
+nlohmann::json placement_json(const grasp::PlacedGrasp& g) {
+  nlohmann::json j{{"force_closure", g.quality.force_closure}, {"epsilon", g.quality.epsilon}};
+  if (!g.degenerate.empty()) j["degenerate"] = g.degenerate;
+  for (const auto& c : g.contacts) {
+    const Eigen::Vector3d& p = c.contact.position;
+    const Eigen::Vector3d& n = c.contact.normal;
+    nlohmann::json k{{"moved_mm", 1000 * c.displacement}, {"along_normal", c.along_normal},
+                     {"position", {p.x(), p.y(), p.z()}}, {"normal", {n.x(), n.y(), n.z()}}};
+    if (c.normal_error_deg) k["normal_error_deg"] = *c.normal_error_deg;
+    j["contacts"].push_back(k);
+  }
+  return j;
+}
+
+}  // namespace
+
 nlohmann::json rows_json(const std::vector<Row>& rows) {
   nlohmann::json a = nlohmann::json::array();
   for (const auto& r : rows) {
@@ -256,10 +283,10 @@ nlohmann::json rows_json(const std::vector<Row>& rows) {
                      {"wall_s", r.wall_s}, {"cpu_s", r.cpu_s}, {"nodes", r.nodes}};
     if (r.selected) j["score"] = r.score;
     if (r.force_closure) j["force_closure"] = *r.force_closure, j["epsilon"] = r.epsilon;
-    for (const auto& c : r.contacts) {
-      nlohmann::json k{{"moved_mm", 1000 * c.displacement}};
-      if (c.normal_error_deg) k["normal_error_deg"] = *c.normal_error_deg;
-      j["contacts"].push_back(k);
+    if (r.on_mesh) {
+      j["contacts"] = placement_json(r.on_mesh->along_normal)["contacts"];
+      j["placements"] = {{"along_normal", placement_json(r.on_mesh->along_normal)}, {"closest", placement_json(r.on_mesh->closest)}};
+      j["worse"] = &r.on_mesh->worse() == &r.on_mesh->closest ? "closest" : "along_normal";
     }
     if (r.held) j["held"] = *r.held;
     if (!r.resolved.empty()) j["resolved"] = r.resolved;

@@ -13,6 +13,8 @@
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/renderer.hpp"
 #include "fba/geometry/viewpoints.hpp"
+#include "fba/vision/caption.hpp"
+#include "fba/vision/model_picture.hpp"
 #include "fba/vision/octree_carver.hpp"
 
 namespace fba::evaluate {
@@ -21,6 +23,20 @@ using Clock = std::chrono::steady_clock;
 
 static double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// A view's render and its mask, each captioned with the view and where its camera stood.
+static void save_view(const std::filesystem::path& stem, const std::string& object, std::size_t i,
+                      const geometry::RenderResult& r, const CameraModel& camera) {
+  const Eigen::Vector3d eye = camera.centre_in_world();
+  vision::Caption caption;
+  caption.details = "camera at " + vision::position_text(eye.x(), eye.y(), eye.z()) + ", looking at the object";
+  caption.title = object + ": view " + std::to_string(i + 1) + ", rendered";
+  caption.legend = {{{70, 150, 230}, "the object, shaded", vision::LegendMark::Swatch}};
+  cv::imwrite(stem.string() + "_view" + std::to_string(i) + ".png", vision::captioned(r.colour, caption));
+  caption.title = object + ": view " + std::to_string(i + 1) + ", its silhouette";
+  caption.legend = {{{255, 255, 255}, "the object's silhouette, carved from", vision::LegendMark::Swatch}};
+  cv::imwrite(stem.string() + "_mask" + std::to_string(i) + ".png", vision::captioned(r.mask, caption));
 }
 
 VoxelComparison compare_voxels(geometry::VoxelGrid truth, geometry::VoxelGrid model,
@@ -134,6 +150,7 @@ SyntheticResult evaluate_synthetic(const std::filesystem::path& mesh_path,
   if (!p.save_dir.empty()) std::filesystem::create_directories(p.save_dir);
   const std::string stem = mesh_path.parent_path().filename().string() + "_" +
                            mesh_path.stem().string();
+  const std::string object = vision::object_name(mesh_path.string());
 
   std::vector<Silhouette> silhouettes;
   double render_ms = 0;
@@ -144,10 +161,7 @@ SyntheticResult evaluate_synthetic(const std::filesystem::path& mesh_path,
     const geometry::RenderResult r = geometry::render(mesh, cam);
     render_ms += ms_since(t0);
     silhouettes.push_back(silhouette_from_render(r.colour, r.mask, cam, static_cast<int>(i)));
-    if (!p.save_dir.empty()) {
-      cv::imwrite((p.save_dir / (stem + "_view" + std::to_string(i) + ".png")).string(), r.colour);
-      cv::imwrite((p.save_dir / (stem + "_mask" + std::to_string(i) + ".png")).string(), r.mask);
-    }
+    if (!p.save_dir.empty()) save_view(p.save_dir / stem, object, i, r, cam);
   }
   out.render_ms_mean = poses.empty() ? 0 : render_ms / poses.size();
 
@@ -177,13 +191,12 @@ SyntheticResult evaluate_synthetic(const std::filesystem::path& mesh_path,
   if (!p.save_dir.empty()) {
     vision::write_ply(*model, (p.save_dir / (stem + "_carved.ply")).string());
     geometry::write_ply(geometry::grid_to_mesh(truth), p.save_dir / (stem + "_truth_voxels.ply"));
-    // A picture of the carved model (clipped as evaluated) from the first viewpoint.
-    geometry::VoxelGrid shown = carved;
-    if (z_min) geometry::clip_below(shown, *z_min);
-    if (!silhouettes.empty()) {
-      const auto r = geometry::render(geometry::grid_to_mesh(shown), silhouettes.front().frame->camera);
-      cv::imwrite((p.save_dir / (stem + "_carved_view0.png")).string(), r.colour);
-    }
+    // The carved model (clipped as evaluated), as a run's model.png shows it.
+    vision::ModelPictureOptions look;
+    look.object = object;
+    for (const auto& s : silhouettes) look.views.push_back(s.frame->camera);
+    look.table_z = z_min;
+    cv::imwrite((p.save_dir / (stem + "_carved.png")).string(), vision::model_picture(*model, look));
   }
   return out;
 }

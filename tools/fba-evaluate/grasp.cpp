@@ -26,10 +26,12 @@ namespace {
 const char* kGraspHelp = R"(fba-evaluate grasp: grasp quality on the true object surface.
 
   fba-evaluate grasp --mesh M.obj --summary run/summary.json [--random 1000]
-      Places the three contacts of summary.json's "grasp" on the mesh (along each contact's
-      normal line, else the closest point), with the mesh's inward normals, and prints how far
-      each moved and how far its normal is off the mesh's, force closure and the Ferrari-Canny
-      epsilon; then the same figures for random contact sets.
+      Places the three contacts of summary.json's "grasp" on the mesh two ways, with the mesh's
+      inward normals: along each contact's normal line (else the closest point), and at each
+      contact's closest point. Prints for each how far each contact moved and how far its normal
+      is off the mesh's, force closure and the Ferrari-Canny epsilon, and the grasp's as the worse
+      of the two (a contact on an edge lands on different faces); then the same figures for random
+      contact sets.
   fba-evaluate grasp --mesh M.obj [M2.obj ...] --random 1000
       Random three-contact sets drawn uniformly by area: share force closure, 99th percentile
       of epsilon (all sets, 0 when not force closure), median epsilon of the force-closure ones.
@@ -58,8 +60,8 @@ A run's summary.json from fba-run is read too: the grasp is then the one a compo
 (grasp.synthesis's results.grasp, this JSON). --summary must be a regular file (a FIFO is refused,
 as reading one waits for a writer); a mesh that is not closed is refused with its boundary edges.
 
-Exit status: 0 when evaluated (with --summary: the grasp is force closure), 1 when the grasp
-is not force closure, 2 for bad input (a mesh that does not load, a malformed summary).
+Exit status: 0 when evaluated (with --summary: the grasp is force closure by both placements), 1
+when it is not, 2 for bad input (a mesh that does not load, a malformed summary).
 
 Options)";
 
@@ -107,20 +109,33 @@ std::string object_name(const std::string& mesh) {
 
 namespace {
 
+// One contact's placement on the mesh, as a line.
+void print_placement(const char* label, const GraspContact& given, const grasp::ObjectSurface::Placement& p) {
+  const Eigen::Vector3d& a = given.position;
+  std::printf("  %s: (%.4f, %.4f, %.4f) -> (%.4f, %.4f, %.4f), moved %.2f mm %s", label, a.x(), a.y(), a.z(), p.contact.position.x(),
+              p.contact.position.y(), p.contact.position.z(), 1000 * p.displacement,
+              p.along_normal ? "along its normal" : "to the closest point");
+  if (p.normal_error_deg) std::printf("; normal %.1f deg off the surface's", *p.normal_error_deg);
+  std::printf("\n");
+}
+
+void print_quality(const char* what, const grasp::PlacedGrasp& g) {
+  std::printf("%s: force closure %s, epsilon %.4f%s\n", what, g.quality.force_closure ? "yes" : "no", g.quality.epsilon,
+              g.degenerate.empty() ? "" : (" (" + g.degenerate + ")").c_str());
+}
+
 int evaluate_summary(const Options& o, const Grasp& g, const grasp::ObjectSurface& surface) {
-  std::array<GraspContact, 3> placed;
+  const grasp::GraspOnSurface on = grasp::place_grasp(surface, g.contacts, o.quality);
   for (int k = 0; k < 3; ++k) {
-    const auto p = surface.place(g.contacts[k]);
-    placed[k] = p.contact;
-    const Eigen::Vector3d& a = g.contacts[k].position;
-    std::printf("  contact %d%s: (%.4f, %.4f, %.4f) -> (%.4f, %.4f, %.4f), moved %.2f mm %s", k, k == 0 ? " (thumb)" : "", a.x(),
-                a.y(), a.z(), p.contact.position.x(), p.contact.position.y(), p.contact.position.z(), 1000 * p.displacement,
-                p.along_normal ? "along its normal" : "to the closest point");
-    if (p.normal_error_deg) std::printf("; normal %.1f deg off the surface's", *p.normal_error_deg);
-    std::printf("\n");
+    const std::string label = "contact " + std::to_string(k) + (k == 0 ? " (thumb)" : "");
+    print_placement(label.c_str(), g.contacts[k], on.along_normal.contacts[k]);
+    print_placement((std::string(label.size(), ' ') + " closest point").c_str(), g.contacts[k], on.closest.contacts[k]);
   }
-  const grasp::GraspQuality q = surface.evaluate(placed, o.quality);
-  std::printf("grasp: force closure %s, epsilon %.4f\n", q.force_closure ? "yes" : "no", q.epsilon);
+  print_quality("placed along the normals", on.along_normal);
+  print_quality("placed at the closest points", on.closest);
+  const grasp::GraspQuality& q = on.worse().quality;
+  std::printf("grasp: force closure %s, epsilon %.4f (the worse placement: %s)\n", q.force_closure ? "yes" : "no", q.epsilon,
+              &on.worse() == &on.closest ? "the closest points" : "along the normals");
   if (o.random > 0) {
     const auto b = grasp::random_baseline(surface, o.random, o.seed, o.quality);
     std::printf("random %zu sets: force closure %.1f%%, epsilon p99 %.4f, median FC epsilon %.4f\n", b.sets,
@@ -144,9 +159,7 @@ void table_row(const Options& o, const std::string& mesh, const grasp::ObjectSur
     std::vector<double> eps;
     std::size_t fc = 0;
     for (const auto& c : r.candidates) {
-      std::array<GraspContact, 3> placed;
-      for (int k = 0; k < 3; ++k) placed[k] = surface.place(c.grasp.contacts[k]).contact;
-      const auto q = surface.evaluate(placed, o.quality);
+      const auto q = grasp::place_grasp(surface, c.grasp.contacts, o.quality).worse().quality;
       eps.push_back(q.epsilon);
       fc += q.force_closure;
     }

@@ -45,9 +45,11 @@ Each run of LIST is run once per variant by fba-run, as a child process writing 
 DIR/<variant>/<NN>-<object>/ (summary.json, log.txt, command.txt), with a --run-id of its own that
 fba-run writes into summary.json: a summary.json without it (an earlier run's) is refused, the run
 is a row "no summary" saying so. The grasp each run selected is placed on the
-true mesh, stood where the run stood it, and evaluated (force closure, Ferrari-Canny epsilon:
-friction 0.5, 8 cone edges, torque / r_max); each mesh gets --random random contact sets for
-comparison. The table (also DIR/table.txt; every run's figures in DIR/runs.json) gives per
+true mesh, stood where the run stood it, two ways: each contact along its normal line, and each at
+its closest surface point (on an edge the two land on different faces). Each placement is evaluated
+(force closure, Ferrari-Canny epsilon: friction 0.5, 8 cone edges, torque / r_max) and the grasp
+counts as the worse of the two (FC_n/c gives both; runs.json's "placements" each contact of both);
+each mesh gets --random random contact sets for comparison. The table (also DIR/table.txt; every run's figures in DIR/runs.json) gives per
 variant, per object and overall: runs, % with a grasp selected, % of those force closure, their
 median epsilon against the random sets' 99th percentile, % held in the lift test, mean views
 until a grasp was selected, wall and CPU seconds per run, and octree nodes processed.

@@ -145,7 +145,7 @@ export class SceneView {
 
   buildLegend() {
     this.legend.replaceChildren(...LAYERS.map(([key, label, color]) => el('label', { class: 'legend-item' },
-      el('input', { type: 'checkbox', checked: true, onchange: (ev) => this.setLayer(key, ev.target.checked) }),
+      el('input', { type: 'checkbox', checked: true, 'data-layer': key, onchange: (ev) => this.setLayer(key, ev.target.checked) }),
       el('span', { class: 'swatch', style: `background:${color}` }), label)),
     el('button', { class: 'small', onclick: () => this.fit(), title: 'frame the model (also: double click)' }, 'fit'));
     this.renderer.domElement.addEventListener('dblclick', () => this.fit());
@@ -153,6 +153,8 @@ export class SceneView {
 
   setLayer(key, visible) {
     this.layerVisible[key] = visible;
+    const box = this.legend.querySelector(`input[data-layer="${key}"]`);
+    if (box) box.checked = visible;
     this.layers[key].visible = visible;
     this.invalidate();
   }

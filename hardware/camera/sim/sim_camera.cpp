@@ -2,6 +2,7 @@
 // the pose it receives, or from a ring or an even spread of viewpoints over the upper
 // hemisphere, with the given intrinsics: a shaded object on a background, optional noise.
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -80,7 +81,7 @@ class SimCamera final : public fba::Component {
         });
   }
 
-  explicit SimCamera(fba::Context& ctx) : ctx_(ctx), mesh_name_(ctx(kMesh).stem().string()) {
+  explicit SimCamera(fba::Context& ctx) : ctx_(ctx), mesh_name_(mesh_name(ctx(kMesh))) {
     auto loaded = fba::geometry::load_mesh_with_warnings(ctx(kMesh));
     for (const auto& w : loaded.warnings) ctx.log().info("{}", w);
     const fba::sim_hand::ObjectPlacement placement{ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw) * kDegree, ctx(kObjectRest)};
@@ -135,6 +136,14 @@ class SimCamera final : public fba::Component {
   }
 
  private:
+  // The frames' source names the object: a scanned object's mesh is model.obj (or textured.obj) in
+  // a folder named for it, so that folder's name says which object it is.
+  static std::string mesh_name(const std::filesystem::path& mesh) {
+    const std::string stem = mesh.stem().string();
+    const std::string folder = mesh.parent_path().filename().string();
+    return (stem == "model" || stem == "textured") && !folder.empty() ? folder : stem;
+  }
+
   // The object must stand where the task looks for it: elsewhere the views miss it or the carver
   // cuts it off, and the run would end on a symptom (no contour in an image, a model not joined to
   // the table) instead of the cause. Partly outside, it is carved cut off there: a warning.

@@ -56,7 +56,7 @@ TEST(SimCamera, TheLastViewpointIsFollowedByLostAsTheEndOfAVideoFile) {
   for (const auto& e : all)
     if (e.name == "lost") lost.push_back(e);
   ASSERT_EQ(lost.size(), 1u);
-  EXPECT_EQ(lost[0].payload, "sim_model");  // the frames' source
+  EXPECT_EQ(lost[0].payload, "sim_YcbMasterChefCan");  // the frames' source: the mesh's folder, as its file is model.obj
 }
 
 TEST(SimCamera, TheOldNameOfTheWorldParameterIsRefusedListingTheNewOne) {
@@ -108,7 +108,7 @@ TEST(SimCamera, AMeshInMillimetresIsRefusedAsOutsideTheWorkspace) {
 
 TEST(SimCamera, AnObjectMovedOutOfTheWorkspaceIsRefusedWithItsPlace) {
   const std::string what = refusal({{"mesh", kCan}, {"object_x", 0.3}});
-  EXPECT_NE(what.find("the object 'model' is outside the workspace: expected it within [-0.130, -0.130, -0.020, 0.130, 0.130, 0.240]"),
+  EXPECT_NE(what.find("the object 'YcbMasterChefCan' is outside the workspace: expected it within [-0.130, -0.130, -0.020, 0.130, 0.130, 0.240]"),
             std::string::npos)
       << what;
   EXPECT_NE(what.find("found it 0.102 x 0.102 x 0.140 m centred at (0.292, 0.015, 0.070) (object_x 0.3, object_y 0): its centre "
@@ -132,7 +132,7 @@ TEST(SimCamera, TheGraspTaskRefusesAnObjectOutsideItsWorkspaceAtTheCamerasLine) 
                                         "/grasp.yaml' --set scene.x=0.3 -o '" + dir.path().string() + "'");
   EXPECT_EQ(r.status, 2) << r.output;  // a configuration error
   EXPECT_NE(r.output.find("profiles/sim.yaml:"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("component 'camera' (sim.camera) refused its configuration: the object 'model' is outside the workspace"),
+  EXPECT_NE(r.output.find("component 'camera' (sim.camera) refused its configuration: the object 'YcbMustardBottle' is outside the workspace"),
             std::string::npos)
       << r.output;
 }

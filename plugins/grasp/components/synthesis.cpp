@@ -31,12 +31,13 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "fba/geometry/renderer.hpp"
+#include "fba/geometry/mesh_io.hpp"
 #include "fba/vision/octree_carver.hpp"
 
 #include "fba/grasp/grasp_json.hpp"
 #include "fba/grasp/model_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
+#include "grasp_pictures.hpp"
 
 #if FBA_GRASP_REACH
 #include <fba/types/joint_state.hpp>
@@ -171,6 +172,12 @@ class GraspSynthesisFilter final : public fba::Component {
       "table_z", {}, "[z]: the table the object stands on (world z, up); grasps whose hand would reach into it are left out. "
       "Empty: no table")
       .size({0, 1});
+  static constexpr auto kPlyLeaves = fba::Param<std::string>(
+      "ply_leaves", "seen",
+      "which occupied leaves the models in exploration/ hold: seen, those two views saw whole (the object as the views show it; "
+      "space no view could carve, such as the top of a root box no camera framed, is left out), or occupied, every one (the "
+      "model the search analysed)")
+                                         .choices({"seen", "occupied"});
   static constexpr fba::EventOut kPlanningPerformed{
       "planning_performed",
       "no reliable grasp yet: regions were emitted for a new view; payload (JSON): views, samples, regions, candidates, "
@@ -209,7 +216,7 @@ class GraspSynthesisFilter final : public fba::Component {
 #endif
     );
     spec.add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kTableZ, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -235,6 +242,7 @@ class GraspSynthesisFilter final : public fba::Component {
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);
+    ply_leaves_ = ctx(kPlyLeaves) == "occupied" ? fba::vision::PlyLeaves::Occupied : fba::vision::PlyLeaves::Seen;
     params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first
     // The model's surface and the search borrow the task's threads, as carving does: the loop waits
     // on each analysis, and the other core would sit idle.
@@ -264,6 +272,7 @@ class GraspSynthesisFilter final : public fba::Component {
       if (frame && frame->has_pose) {
         if (rim_deg_ > 0) rims_.push_back(fba::grasp::silhouette_rim(s.get()));
         last_frame_ = frame;
+        views_.push_back(frame->camera);
       }
     }
     auto in = ctx_(kOctree);
@@ -455,6 +464,7 @@ class GraspSynthesisFilter final : public fba::Component {
     const std::size_t requested = roi.boxes.size();
     const std::size_t points = roi.points.size();
     roi.model_views = views;
+    regions_asked_ = roi.boxes;
     ctx_(kRegions).emit(std::move(roi));
     nlohmann::json j{{"views", views},
                      {"samples", surface.samples.size()},
@@ -634,7 +644,7 @@ class GraspSynthesisFilter final : public fba::Component {
     const std::string json = fba::grasp::grasp_to_json(g).dump();
     ctx_.report("grasp", json);
     ctx_.emit(kGraspSelected, json);
-    write_pictures(g, ctx_(kOctree).get());
+    write_pictures(&g, ctx_(kOctree).get());
     ctx_(kGrasp).emit(std::move(g));
     done_ = true;
   }
@@ -649,59 +659,34 @@ class GraspSynthesisFilter final : public fba::Component {
     std::filesystem::create_directories(dir, ec);
     const auto ply = dir / ("model_" + std::to_string(model.views) + "views.ply");
     try {
-      fba::vision::write_ply(model, ply.string());
+      fba::geometry::write_ply(fba::vision::ply_mesh(model, ply_leaves_, model_views(model)), ply);
     } catch (const std::exception& e) {  // an artefact lost is reported; the search goes on
       ctx_.log().error("could not write {}: {}", ply.string(), e.what());
     }
   }
 
-  // With an output folder: the grasp drawn over the model and over the last camera image, both
-  // seen from that camera: each contact (thumb red, fingers green and blue), its inward normal
-  // (an arrow into the object) and its finger's direction (the approach, yellow, ending on it).
-  void write_pictures(const fba::Grasp& g, const fba::Octree& model) {
-    if (ctx_.output_dir().empty() || !last_frame_) return;
-    const fba::CameraModel& camera = last_frame_->camera;
-    fba::geometry::RenderOptions look;
-    look.object_colour = {200, 200, 200};
-    look.background_top = look.background_bottom = {255, 255, 255};
-    look.ambient = 0.3;
-    look.diffuse = 0.7;
-    // The model near the grasp only: parts no view covered stay occupied and would hide it.
-    fba::TriangleMesh near = fba::vision::occupied_surface_mesh(model);
-    const Eigen::Vector3f centre = ((g.contacts[0].position + g.contacts[1].position + g.contacts[2].position) / 3).cast<float>();
-    const float reach = static_cast<float>(g.aperture);
-    std::erase_if(near.triangles, [&](const auto& t) {
-      for (int k = 0; k < 3; ++k)
-        if ((near.vertices[static_cast<std::size_t>(t[k])] - centre).norm() > reach) return true;
-      return false;
-    });
-    cv::Mat on_model = fba::geometry::render(near, camera, look).colour;
-    cv::Mat on_image = last_frame_->image.clone();
-    if (on_image.channels() == 1) cv::cvtColor(on_image, on_image, cv::COLOR_GRAY2BGR);
-    const Eigen::Matrix<double, 3, 4> P = camera.projection();
-    auto pixel = [&](const Eigen::Vector3d& x) {
-      const Eigen::Vector3d h = P * x.homogeneous();
-      return cv::Point(static_cast<int>(std::lround(h.x() / h.z())), static_cast<int>(std::lround(h.y() / h.z())));
-    };
-    const cv::Scalar colours[3] = {{40, 40, 230}, {40, 180, 40}, {230, 120, 30}};
-    for (cv::Mat* picture : {&on_model, &on_image}) {
-      for (std::size_t i = 0; i < 3; ++i) {
-        const auto& c = g.contacts[i];
-        cv::arrowedLine(*picture, pixel(c.position - g.approach.normalized() * 0.05), pixel(c.position), {0, 200, 230}, 2,
-                        cv::LINE_AA, 0, 0.2);
-        cv::arrowedLine(*picture, pixel(c.position - c.normal.normalized() * 0.03), pixel(c.position), colours[i], 2, cv::LINE_AA,
-                        0, 0.3);
-        cv::circle(*picture, pixel(c.position), 6, colours[i], -1, cv::LINE_AA);
-      }
-    }
-    for (const auto& [name, picture] : {std::pair{"grasp_model.png", &on_model}, std::pair{"grasp_view.png", &on_image}}) {
-      const auto file = ctx_.output_dir() / name;
-      if (!cv::imwrite(file.string(), *picture)) ctx_.log().error("could not write {}", file.string());
-    }
+  // With an output folder: the loop's pictures (grasp_pictures.hpp), of the model analysed last and
+  // the grasp when one was selected.
+  void write_pictures(const fba::Grasp* g, const fba::Octree& model) {
+    if (ctx_.output_dir().empty()) return;
+    fba::vision::ModelPictureOptions o;
+    if (last_frame_) o.object = fba::vision::object_name(last_frame_->source);
+    o.views = model_views(model);
+    o.regions = regions_asked_;
+    o.table_z = params_.table_z;
+    if (g) o.grasp = *g;
+    fba::grasp::write_loop_pictures(ctx_.output_dir(), model, o, last_frame_, ctx_.log());
+  }
+
+  // The cameras of the model's views: the first ones (the carver takes them in arrival order).
+  std::vector<fba::CameraModel> model_views(const fba::Octree& model) const {
+    const std::size_t n = std::min(views_.size(), static_cast<std::size_t>(std::max(0, model.views)));
+    return {views_.begin(), views_.begin() + static_cast<std::ptrdiff_t>(n)};
   }
 
   void fail(const std::string& reason) {
     ctx_.log().warn("grasp synthesis failed: {}", reason);
+    if (auto in = ctx_(kOctree); in.has()) write_pictures(nullptr, in.get());
     ctx_.report("failure", nlohmann::json(reason).dump());
     ctx_.emit(kFailed, reason);
     done_ = true;
@@ -718,6 +703,9 @@ class GraspSynthesisFilter final : public fba::Component {
   const double rim_separation_deg_;
   std::vector<fba::grasp::SilhouetteRim> rims_;   // the posed silhouettes' rims, in arrival order
   std::shared_ptr<const fba::Frame> last_frame_;  // the last posed view: the pictures of the grasp are drawn on it
+  std::vector<fba::CameraModel> views_;           // the posed views' cameras, in arrival order: the pictures' views
+  std::vector<Eigen::AlignedBox3d> regions_asked_;  // the regions last asked to be refined
+  fba::vision::PlyLeaves ply_leaves_ = fba::vision::PlyLeaves::Seen;
   std::vector<int> view_index_;  // the silhouettes' view indices, in arrival order (their images are not kept)
   int requested_views_ = -1;      // the model views of the last regions request
   bool done_ = false;

@@ -136,15 +136,49 @@ ObjectSurface::Placement ObjectSurface::place(const GraspContact& approximate) c
       }
     }
   }
-  if (std::isfinite(best)) {
-    out.displacement = best;
-  } else {
-    out.contact = closest_point(approximate.position);
-    out.displacement = (out.contact.position - approximate.position).norm();
-    out.along_normal = false;
-  }
+  if (!std::isfinite(best)) return place_closest(approximate);
+  out.displacement = best;
   if (has_normal) out.normal_error_deg = angle_between_deg(approximate.normal, out.contact.normal);
   return out;
+}
+
+ObjectSurface::Placement ObjectSurface::place_closest(const GraspContact& approximate) const {
+  if (!approximate.position.allFinite())
+    throw std::invalid_argument("object surface: a contact position is not finite");
+  Placement out;
+  out.contact = closest_point(approximate.position);
+  out.displacement = (out.contact.position - approximate.position).norm();
+  out.along_normal = false;
+  if (approximate.normal.allFinite() && approximate.normal.norm() > 0)
+    out.normal_error_deg = angle_between_deg(approximate.normal, out.contact.normal);
+  return out;
+}
+
+const PlacedGrasp& GraspOnSurface::worse() const {
+  if (along_normal.quality.force_closure != closest.quality.force_closure)
+    return along_normal.quality.force_closure ? closest : along_normal;
+  return closest.quality.epsilon < along_normal.quality.epsilon ? closest : along_normal;
+}
+
+GraspOnSurface place_grasp(const ObjectSurface& surface, const std::array<GraspContact, 3>& contacts,
+                           const QualityParams& params) {
+  const auto placed = [&](auto place) {
+    PlacedGrasp g;
+    std::array<GraspContact, 3> at;
+    for (int k = 0; k < 3; ++k) {
+      g.contacts[k] = (surface.*place)(contacts[k]);
+      at[k] = g.contacts[k].contact;
+    }
+    // Two contacts placed on one point (snapped to the same corner; the measure's own rule) hold
+    // nothing it can define: not force closure. Other bad input (friction, cone edges) is thrown.
+    for (int i = 0; i < 3; ++i)
+      for (int j = i + 1; j < 3; ++j)
+        if ((at[i].position - at[j].position).norm() <= 1e-9 * surface.r_max())
+          g.degenerate = "contacts " + std::to_string(i) + " and " + std::to_string(j) + " placed on one point";
+    if (g.degenerate.empty()) g.quality = surface.evaluate(at, params);
+    return g;
+  };
+  return {placed(&ObjectSurface::place), placed(&ObjectSurface::place_closest)};
 }
 
 SurfaceSampling sample_for_synthesis(const ObjectSurface& surface, std::size_t count, std::uint64_t seed) {

@@ -7,7 +7,9 @@
 #include <fba/types/frame.hpp>
 #include <fba/types/silhouette.hpp>
 
+#include "fba/vision/caption.hpp"
 #include "fba/vision/contour_extraction.hpp"
+#include "fba/vision/model_picture.hpp"
 
 namespace {
 
@@ -101,27 +103,39 @@ class ContourExtraction final : public fba::Component {
     return f.index >= 0 ? source + "_" + std::to_string(f.index) : source;
   }
 
-  static std::vector<const fba::Outline*> outlines(const fba::Silhouette& s) {
-    std::vector<const fba::Outline*> all{&s};
-    for (const auto& h : s.holes) all.push_back(&h);
-    return all;
-  }
-
-  // The contour and the holes drawn on the image: what a person checks first when carving goes wrong.
+  // The contour and the holes drawn on the image: what a person checks first when carving goes
+  // wrong. The caption tells one view's picture from the next: its number in arrival order, its
+  // frame and where the camera stood.
   void write_overlay(const fba::Silhouette& s, const std::string& name) {
     cv::Mat image = s.frame->image.clone();
     if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
     if (image.depth() != CV_8U) image.convertTo(image, CV_8U, 1.0 / 256);
-    std::vector<std::vector<cv::Point>> lines;
-    for (const fba::Outline* o : outlines(s)) lines.emplace_back(o->contour.begin(), o->contour.end());
-    cv::polylines(image, lines, true, cv::Scalar(0, 255, 0), 2, cv::LINE_AA);
+    std::vector<std::vector<cv::Point>> holes;
+    for (const auto& h : s.holes) holes.emplace_back(h.contour.begin(), h.contour.end());
+    cv::polylines(image, std::vector<std::vector<cv::Point>>{{s.contour.begin(), s.contour.end()}}, true, kOuter, 2, cv::LINE_AA);
+    cv::polylines(image, holes, true, kHole, 2, cv::LINE_AA);
+    ++views_written_;
+    fba::vision::Caption caption;
+    caption.title = fba::vision::object_name(s.frame->source) + ": view " + std::to_string(views_written_) + ", its contour";
+    caption.details = "frame " + name;
+    if (s.frame->has_pose) {
+      const Eigen::Vector3d eye = s.frame->camera.centre_in_world();
+      caption.details += ", camera at " + fba::vision::position_text(eye.x(), eye.y(), eye.z());
+    }
+    caption.details += ", " + std::to_string(static_cast<long>(cv::countNonZero(s.mask))) + " px of target";
+    if (s.touches_border) caption.details += ", touches the image's border";
+    caption.legend = {{kOuter, "outer contour", fba::vision::LegendMark::Line}};
+    if (!holes.empty()) caption.legend.push_back({kHole, "holes' contours (carved through)", fba::vision::LegendMark::Line});
     const auto file = overlay_dir_ / (name + ".png");
-    if (!cv::imwrite(file.string(), image)) ctx_.log().error("could not write {}", file.string());
+    if (!cv::imwrite(file.string(), fba::vision::captioned(image, caption))) ctx_.log().error("could not write {}", file.string());
   }
 
+  static inline const cv::Scalar kOuter{0, 255, 0};
+  static inline const cv::Scalar kHole{255, 0, 255};
   fba::Context& ctx_;
   fba::vision::ExtractionParams params_;
   std::filesystem::path overlay_dir_;
+  int views_written_ = 0;  // the overlays' view numbers, in arrival order
 };
 
 }  // namespace

@@ -18,8 +18,7 @@
 #include <fba/types/silhouette.hpp>
 
 #include "fba/geometry/mesh_io.hpp"
-#include "fba/geometry/renderer.hpp"
-#include "fba/geometry/viewpoints.hpp"
+#include "fba/vision/model_picture.hpp"
 #include "fba/vision/octree_carver.hpp"
 
 namespace {
@@ -80,6 +79,12 @@ class OctreeCarverFilter final : public fba::Component {
   static constexpr auto kMemoryBudgetMiB = fba::Param<double>(
       "memory_budget_mib", 4096, "MiB the model may use: a max_depth whose worst case exceeds it is refused, with the figure")
                                                .range(1, 1 << 20);
+  static constexpr auto kPlyLeaves = fba::Param<std::string>(
+      "ply_leaves", "seen",
+      "which occupied leaves model.ply holds: seen, those two views saw whole (the object as the views show it; space no view "
+      "could carve, such as the top of a root box no camera framed, is left out), or occupied, every one (the model as "
+      "synthesis and the checks use it)")
+                                         .choices({"seen", "occupied"});
   static constexpr fba::EventOut kBoundsEstimated{"bounds_estimated", "the root box was estimated from the first silhouettes; payload: the box"};
   static constexpr fba::EventOut kSuspectModel{
       "suspect_model",
@@ -102,7 +107,7 @@ class OctreeCarverFilter final : public fba::Component {
                              "Carves an octree model from silhouettes; refines where the occupancy or the grasp regions ask for it.")
         .add(kSilhouette, kRegions, kOctree, kMaxDepth, kMinNodeSize, kOccupancyThreshold, kGenericDepth, kGraspContour, kCurvatureThreshold,
              kSilhouetteTolerance, kCarveOutsideView, kCompareUniform, kBounds, kBoundsViews, kBoundsMargin, kDetailAfterViews, kDetailDepth,
-             kMemoryBudgetMiB, kBoundsEstimated, kSuspectModel, kModelWarning, kDetail, kUpdated)
+             kMemoryBudgetMiB, kPlyLeaves, kBoundsEstimated, kSuspectModel, kModelWarning, kDetail, kUpdated)
         .check(kBounds, [](const fba::ParamValues& p) {
           const auto b = p(kBounds);
           if (!b.empty() && !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
@@ -124,7 +129,8 @@ class OctreeCarverFilter final : public fba::Component {
         carver_(std::in_place, params(ctx)),
         bounds_views_(static_cast<std::size_t>(ctx(kBoundsViews))),
         margin_(ctx(kBoundsMargin)),
-        compare_uniform_(ctx(kCompareUniform)) {
+        compare_uniform_(ctx(kCompareUniform)),
+        ply_leaves_(ctx(kPlyLeaves) == "occupied" ? fba::vision::PlyLeaves::Occupied : fba::vision::PlyLeaves::Seen) {
     if (compare_uniform_) {
       // Uniform detail to the same depth: every node on the outline split, no grasp criteria.
       fba::vision::CarverParams p = carver_->params();
@@ -163,7 +169,8 @@ class OctreeCarverFilter final : public fba::Component {
         throw std::runtime_error("frame " + (s.frame ? std::to_string(s.frame->index) : std::string("?")) + " from '" +
                                  (s.frame ? s.frame->source : std::string()) +
                                  "' has no camera pose; the carver needs calibrated frames");
-      if (!first_camera_) first_camera_ = s.frame->camera;
+      cameras_.push_back(s.frame->camera);
+      if (object_.empty()) object_ = fba::vision::object_name(s.frame->source);
       views_.push_back(geometry_of(s));
       if (!has_bounds_) {
         pending_.push_back(s);  // the root box comes from the first few views together
@@ -197,23 +204,7 @@ class OctreeCarverFilter final : public fba::Component {
     check_model(*model);
     report_detail(*model);
     if (ctx_.output_dir().empty()) return;
-    // The outputs need only the model's surface, built once for both. Building and rendering it
-    // set the run's peak memory, so the carver (an integral image per view) and the checks' masks
-    // go first, and the tree once its surface is built: carve_dino's peak fell from 242 to 215 MiB
-    // (about 60 of them are OpenCV's libraries).
-    carver_.reset();
-    uniform_.reset();
-    views_ = {};
-    const fba::TriangleMesh surface = fba::vision::occupied_surface_mesh(*model);
-    const Eigen::AlignedBox3d bounds = model->bounds;
-    model.reset();
-    const auto ply = ctx_.output_dir() / "model.ply";
-    fba::geometry::write_ply(surface, ply);  // as vision::write_ply(model) writes it
-    ctx_.log().info("wrote {}", ply.string());
-    if (first_camera_) {
-      const auto png = ctx_.output_dir() / "model.png";
-      if (!cv::imwrite(png.string(), picture(surface, bounds, *first_camera_))) ctx_.log().error("could not write {}", png.string());
-    }
+    write_outputs(*model);
   }
 
  private:
@@ -221,27 +212,23 @@ class OctreeCarverFilter final : public fba::Component {
     return std::ranges::equal(a, b, [](const auto& x, const auto& y) { return x.min() == y.min() && x.max() == y.max(); });
   }
 
-  // The model seen from beside the first camera: turned 35 degrees around the model, raised 25
-  // and framed whole, lit from the upper left, so that its sides and voxel steps show.
-  static cv::Mat picture(const fba::TriangleMesh& surface, const Eigen::AlignedBox3d& bounds, const fba::CameraModel& first) {
-    const Eigen::Vector3d centre = bounds.center();
-    const Eigen::Matrix3d world_from_camera = first.camera_from_world.linear().transpose();
-    const Eigen::Vector3d up = -(world_from_camera * Eigen::Vector3d::UnitY());
-    Eigen::Vector3d eye = first.centre_in_world() - centre;
-    eye = Eigen::AngleAxisd(35 * M_PI / 180, up) * eye;
-    eye = Eigen::AngleAxisd(25 * M_PI / 180, up.cross(eye).normalized()) * eye;
-    // Far enough that the whole root box is in the picture, whatever the lens.
-    eye = eye.normalized() * fba::geometry::framing_distance(bounds, first.width, first.height,
-                                                             std::min(first.K(0, 0), first.K(1, 1)));
-    fba::CameraModel camera = first;
-    camera.camera_from_world = fba::geometry::look_at(centre + eye, centre, up);
-    fba::geometry::RenderOptions look;
-    look.object_colour = {200, 200, 200};
-    look.background_top = look.background_bottom = {255, 255, 255};
-    look.light_towards_world = (camera.camera_from_world.linear().transpose() * Eigen::Vector3d(-0.5, -0.8, -1.0)).normalized();
-    look.ambient = 0.3;
-    look.diffuse = 0.7;
-    return fba::geometry::render(surface, camera, look).colour;
+  // model.ply and the pictures (model.png, views.png). The carver and the checks' masks go first:
+  // building the surfaces and rendering them set the run's peak memory.
+  void write_outputs(const fba::Octree& model) {
+    carver_.reset();
+    uniform_.reset();
+    views_ = {};
+    const auto ply = ctx_.output_dir() / "model.ply";
+    fba::geometry::write_ply(fba::vision::ply_mesh(model, ply_leaves_, cameras_), ply);
+    ctx_.log().info("wrote {}", ply.string());
+    fba::vision::ModelPictureOptions o;
+    o.object = object_;
+    o.views = cameras_;
+    o.regions = last_regions_;
+    for (const auto& [name, picture] : {std::pair{"model.png", &fba::vision::model_picture}, std::pair{"views.png", &fba::vision::views_picture}}) {
+      const auto png = ctx_.output_dir() / name;
+      if (!cv::imwrite(png.string(), picture(model, o))) ctx_.log().error("could not write {}", png.string());
+    }
   }
 
   static fba::vision::CarverParams params(fba::Context& ctx) {
@@ -418,11 +405,13 @@ class OctreeCarverFilter final : public fba::Component {
   const std::size_t bounds_views_;
   const double margin_;
   const bool compare_uniform_;
+  const fba::vision::PlyLeaves ply_leaves_;
   bool has_bounds_ = false;
   std::vector<Eigen::AlignedBox3d> last_regions_;  // the regions of interest in force
   std::vector<fba::Silhouette> views_;  // every view so far (geometry_of): the checks at the end
   std::vector<fba::Silhouette> pending_;
-  std::optional<fba::CameraModel> first_camera_;
+  std::vector<fba::CameraModel> cameras_;  // the views' cameras, in arrival order: the PLY's and the pictures'
+  std::string object_;                     // the object's name, from the first frame's source
 };
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Reading results out of an Octree: leaves, surface mesh, PLY, re-projection, comparisons.
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <vector>
@@ -39,7 +40,7 @@ std::size_t mismatches(const fba::Octree& a, const fba::OctreeNode& na, const fb
 // level, so neighbours are found exactly and face corners are shared (welded) between faces.
 class SurfaceBuilder {
  public:
-  explicit SurfaceBuilder(const fba::Octree& t) : t_(t) {}
+  SurfaceBuilder(const fba::Octree& t, const LeafFilter& inside) : t_(t), inside_(inside) {}
 
   fba::TriangleMesh build() {
     if (t_.node_count == 0) return std::move(mesh_);
@@ -69,7 +70,7 @@ class SurfaceBuilder {
     const Step& st = path_[d];
     if (!occupied(*st.node)) return;
     if (st.node->is_leaf()) {
-      faces_of(d);
+      if (inside(*st.node, st.cell)) faces_of(d);
       return;
     }
     const fba::OctreeNode* c = t_.children(*st.node);
@@ -111,7 +112,7 @@ class SurfaceBuilder {
   // whole face when n is a leaf at least as large).
   void across(const fba::OctreeNode& n, const Cell& nc, int axis, int dir, int plane, const Cell& own) {
     if (n.is_leaf()) {
-      if (!occupied(n)) face(axis, dir, plane, nc.s < own.s ? nc : own);
+      if (!inside(n, nc)) face(axis, dir, plane, nc.s < own.s ? nc : own);
       return;
     }
     // Children on the near side: their `axis` bit is 0 when n lies on the + side of the face.
@@ -122,6 +123,14 @@ class SurfaceBuilder {
       if (((k >> axis) & 1) == near)
         across(c[k], Cell{{nc.x[0] + (k & 1) * h, nc.x[1] + ((k >> 1) & 1) * h, nc.x[2] + ((k >> 2) & 1) * h}, h}, axis,
                dir, plane, own);
+  }
+
+  // Whether leaf n (cell c) is in the solid: occupied, and kept by the filter if there is one.
+  bool inside(const fba::OctreeNode& n, const Cell& c) const {
+    if (!occupied(n)) return false;
+    if (!inside_) return true;
+    const int depth = finest_ - std::countr_zero(static_cast<unsigned>(c.s));
+    return inside_(t_.cell(depth, c.x[0] / c.s, c.x[1] / c.s, c.x[2] / c.s, n));
   }
 
   // A square in the plane axis = plane covering cell c's extent along the two other axes, two
@@ -183,6 +192,7 @@ class SurfaceBuilder {
   }
 
   const fba::Octree& t_;
+  const LeafFilter& inside_;
   int finest_ = 0;
   int n_ = 1;
   static constexpr std::uint64_t kNoKey = ~std::uint64_t(0);
@@ -201,11 +211,34 @@ std::vector<Eigen::AlignedBox3d> occupied_leaves(const fba::Octree& t) {
   return out;
 }
 
-fba::TriangleMesh occupied_surface_mesh(const fba::Octree& t) {
-  return SurfaceBuilder(t).build();
-}
+fba::TriangleMesh occupied_surface_mesh(const fba::Octree& t) { return SurfaceBuilder(t, {}).build(); }
+
+fba::TriangleMesh surface_mesh(const fba::Octree& t, const LeafFilter& keep) { return SurfaceBuilder(t, keep).build(); }
 
 void write_ply(const fba::Octree& t, const std::string& path) { geometry::write_ply(occupied_surface_mesh(t), path); }
+
+bool seen_by_two_views(const fba::OctreeCell& leaf, const std::vector<fba::CameraModel>& views) {
+  // A view sees the whole leaf when the projection of the sphere around it is inside the image:
+  // the carver never carves a node partly outside an image on that image's evidence.
+  const double radius = std::sqrt(3.0) * leaf.half_size;
+  auto sees = [&](const fba::CameraModel& camera) {
+    const Eigen::Vector3d p = camera.camera_from_world * leaf.centre;
+    if (p.z() <= radius) return false;
+    const double margin = camera.K(0, 0) * radius / (p.z() - radius);
+    const double u = camera.K(0, 0) * p.x() / p.z() + camera.K(0, 2), v = camera.K(1, 1) * p.y() / p.z() + camera.K(1, 2);
+    return u >= margin - 0.5 && v >= margin - 0.5 && u <= camera.width - 0.5 - margin && v <= camera.height - 0.5 - margin;
+  };
+  const std::ptrdiff_t need = std::min<std::ptrdiff_t>(2, std::ssize(views));
+  std::ptrdiff_t seen = 0;
+  for (const auto& v : views)
+    if (sees(v) && ++seen >= need) return true;
+  return need == 0;
+}
+
+fba::TriangleMesh ply_mesh(const fba::Octree& t, PlyLeaves leaves, const std::vector<fba::CameraModel>& views) {
+  if (leaves == PlyLeaves::Occupied) return occupied_surface_mesh(t);
+  return surface_mesh(t, [&](const fba::OctreeCell& c) { return seen_by_two_views(c, views); });
+}
 
 cv::Mat reproject_mask(const fba::Octree& t, const fba::CameraModel& cam) {
   // The renderer samples pixel centres, the rule the silhouettes follow (a rendered mask, or a

@@ -2,8 +2,13 @@
 // spread over the upper hemisphere, depth 6, table plane clipped.
 #include <gtest/gtest.h>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "evaluate.hpp"
+#include "fba/vision/model_picture.hpp"
 #include "support/geometry_checks.hpp"
+#include "support/pictures.hpp"
+#include "support/temp_dir.hpp"
 
 namespace fba::evaluate {
 namespace {
@@ -29,6 +34,29 @@ TEST_P(YcbCarve, EightHemisphereViewsReachIou090) {
   const SyntheticResult r = run(GetParam());
   RecordProperty("iou", std::to_string(r.voxels.iou));
   EXPECT_GE(r.voxels.iou, 0.90);
+}
+
+// With save_dir, each view's render and mask and the carved model's picture, each captioned.
+TEST(Evaluate, SavedPicturesAreCaptionedAndTheModelPictureFramesTheObject) {
+  fba::test::TempDir dir;
+  SyntheticParams p;
+  p.views = 3;
+  p.depth = 5;
+  p.save_dir = dir.path();
+  evaluate_synthetic(geometry::test::ycb_mesh("YcbMustardBottle"), p);
+  const std::string stem = "YcbMustardBottle_model";
+  for (int i = 0; i < 3; ++i)
+    for (const char* kind : {"_view", "_mask"}) {
+      const cv::Mat picture = cv::imread((dir.path() / (stem + kind + std::to_string(i) + ".png")).string());
+      ASSERT_FALSE(picture.empty()) << kind << i;
+      EXPECT_EQ(picture.size(), vision::captioned_size({p.width, p.height})) << kind << i;
+      EXPECT_GT(fba::test::legend_ink(picture), 0.01) << kind << i;
+    }
+  const cv::Mat model = cv::imread((dir.path() / (stem + "_carved.png")).string());
+  ASSERT_FALSE(model.empty());
+  EXPECT_EQ(model.size(), vision::captioned_size(vision::ModelPictureOptions{}.size));
+  EXPECT_GT(fba::test::legend_ink(model), 0.01);
+  EXPECT_GT(fba::test::object_share(model), 0.08);
 }
 
 INSTANTIATE_TEST_SUITE_P(Ycb, YcbCarve, ::testing::ValuesIn(geometry::test::kYcbNames));

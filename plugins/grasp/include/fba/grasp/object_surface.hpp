@@ -8,6 +8,7 @@
 #include <optional>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -43,6 +44,8 @@ class ObjectSurface {
   // Puts an approximate contact on the surface: the hit of the line through its position along its
   // normal that is nearest to the position; if that line misses the mesh, the closest surface point.
   Placement place(const GraspContact& approximate) const;
+  // Puts an approximate contact on the surface point closest to its position (along_normal false).
+  Placement place_closest(const GraspContact& approximate) const;
   // The surface point closest to p, with the inward normal of its triangle.
   GraspContact closest_point(const Eigen::Vector3d& p) const;
 
@@ -65,6 +68,25 @@ class ObjectSurface {
   double r_max_ = 0;
   Eigen::Vector3d com_ = Eigen::Vector3d::Zero();
 };
+
+// A grasp's three contacts put on the true surface one way, and the grasp's quality there.
+struct PlacedGrasp {
+  std::array<ObjectSurface::Placement, 3> contacts;
+  GraspQuality quality;
+  std::string degenerate;  // why the measure is undefined here (two contacts landed on one point), else ""
+};
+
+// A grasp placed on the true surface both ways: each contact along its normal line (place) and
+// each at its closest surface point (place_closest). Near an edge the two land on different faces
+// with different normals; the grasp counts as the worse, so that it is not judged by its kinder
+// placement.
+struct GraspOnSurface {
+  PlacedGrasp along_normal, closest;
+  // Not force closure before force closure, then the lower epsilon (along_normal on a tie).
+  const PlacedGrasp& worse() const;
+};
+GraspOnSurface place_grasp(const ObjectSurface& surface, const std::array<GraspContact, 3>& contacts,
+                           const QualityParams& params = {});
 
 struct RandomBaseline {
   std::size_t sets = 0;

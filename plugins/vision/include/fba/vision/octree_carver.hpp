@@ -189,9 +189,23 @@ std::vector<Eigen::AlignedBox3d> occupied_leaves(const fba::Octree&);
 // outward, with shared corners welded. Where a large occupied leaf meets smaller leaves, only the
 // parts against non-occupied ones are emitted, so no face lies inside the model.
 fba::TriangleMesh occupied_surface_mesh(const fba::Octree&);
+// Which occupied leaves a surface holds (true: kept); an empty filter keeps them all.
+using LeafFilter = std::function<bool(const fba::OctreeCell&)>;
+// The surface of the occupied leaves the filter keeps, built as occupied_surface_mesh builds its
+// own: the squares between a kept leaf and one that is not (left out, or not occupied).
+fba::TriangleMesh surface_mesh(const fba::Octree&, const LeafFilter& keep);
 // The one way to save an octree: occupied_surface_mesh written by geometry::write_ply (binary
 // PLY, opens in MeshLab). Throws std::runtime_error on I/O error.
 void write_ply(const fba::Octree&, const std::string& path);
+// Whether at least two of the views (every one, when fewer are given) see the whole leaf inside
+// their image. Elsewhere the model is bounded by one cone of sight at most: nothing there was seen
+// to be empty (the top of a root box no camera framed), so it is not carved, however it looks.
+bool seen_by_two_views(const fba::OctreeCell& leaf, const std::vector<fba::CameraModel>& views);
+// Which occupied leaves a model's PLY holds: Seen, those two views saw (seen_by_two_views: the
+// object as the views show it, without the space around it no view could carve); Occupied, all.
+enum class PlyLeaves { Seen, Occupied };
+// The surface a PLY of these leaves holds (surface_mesh's): write it with geometry::write_ply.
+fba::TriangleMesh ply_mesh(const fba::Octree&, PlyLeaves leaves, const std::vector<fba::CameraModel>& views);
 // The occupied space seen by the camera (ideal pinhole, 8U 0/255, camera size): a pixel is in
 // when its centre sees the model, as geometry::render samples it.
 cv::Mat reproject_mask(const fba::Octree&, const fba::CameraModel&);
