@@ -23,6 +23,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -36,8 +37,6 @@
 #include <atomic>
 #include <utility>
 #include <vector>
-
-#include "support/temp_dir.hpp"
 
 extern char** environ;
 
@@ -91,9 +90,9 @@ class Child {
  public:
   // args[0] is the program's path; throws when it cannot be started.
   explicit Child(std::vector<std::string> args, ChildOptions options = {})
-      : dir_(std::make_unique<TempDir>("child")), out_(dir_->path() / "output.txt") {
+      : dir_(make_output_dir()), out_(dir_ / "output.txt") {
     if (args.empty()) throw std::invalid_argument("Child: no program given");
-    if (options.stderr_apart) err_ = dir_->path() / "stderr.txt";
+    if (options.stderr_apart) err_ = dir_ / "stderr.txt";
     int terminal = -1, terminal_end = -1;  // the pseudo-terminal's master and slave
     if (options.terminal) {
       termios raw{};
@@ -154,6 +153,12 @@ class Child {
       ::kill(pid_, SIGKILL);
       ::waitpid(pid_, nullptr, 0);
     }
+    if (copier_.joinable()) {
+      copier_.request_stop();
+      copier_.join();
+    }
+    std::error_code ec;
+    std::filesystem::remove_all(dir_, ec);
   }
   Child(const Child&) = delete;
   Child& operator=(const Child&) = delete;
@@ -241,6 +246,15 @@ class Child {
     return r;
   }
 
+  // A folder of its own for the output files, under the temporary directory (not a
+  // support/temp_dir.hpp TempDir: benchmarks run programs too, without GoogleTest).
+  static std::filesystem::path make_output_dir() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "fba-child-XXXXXX").string();
+    if (!::mkdtemp(pattern.data()))
+      throw std::runtime_error("cannot create a temporary folder " + pattern + ": " + std::strerror(errno));
+    return pattern;
+  }
+
   // Copies what the child writes on the terminal to the output file, until the terminal's last
   // writer has closed it (read fails with EIO) or the Child goes.
   void copy_terminal(int terminal, std::stop_token stop) {
@@ -258,12 +272,12 @@ class Child {
     drained_ = true;
   }
 
-  std::unique_ptr<TempDir> dir_;  // holds the output files; removed after the child is reaped
+  std::filesystem::path dir_;  // holds the output files; removed when the Child goes
   std::filesystem::path out_;
   std::filesystem::path err_;
   pid_t pid_ = -1;
   std::atomic<bool> drained_ = true;  // false while a terminal's output is still being copied
-  std::jthread copier_;               // last: stopped and joined first when the Child goes
+  std::jthread copier_;               // stopped and joined before the output folder is removed
 };
 
 // Runs a program to its end: its status and output.

@@ -19,7 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "serve/live_client.hpp"
+#include "support/live_client.hpp"
 #include "support/build_paths.hpp"
 #include "support/child_process.hpp"
 

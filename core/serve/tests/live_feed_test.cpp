@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fba/view.hpp"
-#include "live_client.hpp"
+#include "support/live_client.hpp"
 #include "monitor.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "live_client.hpp"
+#include "support/live_client.hpp"
 #include "request_routing.hpp"
 #include "support/temp_dir.hpp"
 

@@ -14,7 +14,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "live_client.hpp"
+#include "support/live_client.hpp"
 #include "support/build_paths.hpp"
 #include "support/child_process.hpp"
 #include "support/temp_dir.hpp"
