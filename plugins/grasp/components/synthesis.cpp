@@ -212,7 +212,7 @@ class GraspSynthesisFilter final : public fba::Component {
       "reach_checks", 4,
       "with joint_state: at most this many candidates of one model are checked as far as the arm's inverse kinematics (tens of "
       "milliseconds each when there is no solution), best first; the ones after them are neither selected on that model nor passed "
-      "over (4: about 0.1 s a model at depth 6 on the grasp task, two threads)").range(1, 1000);
+      "over; at the last view (max_views) every candidate is checked, since no other model will come").range(1, 1000);
 #endif
 
   static fba::Spec spec() {
@@ -596,7 +596,8 @@ class GraspSynthesisFilter final : public fba::Component {
     if (!state) return reach;
     reach.active = true;
     reach.log = &ctx_.log();
-    reach.budget = static_cast<std::size_t>(reach_checks_);
+    // At the last view no other model will come to pick from: every candidate may be checked.
+    reach.budget = model.views >= max_views_ ? candidates.size() : static_cast<std::size_t>(reach_checks_);
     reach.state.assign(candidates.size(), -1);
     reach.ahead.resize(candidates.size());
     reach.parallel_for = params_.parallel_for;
