@@ -7,7 +7,6 @@
 #pragma once
 
 #include <functional>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,11 +48,5 @@ struct RobotHand {
 
 // The lowest point of a shape, world z.
 double lowest_z(const HandShape& shape);
-
-// The first shape of the hand posed for `grasp` that comes within `clearance` of the table at
-// world z `table_z`, as "thumb 4.2 mm into the table"-like text; or why the hand cannot take the
-// grasp; nullopt when the hand clears the table. Throws std::invalid_argument for a hand with no
-// pose function.
-std::optional<std::string> hand_table_refusal(const Grasp& grasp, const RobotHand& hand, double table_z, double clearance);
 
 }  // namespace fba::grasp
