@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <variant>
 #include <vector>
@@ -16,6 +17,10 @@
 
 #include "arm_model.hpp"
 #include "arm_ports.hpp"
+
+#ifdef FBA_ARM_COLLISION
+#include "fba/motion/robot_collision.hpp"
+#endif
 
 namespace fba::arm {
 
@@ -62,6 +67,11 @@ class ArmComponent : public fba::Component, public ArmPorts {
       fba::Param<int>("ik_attempts", 32, "IK starts: the current joints, then random seeds").range(1, 10000);
   static constexpr auto kPublishInitial = fba::Param<bool>(
       "publish_initial", true, "publish the joint state and camera pose where the arm starts, at the first tick");
+  static constexpr fba::Param<bool> kCollisionCheck{
+      "collision_check", true,
+      "a target's IK solution must keep the arm, its camera and the hand on its flange (the URDF's collision shapes, the hand "
+      "open) off the arm itself and the table: among the attempts, the nearest such solution is taken, so a view is reached "
+      "with the hand clear of the forearm; off: any solution within the limits"};
 
  protected:
   using Request = std::variant<fba::Pose, fba::JointState>;
@@ -97,8 +107,20 @@ class ArmComponent : public fba::Component, public ArmPorts {
   fba::Context& ctx_;
   const ArmModel model_;
   IkOptions ik_;
+#ifdef FBA_ARM_COLLISION
+  // The checks behind ik_.accept, on the chain to the flange (which they refer to): null when
+  // collision_check is off or the URDF has no palm.
+  std::unique_ptr<ArmModel> to_flange_;
+  std::unique_ptr<fba::motion::RobotCollision> collision_;
+#endif
 
  private:
+  // The links the collision check reads: the hand is mounted on the flange, at the palm.
+  static constexpr const char* kFlangeLink = "flange";
+  static constexpr const char* kPalmLink = "palm";
+  // Sets ik_.accept to the robot's collision check (collision_check).
+  void check_collisions(fba::Context& ctx);
+
   fba::Pose pose_at(const Eigen::VectorXd& q, std::int64_t stamp_ns) const;
   std::string joint_goal(const fba::JointState& js, const Eigen::VectorXd& from, Eigen::VectorXd& goal) const;
 

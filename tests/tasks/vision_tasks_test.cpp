@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <fba/registry.hpp>
@@ -187,6 +188,16 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   EXPECT_NE(component("carver").results.at("carving").find("\"nodes_visited\": "), std::string::npos);
   ASSERT_EQ(component("hand").results.count("lift"), 1u);
   EXPECT_EQ(component("hand").results.at("lift"), r.final_event->payload);
+  // The motor stage: reach planning's plan for the selected grasp, with the trajectory the arm and
+  // the hand were sent and each step's time.
+  ASSERT_EQ(component("reach").results.count("reach"), 1u);
+  const auto reach = nlohmann::json::parse(component("reach").results.at("reach"));
+  EXPECT_TRUE(reach.at("ok").get<bool>()) << reach.dump();
+  EXPECT_EQ(reach.at("trajectory").at("names").size(), 6u);
+  const auto& points = reach.at("trajectory").at("points");
+  ASSERT_GT(points.size(), 2u);
+  EXPECT_DOUBLE_EQ(points.back().at("t").get<double>(), reach.at("duration_s").get<double>());
+  for (const char* step : {"plan", "approach", "close", "lift", "hold"}) EXPECT_TRUE(reach.at("steps_s").contains(step)) << step;
   // Its stages' times: it waited for the arm in exploration_movement, and worked in grasp_synthesis.
   ASSERT_EQ(synthesis.stages.size(), 3u);
   EXPECT_EQ(synthesis.stages[2].first, "exploration_movement");

@@ -49,10 +49,11 @@ true mesh, stood where the run stood it, two ways: each contact along its normal
 its closest surface point (on an edge the two land on different faces). Each placement is evaluated
 (force closure, Ferrari-Canny epsilon: friction 0.5, 8 cone edges, torque / r_max) and the grasp
 counts as the worse of the two (FC_n/c gives both; runs.json's "placements" each contact of both);
-each mesh gets --random random contact sets for comparison. The table (also DIR/table.txt; every run's figures in DIR/runs.json) gives per
-variant, per object and overall: runs, % with a grasp selected, % of those force closure, their
-median epsilon against the random sets' 99th percentile, % held in the lift test, mean views
-until a grasp was selected, wall and CPU seconds per run, and octree nodes processed.
+each mesh gets --random random contact sets for comparison. The table (also DIR/table.txt; every
+run's figures in DIR/runs.json) gives per variant, per object and overall: runs, % with a grasp
+selected, % of those force closure, their median epsilon against the random sets' 99th
+percentile, % held in the lift test, mean views until a grasp was selected, wall and CPU seconds
+per run, octree nodes processed, and the grasps the two placements split on.
 
 LIST (paths relative to it):
   task: grasp.yaml                     the task file

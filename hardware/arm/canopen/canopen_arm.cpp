@@ -113,7 +113,7 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
                "targets with synchronised profile position moves, quick-stops on any fault.")
         .add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable, kDevice, kBitrate,
              kNodeIds, kCountsPerRad, kZeroCounts, kUrdf, kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate,
-             kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kHeartbeatPeriod, kHeartbeatTimeout,
+             kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kCollisionCheck, kHeartbeatPeriod, kHeartbeatTimeout,
              kSdoTimeout, kEnableTimeout, kResetFaults, kEmulator, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
         .check(kDevice, check_bus)
         .check(kEmulator, check_emulator)

@@ -43,7 +43,7 @@ class SimArm final : public fba::arm::ArmComponent {
                                "Simulated 6-joint arm with a wrist camera (URDF, Orocos KDL): moves to camera poses or joint targets "
                                "within the joint limits, in task time (the twin of hw.canopen_arm).")
         .add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable, kUrdf, kBaseLink, kCameraLink, kInitial, kSpeed,
-             kAcceleration, kRate, kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial);
+             kAcceleration, kRate, kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kCollisionCheck);
   }
 
   explicit SimArm(fba::Context& ctx) : ArmComponent(ctx) {

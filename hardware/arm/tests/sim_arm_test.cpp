@@ -16,6 +16,9 @@
 #include <fba/types/pose.hpp>
 
 #include "arm_model.hpp"
+#ifdef FBA_ARM_COLLISION
+#include "fba/motion/robot_collision.hpp"
+#endif
 #include "support/wrist_camera_arm.hpp"
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
@@ -374,3 +377,45 @@ TEST(SimArm, ATrajectoryThatDoesNotFitTheArmOrComesWhileItMovesIsRefused) {
   tick_until_arrived(h);
   EXPECT_EQ(named(h.events(), "arrived").size(), 1u);  // the joint target's move only
 }
+
+#ifdef FBA_ARM_COLLISION
+// Where the exploration looks from (a band of views around the object, as tasks/grasp.yaml's
+// planner places them), the arm takes a pose in which neither it, nor its camera, nor the hand on
+// its flange touches the arm itself or the table; without the check, the nearest IK solution puts
+// the hand into the forearm at some of those views.
+TEST(SimArm, ReachesEveryViewWithTheRobotClearOfItselfAndTheTable) {
+  const std::string urdf = fba::test::wrist_camera_arm_urdf();
+  const fba::arm::ArmModel to_flange(urdf, "world", "flange");
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(6);
+  const Eigen::Isometry3d flange_from_palm =
+      to_flange.forward(zero).inverse() * fba::arm::ArmModel(urdf, "world", "palm").forward(zero);
+  fba::motion::RobotCollision robot(to_flange, flange_from_palm);
+  const Eigen::Vector3d centre(0, 0, 0.05);
+  int reached_clear = 0, colliding_without = 0;
+  for (bool check : {true, false}) {
+    ComponentHarness h(built_plugins(), "sim.arm", {{"collision_check", check}}, {"target"});
+    tick(h);
+    for (double elevation : {20.0, 45.0, 70.0})
+      for (double azimuth = 0; azimuth < 360; azimuth += 30) {
+        fba::Pose view = looking_at_origin(elevation, azimuth, 0.3);
+        view.world_from_frame.translation() += centre;
+        const auto answers = [&] { return named(h.events(), "arrived").size() + named(h.events(), "unreachable").size(); };
+        const std::size_t before = answers(), arrived_before = named(h.events(), "arrived").size();
+        h.push<fba::Pose>("target", view);
+        for (int i = 0; i < 2000 && answers() == before; ++i) tick(h);
+        const auto arrived = named(h.events(), "arrived");
+        if (arrived.size() == arrived_before) continue;  // unreachable: the band's far side is beyond the arm
+        const auto joints = nlohmann::json::parse(arrived.back().payload)["joints"].get<std::vector<double>>();
+        const std::string hit = robot.collision(Eigen::Map<const Eigen::VectorXd>(joints.data(), 6));
+        if (check) {
+          EXPECT_EQ(hit, "") << "view at elevation " << elevation << ", azimuth " << azimuth;
+          ++reached_clear;
+        } else if (!hit.empty()) {
+          ++colliding_without;
+        }
+      }
+  }
+  EXPECT_GT(reached_clear, 18);      // most of the band is reached, and clear
+  EXPECT_GT(colliding_without, 0);   // the check is what keeps them clear
+}
+#endif

@@ -27,6 +27,11 @@
 #include <fba/vision/image_set.hpp>
 
 #include "fba/grasp/exploration.hpp"
+#if FBA_GRASP_REACH
+#include "arm_model.hpp"
+#include "fba/motion/reach_parameters.hpp"
+#include "fba/motion/robot_collision.hpp"
+#endif
 
 namespace {
 
@@ -66,6 +71,12 @@ class ExplorationPlanner final : public fba::Component {
   static constexpr fba::Param<bool> kGoodOnly{"good_only", true, "recorded, Middlebury: only the views with good silhouettes"};
   static constexpr auto kInitialViews = fba::Param<int>(
       "initial_views", 3, "on start: candidate 0 and its nearest candidates, for the initial analysis").range(1, 10000);
+#if FBA_GRASP_REACH
+  static constexpr fba::Param<bool> kReachableOnly{
+      "reachable_only", false,
+      "ring and hemisphere: keep only the candidate views the arm reaches with the robot clear of itself and the table (inverse "
+      "kinematics on the urdf's arm to its camera, with the arms' collision check), so that no view asked for is refused"};
+#endif
   static constexpr auto kMovementWeight = fba::Param<double>(
       "movement_weight", 0.1, "score = gain (the grazing gain of the request's points, else the share of its uncertain nodes seen) - movement_weight * (angle moved / 180 deg)").at_least(0);
   static constexpr auto kHalfFov =
@@ -89,6 +100,9 @@ class ExplorationPlanner final : public fba::Component {
              kPosesFrom, kGoodOnly, kInitialViews, kMovementWeight, kHalfFov, kMinGain, kMaxRays, kExcludeVisited, kViewChosen,
              kNoView)
         .add(kMinElevation <= kMaxElevation)
+#if FBA_GRASP_REACH
+        .add(kReachableOnly, fba::motion::ReachParameters::kUrdf)
+#endif
         .check([](const fba::ParamValues& p) {
           if (p(kViews) == "recorded" && p(kPosesFrom).empty())
             return std::string("views: recorded needs poses_from, the image set whose poses are the candidates; found none");
@@ -145,7 +159,34 @@ class ExplorationPlanner final : public fba::Component {
                                        ? fba::geometry::ring_views(ctx_(kCount), 0.5 * (lo + hi), ctx_(kDistance), centre)
                                        : fba::geometry::hemisphere_views(ctx_(kCount), lo, hi, ctx_(kDistance), centre);
     for (const auto& p : camera_from_world) candidates_.push_back(p.inverse());
+#if FBA_GRASP_REACH
+    if (ctx_(kReachableOnly)) keep_reachable();
+#endif
   }
+
+#if FBA_GRASP_REACH
+  // Drops the candidates the arm cannot take: no IK solution for its camera there, within the
+  // joint limits, with the arm, the camera and the hand clear of the arm itself and the table (the
+  // check sim.arm and hw.canopen_arm make before they move).
+  void keep_reachable() {
+    const std::filesystem::path urdf =
+        ctx_(fba::motion::ReachParameters::kUrdf).empty() ? fba::motion::default_urdf() : ctx_(fba::motion::ReachParameters::kUrdf);
+    const fba::arm::ArmModel to_camera(urdf, "world", "camera"), to_flange(urdf, "world", "flange");
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(to_flange.size()));
+    const Eigen::Isometry3d flange_from_palm = to_flange.forward(zero).inverse() * fba::arm::ArmModel(urdf, "world", "palm").forward(zero);
+    fba::motion::RobotCollision robot(to_flange, flange_from_palm);
+    fba::arm::IkOptions ik;
+    ik.accept = [&robot](const Eigen::VectorXd& q) { return robot.collision(q); };
+    std::vector<Eigen::Isometry3d> kept;
+    for (const auto& view : candidates_)
+      if (to_camera.inverse(view, zero, ik).ok) kept.push_back(view);
+    ctx_.log().info("{} of the {} candidate views are within the arm's reach ({})", kept.size(), candidates_.size(), urdf.string());
+    if (kept.empty())
+      throw std::runtime_error("reachable_only: none of the " + std::to_string(candidates_.size()) + " candidate views is within the reach of " +
+                               "the arm of " + urdf.string() + "; move the views (centre, distance, elevations) or the arm");
+    candidates_ = std::move(kept);
+  }
+#endif
 
   void start() {
     started_ = true;

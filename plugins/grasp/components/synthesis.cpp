@@ -44,6 +44,7 @@
 
 #include "fba/motion/reach_parameters.hpp"
 #include "fba/motion/reach_planner.hpp"
+#include "motion_hand.hpp"
 #endif
 
 namespace {
@@ -168,6 +169,11 @@ class GraspSynthesisFilter final : public fba::Component {
       "degrees the model's normals may be off the object's: a candidate must stay force closure with each normal turned this far "
       "(its friction cones narrowed to fit); 0: the model's normals are taken as true")
                                               .range(0, 24);
+  static constexpr auto kEdgeMarginMm = fba::Param<double>(
+      "edge_margin_mm", -1.0,
+      "millimetres: no contact nearer its graspable region's edge than this, measured over the region (the safety margin S3 as a "
+      "bound): a contact that lands off where the model puts it stays on its face. -1: the model's finest leaf edge, the error of a "
+      "surface two views' rims pin; 0: off").range(-1, 100);
   static inline const auto kTableZ = fba::Param<std::vector<double>>(
       "table_z", {}, "[z]: the table the object stands on (world z, up); grasps whose hand would reach into it are left out. "
       "Empty: no table")
@@ -197,11 +203,16 @@ class GraspSynthesisFilter final : public fba::Component {
       "no candidate on the model is reachable by the arm; synthesis asks for views as when none is reliable. "
       "Payload (JSON): views, candidates, checked, passed_over (per refusal: count and an example reason), unchecked (beyond "
       "reach_checks), seconds"};
+  static constexpr auto kRobotHand = fba::Param<bool>(
+      "robot_hand", true,
+      "the table is checked on the robot's own hand as reach planning poses it (palm and finger links at the pregrasp, at the grasp "
+      "and closed), and a grasp whose pads would put the fingers into the table is taken as a fingertip pinch; false: synthesis's "
+      "approximate hand, approaching from above or level");
   static constexpr auto kReachChecks = fba::Param<int>(
       "reach_checks", 4,
       "with joint_state: at most this many candidates of one model are checked as far as the arm's inverse kinematics (tens of "
       "milliseconds each when there is no solution), best first; the ones after them are neither selected on that model nor passed "
-      "over (4: about 0.1 s a model at depth 6 on the grasp task, two threads)").range(1, 1000);
+      "over; at the last view (max_views) every candidate is checked, since no other model will come").range(1, 1000);
 #endif
 
   static fba::Spec spec() {
@@ -216,7 +227,7 @@ class GraspSynthesisFilter final : public fba::Component {
 #endif
     );
     spec.add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -226,7 +237,7 @@ class GraspSynthesisFilter final : public fba::Component {
         .stages({"visual_analysis", "grasp_synthesis", "exploration_movement"},
                 {{"visual_analysis", "grasp_synthesis"}, {"grasp_synthesis", "exploration_movement"}, {"exploration_movement", "grasp_synthesis"}});
 #if FBA_GRASP_REACH
-    spec.add(kJointState, kUnreachable, kReachChecks);
+    spec.add(kJointState, kUnreachable, kReachChecks, kRobotHand);
     fba::motion::ReachParameters::add(spec);  // motion.reach_planner's, declared once
 #endif
     return spec;
@@ -243,11 +254,15 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);
     ply_leaves_ = ctx(kPlyLeaves) == "occupied" ? fba::vision::PlyLeaves::Occupied : fba::vision::PlyLeaves::Seen;
+    edge_margin_ = ctx(kEdgeMarginMm) / 1000;
     params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first
     // The model's surface and the search borrow the task's threads, as carving does: the loop waits
     // on each analysis, and the other core would sit idle.
     params_.parallel_for = ctx.thread_pool().as_parallel_for();
 #if FBA_GRASP_REACH
+    // The table is checked on the robot's own hand, as reach planning poses it.
+    const fba::motion::ReachParams reach_params = fba::motion::ReachParameters::read(ctx);
+    if (ctx(kRobotHand)) params_.robot_hand = fba::grasp::motion_hand(reach_params.standoff, reach_params.clearance);
     // The arm's reach, when its joints are wired: the planner's check, with its parameters.
     if (ctx(kJointState).connected()) {
       // Whether the arm reaches a candidate, not yet how: the grasp alone (its pregrasp, approach and
@@ -312,6 +327,7 @@ class GraspSynthesisFilter final : public fba::Component {
     if (rim_deg_ > 0 && !rims.empty()) fba::grasp::mark_unobserved(observed.samples, rims, surface.finest_edge, rim_deg_, rim_separation_deg_);
     fba::grasp::SynthesisParams p = params_;
     p.neighbour_radius = surface.radius;
+    p.edge_margin = edge_margin_ >= 0 ? edge_margin_ : surface.finest_edge;
     const fba::grasp::SynthesisResult r = fba::grasp::synthesise(observed.samples, p);
 
     // The candidates come reliable first, the most stable on the model first: not by total.
@@ -389,9 +405,11 @@ class GraspSynthesisFilter final : public fba::Component {
                ", S4 curvature " + fixed(c.grasp.scores.curvature) + ")";
       };
       if (r.candidates.empty()) {  // what removed them, not a best total of nothing
-        if (r.below_table > 0)
+        if (r.below_table > 0 || r.hand_unfit > 0 || r.too_low > 0)
           return fail(reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
-                      " would put the hand into the table" + passed);
+                      " would put the hand into the table (as a pinch too), " + std::to_string(r.hand_unfit) +
+                      " wider than the hand takes; " + std::to_string(r.too_low) +
+                      " surface samples too low for a finger to touch above the table" + passed);
         if (r.hand_blocked > 0 || r.not_force_closure > 0)
           return fail(reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) +
                       " blocked by the model in the hand's way, " + std::to_string(r.not_force_closure) +
@@ -578,7 +596,8 @@ class GraspSynthesisFilter final : public fba::Component {
     if (!state) return reach;
     reach.active = true;
     reach.log = &ctx_.log();
-    reach.budget = static_cast<std::size_t>(reach_checks_);
+    // At the last view no other model will come to pick from: every candidate may be checked.
+    reach.budget = model.views >= max_views_ ? candidates.size() : static_cast<std::size_t>(reach_checks_);
     reach.state.assign(candidates.size(), -1);
     reach.ahead.resize(candidates.size());
     reach.parallel_for = params_.parallel_for;
@@ -701,6 +720,7 @@ class GraspSynthesisFilter final : public fba::Component {
   const double radius_;
   const double rim_deg_;
   const double rim_separation_deg_;
+  double edge_margin_ = 0;  // metres; negative: the model's finest leaf edge
   std::vector<fba::grasp::SilhouetteRim> rims_;   // the posed silhouettes' rims, in arrival order
   std::shared_ptr<const fba::Frame> last_frame_;  // the last posed view: the pictures of the grasp are drawn on it
   std::vector<fba::CameraModel> views_;           // the posed views' cameras, in arrival order: the pictures' views

@@ -38,6 +38,7 @@ json grasp_to_json(const Grasp& g) {
           {"approach", vec(g.approach)},
           {"spread", g.spread},
           {"aperture", g.aperture},
+          {"pinch_depth", g.pinch_depth},
           {"scores",
            {{"symmetry", g.scores.symmetry},
             {"safety_margin", g.scores.safety_margin},
@@ -63,6 +64,7 @@ Grasp grasp_from_json(const json& j, const std::string& where) {
   if (j.contains("approach")) g.approach = read_vec(j["approach"], where + ".approach");
   g.spread = read_number(j, "spread", where);
   g.aperture = read_number(j, "aperture", where);
+  g.pinch_depth = read_number(j, "pinch_depth", where);
   if (j.contains("scores")) {
     const json& s = j["scores"];
     if (!s.is_object()) fail(where + ".scores", "an object", s);

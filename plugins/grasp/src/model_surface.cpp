@@ -120,16 +120,20 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
     for (std::size_t i = begin; i < end; ++i) neighbours[i] = face_neighbours(model, leaves, leaves.cells[i]);
   });
 
-  // The object, with a table: the occupied leaves joined through shared faces to one that reaches
-  // down to it. A pillar the views could not carve stays joined; space above the object that no
-  // view saw (carving keeps it: nothing there was seen to be empty), cut off from the object by
-  // carved space, does not.
+  // The object, with a table: the occupied leaves joined through shared faces to one that stands
+  // on it. A pillar the views could not carve stays joined; space above the object that no view saw
+  // (carving keeps it: nothing there was seen to be empty), cut off from the object by carved space
+  // centimetres above the table, does not. A leaf stands on the table when its bottom lies within
+  // one of its edges of it: an object that touches the table on a small patch or a point (a sphere,
+  // an ellipsoid) has only a leaf or two there, and the carver judges a leaf by its centre, which
+  // beside such a contact lies outside the object (under a sphere's lowest point), so the leaf that
+  // straddles the table is carved and the object's lowest leaf stands up to an edge above it.
   std::vector<char> object(leaves.cells.size(), params.table_z ? 0 : 1);
   if (params.table_z) {
     std::vector<std::int32_t> queue;
     for (std::size_t i = 0; i < leaves.cells.size(); ++i) {
       const OctreeCell& c = leaves.cells[i];
-      if (c.centre.z() - c.half_size <= *params.table_z) object[i] = 1, queue.push_back(std::int32_t(i));
+      if (c.centre.z() - 3 * c.half_size <= *params.table_z) object[i] = 1, queue.push_back(std::int32_t(i));
     }
     while (!queue.empty()) {
       const FaceNeighbours& f = neighbours[std::size_t(queue.back())];

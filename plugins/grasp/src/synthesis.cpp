@@ -52,6 +52,9 @@ void check_params(const SynthesisParams& p) {
   require(p.sharp_curvature >= 0, "sharp_curvature must be >= 0, found " + num(p.sharp_curvature));
   require(p.curvature_scale > 0, "curvature_scale must be > 0, found " + num(p.curvature_scale));
   require(p.safety_reference >= 0, "safety_reference must be >= 0, found " + num(p.safety_reference));
+  require(p.edge_margin >= 0 && std::isfinite(p.edge_margin), "edge_margin must be finite and >= 0, found " + num(p.edge_margin));
+  require(p.robot_hand.pinch_depth >= 0 && std::isfinite(p.robot_hand.pinch_depth),
+          "robot_hand.pinch_depth must be finite and >= 0, found " + num(p.robot_hand.pinch_depth));
   require(p.thumb_alignment_deg > 0 && p.thumb_alignment_deg <= 90,
           "thumb_alignment_deg must be in (0, 90], found " + num(p.thumb_alignment_deg));
   require(p.finger_alignment_deg > 0 && p.finger_alignment_deg <= 90,
@@ -216,6 +219,32 @@ std::optional<std::size_t> hand_path_blocked(const Grasp& g, const HandGeometry&
   return SampleCells(samples, hand.finger_width).hand_path_blocked(g, hand, tolerance);
 }
 
+namespace {
+
+enum class TableFit { Clear, Table, Unfit };
+
+// Whether the robot's hand takes `g` clear of the table: on its pads, else as the deepest pinch it
+// takes (written into g.pinch_depth), which stands the hand back so that the fingertips end
+// nearest the contacts' level.
+TableFit table_fit(Grasp& g, const RobotHand& hand, double table_z, double clearance) {
+  auto fit = [&] {
+    const PosedHand posed = hand.pose(g);
+    if (!posed.why.empty()) return TableFit::Unfit;
+    for (const HandShape& shape : posed.shapes)
+      if (lowest_z(shape) < table_z + clearance) return TableFit::Table;
+    return TableFit::Clear;
+  };
+  g.pinch_depth = 0;
+  const TableFit on_pads = fit();
+  if (on_pads != TableFit::Table || hand.pinch_depth <= 0) return on_pads;
+  g.pinch_depth = hand.pinch_depth;
+  const TableFit pinch = fit();
+  if (pinch != TableFit::Clear) g.pinch_depth = 0;
+  return pinch;
+}
+
+}  // namespace
+
 void estimate_curvature(std::span<SurfaceSample> samples, double radius, const ParallelFor& parallel_for) {
   require(radius > 0, "curvature radius must be > 0, found " + num(radius));
   const std::vector<std::vector<std::size_t>> nb = NeighbourGrid(samples, radius).neighbourhoods(false, parallel_for);
@@ -338,13 +367,21 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
     return ra.uncertain_share * ra.samples.size() > rb.uncertain_share * rb.samples.size();
   });
 
-  // Candidates: a thumb opposing two fingers, within the hand's reach.
+  // Candidates: a thumb opposing two fingers, within the hand's reach, each contact at least the
+  // edge margin inside its region and high enough for a finger to touch above the table.
   std::vector<std::size_t> pool;
-  for (std::size_t i = 0; i < n; ++i)
-    if (region_of[i] != kNone) pool.push_back(i);
-  if (pool.size() < 3) return result;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (region_of[i] == kNone) continue;
+    const bool near_edge = result.boundary_distance[i] < p.edge_margin;
+    const bool too_low = !near_edge && p.table_z && p.robot_hand.finger_radius > 0 &&
+                         s[i].position.z() - p.robot_hand.finger_radius * (1 - s[i].normal.z()) < *p.table_z + p.table_clearance;
+    result.near_edge += near_edge;
+    result.too_low += too_low;
+    if (!near_edge && !too_low) pool.push_back(i);
+  }
   std::mt19937 rng(0);  // a fixed shuffle: an even, reproducible subset of the surface
   std::shuffle(pool.begin(), pool.end(), rng);
+  if (pool.size() < 3) return result;
   const std::vector<std::size_t> thumbs(pool.begin(), pool.begin() + std::min(pool.size(), p.max_thumbs));
 
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -369,7 +406,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   // Each thumb's candidates apart, at once with a parallel_for, then in the thumbs' order: the same
   // list whatever the threads.
   std::vector<std::vector<GraspCandidate>> per_thumb(thumbs.size());
-  std::vector<std::size_t> below_table(thumbs.size(), 0);
+  std::vector<std::size_t> below_table(thumbs.size(), 0), hand_unfit(thumbs.size(), 0);
   auto search = [&](std::size_t ti) {
     const std::size_t t = thumbs[ti];
     std::vector<GraspCandidate>& all = per_thumb[ti];
@@ -431,7 +468,14 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
         g.approach = normal.dot(preferred) >= 0 ? normal : Eigen::Vector3d(-normal);
         g.spread = spread;
         g.aperture = std::min(aperture + hand.finger_width, hand.aperture_max + hand.finger_width);
-        if (p.table_z) {
+        if (p.table_z && p.robot_hand) {
+          // The robot's own hand at each pose, whatever the approach: on the pads, else as a pinch.
+          const TableFit fit = table_fit(g, p.robot_hand, *p.table_z, p.table_clearance);
+          if (fit != TableFit::Clear) {
+            ++(fit == TableFit::Unfit ? hand_unfit : below_table)[ti];
+            continue;
+          }
+        } else if (p.table_z) {
           // From above or level only: from below, the hand would come through the table.
           if (g.approach.z() > 1e-9) g.approach = -g.approach;
           const double floor = *p.table_z + p.table_clearance;
@@ -457,6 +501,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   std::vector<GraspCandidate> all;
   for (std::size_t ti = 0; ti < thumbs.size(); ++ti) {
     result.below_table += below_table[ti];
+    result.hand_unfit += hand_unfit[ti];
     std::move(per_thumb[ti].begin(), per_thumb[ti].end(), std::back_inserter(all));
   }
   std::stable_sort(all.begin(), all.end(),

@@ -298,6 +298,36 @@ TEST(ModelSurface, OnATableTheObjectIsWhatRestsOnIt) {
   EXPECT_EQ(count(s, [](double z) { return z > 0.01 && z < 0.05; }), count(all, [](double z) { return z > 0.01 && z < 0.05; }));
 }
 
+// A sphere touches the table at one point. A leaf is occupied when its centre is inside (the
+// carver's leaf test): the leaves that straddle the table under the contact have their centres
+// below the sphere, so none of the model reaches down to the table; its lowest leaves stand a
+// fraction of an edge above it. The sphere is the object still; a block floating over it, cut off
+// by carved space, is not, nor one that floats a few leaves above the table.
+TEST(ModelSurface, AnObjectTouchingTheTableAtAPointIsTheObjectAndWhatFloatsIsNot) {
+  const Eigen::AlignedBox3d workspace(Eigen::Vector3d(-0.13, -0.13, -0.02), Eigen::Vector3d(0.13, 0.13, 0.24));  // the grasp task's
+  const double r = 0.03;
+  const test::Sdf sphere = test::sphere_sdf({0, 0, r}, r);
+  const test::Sdf above = test::box_sdf({0, 0, 0.16}, {0.08, 0.08, 0.04});
+  const test::Sdf beside = test::box_sdf({0.08, 0, 0.03}, {0.02, 0.02, 0.02});  // z 0.02 .. 0.04, five leaves up
+  const Octree model = test::voxelise([&](const Eigen::Vector3d& p) { return std::min({sphere(p), above(p), beside(p)}); }, workspace, 6);
+  double lowest = INFINITY;
+  model.for_each_occupied_leaf([&](const OctreeCell& c) { lowest = std::min(lowest, c.centre.z() - c.half_size); });
+  ASSERT_GT(lowest, 0.0);  // nothing reaches down to the table
+  ASSERT_LT(lowest, workspace.sizes().x() / 64);
+
+  ModelSurfaceParams params;
+  params.table_z = 0.0;
+  const ModelSurface s = model_surface(model, params);
+  ASSERT_FALSE(s.samples.empty());
+  Eigen::AlignedBox3d kept;
+  for (const auto& x : s.samples) kept.extend(x.position);
+  EXPECT_GT(kept.max().z(), 2 * r - 0.004);  // the sphere's top
+  EXPECT_LT(kept.max().z(), 2 * r + 0.004);  // and not the block above it
+  EXPECT_LT(kept.max().x(), r + 0.004);      // nor the block beside it
+  EXPECT_LT(kept.min().z(), 0.004);          // down to its lowest point
+  EXPECT_GT(s.unsupported_leaves, 0u);
+}
+
 TEST(ModelSurface, AnEmptyModelHasNoSurface) {
   Octree empty;
   empty.bounds = kCube;

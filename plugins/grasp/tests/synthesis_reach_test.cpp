@@ -34,13 +34,14 @@ bool same_contacts(const fba::Grasp& a, const fba::Grasp& b) {
 // one and those like it, and selects a worse one the arm reaches.
 TEST(GraspSynthesisReach, TheBestCandidateWhosePalmWouldGoIntoTheTableIsPassedOverForAReachableOne) {
   const std::vector<double> box = reach::standing({0.06, 0.06, 0.06});
-  const reach::Outcome before = reach::synthesise(box, {});
+  const std::string margin = "edge_margin_mm: 0";  // the scene's best candidate lies near an edge of the box
+  const reach::Outcome before = reach::synthesise(box, {}, margin);
   ASSERT_EQ(before.grasps.size(), 1u) << before.run.reason;
   const fba::motion::ReachPlan refused = reach_planner().reachable(before.grasps[0], reach::box_model_of(box), home());
   ASSERT_EQ(refused.refusal, fba::motion::Refusal::Table) << refused.why;
   ASSERT_EQ(refused.why, "the pregrasp puts the palm into the table");
 
-  const reach::Outcome after = reach::synthesise(box, home());
+  const reach::Outcome after = reach::synthesise(box, home(), margin);
   ASSERT_EQ(after.grasps.size(), 1u) << after.run.reason;
   EXPECT_FALSE(same_contacts(after.grasps[0], before.grasps[0]));
   const fba::motion::ReachPlan plan = reach_planner().plan(after.grasps[0], reach::box_model_of(box), home());
@@ -62,7 +63,9 @@ TEST(GraspSynthesisReach, TheBestCandidateWhosePalmWouldGoIntoTheTableIsPassedOv
 // reaches.
 TEST(GraspSynthesisReach, TheBestCandidateBehindTheObjectBeyondTheArmsReachIsPassedOver) {
   const std::vector<double> box = reach::standing({0.06, 0.06, 0.14}, 0.08);
-  const std::string table = "table_z: [0.001]";  // the box's lowest leaves reach down to it
+  // The box's lowest leaves reach down to the table. The scene's far-side grasp is one synthesis's
+  // approximate hand keeps clear of the table (the robot's hand, with its clearance, refuses it).
+  const std::string table = "table_z: [0.001], edge_margin_mm: 0, robot_hand: false";
   const reach::Outcome before = reach::synthesise(box, {}, table);
   ASSERT_EQ(before.grasps.size(), 1u) << before.run.reason;
   EXPECT_LT(before.grasps[0].approach.x(), -0.9);  // from the far side, towards the arm

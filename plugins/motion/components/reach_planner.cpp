@@ -36,6 +36,14 @@ nlohmann::json pose_json(const Eigen::Isometry3d& t) {
   return {{"position", {p.x(), p.y(), p.z()}}, {"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
 }
 
+// The trajectory as summary.json carries it: the joints' names, and each waypoint's time and
+// positions (velocities follow from them).
+nlohmann::json trajectory_json(const fba::JointTrajectory& t) {
+  nlohmann::json points = nlohmann::json::array();
+  for (const auto& p : t.points) points.push_back({{"t", p.time}, {"positions", p.positions}});
+  return {{"names", t.names}, {"points", std::move(points)}};
+}
+
 class ReachPlannerFilter final : public fba::Component {
  public:
   static constexpr fba::In<fba::Grasp> kGrasp{"grasp", "the grasp to take (world frame, the table at z = 0)"};
@@ -158,6 +166,7 @@ class ReachPlannerFilter final : public fba::Component {
     figures["pregrasp_joints"] = values(plan.pregrasp_joints);
     figures["opening_m"] = plan.opening;
     figures["spread_m"] = plan.spread;
+    figures["trajectory"] = trajectory_json(plan.trajectory);
     if (!refused_.empty()) figures["refused"] = refused_;
     ctx_.report("reach", figures.dump());
     ctx_.log().info("reach planned: {:.2f} s of motion, path {:.2f} rad ({} waypoints{}) found in {:.3f} s",

@@ -35,8 +35,12 @@ std::vector<std::shared_ptr<const fba::Frame>> dino_frames(int n) {
   return out;
 }
 
+// The mask as contour extraction gives it: touches_border when the target reaches the image's edge.
 fba::Silhouette silhouette(std::shared_ptr<const fba::Frame> frame, cv::Mat mask) {
   fba::Silhouette s;
+  const int last_row = mask.rows - 1, last_col = mask.cols - 1;
+  s.touches_border = cv::countNonZero(mask.row(0)) + cv::countNonZero(mask.row(last_row)) + cv::countNonZero(mask.col(0)) +
+                         cv::countNonZero(mask.col(last_col)) > 0;
   s.mask = std::move(mask);
   s.frame = std::move(frame);
   return s;

@@ -194,15 +194,25 @@ TEST(ConservativeCarve, SphereWithPerfectSilhouettesKeepsEveryVoxelWhoseCentreIs
   }
 }
 
-TEST(PartlyOutsideImage, NodeIsNotCarvedByAViewWhoseObjectLeavesTheImage) {
-  // One camera at the origin looking along +z; the silhouette is all background here, but the
-  // object leaves the image (touches_border), so what lies outside it is unknown.
+namespace {
+
+// A 100 x 100 silhouette of nothing, seen by a camera at the origin looking along +z.
+fba::Silhouette background_at_origin() {
   auto frame = std::make_shared<fba::Frame>();
   frame->camera.width = 100, frame->camera.height = 100;
   frame->camera.K << 100, 0, 50, 0, 100, 50, 0, 0, 1;
   fba::Silhouette s;
   s.mask = cv::Mat::zeros(100, 100, CV_8UC1);
   s.frame = frame;
+  return s;
+}
+
+}  // namespace
+
+TEST(PartlyOutsideImage, NodeIsNotCarvedByAViewWhoseObjectLeavesTheImage) {
+  // The silhouette is all background here, but the object leaves the image (touches_border),
+  // so what lies outside it is unknown.
+  fba::Silhouette s = background_at_origin();
   s.touches_border = true;
   const Eigen::Vector3d h = Eigen::Vector3d::Constant(0.1);
   for (double tolerance : {0.0, CarverParams{}.silhouette_tolerance}) {
@@ -230,13 +240,8 @@ TEST(PartlyOutsideImage, NodeIsNotCarvedByAViewWhoseObjectLeavesTheImage) {
 // image's border, or wholly outside it, is carved by it (carve_outside_view), by the fast carver
 // and the reference alike; with the option off it is not.
 TEST(PartlyOutsideImage, NodeIsCarvedByAViewThatSawTheWholeObject) {
-  auto frame = std::make_shared<fba::Frame>();
-  frame->camera.width = 100, frame->camera.height = 100;
-  frame->camera.K << 100, 0, 50, 0, 100, 50, 0, 0, 1;
-  fba::Silhouette s;
-  s.mask = cv::Mat::zeros(100, 100, CV_8UC1);
+  fba::Silhouette s = background_at_origin();
   cv::circle(s.mask, {50, 50}, 10, cv::Scalar(255), cv::FILLED);  // the object, inside the image
-  s.frame = frame;
   const Eigen::Vector3d h = Eigen::Vector3d::Constant(0.1);
   for (const Eigen::Vector3d centre : {Eigen::Vector3d(-0.5, 0, 1), Eigen::Vector3d(-2.0, 0, 1)}) {  // straddling; outside
     CarverParams p;

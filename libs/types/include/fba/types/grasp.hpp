@@ -35,6 +35,11 @@ struct Grasp {
   // clearance.
   double spread = 0;
   double aperture = 0;
+  // Where on the fingers the contacts lie: metres along the approach beyond the pads. 0: on the
+  // pads; more: towards the fingertips, a pinch (the Robotiq's pinch mode), the hand that much
+  // farther back, so that the fingers reach no lower than the contacts less a fingertip's radius
+  // (a low object is taken from above without the fingers meeting the table).
+  double pinch_depth = 0;
   GraspScores scores;
   std::vector<int> views;  // indices of the views whose model the grasp was synthesised on
   double stamp = 0.0;      // seconds, on the producer's clock
@@ -44,4 +49,4 @@ struct Grasp {
 
 FBA_DATA_TYPE(fba::Grasp, "fba.Grasp",
               "Three contacts (thumb first; world positions, inward normals), approach, pregrasp "
-              "(spread, aperture) and the S1/S3/S4 scores with their total.");
+              "(spread, aperture), where on the fingers the contacts lie (pinch_depth) and the S1/S3/S4 scores with their total.");

@@ -24,7 +24,8 @@ struct ModelSurfaceParams {
   // World z of the table the object rests on, when known. Carving keeps what no view saw, as
   // nothing there was seen to be empty: space out of every image (often above the object, at the
   // top of the root box) and the silhouettes' cones under the table. With a table, only the leaves
-  // joined through shared faces to one that reaches down to it are the object, and only above it.
+  // joined through shared faces to one that stands on it (its bottom within one of its edges of the
+  // table: a sphere's lowest leaf may stand that high) are the object, and only above it.
   std::optional<double> table_z;
   ParallelFor parallel_for;  // the leaves' faces, the normals' fits and the neighbourhoods
 };

@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 
+#include "fba/grasp/robot_hand.hpp"
 #include "fba/parallel_for.hpp"
 #include "fba/types/grasp.hpp"
 
@@ -66,6 +67,11 @@ struct SynthesisParams {
   double curvature_scale = 25;
   // S3: a contact this far (metres) from its region's boundary scores 1; 0 means finger_width.
   double safety_reference = 0;
+  // Metres: no contact nearer its region's boundary than this, measured over the region's surface
+  // (the paper's safety margin S3 as a bound, not only a score): a contact that lands that far from
+  // where the model puts it, by the model's error or the hand's, is still on the same face, pushing
+  // along the normal the grasp was chosen for, not over an edge. 0: off.
+  double edge_margin = 0;
   // Opposition: the thumb pushes within thumb_alignment_deg of the thumb-to-fingers axis, each
   // finger within finger_alignment_deg of the opposite direction (60 degrees is three contacts
   // 120 degrees apart), and the fingers' resultant within balance_deg of it, so that their sideways
@@ -90,6 +96,12 @@ struct SynthesisParams {
   // palm stay table_clearance above the table.
   std::optional<double> table_z;
   double table_clearance = 0.003;
+  // The robot's hand (robot_hand.hpp). With table_z, whether the hand reaches into the table is
+  // checked on its real shapes at each pose it takes (pregrasp, grasp, closed), whatever the
+  // approach, and a candidate whose pads would put the fingers into the table is taken as a
+  // fingertip pinch when that clears it (Grasp::pinch_depth up to the hand's). Without it,
+  // HandGeometry's model, approaching from above or level.
+  RobotHand robot_hand;
   double pregrasp_distance = 0.05;  // metres back along the approach where the hand starts
   // The hand's way to its contacts on the model: each finger, opened to the grasp's aperture, runs
   // along the approach and closes across it onto its contact; a model sample that stands more than
@@ -151,6 +163,9 @@ struct SynthesisResult {
   std::vector<double> boundary_distance;   // per input sample: distance to its region's boundary (m), 0 if none
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // the object's centre used (S1, force closure)
   std::size_t below_table = 0;  // candidates left out because the hand would reach into the table
+  std::size_t hand_unfit = 0;    // candidates the robot's hand cannot take at all (SynthesisParams::robot_hand)
+  std::size_t near_edge = 0;     // surface samples not taken as contacts: nearer a region's boundary than edge_margin
+  std::size_t too_low = 0;       // surface samples not taken as contacts: a finger touching them would reach into the table
   std::size_t hand_blocked = 0;  // candidates left out because the model is in the hand's way
   std::size_t not_force_closure = 0;  // candidates left out as not force closure (or too little epsilon) on the model
 };

@@ -1,0 +1,45 @@
+// The robot's hand for grasp synthesis's table check (fba::grasp::RobotHand), from reach planning's
+// description of it (fba::motion: hand_parts(), whose dimensions are the URDF's, and place_hand(),
+// the palm's placement the planner and the lift test use): the hand synthesis keeps off the table
+// is the one the arm carries. Header-only: the plugin and its tests link fba::motion, the grasp
+// library does not.
+#pragma once
+
+#include <vector>
+
+#include "fba/grasp/robot_hand.hpp"
+#include "fba/motion/hand_geometry.hpp"
+#include "fba/motion/hand_placement.hpp"
+
+namespace fba::grasp {
+
+// `standoff`: metres back along the approach where the pregrasp is; `clearance`: between each pad
+// and its contact there (fba::motion::ReachParams' standoff and clearance).
+inline RobotHand motion_hand(double standoff, double clearance) {
+  RobotHand hand;
+  // A pinch puts the contacts on the distal phalanx's straight part up to its end: beyond that the
+  // cap curves away and would push down on the object.
+  hand.pinch_depth = motion::hand::kPhalanxLength[2] - motion::hand::kPadAlongDistal;
+  hand.finger_radius = motion::hand::kPadRadius;  // the distal phalanx's, which touches
+  hand.pose = [standoff, clearance](const Grasp& grasp) {
+    PosedHand posed;
+    const motion::HandPlacement place = motion::place_hand(grasp, clearance);
+    if (!place.why.empty()) return posed.why = place.why, posed;
+    const Eigen::Vector3d approach = place.world_from_palm.linear().col(2);
+    // place_hand puts the pads at the contacts' depth; a pinch stands the palm back by its depth.
+    const Eigen::Isometry3d at_grasp = Eigen::Translation3d(-approach * grasp.pinch_depth) * place.world_from_palm;
+    const Eigen::Isometry3d at_pregrasp = Eigen::Translation3d(-approach * standoff) * at_grasp;
+    auto add = [&](const Eigen::Isometry3d& world_from_palm, double opening) {
+      for (const motion::HandPart& part : motion::hand_parts(opening, place.spread))
+        posed.shapes.push_back({part.name, part.kind == motion::HandPart::Kind::Box ? HandShape::Kind::Box : HandShape::Kind::Capsule,
+                                part.size, world_from_palm * part.palm_from_part});
+    };
+    add(at_pregrasp, place.opening);  // open, where the straight approach begins
+    add(at_grasp, place.opening);     // open, at the contacts
+    add(at_grasp, place.width);       // closed on them, for the lift
+    return posed;
+  };
+  return hand;
+}
+
+}  // namespace fba::grasp
