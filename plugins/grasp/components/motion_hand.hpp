@@ -26,8 +26,7 @@ inline RobotHand motion_hand(double standoff, double clearance) {
     const motion::HandPlacement place = motion::place_hand(grasp, clearance);
     if (!place.why.empty()) return posed.why = place.why, posed;
     const Eigen::Vector3d approach = place.world_from_palm.linear().col(2);
-    // place_hand puts the pads at the contacts' depth; a pinch stands the palm back by its depth.
-    const Eigen::Isometry3d at_grasp = Eigen::Translation3d(-approach * grasp.pinch_depth) * place.world_from_palm;
+    const Eigen::Isometry3d& at_grasp = place.world_from_palm;  // a pinch's palm stood back by place_hand
     const Eigen::Isometry3d at_pregrasp = Eigen::Translation3d(-approach * standoff) * at_grasp;
     auto add = [&](const Eigen::Isometry3d& world_from_palm, double opening) {
       for (const motion::HandPart& part : motion::hand_parts(opening, place.spread))

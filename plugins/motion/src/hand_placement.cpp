@@ -38,7 +38,10 @@ HandPlacement place_hand(const Grasp& grasp, double clearance) {
   for (const auto& c : grasp.contacts) along += c.position.dot(a) / 3;
   const Eigen::Vector3d centre = u * (thumb.dot(u) + mid.dot(u)) / 2 + y * mid.dot(y) + a * along;
   p.world_from_palm.linear() << u, y, a;
-  p.world_from_palm.translation() = centre - a * hand::kPadDistance;
+  // The pads at the contacts' depth; a pinch (pinch_depth > 0) stands the palm back so that the
+  // contacts lie that far along the distal phalanxes, towards their ends.
+  const double pinch = std::isfinite(grasp.pinch_depth) ? std::max(grasp.pinch_depth, 0.0) : 0.0;
+  p.world_from_palm.translation() = centre - a * (hand::kPadDistance + pinch);
   return p;
 }
 

@@ -1,8 +1,8 @@
 // Where the palm goes to take a grasp, by the convention of the lift test
 // (hardware/hand/sim/lift_test.cpp): the palm frame's z along the approach, x from the thumb's
 // contact to the fingers' midpoint across the approach; the pads at the contacts' mean depth along
-// the approach, centred between the thumb and the fingers across it and on the fingers' midpoint
-// beside it.
+// the approach (stood back by the grasp's pinch_depth for a fingertip pinch), centred between the
+// thumb and the fingers across it and on the fingers' midpoint beside it.
 #pragma once
 
 #include <string>
