@@ -95,10 +95,11 @@ TEST(GraspSynthesisReach, TheBestCandidateBehindTheObjectBeyondTheArmsReachIsPas
 
 // A flat box: every candidate's fingers would reach into the table. Synthesis says `unreachable`
 // with the counts and asks for views as when none is reliable; after the last view it gives up
-// with the counts.
+// with the counts. (With synthesis's approximate hand, which takes no grasp as a fingertip pinch:
+// the robot's hand would pinch this box from above.)
 TEST(GraspSynthesisReach, WhenNoCandidateIsReachableItSaysSoAndAsksForViews) {
   const std::vector<double> flat = reach::standing({0.06, 0.06, 0.04});
-  const std::string table = "table_z: [0.001]";
+  const std::string table = "table_z: [0.001], robot_hand: false";
   ASSERT_EQ(reach::synthesise(flat, {}, table).regions.size(), 1u);  // without the arm: none reliable, views asked for too
 
   const reach::Outcome o = reach::synthesise(flat, home(), table);
