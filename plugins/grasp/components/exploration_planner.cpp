@@ -51,7 +51,7 @@ class ExplorationPlanner final : public fba::Component {
   static constexpr fba::OptionalIn<fba::Pose> kCurrent{
       "current", "where the camera is (world_from_camera); without it, the last target stands for it"};
   static constexpr fba::OptionalIn<std::int64_t> kStart{
-      "start", "a sample (e.g. from examples.counter with count 1) starts the exploration: the first initial_views candidates are requested, no model needed"};
+      "start", "a sample (grasp.start's) starts the exploration: the first initial_views candidates are requested, no model needed"};
   static constexpr fba::Out<fba::Pose> kTarget{"target", "the camera's next pose, world_from_camera"};
   static constexpr auto kViews = fba::Param<std::string>(
       "views", "ring", "the candidate views: a ring or a hemisphere around centre, or the recorded views of poses_from")
