@@ -119,18 +119,15 @@ ArmComponent::ArmComponent(fba::Context& ctx)
 void ArmComponent::check_collisions(fba::Context& ctx) {
 #ifdef FBA_ARM_COLLISION
   const std::filesystem::path urdf = ctx(kUrdf).empty() ? default_urdf() : ctx(kUrdf);
-  auto to_flange = std::make_unique<ArmModel>(urdf, ctx(kBaseLink), kFlangeLink);
-  // The palm's place on the flange, from the one description: the same pose along both chains.
   Eigen::Isometry3d flange_from_palm;
   try {
-    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(to_flange->size()));
-    flange_from_palm = to_flange->forward(zero).inverse() * ArmModel(urdf, ctx(kBaseLink), kPalmLink).forward(zero);
+    flange_from_palm = fba::motion::urdf_flange_from_palm(urdf, ctx(kBaseLink), kFlangeLink, kPalmLink);
   } catch (const ArmModelError&) {
     ctx.log().info("no '{}' link after '{}' in {}: IK solutions are not checked for collisions (the hand's place is needed)",
                    kPalmLink, kFlangeLink, urdf.string());
     return;
   }
-  to_flange_ = std::move(to_flange);
+  to_flange_ = std::make_unique<ArmModel>(urdf, ctx(kBaseLink), kFlangeLink);
   collision_ = std::make_unique<fba::motion::RobotCollision>(*to_flange_, flange_from_palm);
   ik_.accept = [c = collision_.get()](const Eigen::VectorXd& q) { return c->collision(q); };
 #else

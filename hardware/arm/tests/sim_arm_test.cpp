@@ -386,10 +386,7 @@ TEST(SimArm, ATrajectoryThatDoesNotFitTheArmOrComesWhileItMovesIsRefused) {
 TEST(SimArm, ReachesEveryViewWithTheRobotClearOfItselfAndTheTable) {
   const std::string urdf = fba::test::wrist_camera_arm_urdf();
   const fba::arm::ArmModel to_flange(urdf, "world", "flange");
-  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(6);
-  const Eigen::Isometry3d flange_from_palm =
-      to_flange.forward(zero).inverse() * fba::arm::ArmModel(urdf, "world", "palm").forward(zero);
-  fba::motion::RobotCollision robot(to_flange, flange_from_palm);
+  fba::motion::RobotCollision robot(to_flange, fba::motion::urdf_flange_from_palm(urdf, "world"));
   const Eigen::Vector3d centre(0, 0, 0.05);
   int reached_clear = 0, colliding_without = 0;
   for (bool check : {true, false}) {

@@ -173,8 +173,7 @@ class ExplorationPlanner final : public fba::Component {
         ctx_(fba::motion::ReachParameters::kUrdf).empty() ? fba::motion::default_urdf() : ctx_(fba::motion::ReachParameters::kUrdf);
     const fba::arm::ArmModel to_camera(urdf, "world", "camera"), to_flange(urdf, "world", "flange");
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(to_flange.size()));
-    const Eigen::Isometry3d flange_from_palm = to_flange.forward(zero).inverse() * fba::arm::ArmModel(urdf, "world", "palm").forward(zero);
-    fba::motion::RobotCollision robot(to_flange, flange_from_palm);
+    fba::motion::RobotCollision robot(to_flange, fba::motion::urdf_flange_from_palm(urdf, "world"));
     fba::arm::IkOptions ik;
     ik.accept = [&robot](const Eigen::VectorXd& q) { return robot.collision(q); };
     std::vector<Eigen::Isometry3d> kept;

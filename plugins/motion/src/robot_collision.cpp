@@ -141,6 +141,13 @@ struct RobotCollision::Impl {
   }
 };
 
+Eigen::Isometry3d urdf_flange_from_palm(const std::filesystem::path& urdf, const std::string& base_link,
+                                        const std::string& flange_link, const std::string& palm_link) {
+  const arm::ArmModel to_flange(urdf, base_link, flange_link), to_palm(urdf, base_link, palm_link);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(to_flange.size()));
+  return to_flange.forward(zero).inverse() * to_palm.forward(zero);  // the same at any joints: a fixed joint
+}
+
 RobotCollision::RobotCollision(const arm::ArmModel& arm, const Eigen::Isometry3d& flange_from_palm)
     : impl_(std::make_unique<Impl>()) {
   auto& s = *impl_;

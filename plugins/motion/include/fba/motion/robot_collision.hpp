@@ -4,6 +4,7 @@
 // from hand_parts().
 #pragma once
 
+#include <filesystem>
 #include <memory>
 #include <span>
 #include <string>
@@ -14,6 +15,12 @@
 #include "fba/motion/model_obstacles.hpp"
 
 namespace fba::motion {
+
+// Where the palm sits on the flange, as the robot's URDF places it (the fixed joint between them),
+// so that every reader of the one description puts the hand at the same place. Throws
+// arm::ArmModelError when either link is not on a chain from `base_link`.
+Eigen::Isometry3d urdf_flange_from_palm(const std::filesystem::path& urdf, const std::string& base_link,
+                                        const std::string& flange_link = "flange", const std::string& palm_link = "palm");
 
 class RobotCollision {
  public:
