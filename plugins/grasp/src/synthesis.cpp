@@ -534,12 +534,18 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
     if (blocked[i] < 0) blocked[i] = p.path_tolerance > 0 && cells.hand_path_blocked(all[i].grasp, hand, p.path_tolerance);
     return blocked[i] == 1;
   };
+  // Up to max_candidates of each kind: on resolved surface, on resolved contacts only, and not
+  // resolved. Better-scoring candidates on surface not yet pinned by two views would otherwise
+  // crowd the resolved ones out of the list, and with them the grasps selectable now.
+  auto kind = [](const GraspCandidate& c) { return !c.uncertain ? 0 : !c.contacts_uncertain ? 1 : 2; };
+  std::array<std::size_t, 3> kept{};
+  auto full = [&](const GraspCandidate& c) { return kept[kind(c)] >= p.max_candidates; };
   std::vector<std::optional<GraspQuality>> quality_of(all.size());
   auto compute_ahead = [&](std::size_t first, std::size_t budget) {
     const std::size_t ahead = std::min<std::size_t>(p.parallel_for ? 8 : 1, budget);  // one thread: none ahead
     std::vector<std::size_t> next;
     for (std::size_t j = first; j < all.size() && next.size() < ahead; ++j)
-      if (!quality_of[j] && !repeats(all[j]) && !hand_blocked(j)) next.push_back(j);
+      if (!quality_of[j] && !full(all[j]) && !repeats(all[j]) && !hand_blocked(j)) next.push_back(j);
     auto compute = [&](std::size_t k) {
       GraspQuality q;
       try {
@@ -554,8 +560,8 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   std::size_t checks = 0;
   for (std::size_t i = 0; i < all.size(); ++i) {
     GraspCandidate& c = all[i];
-    if (result.candidates.size() >= p.max_candidates) break;
-    if (repeats(c)) continue;
+    if (std::all_of(kept.begin(), kept.end(), [&](std::size_t k) { return k >= p.max_candidates; })) break;
+    if (full(c) || repeats(c)) continue;
     // The hand's way first, on every candidate in turn: a few microseconds each. Counting it in
     // max_checks let the blocked best candidates use up the search (the cracker box: 400 of 400
     // blocked from view 3 to view 8; the first free one at view 3 was the 444th).
@@ -573,6 +579,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
       }
       c.model_epsilon = q.epsilon;
     }
+    ++kept[kind(c)];
     result.candidates.push_back(std::move(c));
   }
   if (p.rank_total) {

@@ -202,19 +202,47 @@ TEST(GraspSynthesis, UncertainSamplesNameTheirRegionAndFlagCandidates) {
   estimate_curvature(samples, 2.2 * h);
   for (auto& s : samples)
     if (s.normal.x() > 0.5) s.uncertain = true;  // the +x face is not yet seen well
-  const SynthesisResult r = synthesise(samples, params_for(h));
+  const SynthesisParams p = params_for(h);
+  const SynthesisResult r = synthesise(samples, p);
   ASSERT_EQ(r.uncertain_regions.size(), 1u);
   const GraspRegion& region = r.regions[r.uncertain_regions[0]];
   EXPECT_NEAR(region.normal.x(), 1.0, 1e-9);
   EXPECT_DOUBLE_EQ(region.uncertain_share, 1.0);
-  bool flagged = false;
+  double face_x = -1;  // the unseen face's plane
+  for (const auto& s : samples) face_x = std::max(face_x, s.position.x());
+  int flagged = 0, clear = 0;
   for (const auto& c : r.candidates) {
-    bool touches = false;
-    for (const auto& k : c.grasp.contacts) touches = touches || k.normal.x() < -0.5;
-    EXPECT_EQ(c.uncertain, touches);
-    flagged = flagged || c.uncertain;
+    bool touches = false, near = false;  // a contact on the unseen face; within the neighbourhood of it
+    for (const auto& k : c.grasp.contacts) {
+      touches = touches || k.normal.x() < -0.5;
+      near = near || face_x - k.position.x() <= p.neighbour_radius + h;
+    }
+    if (touches) EXPECT_TRUE(c.uncertain && c.contacts_uncertain);
+    if (!near) EXPECT_FALSE(c.uncertain);
+    flagged += c.uncertain;
+    clear += !c.uncertain;
   }
-  EXPECT_TRUE(flagged);
+  // Both kinds are returned: the unseen face's better candidates do not crowd the others out.
+  EXPECT_GT(flagged, 0);
+  EXPECT_GT(clear, 0);
+}
+
+// max_candidates bounds each kind apart (on resolved surface, on resolved contacts only, neither):
+// a grasp selectable now is returned however many better ones wait for views.
+TEST(GraspSynthesis, CandidatesOnResolvedSurfaceAreNotCrowdedOutByUnresolvedOnes) {
+  const double h = 0.005;
+  auto samples = box({0.06, 0.10, 0.15}, h);
+  estimate_curvature(samples, 2.2 * h);
+  for (auto& s : samples)
+    if (s.normal.x() > 0.5) s.uncertain = true;
+  SynthesisParams p = params_for(h);
+  p.max_candidates = 1;
+  const SynthesisResult r = synthesise(samples, p);
+  int resolved = 0, unresolved = 0;
+  for (const auto& c : r.candidates) (c.uncertain ? unresolved : resolved) += 1;
+  EXPECT_EQ(resolved, 1);
+  EXPECT_GE(unresolved, 1);
+  EXPECT_LE(r.candidates.size(), 3u);
 }
 
 // Pinning is checked over each contact's neighbourhood; the contacts themselves are flagged apart

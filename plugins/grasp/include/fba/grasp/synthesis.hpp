@@ -129,7 +129,8 @@ struct SynthesisParams {
   // Candidates checked for force closure on the model, best total first, among those the hand can
   // take (path_tolerance, checked on every candidate in turn): each check is a 6-D hull.
   std::size_t max_checks = 400;
-  // Bounds on the search: thumbs tried, finger positions per thumb, candidates returned.
+  // Bounds on the search: thumbs tried, finger positions per thumb, candidates returned of each
+  // kind (on resolved surface, on resolved contacts only, neither: GraspCandidate's flags).
   std::size_t max_thumbs = 80;
   std::size_t max_fingers = 300;
   std::size_t max_candidates = 20;
@@ -157,7 +158,7 @@ struct GraspCandidate {
 
 struct SynthesisResult {
   std::vector<GraspRegion> regions;
-  std::vector<GraspCandidate> candidates;  // best total first, at most max_candidates, distinct
+  std::vector<GraspCandidate> candidates;  // best total first, at most max_candidates of each kind, distinct
   // Regions where more views would help (any uncertain sample), most uncertain area first.
   std::vector<std::size_t> uncertain_regions;
   std::vector<double> boundary_distance;   // per input sample: distance to its region's boundary (m), 0 if none
