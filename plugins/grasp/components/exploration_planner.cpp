@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -70,7 +71,13 @@ class ExplorationPlanner final : public fba::Component {
       "poses_from", "", "recorded: the image set (Middlebury *_par.txt or fba YAML) whose camera poses are the candidates; relative to the task file's folder"};
   static constexpr fba::Param<bool> kGoodOnly{"good_only", true, "recorded, Middlebury: only the views with good silhouettes"};
   static constexpr auto kInitialViews = fba::Param<int>(
-      "initial_views", 3, "on start: candidate 0 and its nearest candidates, for the initial analysis").range(1, 10000);
+      "initial_views", 3, "on start: how many views are requested before any model, for the initial analysis").range(1, 10000);
+  static constexpr auto kInitialLayout = fba::Param<std::string>(
+      "initial_layout", "neighbours",
+      "which views the start requests: neighbours, candidate 0 and its nearest candidates (the paper's few views close together); "
+      "spread, candidate 0 and then each time the candidate farthest from those taken, so that the first model is carved "
+      "from around the object")
+      .choices({"neighbours", "spread"});
 #if FBA_GRASP_REACH
   static constexpr fba::Param<bool> kReachableOnly{
       "reachable_only", false,
@@ -97,7 +104,7 @@ class ExplorationPlanner final : public fba::Component {
                              "contacts in a new direction, else the one that sees most uncertain model nodes in its regions; "
                              "visibility-aware, less the cost of moving.")
         .add(kOctree, kRegions, kCurrent, kStart, kTarget, kViews, kCount, kDistance, kMinElevation, kMaxElevation, kCentre,
-             kPosesFrom, kGoodOnly, kInitialViews, kMovementWeight, kHalfFov, kMinGain, kMaxRays, kExcludeVisited, kViewChosen,
+             kPosesFrom, kGoodOnly, kInitialViews, kInitialLayout, kMovementWeight, kHalfFov, kMinGain, kMaxRays, kExcludeVisited, kViewChosen,
              kNoView)
         .add(kMinElevation <= kMaxElevation)
 #if FBA_GRASP_REACH
@@ -189,16 +196,32 @@ class ExplorationPlanner final : public fba::Component {
 
   void start() {
     started_ = true;
-    // Candidate 0 and its nearest neighbours: a few views close together, as in the paper.
-    std::vector<std::size_t> order(candidates_.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    const Eigen::Vector3d first = candidates_[0].translation();
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-      return (candidates_[a].translation() - first).norm() < (candidates_[b].translation() - first).norm();
-    });
-    const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(initial_views_), order.size());
-    for (std::size_t i = 0; i < n; ++i) request(order[i]);
-    ctx_.log().info("start: {} initial views requested", n);
+    const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(initial_views_), candidates_.size());
+    auto where = [&](std::size_t i) { return candidates_[i].translation(); };
+    std::vector<std::size_t> chosen;
+    if (n > 0 && ctx_(kInitialLayout) == "neighbours") {
+      // Candidate 0 and its nearest neighbours: a few views close together, as in the paper.
+      std::vector<std::size_t> order(candidates_.size());
+      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+      std::stable_sort(order.begin(), order.end(),
+                       [&](std::size_t a, std::size_t b) { return (where(a) - where(0)).norm() < (where(b) - where(0)).norm(); });
+      chosen.assign(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n));
+    } else if (n > 0) {
+      // Farthest-point order: each next view the one farthest from every view taken (the first of
+      // equals), so that three views stand about a third of a turn apart.
+      chosen.push_back(0);
+      std::vector<double> nearest(candidates_.size(), std::numeric_limits<double>::infinity());
+      while (chosen.size() < n) {
+        std::size_t far = 0;
+        for (std::size_t i = 0; i < candidates_.size(); ++i) {
+          nearest[i] = std::min(nearest[i], (where(i) - where(chosen.back())).norm());
+          if (nearest[i] > nearest[far]) far = i;
+        }
+        chosen.push_back(far);
+      }
+    }
+    for (std::size_t i : chosen) request(i);
+    ctx_.log().info("start: {} initial views requested ({})", n, ctx_(kInitialLayout));
   }
 
   void request(std::size_t view) {

@@ -74,6 +74,18 @@ TEST(ExplorationPlanner, StartRequestsTheFirstCandidateAndItsNearestNeighbours) 
   EXPECT_TRUE((first.linear().col(2) + first.translation().normalized()).norm() < 1e-9);
 }
 
+TEST(ExplorationPlanner, SpreadStartRequestsViewsAroundTheObject) {
+  ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8({{"initial_layout", std::string("spread")}}), {"start"});
+  h.push<std::int64_t>("start", 0);
+  h.run();
+  const auto targets = h.values<fba::Pose>("target");
+  ASSERT_EQ(targets.size(), 3u);
+  // Candidate 0, the one opposite it, then the first of the two a quarter turn from both.
+  EXPECT_EQ(azimuth_deg(targets[0]), 0);
+  EXPECT_EQ(azimuth_deg(targets[1]), 180);
+  EXPECT_EQ(azimuth_deg(targets[2]) % 180, 90);
+}
+
 TEST(ExplorationPlanner, ARequestGetsTheViewThatSeesTheRegion) {
   ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8());
   h.push<fba::Octree>("octree", box_model(1));
