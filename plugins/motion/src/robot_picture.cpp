@@ -1,7 +1,6 @@
 #include "fba/motion/robot_picture.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -204,11 +203,8 @@ cv::Mat robot_picture(const ReachPlanner& planner, const ReachPlan& plan, const 
   const double opening = lift ? plan.width : plan.opening;
   const RobotMeshes robot = robot_meshes(planner, joints, opening, plan.spread);
   const Eigen::Vector3d offset = object_offset(plan, pose);
-  const TriangleMesh leaves = [&] {
-    TriangleMesh m;
-    append(m, model_mesh(model), Eigen::Isometry3d(Eigen::Translation3d(offset)));
-    return m;
-  }();
+  TriangleMesh leaves;
+  append(leaves, model_mesh(model), Eigen::Isometry3d(Eigen::Translation3d(offset)));
 
   geometry::RenderOptions look;
   look.background_top = look.background_bottom = C::background;
@@ -222,16 +218,18 @@ cv::Mat robot_picture(const ReachPlanner& planner, const ReachPlan& plan, const 
   const TableMeshes table = table_meshes(footprint.min().head<2>(), footprint.max().head<2>());
   const cv::Vec3b table_dark(cv::Vec3b(C::table * 0.85));
   geometry::RenderResult scene = geometry::render(TriangleMesh{}, camera, look);  // the background
-  for (const auto& [mesh, colour] : {std::pair{&table.light, C::table}, std::pair{&table.dark, table_dark}, std::pair{&table.slab, table_dark},
-                                     std::pair{&robot.arm, C::arm}, std::pair{&robot.camera, C::camera}, std::pair{&robot.hand, C::hand},
-                                     std::pair{&leaves, C::model}}) {
+  const std::pair<const TriangleMesh*, cv::Vec3b> parts[] = {
+      {&table.light, C::table}, {&table.dark, table_dark}, {&table.slab, table_dark}, {&robot.arm, C::arm},
+      {&robot.camera, C::camera}, {&robot.hand, C::hand}, {&leaves, C::model}};
+  for (const auto& [mesh, colour] : parts) {
     if (mesh->triangles.empty()) continue;
     look.object_colour = colour;
     geometry::composite(scene, geometry::render(*mesh, camera, look));
   }
   cv::Mat picture = scene.colour;
 
-  // The contacts, over everything (one may lie behind the object as seen): with the object.
+  // The contacts, drawn over everything so that one behind the object as seen still shows; at the
+  // lift, where the object carried them.
   for (std::size_t i = 0; i < 3; ++i) {
     Eigen::Vector2d px;
     if (!geometry::project(camera, grasp.contacts[i].position + offset, px)) continue;
