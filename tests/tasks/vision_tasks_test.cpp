@@ -204,10 +204,11 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   EXPECT_GE(synthesis.stages[2].second.entered, moves);
   EXPECT_GT(synthesis.stages[2].second.clock_s, 0.0);  // the arm's moves, on the virtual clock
   // The loop's pictures, each captioned with a legend: the whole model with the grasp, the views
-  // taken, the grasp over the last camera image (the camera's size between the bands), and a
-  // contour picture per view.
+  // taken, the grasp over the last camera image (the camera's size between the bands), reach
+  // planning's robot at the pregrasp and at the lift, and a contour picture per view.
   for (const auto& [name, size] : {std::pair{"grasp_model.png", cv::Size(800, 600)}, std::pair{"views.png", cv::Size(800, 600)},
-                                   std::pair{"grasp_view.png", cv::Size(640, 480)}}) {
+                                   std::pair{"grasp_view.png", cv::Size(640, 480)}, std::pair{"robot_pregrasp.png", cv::Size(800, 600)},
+                                   std::pair{"robot_lift.png", cv::Size(800, 600)}}) {
     const cv::Mat picture = cv::imread((out.path() / name).string());
     ASSERT_FALSE(picture.empty()) << name;
     EXPECT_EQ(picture.size(), fba::vision::captioned_size(size)) << name;

@@ -203,4 +203,26 @@ RenderResult render(const TriangleMesh& mesh, const CameraModel& camera,
   return out;
 }
 
+void composite(RenderResult& into, const RenderResult& part) {
+  const auto shaped = [](const RenderResult& r, cv::Size size) {
+    return r.colour.type() == CV_8UC3 && r.depth.type() == CV_32FC1 && r.mask.type() == CV_8UC1 && r.colour.size() == size &&
+           r.depth.size() == size && r.mask.size() == size;
+  };
+  if (!shaped(into, into.colour.size()) || !shaped(part, into.colour.size()))
+    throw std::invalid_argument("composite: the two renders differ in size or are not render()'s colour, depth and mask");
+  for (int y = 0; y < into.colour.rows; ++y) {
+    const float* pz = part.depth.ptr<float>(y);
+    const cv::Vec3b* pc = part.colour.ptr<cv::Vec3b>(y);
+    float* iz = into.depth.ptr<float>(y);
+    cv::Vec3b* ic = into.colour.ptr<cv::Vec3b>(y);
+    uchar* im = into.mask.ptr<uchar>(y);
+    for (int x = 0; x < into.colour.cols; ++x) {
+      if (pz[x] <= 0 || (iz[x] > 0 && iz[x] <= pz[x])) continue;  // no surface of the part, or behind into's
+      iz[x] = pz[x];
+      ic[x] = pc[x];
+      im[x] = 255;
+    }
+  }
+}
+
 }  // namespace fba::geometry

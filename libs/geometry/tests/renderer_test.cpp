@@ -146,6 +146,48 @@ TEST(Renderer, TableHidesWhatIsBelowIt) {
   EXPECT_NE(free.colour.at<cv::Vec3b>(479, 0), on_table.colour.at<cv::Vec3b>(479, 0));
 }
 
+// Two boxes in colours of their own, one partly in front of the other, rendered apart and
+// composited: in either order the same picture, whose depth and mask are the two rendered as one
+// mesh, the nearer box's colour where they overlap, and the background where neither is.
+TEST(Renderer, CompositedPartsHideOneAnotherByDepthInEitherOrder) {
+  const TriangleMesh near_box = make_box({-0.05, -0.15, -0.05}, {0.05, -0.05, 0.05});
+  const TriangleMesh far_box = make_box({0.0, 0.0, -0.08}, {0.16, 0.1, 0.08});
+  const auto cam = camera_at({0, -0.6, 0}, {0, 0, 0});
+  RenderOptions red, blue;
+  red.object_colour = {0, 0, 255};
+  blue.object_colour = {255, 0, 0};
+  const RenderResult a = render(near_box, cam, red), b = render(far_box, cam, blue);
+  RenderResult ab{a.colour.clone(), a.depth.clone(), a.mask.clone()};
+  composite(ab, b);
+  RenderResult ba{b.colour.clone(), b.depth.clone(), b.mask.clone()};
+  composite(ba, a);
+  TriangleMesh both = near_box;
+  for (const auto& v : far_box.vertices) both.vertices.push_back(v);
+  for (const auto& t : far_box.triangles) both.triangles.push_back(t + Eigen::Vector3i::Constant(int(near_box.vertices.size())));
+  const RenderResult one = render(both, cam, red);
+
+  EXPECT_EQ(cv::countNonZero(ab.colour.reshape(1) != ba.colour.reshape(1)), 0);
+  EXPECT_EQ(cv::countNonZero(ab.depth != one.depth), 0);
+  EXPECT_EQ(cv::countNonZero(ab.mask != one.mask), 0);
+  EXPECT_EQ(cv::countNonZero(ba.depth != one.depth), 0);
+  // Each box alone covers pixels the other covers too, so the overlap is tested.
+  cv::Mat overlap = a.mask & b.mask;
+  ASSERT_GT(cv::countNonZero(overlap), 1000);
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u) {
+      const cv::Vec3b c = ab.colour.at<cv::Vec3b>(v, u);
+      if (overlap.at<uchar>(v, u)) {
+        ASSERT_EQ(c, a.colour.at<cv::Vec3b>(v, u)) << "the near box hides the far one at " << u << ", " << v;
+      } else if (b.mask.at<uchar>(v, u)) {
+        ASSERT_EQ(c, b.colour.at<cv::Vec3b>(v, u)) << u << ", " << v;
+      } else if (!a.mask.at<uchar>(v, u)) {
+        ASSERT_EQ(c, a.colour.at<cv::Vec3b>(v, u)) << "background at " << u << ", " << v;
+      }
+    }
+  RenderResult other_size{cv::Mat(10, 10, CV_8UC3), cv::Mat(10, 10, CV_32FC1), cv::Mat(10, 10, CV_8UC1)};
+  EXPECT_THROW(composite(ab, other_size), std::invalid_argument);
+}
+
 TEST(Renderer, NoiseIsSeededAndRepeatable) {
   const TriangleMesh sphere = make_uv_sphere({0, 0, 0}, 0.1, 32, 16);
   const auto cam = camera_at({0.5, 0, 0.2}, {0, 0, 0});

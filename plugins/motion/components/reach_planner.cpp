@@ -2,7 +2,10 @@
 // it plans what the arm and the hand do (fba/motion/reach_planner.hpp): the timed joint trajectory
 // for the arm's driver, the hand's commands in order, or the event `unreachable` with the reason.
 // Its stages follow the plan's steps on the task's clock from when the plan was sent, as the
-// component runs (each joint state or model that arrives).
+// component runs (each joint state or model that arrives). With an output folder, a plan's
+// pictures are written there once the plan is sent: robot_pregrasp.png and robot_lift.png
+// (fba/motion/robot_picture.hpp).
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -21,6 +24,9 @@
 
 #include "fba/motion/reach_parameters.hpp"
 #include "fba/motion/reach_planner.hpp"
+#if FBA_ROBOT_PICTURES
+#include "fba/motion/robot_picture.hpp"
+#endif
 
 namespace {
 
@@ -75,6 +81,8 @@ class ReachPlannerFilter final : public fba::Component {
       fba::Param<double>("acceleration", 3.0, "joint acceleration limit, rad/s^2, every joint").range(0.01, 100.0);
   static constexpr auto kSamplePeriod =
       fba::Param<double>("sample_period", 0.02, "seconds between the trajectory's waypoints").range(0.001, 1.0);
+  static constexpr fba::Param<std::string> kObject{
+      "object", "", "the object's name in the titles of the pictures written into the output folder; empty: \"the object\""};
 
   static fba::Spec spec() {
     fba::Spec spec = fba::Spec::filter("motion.reach_planner",
@@ -82,7 +90,7 @@ class ReachPlannerFilter final : public fba::Component {
                                        "the table, the arm and the carved model): a timed joint trajectory and the hand's commands.");
     spec.add(kGrasp, kOctree, kJointState, kTrajectory, kHand, kUnreachable);
     ReachParameters::add(spec)  // shared with grasp.synthesis, which checks reachability with them
-        .add(kHoldTime, kHandTime, kFingerForce, kRetreat, kPlanningTime, kPathChecks, kSpeed, kAcceleration, kSamplePeriod)
+        .add(kHoldTime, kHandTime, kFingerForce, kRetreat, kPlanningTime, kPathChecks, kSpeed, kAcceleration, kSamplePeriod, kObject)
         .stages({"idle", "plan", "approach", "close", "lift", "hold", "retreat"},
                 {{"idle", "plan"}, {"plan", "idle"}, {"plan", "approach"}, {"approach", "plan"}, {"approach", "close"},
                  {"close", "plan"}, {"close", "lift"}, {"lift", "plan"}, {"lift", "hold"}, {"hold", "plan"}, {"hold", "retreat"},
@@ -176,6 +184,27 @@ class ReachPlannerFilter final : public fba::Component {
     for (const auto& c : plan.hand) ctx_(kHand).emit(c);
     steps_ = plan.steps;
     sent_ns_ = ctx_.now_ns();
+    write_pictures(grasp, model, plan);
+  }
+
+  // The robot at the plan's pregrasp and lift, into the output folder (none: nothing drawn), once
+  // the plan is sent, so that drawing adds nothing to the time a plan takes. The latest plan's
+  // pictures replace an earlier one's. A picture lost is reported; the plan stands.
+  void write_pictures(const fba::Grasp& grasp, const fba::Octree& model, const ReachPlan& plan) {
+    if (ctx_.output_dir().empty()) return;
+#if FBA_ROBOT_PICTURES
+    try {
+      const auto start = std::chrono::steady_clock::now();
+      fba::motion::write_robot_pictures(ctx_.output_dir(), planner_, plan, grasp, model, ctx_(kObject));
+      ctx_.log().info("wrote robot_pregrasp.png and robot_lift.png in {:.3f} s",
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    } catch (const std::exception& e) {
+      ctx_.log().error("could not draw the robot's pictures in {}: {}", ctx_.output_dir().string(), e.what());
+    }
+#else
+    (void)grasp, (void)model, (void)plan;
+    ctx_.log().info("no robot pictures: this build has no vision libraries (FBA_BUILD_VISION off) to draw them");
+#endif
   }
 
   // The stage of the plan being followed: the step its time since it was sent falls in.

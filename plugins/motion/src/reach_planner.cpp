@@ -239,6 +239,7 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
   const HandPlacement hand = place_hand(grasp, p.clearance);
   if (!hand.why.empty()) return refuse(std::move(plan), Refusal::Hand, "the hand cannot take the grasp: " + hand.why);
   plan.opening = hand.opening;
+  plan.width = hand.width;
   plan.spread = hand.spread;
   plan.grasp_palm = hand.world_from_palm;
   const Eigen::Vector3d approach = hand.world_from_palm.linear().col(2);

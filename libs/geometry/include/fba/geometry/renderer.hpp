@@ -60,4 +60,11 @@ struct RenderResult {
 RenderResult render(const TriangleMesh& mesh, const CameraModel& camera,
                     const RenderOptions& options = {});
 
+// A scene of parts in colours of their own, rendered one render() each with the same camera:
+// `part`'s surface replaces `into`'s colour, depth and mask wherever it is nearer than what `into`
+// shows there (or `into` shows no surface), so that the parts hide one another as in one render.
+// `into`'s background and table stay where no part's surface is drawn. Throws
+// std::invalid_argument when the two are not the same size and types as render() makes them.
+void composite(RenderResult& into, const RenderResult& part);
+
 }  // namespace fba::geometry

@@ -121,6 +121,7 @@ struct ReachPlan {
   // the current joints (empty when the start is clear of the model), the approach, the lift.
   std::vector<Eigen::VectorXd> backout_path, approach_path, lift_path;
   double opening = 0;  // the pregrasp's, m
+  double width = 0;    // the closed hand's: its pads on the contacts, m
   double spread = 0;   // m
 
   fba::JointTrajectory trajectory;  // from the current joints (the back-out first); every joint on every waypoint
