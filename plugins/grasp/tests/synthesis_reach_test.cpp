@@ -171,7 +171,8 @@ TEST(GraspSynthesisReach, WithoutAJointStateTheSameGraspIsSelectedAsBefore) {
 }
 
 // The reach parameters synthesis checks with are motion.reach_planner's: the same names, defaults,
-// ranges and docs, declared once (fba/motion/reach_parameters.hpp).
+// ranges and docs, declared once (fba/motion/reach_parameters.hpp, with the robot's:
+// robot_parameters.hpp).
 TEST(GraspSynthesisReach, ItsReachParametersAreTheReachPlannersOwn) {
   const auto synthesis = reach::reach_registry().find("grasp.synthesis");
   const auto planner = reach::reach_registry().find("motion.reach_planner");
@@ -187,7 +188,9 @@ TEST(GraspSynthesisReach, ItsReachParametersAreTheReachPlannersOwn) {
     EXPECT_EQ(s->sizes, p.sizes) << p.name;
     EXPECT_EQ(s->doc, p.doc) << p.name;
   }
-  EXPECT_EQ(shared, 10);  // urdf, base_link, flange_link, flange_to_palm, standoff, lift_height, contact_allowance, max_backout, seed, ik_attempts
+  // The robot's (urdf, base_pose, flange_to_palm, flange_to_camera), then base_link, flange_link, standoff, lift_height,
+  // contact_allowance, max_backout, seed, ik_attempts.
+  EXPECT_EQ(shared, 12);
   EXPECT_NE(synthesis->spec.find_input("joint_state"), nullptr);
   EXPECT_NE(synthesis->spec.find_event("unreachable"), nullptr);
 }
