@@ -206,7 +206,8 @@ nlohmann::json plan_of(const fba::Grasp& grasp, const std::vector<double>& box, 
   fba::testing::ComponentHarness h(reach::reach_registry(), "motion.reach_planner", params);
   fba::JointState joints;
   joints.names = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"};
-  joints.positions.assign(home().data(), home().data() + 6);
+  const Eigen::VectorXd q = home();
+  joints.positions.assign(q.data(), q.data() + q.size());
   h.push("octree", reach::box_model_of(box));
   h.push("joint_state", joints);
   h.push("grasp", grasp);

@@ -58,7 +58,6 @@ struct ReachParameters {
     p.ik_attempts = ctx(kIkAttempts);
     return p;
   }
-  static ReachParams read(const fba::Context& ctx, ReachParams p = {}) { return read(ctx, arm::RobotParameters::read(ctx), p); }
   // The planner they describe, the rest of `p` as given. Throws as ReachPlanner's constructor, and
   // arm::RobotParameters::read.
   static ReachPlanner planner(const fba::Context& ctx, const arm::RobotDescription& robot, const ReachParams& p = {}) {
