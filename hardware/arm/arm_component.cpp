@@ -1,7 +1,5 @@
 #include "arm_component.hpp"
 
-#include <dlfcn.h>
-
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -10,15 +8,6 @@
 namespace fba::arm {
 
 namespace {
-
-// The project's arm, installed beside the plugins (FBA_ROBOTS_FROM_PLUGIN is relative to them);
-// linked into each arm plugin, dladdr names that plugin.
-std::filesystem::path default_urdf() {
-  Dl_info info{};
-  if (!dladdr(reinterpret_cast<void*>(&default_urdf), &info) || !info.dli_fname) return "wrist_camera_arm.urdf";
-  return (std::filesystem::path(info.dli_fname).parent_path() / FBA_ROBOTS_FROM_PLUGIN / "wrist_camera_arm.urdf")
-      .lexically_normal();
-}
 
 nlohmann::json pose_json(const Eigen::Isometry3d& t) {
   const Eigen::Quaterniond q(t.linear());
@@ -108,7 +97,8 @@ std::string ArmComponent::path_of(const fba::JointTrajectory& t, const Eigen::Ve
 
 ArmComponent::ArmComponent(fba::Context& ctx)
     : ctx_(ctx),
-      model_(ctx(kUrdf).empty() ? default_urdf() : ctx(kUrdf), ctx(kBaseLink), ctx(kCameraLink)),
+      robot_(Robot::read(ctx)),
+      model_(ArmModel::from_string(robot_.urdf, robot_.name, ctx(kBaseLink), ctx(kCameraLink))),
       publish_initial_(ctx(kPublishInitial)) {
   ik_.position_tolerance = ctx(kPositionTolerance);
   ik_.orientation_tolerance = ctx(kOrientationTolerance);
@@ -116,18 +106,17 @@ ArmComponent::ArmComponent(fba::Context& ctx)
   if (ctx(kCollisionCheck)) check_collisions(ctx);
 }
 
-void ArmComponent::check_collisions(fba::Context& ctx) {
+void ArmComponent::check_collisions(const fba::Context& ctx) {
 #ifdef FBA_ARM_COLLISION
-  const std::filesystem::path urdf = ctx(kUrdf).empty() ? default_urdf() : ctx(kUrdf);
   Eigen::Isometry3d flange_from_palm;
   try {
-    flange_from_palm = fba::motion::urdf_flange_from_palm(urdf, ctx(kBaseLink), kFlangeLink, kPalmLink);
+    flange_from_palm = fba::motion::urdf_flange_from_palm(robot_.urdf, robot_.name, ctx(kBaseLink), kFlangeLink, kPalmLink);
   } catch (const ArmModelError&) {
     ctx.log().info("no '{}' link after '{}' in {}: IK solutions are not checked for collisions (the hand's place is needed)",
-                   kPalmLink, kFlangeLink, urdf.string());
+                   kPalmLink, kFlangeLink, robot_.name);
     return;
   }
-  to_flange_ = std::make_unique<ArmModel>(urdf, ctx(kBaseLink), kFlangeLink);
+  to_flange_ = std::make_unique<ArmModel>(ArmModel::from_string(robot_.urdf, robot_.name, ctx(kBaseLink), kFlangeLink));
   collision_ = std::make_unique<fba::motion::RobotCollision>(*to_flange_, flange_from_palm);
   ik_.accept = [c = collision_.get()](const Eigen::VectorXd& q) { return c->collision(q); };
 #else

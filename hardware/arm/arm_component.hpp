@@ -1,5 +1,5 @@
 // What the task's two arms do alike, written once: sim.arm (simulated) and hw.canopen_arm (the real
-// arm over CANopen) derive from ArmComponent. It holds the arm's model from the URDF parameters,
+// arm over CANopen) derive from ArmComponent. It holds the arm's model from the robot's parameters,
 // turns a target into joint goals, and publishes the joint states, the camera pose and the
 // 'arrived' and 'unreachable' events; each twin adds how its joints move.
 #pragma once
@@ -17,6 +17,7 @@
 
 #include "arm_model.hpp"
 #include "arm_ports.hpp"
+#include "robot_parameters.hpp"
 
 #ifdef FBA_ARM_COLLISION
 #include "fba/motion/robot_collision.hpp"
@@ -44,10 +45,9 @@ class TimedPath {
 
 class ArmComponent : public fba::Component, public ArmPorts {
  public:
-  static constexpr fba::Param<std::filesystem::path> kUrdf{
-      "urdf", "",
-      "the arm's URDF (kinematics and joint limits); empty: the project's wrist_camera_arm.urdf (a UR5-like 6R arm, "
-      "camera on the wrist)"};
+  // The robot (urdf, base_pose, flange_to_palm, flange_to_camera): its kinematics and joint limits,
+  // where the camera sits for the camera pose, where the hand sits for the collision check.
+  using Robot = RobotParameters;
   static constexpr fba::Param<std::string> kBaseLink{"base_link", "world", "the frame target poses are given in"};
   static constexpr fba::Param<std::string> kCameraLink{"camera_link", "camera",
                                                        "the camera's optical frame (z forward, x right, y down)"};
@@ -105,6 +105,8 @@ class ArmComponent : public fba::Component, public ArmPorts {
   std::string names() const;
 
   fba::Context& ctx_;
+  // The robot as the parameters describe it, the measured origins in place; read once.
+  const RobotDescription robot_;
   const ArmModel model_;
   IkOptions ik_;
 #ifdef FBA_ARM_COLLISION
@@ -119,7 +121,7 @@ class ArmComponent : public fba::Component, public ArmPorts {
   static constexpr const char* kFlangeLink = "flange";
   static constexpr const char* kPalmLink = "palm";
   // Sets ik_.accept to the robot's collision check (collision_check).
-  void check_collisions(fba::Context& ctx);
+  void check_collisions(const fba::Context& ctx);
 
   fba::Pose pose_at(const Eigen::VectorXd& q, std::int64_t stamp_ns) const;
   std::string joint_goal(const fba::JointState& js, const Eigen::VectorXd& from, Eigen::VectorXd& goal) const;

@@ -1,6 +1,11 @@
 // tasks/grasp.yaml: the grasp loop with its arm, camera and hand as device slots, bound by a profile
-// (tasks/profiles/sim.yaml).
+// (tasks/profiles/sim.yaml), and the robot's measured transforms, its parameters under every profile.
 #include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
 
 #include <fba/registry.hpp>
 #include <fba/task.hpp>
@@ -50,4 +55,64 @@ TEST(GraspTask, CheckShowsTheParametersAndEachSlotsTypeAndInterface) {
                            "optional)\n    outputs: result (fba.GraspExecution)\n"
                            "    events:  dropped, held, error, finished\n"})
     EXPECT_NE(r.output.find(line), std::string::npos) << line << " in:\n" << r.output;
+}
+
+// The robot's measured transforms are the task's parameters: set once, under every profile, they
+// reach every component that reads the robot (each declares the robot's parameters alike), the
+// slots' arm and sim.hand as the task's own reach, synthesis and planner.
+TEST(GraspTask, TheRobotsMeasuredTransformsSetOnceReachEveryComponentThatReadsTheRobot) {
+  const std::map<std::string, std::vector<double>> measured{{"base_pose", {-0.44, 0.01, 0.002, 0, 0, 0.01}},
+                                                            {"flange_to_palm", {0.001, 0, 0.08, 0, 0, 0.02}},
+                                                            {"flange_to_camera", {0, 0.061, 0.029, 0.01, 0, 0}}};
+  std::vector<std::string> sets;
+  for (const auto& [name, v] : measured) {
+    std::string list;
+    for (double x : v) list += (list.empty() ? "" : ",") + std::to_string(x);
+    sets.push_back("robot." + name + "=[" + list + "]");
+  }
+  const std::map<std::string, std::set<std::string>> readers{
+      {"sim", {"arm", "hand", "reach", "synthesis", "planner"}},
+      {"emulated", {"arm", "reach", "synthesis", "planner"}},
+      {"real", {"arm", "reach", "synthesis", "planner"}}};
+  std::map<std::string, fba::ParamSpec> declared;  // as the first reader declares them: the others alike
+  for (const auto& [name, expected] : readers) {
+    const auto task = fba::load_task(kGrasp, built_plugins(), profile(name, sets));
+    std::set<std::string> found;
+    for (const auto& c : task.components) {
+      const fba::Spec& spec = c.type->spec;
+      if (!spec.find_param("urdf")) continue;
+      found.insert(c.name);
+      for (const auto& [param, value] : measured) {
+        ASSERT_NE(spec.find_param(param), nullptr) << c.name << " (" << spec.type_name() << ") reads the robot without " << param;
+        EXPECT_EQ(std::get<std::vector<double>>(c.params.at(param)), value) << name << ": " << c.name << "." << param;
+      }
+      for (const char* param : {"urdf", "base_pose", "flange_to_palm", "flange_to_camera"}) {
+        const fba::ParamSpec& p = *spec.find_param(param);
+        const fba::ParamSpec& first = declared.emplace(param, p).first->second;
+        EXPECT_EQ(p.type, first.type) << c.name << "." << param;
+        EXPECT_EQ(p.default_value, first.default_value) << c.name << "." << param;
+        EXPECT_EQ(p.sizes, first.sizes) << c.name << "." << param;
+        EXPECT_EQ(p.doc, first.doc) << c.name << "." << param;
+      }
+    }
+    EXPECT_EQ(found, expected) << name;
+  }
+}
+
+// A measured transform of five numbers, set on the task: the task does not load, and each place
+// it reaches says which parameter, what it needs and where the value came from.
+TEST(GraspTask, AMalformedMeasuredTransformIsAClearErrorNamingTheParameter) {
+  try {
+    fba::load_task(kGrasp, built_plugins(), profile("sim", {"robot.flange_to_camera=[0,0.06,0.03,0,0]"}));
+    FAIL() << "loaded";
+  } catch (const fba::ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("--set robot.flange_to_camera=[0,0.06,0.03,0,0]: error: component 'arm' (sim.arm): parameter 'flange_to_camera' "
+                        "must have 0 or 6 numbers; found 5 (arm.flange_to_camera is ${robot.flange_to_camera} at "),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("component 'reach' (motion.reach_planner): parameter 'flange_to_camera' must have 0 or 6 numbers; found 5"),
+              std::string::npos)
+        << what;
+  }
 }

@@ -106,20 +106,23 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
           .range(0, 1000000);
 
   static fba::Spec spec() {
-    return fba::Spec::actuator(
-               "hw.canopen_arm",
-               "Real arm of CiA 402 drives on a CANopen bus (SLCAN or SocketCAN), one node per joint, "
-               "kinematics and limits from a URDF (the twin of sim.arm): moves to camera poses or joint "
-               "targets with synchronised profile position moves, quick-stops on any fault.")
-        .add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable, kDevice, kBitrate,
-             kNodeIds, kCountsPerRad, kZeroCounts, kUrdf, kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate,
-             kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kCollisionCheck, kHeartbeatPeriod, kHeartbeatTimeout,
-             kSdoTimeout, kEnableTimeout, kResetFaults, kEmulator, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
+    fba::Spec spec = fba::Spec::actuator(
+        "hw.canopen_arm",
+        "Real arm of CiA 402 drives on a CANopen bus (SLCAN or SocketCAN), one node per joint, "
+        "kinematics and limits from a URDF (the twin of sim.arm): moves to camera poses or joint "
+        "targets with synchronised profile position moves, quick-stops on any fault.");
+    spec.add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable, kDevice, kBitrate, kNodeIds,
+             kCountsPerRad, kZeroCounts);
+    Robot::add(spec)
+        .add(kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate, kPositionTolerance, kOrientationTolerance, kAttempts,
+             kPublishInitial, kCollisionCheck, kHeartbeatPeriod, kHeartbeatTimeout, kSdoTimeout, kEnableTimeout, kResetFaults,
+             kEmulator, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
         .check(kDevice, check_bus)
         .check(kEmulator, check_emulator)
         .check(kRate, check_rate)
         .blocking()
         .concurrent_safe_state();
+    return spec;
   }
 
   explicit CanopenArmComponent(fba::Context& ctx)
@@ -150,7 +153,7 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
         throw std::runtime_error(
             fmt::format("joint '{}' of '{}' has no finite limits (a continuous joint): "
                         "hw.canopen_arm needs limits to check every command against",
-                        name, ctx(kUrdf).string()));
+                        name, robot_.name));
       joints.push_back(canopen::ArmJoint{.name = name,
                                          .node = static_cast<int>(nodes[i]),
                                          .counts_per_unit = counts[i],

@@ -39,11 +39,13 @@ class SimArm final : public fba::arm::ArmComponent {
   static constexpr auto kRate = fba::Param<double>("rate", 50.0, "joint states per second while moving (task time)").range(0.1, 1000.0);
 
   static fba::Spec spec() {
-    return fba::Spec::actuator("sim.arm",
-                               "Simulated 6-joint arm with a wrist camera (URDF, Orocos KDL): moves to camera poses or joint targets "
-                               "within the joint limits, in task time (the twin of hw.canopen_arm).")
-        .add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable, kUrdf, kBaseLink, kCameraLink, kInitial, kSpeed,
-             kAcceleration, kRate, kPositionTolerance, kOrientationTolerance, kAttempts, kPublishInitial, kCollisionCheck);
+    fba::Spec spec = fba::Spec::actuator("sim.arm",
+                                         "Simulated 6-joint arm with a wrist camera (URDF, Orocos KDL): moves to camera poses or joint "
+                                         "targets within the joint limits, in task time (the twin of hw.canopen_arm).");
+    spec.add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable);
+    Robot::add(spec).add(kBaseLink, kCameraLink, kInitial, kSpeed, kAcceleration, kRate, kPositionTolerance, kOrientationTolerance,
+                         kAttempts, kPublishInitial, kCollisionCheck);
+    return spec;
   }
 
   explicit SimArm(fba::Context& ctx) : ArmComponent(ctx) {

@@ -62,8 +62,9 @@ TEST(RobotDescription, TheHandsShapesAreNotTheArms) {
   EXPECT_NEAR(finger.limits()[0].upper, 0.06, 1e-12);
 }
 
-// A profile's measured transforms replace the URDF's: the palm and the camera on the flange, the
-// base on the table. Only fixed joints take one, and a wrong name is refused with those there are.
+// The measured transforms (the robot's parameters) replace the URDF's: the palm and the camera on
+// the flange, the base on the table. Only fixed joints take one, and a wrong name is refused with
+// those there are.
 TEST(RobotDescription, MeasuredTransformsReplaceTheUrdfsOrigins) {
   const Eigen::Isometry3d palm = fba::arm::pose_from_xyz_rpy({0.001, -0.002, 0.08, 0, 0, M_PI / 2}, "flange_to_palm");
   const Eigen::Isometry3d base = fba::arm::pose_from_xyz_rpy({-0.5, 0.1, 0.02, 0, 0, 0.3}, "base_pose");

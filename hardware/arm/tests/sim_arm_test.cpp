@@ -386,7 +386,7 @@ TEST(SimArm, ATrajectoryThatDoesNotFitTheArmOrComesWhileItMovesIsRefused) {
 TEST(SimArm, ReachesEveryViewWithTheRobotClearOfItselfAndTheTable) {
   const std::string urdf = fba::test::wrist_camera_arm_urdf();
   const fba::arm::ArmModel to_flange(urdf, "world", "flange");
-  fba::motion::RobotCollision robot(to_flange, fba::motion::urdf_flange_from_palm(urdf, "world"));
+  fba::motion::RobotCollision robot(to_flange, fba::motion::urdf_flange_from_palm(fba::test::wrist_camera_arm_text(), urdf, "world"));
   const Eigen::Vector3d centre(0, 0, 0.05);
   int reached_clear = 0, colliding_without = 0;
   for (bool check : {true, false}) {

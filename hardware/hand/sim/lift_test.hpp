@@ -67,8 +67,9 @@ struct LiftTestParams {
 struct RobotSetup {
   std::string urdf;          // URDF text; empty: the project's (built in)
   std::string urdf_name;     // names it in messages
-  // Fixed joints' origins in place of the URDF's (arm::with_fixed_joint_origins): the profile's
-  // world_to_base, flange_to_palm, flange_to_camera.
+  // Fixed joints' origins in place of the URDF's (arm::with_fixed_joint_origins): the measured
+  // world_to_base, flange_to_palm, flange_to_camera. (sim.hand gives `urdf` with them in place
+  // already: arm::RobotParameters::read.)
   std::map<std::string, Eigen::Isometry3d> origins;
 };
 

@@ -3,10 +3,7 @@
 // carries the hand to the grasp on reach planning's trajectory, the fingers close under force
 // control, the arm lifts and holds (the lift test, lift_test.hpp); it reports what happened.
 #include <cmath>
-#include <fstream>
-#include <map>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -18,10 +15,10 @@
 #include <fba/types/hand_command.hpp>
 #include <fba/types/joint_trajectory.hpp>
 
-#include "arm_model.hpp"
 #include "fba/geometry/mesh_io.hpp"
 #include "hand_ports.hpp"
 #include "lift_test.hpp"
+#include "robot_parameters.hpp"
 
 namespace {
 
@@ -73,21 +70,9 @@ class SimHand final : public fba::Component {
           .choices({"table", "mesh"});
   static constexpr auto kFingerForce =
       fba::Param<double>("finger_force", 10.0, "force at each finger's pad when closing, newtons; the thumb pushes twice as hard").range(0.1, 100);
-  static constexpr fba::Param<std::filesystem::path> kUrdf{
-      "urdf", "", "the robot's URDF (the arm, its camera and the hand on its flange); empty: the project's wrist_camera_arm.urdf, built in"};
-  // The measured transforms (docs/hardware.md, "Where the robot's parts are"): empty, the URDF's own.
-  static inline const auto kBasePose = fba::Param<std::vector<double>>(
-      "base_pose", std::vector<double>{},
-      "the arm's base on the table (the URDF's joint world_to_base): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's")
-      .size({0, 6});
-  static inline const auto kFlangeToPalm = fba::Param<std::vector<double>>(
-      "flange_to_palm", std::vector<double>{},
-      "the palm on the flange (the URDF's joint flange_to_palm): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's")
-      .size({0, 6});
-  static inline const auto kFlangeToCamera = fba::Param<std::vector<double>>(
-      "flange_to_camera", std::vector<double>{},
-      "the camera on the flange, hand-eye (the URDF's joint flange_to_camera): [x, y, z] m, [roll, pitch, yaw] rad; empty: the URDF's")
-      .size({0, 6});
+  // The robot (urdf, base_pose, flange_to_palm, flange_to_camera), as every component that reads
+  // it takes it: the world's arm, camera and hand.
+  using Robot = fba::arm::RobotParameters;
   static constexpr auto kVoxelSize = fba::Param<double>(
       "voxel_size", 0.003, "the edge of the voxels whose boxes the object collides as in MuJoCo, metres").range(0.0005, 0.02);
   static inline const auto kStartJoints = fba::Param<std::vector<double>>(
@@ -95,12 +80,14 @@ class SimHand final : public fba::Component {
       "the arm's joints where each grasp's reach plan starts, in the URDF's order; empty: sim.arm's initial pose drawn back 20 cm");
 
   static fba::Spec spec() {
-    return fba::Spec::actuator("sim.hand",
-                             "A three-fingered hand executing grasps in the MuJoCo physics engine: it lifts the object and "
-                             "holds it, and reports the real contacts, whether it held and how far it slipped "
-                             "(the twin of hw.robotiq_3f).")
-        .add(kGrasp, kCommands, kTrajectory, kResult, kHeld, kDropped, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kMass, kFriction, kLiftHeight, kHoldTime,
-             kFingerForce, kWorld, kUrdf, kBasePose, kFlangeToPalm, kFlangeToCamera, kVoxelSize, kStartJoints);
+    fba::Spec spec = fba::Spec::actuator("sim.hand",
+                                         "A three-fingered hand executing grasps in the MuJoCo physics engine: it lifts the object and "
+                                         "holds it, and reports the real contacts, whether it held and how far it slipped "
+                                         "(the twin of hw.robotiq_3f).");
+    spec.add(kGrasp, kCommands, kTrajectory, kResult, kHeld, kDropped, kMesh, kObjectX, kObjectY, kObjectYaw, kObjectRest, kMass, kFriction,
+             kLiftHeight, kHoldTime, kFingerForce, kWorld);
+    Robot::add(spec).add(kVoxelSize, kStartJoints);
+    return spec;
   }
 
   explicit SimHand(fba::Context& ctx) : ctx_(ctx), test_(make_test(ctx, table_shift_)) {
@@ -196,22 +183,11 @@ class SimHand final : public fba::Component {
     p.finger_force = ctx(kFingerForce);
     p.voxel_size = ctx(kVoxelSize);
     p.start_joints = ctx(kStartJoints);
+    // The robot's URDF with the measured origins already in place.
+    const fba::arm::RobotDescription described = Robot::read(ctx);
     fba::sim_hand::RobotSetup robot;
-    if (!ctx(kUrdf).empty()) {
-      std::ifstream in(ctx(kUrdf), std::ios::binary);
-      std::ostringstream text;
-      text << in.rdbuf();
-      if (!in) throw std::runtime_error("parameter 'urdf': cannot read " + ctx(kUrdf).string());
-      robot.urdf = text.str();
-      robot.urdf_name = ctx(kUrdf).string();
-    }
-    const std::map<std::string, const fba::Param<std::vector<double>>*> measured{
-        {"world_to_base", &kBasePose}, {"flange_to_palm", &kFlangeToPalm}, {"flange_to_camera", &kFlangeToCamera}};
-    for (const auto& [joint, param] : measured) {
-      const std::vector<double> v = ctx(*param);
-      if (v.empty()) continue;
-      robot.origins[joint] = fba::arm::pose_from_xyz_rpy(v, "parameter '" + std::string(param->name) + "'");
-    }
+    robot.urdf = described.urdf;
+    robot.urdf_name = described.name;
     return fba::sim_hand::LiftTest(loaded.mesh, placement(ctx), p, robot);
   }
 

@@ -30,8 +30,8 @@
 #include "fba/grasp/exploration.hpp"
 #if FBA_GRASP_REACH
 #include "arm_model.hpp"
-#include "fba/motion/reach_parameters.hpp"
 #include "fba/motion/robot_collision.hpp"
+#include "robot_parameters.hpp"
 #endif
 
 namespace {
@@ -82,7 +82,8 @@ class ExplorationPlanner final : public fba::Component {
   static constexpr fba::Param<bool> kReachableOnly{
       "reachable_only", false,
       "ring and hemisphere: keep only the candidate views the arm reaches with the robot clear of itself and the table (inverse "
-      "kinematics on the urdf's arm to its camera, with the arms' collision check), so that no view asked for is refused"};
+      "kinematics on the robot's arm to its camera, with the arms' collision check; the robot: urdf and its measured transforms), "
+      "so that no view asked for is refused"};
 #endif
   static constexpr auto kMovementWeight = fba::Param<double>(
       "movement_weight", 0.1, "score = gain (the grazing gain of the request's points, else the share of its uncertain nodes seen) - movement_weight * (angle moved / 180 deg)").at_least(0);
@@ -99,17 +100,14 @@ class ExplorationPlanner final : public fba::Component {
   static constexpr fba::EventOut kNoView{"no_view", "no candidate is worth the move; payload (JSON): reason, views requested"};
 
   static fba::Spec spec() {
-    return fba::Spec::filter("grasp.exploration_planner",
-                             "Chooses the next view: the candidate whose lines of sight graze most of the grasp's unresolved "
-                             "contacts in a new direction, else the one that sees most uncertain model nodes in its regions; "
-                             "visibility-aware, less the cost of moving.")
+    fba::Spec spec = fba::Spec::filter("grasp.exploration_planner",
+                                       "Chooses the next view: the candidate whose lines of sight graze most of the grasp's unresolved "
+                                       "contacts in a new direction, else the one that sees most uncertain model nodes in its regions; "
+                                       "visibility-aware, less the cost of moving.")
         .add(kOctree, kRegions, kCurrent, kStart, kTarget, kViews, kCount, kDistance, kMinElevation, kMaxElevation, kCentre,
              kPosesFrom, kGoodOnly, kInitialViews, kInitialLayout, kMovementWeight, kHalfFov, kMinGain, kMaxRays, kExcludeVisited, kViewChosen,
              kNoView)
         .add(kMinElevation <= kMaxElevation)
-#if FBA_GRASP_REACH
-        .add(kReachableOnly, fba::motion::ReachParameters::kUrdf)
-#endif
         .check([](const fba::ParamValues& p) {
           if (p(kViews) == "recorded" && p(kPosesFrom).empty())
             return std::string("views: recorded needs poses_from, the image set whose poses are the candidates; found none");
@@ -117,6 +115,11 @@ class ExplorationPlanner final : public fba::Component {
             return std::string("poses_from '" + p(kPosesFrom) + "' is used only with views: recorded; found views: " + p(kViews));
           return std::string();
         });
+#if FBA_GRASP_REACH
+    spec.add(kReachableOnly);
+    fba::arm::RobotParameters::add(spec);  // the robot reachable_only checks the views on
+#endif
+    return spec;
   }
 
   explicit ExplorationPlanner(fba::Context& ctx) : ctx_(ctx), initial_views_(ctx(kInitialViews)), exclude_visited_(ctx(kExcludeVisited)) {
@@ -176,20 +179,20 @@ class ExplorationPlanner final : public fba::Component {
   // joint limits, with the arm, the camera and the hand clear of the arm itself and the table (the
   // check sim.arm and hw.canopen_arm make before they move).
   void keep_reachable() {
-    const std::filesystem::path urdf =
-        ctx_(fba::motion::ReachParameters::kUrdf).empty() ? fba::motion::default_urdf() : ctx_(fba::motion::ReachParameters::kUrdf);
-    const fba::arm::ArmModel to_camera(urdf, "world", "camera"), to_flange(urdf, "world", "flange");
+    const fba::arm::RobotDescription arm = fba::arm::RobotParameters::read(ctx_);
+    const auto to_camera = fba::arm::ArmModel::from_string(arm.urdf, arm.name, "world", "camera");
+    const auto to_flange = fba::arm::ArmModel::from_string(arm.urdf, arm.name, "world", "flange");
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(to_flange.size()));
-    fba::motion::RobotCollision robot(to_flange, fba::motion::urdf_flange_from_palm(urdf, "world"));
+    fba::motion::RobotCollision robot(to_flange, fba::motion::urdf_flange_from_palm(arm.urdf, arm.name, "world"));
     fba::arm::IkOptions ik;
     ik.accept = [&robot](const Eigen::VectorXd& q) { return robot.collision(q); };
     std::vector<Eigen::Isometry3d> kept;
     for (const auto& view : candidates_)
       if (to_camera.inverse(view, zero, ik).ok) kept.push_back(view);
-    ctx_.log().info("{} of the {} candidate views are within the arm's reach ({})", kept.size(), candidates_.size(), urdf.string());
+    ctx_.log().info("{} of the {} candidate views are within the arm's reach ({})", kept.size(), candidates_.size(), arm.name);
     if (kept.empty())
       throw std::runtime_error("reachable_only: none of the " + std::to_string(candidates_.size()) + " candidate views is within the reach of " +
-                               "the arm of " + urdf.string() + "; move the views (centre, distance, elevations) or the arm");
+                               "the arm of " + arm.name + "; move the views (centre, distance, elevations) or the arm");
     candidates_ = std::move(kept);
   }
 #endif

@@ -238,7 +238,7 @@ class GraspSynthesisFilter final : public fba::Component {
                 {{"visual_analysis", "grasp_synthesis"}, {"grasp_synthesis", "exploration_movement"}, {"exploration_movement", "grasp_synthesis"}});
 #if FBA_GRASP_REACH
     spec.add(kJointState, kUnreachable, kReachChecks, kRobotHand);
-    fba::motion::ReachParameters::add(spec);  // motion.reach_planner's, declared once
+    fba::motion::ReachParameters::add(spec);  // motion.reach_planner's and the robot's, declared once
 #endif
     return spec;
   }
@@ -261,18 +261,20 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.parallel_for = ctx.thread_pool().as_parallel_for();
 #if FBA_GRASP_REACH
     // The table is checked on the robot's own hand, as reach planning poses it.
-    const fba::motion::ReachParams reach_params = fba::motion::ReachParameters::read(ctx);
-    if (ctx(kRobotHand)) params_.robot_hand = fba::grasp::motion_hand(reach_params.standoff, reach_params.clearance);
-    // The arm's reach, when its joints are wired: the planner's check, with its parameters.
+    if (ctx(kRobotHand))
+      params_.robot_hand = fba::grasp::motion_hand(ctx(fba::motion::ReachParameters::kStandoff), fba::motion::ReachParams{}.clearance);
+    // The arm's reach, when its joints are wired: the planner's check, with its parameters and the
+    // robot's.
     if (ctx(kJointState).connected()) {
+      const fba::arm::RobotDescription robot = fba::arm::RobotParameters::read(ctx);
       // Whether the arm reaches a candidate, not yet how: the grasp alone (its pregrasp, approach and
       // lift), from where the arm stands; whether it can start from there, for the one selected.
       fba::motion::ReachParams quick;
       quick.first_solution = true;
       quick.check_start = false;
-      reach_.emplace(fba::motion::ReachParameters::planner(ctx, quick));
+      reach_.emplace(fba::motion::ReachParameters::planner(ctx, robot, quick));
       quick.check_start = true;
-      reach_start_.emplace(fba::motion::ReachParameters::planner(ctx, quick));
+      reach_start_.emplace(fba::motion::ReachParameters::planner(ctx, robot, quick));
       reach_checks_ = ctx(kReachChecks);
       params_.pregrasp_distance = reach_->params().standoff;  // the table's check at the pregrasp, where the path ends
     }

@@ -1,11 +1,14 @@
 // grasp.synthesis with the arm's joints: it passes over the candidates the arm cannot reach from
 // where it stands (the reach planner's reachable(), with motion.reach_planner's parameters), counts
 // them by refusal, says `unreachable` when none is reachable and asks for views; without joints it
-// selects as before. Scenes: boxes carved exactly in the task's workspace at depth 6, the arm at
-// sim.arm's initial pose (the camera 0.35 m from the origin, 60 degrees up on the arm's side).
+// selects as before. Its palm sits where motion.reach_planner's does (the robot's flange_to_palm).
+// Scenes: boxes carved exactly in the task's workspace at depth 6, the arm at sim.arm's initial
+// pose (the camera 0.35 m from the origin, 60 degrees up on the arm's side).
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+
+#include <fba/testing.hpp>
 
 #include "reach_scene.hpp"
 
@@ -171,7 +174,8 @@ TEST(GraspSynthesisReach, WithoutAJointStateTheSameGraspIsSelectedAsBefore) {
 }
 
 // The reach parameters synthesis checks with are motion.reach_planner's: the same names, defaults,
-// ranges and docs, declared once (fba/motion/reach_parameters.hpp).
+// ranges and docs, declared once (fba/motion/reach_parameters.hpp, with the robot's:
+// robot_parameters.hpp).
 TEST(GraspSynthesisReach, ItsReachParametersAreTheReachPlannersOwn) {
   const auto synthesis = reach::reach_registry().find("grasp.synthesis");
   const auto planner = reach::reach_registry().find("motion.reach_planner");
@@ -187,7 +191,56 @@ TEST(GraspSynthesisReach, ItsReachParametersAreTheReachPlannersOwn) {
     EXPECT_EQ(s->sizes, p.sizes) << p.name;
     EXPECT_EQ(s->doc, p.doc) << p.name;
   }
-  EXPECT_EQ(shared, 10);  // urdf, base_link, flange_link, flange_to_palm, standoff, lift_height, contact_allowance, max_backout, seed, ik_attempts
+  // The robot's (urdf, base_pose, flange_to_palm, flange_to_camera), then base_link, flange_link, standoff, lift_height,
+  // contact_allowance, max_backout, seed, ik_attempts.
+  EXPECT_EQ(shared, 12);
   EXPECT_NE(synthesis->spec.find_input("joint_state"), nullptr);
   EXPECT_NE(synthesis->spec.find_event("unreachable"), nullptr);
+}
+
+namespace {
+
+// motion.reach_planner with `params` on the grasp, the box's model and the arm at home(): the
+// `unreachable` event's payload, or null when it planned the grasp.
+nlohmann::json plan_of(const fba::Grasp& grasp, const std::vector<double>& box, const fba::testing::Params& params) {
+  fba::testing::ComponentHarness h(reach::reach_registry(), "motion.reach_planner", params);
+  fba::JointState joints;
+  joints.names = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"};
+  const Eigen::VectorXd q = home();
+  joints.positions.assign(q.data(), q.data() + q.size());
+  h.push("octree", reach::box_model_of(box));
+  h.push("joint_state", joints);
+  h.push("grasp", grasp);
+  h.run();
+  for (const auto& e : h.events())
+    if (e.name == "unreachable") return nlohmann::json::parse(e.payload);
+  if (h.packets("trajectory").size() != 1) ADD_FAILURE() << "neither planned nor refused: " << h.failure();
+  return nullptr;
+}
+
+}  // namespace
+
+// The palm measured 25 cm out on the flange (the robot's parameter flange_to_palm): where the arm
+// stands, the open hand's thumb is then in the table. Synthesis's reach check says so of the grasp
+// it selects, in the words motion.reach_planner refuses it with, given the same parameter; with the
+// URDF's palm, both find the start clear and the planner plans it.
+TEST(GraspSynthesisReach, ItsReachCheckPutsThePalmWhereThePlannerDoesWhenFlangeToPalmIsSet) {
+  const std::vector<double> box = reach::standing({0.06, 0.06, 0.06});
+  const std::vector<double> measured{0, 0, 0.25, 0, 0, 0};
+  const std::string table = "table_z: [0.001]";
+  const reach::Outcome urdf_palm = reach::synthesise(box, home(), table);
+  ASSERT_EQ(urdf_palm.grasps.size(), 1u) << urdf_palm.run.reason;
+  EXPECT_EQ(nlohmann::json::parse(urdf_palm.result("reach"))["start"], "clear");
+  EXPECT_TRUE(plan_of(urdf_palm.grasps[0], box, {}).is_null());
+
+  const reach::Outcome measured_palm = reach::synthesise(box, home(), table + ", flange_to_palm: " + reach::numbers(measured));
+  ASSERT_EQ(measured_palm.grasps.size(), 1u) << measured_palm.run.reason;
+  const auto start = nlohmann::json::parse(measured_palm.result("reach"))["start"];
+  ASSERT_TRUE(start.is_object()) << start;
+  EXPECT_EQ(start["refusal"], "start");
+  EXPECT_EQ(start["reason"].get<std::string>().rfind("the current joints collide, with the hand open for the pregrasp: ", 0), 0u) << start;
+  const nlohmann::json refused = plan_of(measured_palm.grasps[0], box, {{"flange_to_palm", measured}});
+  ASSERT_FALSE(refused.is_null());
+  EXPECT_EQ(refused["refusal"], start["refusal"]);
+  EXPECT_EQ(refused["reason"], start["reason"]);
 }

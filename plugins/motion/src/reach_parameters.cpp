@@ -1,15 +1,6 @@
 #include "fba/motion/reach_parameters.hpp"
 
-#include <dlfcn.h>
-
 namespace fba::motion {
-
-// FBA_ROBOTS_FROM_PLUGIN: the robots' folder relative to the plugins' (plugins/motion/CMakeLists.txt).
-std::filesystem::path default_urdf() {
-  Dl_info info{};
-  if (!dladdr(reinterpret_cast<void*>(&default_urdf), &info) || !info.dli_fname) return "wrist_camera_arm.urdf";
-  return (std::filesystem::path(info.dli_fname).parent_path() / FBA_ROBOTS_FROM_PLUGIN / "wrist_camera_arm.urdf").lexically_normal();
-}
 
 std::optional<Eigen::VectorXd> arm_joints(const arm::ArmModel& arm, const fba::JointState& state, std::string& why) {
   const auto& names = arm.joint_names();

@@ -141,9 +141,10 @@ struct RobotCollision::Impl {
   }
 };
 
-Eigen::Isometry3d urdf_flange_from_palm(const std::filesystem::path& urdf, const std::string& base_link,
+Eigen::Isometry3d urdf_flange_from_palm(const std::string& urdf_xml, const std::string& origin, const std::string& base_link,
                                         const std::string& flange_link, const std::string& palm_link) {
-  const arm::ArmModel to_flange(urdf, base_link, flange_link), to_palm(urdf, base_link, palm_link);
+  const arm::ArmModel to_flange = arm::ArmModel::from_string(urdf_xml, origin, base_link, flange_link);
+  const arm::ArmModel to_palm = arm::ArmModel::from_string(urdf_xml, origin, base_link, palm_link);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(to_flange.size()));
   return to_flange.forward(zero).inverse() * to_palm.forward(zero);  // the same at any joints: a fixed joint
 }

@@ -1,11 +1,15 @@
 // motion.reach_planner through the component harness: a plan from the newest model and joints,
-// its stages following the plan's steps on the clock, and a refusal as the event `unreachable`.
+// its stages following the plan's steps on the clock, a refusal as the event `unreachable`, and
+// the palm where the robot's parameter flange_to_palm puts it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
+#include <fba/task_config.hpp>
 #include <fba/testing.hpp>
 #include <fba/types/hand_command.hpp>
 #include <fba/types/joint_state.hpp>
@@ -125,4 +129,53 @@ TEST(ReachPlannerComponent, ANewGraspReplacesThePlanBeingFollowed) {
   h.run();
   EXPECT_EQ(h.stage(), "idle");
   EXPECT_EQ(h.failure(), "");
+}
+
+namespace {
+
+// The flange's pose where the plan closes the hand (the trajectory's waypoint at the close), for
+// the box's grasp from above, with the planner's parameters `params`.
+Eigen::Isometry3d flange_at_close(const fba::testing::Params& params) {
+  ComponentHarness h(fba::test::built_plugins(), "motion.reach_planner", params);
+  h.push("octree", box_model(kBox));
+  h.push("joint_state", named_joints(home()));
+  h.push("grasp", box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07));
+  h.run();
+  const auto trajectory = h.values<fba::JointTrajectory>("trajectory");
+  const auto hand = h.values<fba::HandCommand>("hand");
+  if (trajectory.size() != 1 || hand.size() != 3) throw std::runtime_error("no plan: " + h.failure());
+  const auto& points = trajectory[0].points;
+  const auto at = std::find_if(points.begin(), points.end(), [&](const auto& p) { return std::abs(p.time - hand[1].time) < 1e-9; });
+  if (at == points.end()) throw std::runtime_error("no waypoint at the close");
+  static const fba::arm::ArmModel to_flange(arm_urdf(), "world", "flange");
+  return to_flange.forward(Eigen::Map<const Eigen::VectorXd>(at->positions.data(), 6));
+}
+
+}  // namespace
+
+// The palm measured elsewhere on the flange (the robot's parameter flange_to_palm): the plan puts
+// the palm where the grasp needs it all the same, so the flange stands elsewhere, by the
+// difference. Without the parameter, the URDF's flange_to_palm joint places it.
+TEST(ReachPlannerComponent, AFlangeToPalmSetThroughTheParameterMovesThePalmItPlansFor) {
+  const std::vector<double> urdf_palm{0, 0, 0.075, 0, 0, 0};  // hardware/robots/wrist_camera_arm.urdf
+  const std::vector<double> measured{0.004, -0.003, 0.09, 0, 0, 0.2};
+  const Eigen::Isometry3d flange = flange_at_close({});
+  const Eigen::Isometry3d flange_measured = flange_at_close({{"flange_to_palm", measured}});
+  const Eigen::Isometry3d palm = flange * fba::arm::pose_from_xyz_rpy(urdf_palm, "urdf");
+  const Eigen::Isometry3d palm_measured = flange_measured * fba::arm::pose_from_xyz_rpy(measured, "measured");
+  // The same palm pose (within the IK's tolerances), reached with the flange 1.5 cm further back.
+  EXPECT_LT((palm_measured.translation() - palm.translation()).norm(), 1e-3);
+  EXPECT_LT(fba::arm::angle_between(palm_measured, palm), 2e-3);
+  EXPECT_GT((flange_measured.translation() - flange.translation()).norm(), 0.01);
+  // Read with the URDF's palm, the measured plan's hand would stand off the grasp.
+  EXPECT_GT(((flange_measured * fba::arm::pose_from_xyz_rpy(urdf_palm, "urdf")).translation() - palm.translation()).norm(), 0.01);
+}
+
+TEST(ReachPlannerComponent, AMalformedFlangeToPalmIsAClearErrorNamingTheParameter) {
+  try {
+    ComponentHarness h(fba::test::built_plugins(), "motion.reach_planner", {{"flange_to_palm", std::vector<double>{0, 0, 0.075, 0, 0}}});
+    FAIL() << "accepted";
+  } catch (const fba::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("parameter 'flange_to_palm' must have 0 or 6 numbers; found 5"), std::string::npos) << e.what();
+  }
 }

@@ -2,10 +2,12 @@
 // the arm's motion to a grasp, and grasp.synthesis, which passes over the grasps the arm cannot
 // reach (ReachPlanner::reachable). Declared once here, with their names, defaults and ranges, so
 // that the two components read the same robot and cannot disagree on what is reachable; a task
-// that changes one sets it on both.
+// that changes one sets it on both. The robot itself (urdf, base_pose, flange_to_palm,
+// flange_to_camera) is arm::RobotParameters, which every component that reads the robot declares:
+// the palm sits on the flange where the URDF's joint flange_to_palm puts it, or where the
+// parameter flange_to_palm measured it.
 #pragma once
 
-#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,23 +19,14 @@
 
 #include "arm_model.hpp"
 #include "fba/motion/reach_planner.hpp"
+#include "fba/motion/robot_collision.hpp"
+#include "robot_parameters.hpp"
 
 namespace fba::motion {
 
-// The project's arm, wrist_camera_arm.urdf, where the build and the install put it: at the same
-// place relative to the plugin (the file this code is linked into) as sim.arm finds it.
-std::filesystem::path default_urdf();
-
 struct ReachParameters {
-  static constexpr fba::Param<std::filesystem::path> kUrdf{
-      "urdf", "", "the arm's URDF (kinematics, limits, collision shapes); empty: the project's wrist_camera_arm.urdf"};
   static constexpr fba::Param<std::string> kBaseLink{"base_link", "world", "the frame grasps are given in"};
   static constexpr fba::Param<std::string> kFlangeLink{"flange_link", "flange", "the link the hand is mounted on"};
-  static inline const auto kFlangeToPalm = fba::Param<std::vector<double>>(
-      "flange_to_palm", std::vector<double>{0, 0, 0.075, 0, 0, 0},
-      "the palm's frame on the flange: [x, y, z] in metres and [roll, pitch, yaw] in radians (the default: the palm's back 3 cm "
-      "out along the flange's axis, past the wrist camera)")
-      .size({6});
   static constexpr auto kStandoff =
       fba::Param<double>("standoff", 0.05, "metres back along the approach where the path ends and the straight approach begins").range(0, 0.5);
   static constexpr auto kLiftHeight = fba::Param<double>("lift_height", 0.1, "metres, straight up").range(0, 0.5);
@@ -49,16 +42,14 @@ struct ReachParameters {
   static constexpr auto kIkAttempts =
       fba::Param<int>("ik_attempts", 32, "IK starts for the pregrasp: the current joints, then random ones").range(1, 10000);
 
-  // Declares them on a component's spec.
+  // Declares them, with the robot's, on a component's spec.
   static fba::Spec& add(fba::Spec& spec) {
-    return spec.add(kUrdf, kBaseLink, kFlangeLink, kFlangeToPalm, kStandoff, kLiftHeight, kContactAllowance, kMaxBackout, kSeed,
-                    kIkAttempts);
+    arm::RobotParameters::add(spec);
+    return spec.add(kBaseLink, kFlangeLink, kStandoff, kLiftHeight, kContactAllowance, kMaxBackout, kSeed, kIkAttempts);
   }
-  // `p` with these parameters' values.
-  static ReachParams read(const fba::Context& ctx, ReachParams p = {}) {
-    const std::vector<double> f = ctx(kFlangeToPalm);
-    p.flange_from_palm = Eigen::Translation3d(f[0], f[1], f[2]) * Eigen::AngleAxisd(f[5], Eigen::Vector3d::UnitZ()) *
-                         Eigen::AngleAxisd(f[4], Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(f[3], Eigen::Vector3d::UnitX());
+  // `p` with these parameters' values, the palm on the flange where `robot` places it.
+  static ReachParams read(const fba::Context& ctx, const arm::RobotDescription& robot, ReachParams p = {}) {
+    p.flange_from_palm = urdf_flange_from_palm(robot.urdf, robot.name, ctx(kBaseLink), ctx(kFlangeLink));
     p.standoff = ctx(kStandoff);
     p.lift_height = ctx(kLiftHeight);
     p.contact_allowance = ctx(kContactAllowance);
@@ -67,9 +58,13 @@ struct ReachParameters {
     p.ik_attempts = ctx(kIkAttempts);
     return p;
   }
-  // The planner they describe, the rest of `p` as given. Throws as ReachPlanner's constructor.
+  // The planner they describe, the rest of `p` as given. Throws as ReachPlanner's constructor, and
+  // arm::RobotParameters::read.
+  static ReachPlanner planner(const fba::Context& ctx, const arm::RobotDescription& robot, const ReachParams& p = {}) {
+    return ReachPlanner(arm::ArmModel::from_string(robot.urdf, robot.name, ctx(kBaseLink), ctx(kFlangeLink)), read(ctx, robot, p));
+  }
   static ReachPlanner planner(const fba::Context& ctx, const ReachParams& p = {}) {
-    return ReachPlanner(ctx(kUrdf).empty() ? default_urdf() : ctx(kUrdf), read(ctx, p), ctx(kBaseLink), ctx(kFlangeLink));
+    return planner(ctx, arm::RobotParameters::read(ctx), p);
   }
 };
 

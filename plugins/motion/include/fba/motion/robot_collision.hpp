@@ -4,7 +4,6 @@
 // from hand_parts().
 #pragma once
 
-#include <filesystem>
 #include <memory>
 #include <span>
 #include <string>
@@ -16,10 +15,11 @@
 
 namespace fba::motion {
 
-// Where the palm sits on the flange, as the robot's URDF places it (the fixed joint between them),
-// so that every reader of the one description puts the hand at the same place. Throws
-// arm::ArmModelError when either link is not on a chain from `base_link`.
-Eigen::Isometry3d urdf_flange_from_palm(const std::filesystem::path& urdf, const std::string& base_link,
+// Where the palm sits on the flange, as the robot's URDF (its text, `origin` naming it in messages:
+// arm::RobotDescription) places it (the fixed joint between them), so that every reader of the one
+// description puts the hand at the same place. Throws arm::ArmModelError when either link is not
+// on a chain from `base_link`.
+Eigen::Isometry3d urdf_flange_from_palm(const std::string& urdf_xml, const std::string& origin, const std::string& base_link,
                                         const std::string& flange_link = "flange", const std::string& palm_link = "palm");
 
 class RobotCollision {
