@@ -188,7 +188,7 @@ class GraspSynthesisFilter final : public fba::Component {
       "planning_performed",
       "no reliable grasp yet: regions were emitted for a new view; payload (JSON): views, samples, regions, candidates, "
       "uncertain_regions, regions_requested, points_requested (contacts to graze), best_total, seconds (wall time of the analysis), best (the best candidate's S1, S3, S4 and whether it is uncertain)"};
-  static constexpr fba::EventOut kGraspSelected{"grasp_selected", "a reliable grasp was selected; payload: the grasp as JSON"};
+  static constexpr fba::EventOut kGraspSelected{"grasp_selected", "a reliable grasp was selected; payload: the grasp as JSON, with its Ferrari-Canny epsilon on the model (model_epsilon)"};
   static constexpr fba::EventOut kFailed{"grasp_synthesis_failed", "the search gave up; payload: the reason"};
 #if FBA_GRASP_REACH
   static constexpr fba::OptionalIn<fba::JointState> kJointState{
@@ -374,7 +374,7 @@ class GraspSynthesisFilter final : public fba::Component {
                         c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                         c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
         reach.start_for(i);
-        return select(c.grasp, views, "surface");
+        return select(c.grasp, c.model_epsilon, views, "surface");
       }
       if (c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
     }
@@ -390,7 +390,7 @@ class GraspSynthesisFilter final : public fba::Component {
                           c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                           c.model_epsilon);
           reach.start_for(i);
-          return select(c.grasp, views, "contacts");
+          return select(c.grasp, c.model_epsilon, views, "contacts");
         }
       if (reach.active && !r.candidates.empty() && !first_reachable)
         return fail("no grasp the arm can reach after " + std::to_string(views) + " views: none of the " +
@@ -654,13 +654,17 @@ class GraspSynthesisFilter final : public fba::Component {
 
   // resolved: what the model had resolved (and two views pinned, with rim_deg) under the fingers:
   // "surface", each contact and its neighbourhood, or "contacts", the contacts only (after the
-  // last view).
-  void select(fba::Grasp g, int views, const char* resolved) {
+  // last view). model_epsilon: the grasp's Ferrari-Canny epsilon on the model, which fba::Grasp
+  // does not carry: the result and the event hold it beside the grasp ("model_epsilon"), for the
+  // run's last line and the summary's readers.
+  void select(fba::Grasp g, double model_epsilon, int views, const char* resolved) {
     ctx_.report("resolved", nlohmann::json(resolved).dump());
     // The carver integrates silhouettes in arrival order: the model's views are the first ones.
     for (int v = 0; v < views; ++v) g.views.push_back(v < int(view_index_.size()) ? view_index_[v] : v);
     g.stamp = ctx_(kOctree).packet().header().stamp_ns * 1e-9;
-    const std::string json = fba::grasp::grasp_to_json(g).dump();
+    nlohmann::json selected = fba::grasp::grasp_to_json(g);
+    selected["model_epsilon"] = model_epsilon;
+    const std::string json = selected.dump();
     ctx_.report("grasp", json);
     ctx_.emit(kGraspSelected, json);
     write_pictures(&g, ctx_(kOctree).get());
