@@ -202,6 +202,108 @@ TEST_F(CliServe, WithoutABuiltTemplateNoReportIsWrittenAndFbaRunSaysHowToGetOne)
   EXPECT_NE(r.output.find("npm"), std::string::npos) << r.output;
 }
 
+// Ends by itself with a failure: the sink's done is a failure event (exit 1).
+constexpr const char* kFiniteFailing = R"(task: finite_failing
+components:
+  source: { type: examples.counter, params: { count: 100 } }
+  sink: { type: examples.sink, params: { expected: 100 } }
+connections:
+  - source.out -> sink.in
+on:
+  sink.done: stop_failure
+)";
+
+// A page that connects after the run: the run's messages from the task to the end, read until the
+// server closes the stream or the end is in. Returns them in order.
+std::vector<json> replayed(const LiveUrl& url) {
+  LiveSocket socket(url);
+  beast::error_code ec;
+  socket.handshake(url.origin(), url.token, ec);
+  if (ec) throw std::runtime_error("the WebSocket handshake failed: " + ec.message());
+  std::vector<json> messages;
+  while (messages.empty() || messages.back().value("type", "") != "end") {
+    const std::string text = socket.read(ec);
+    if (ec) throw std::runtime_error("the stream ended before its end message: " + ec.message());
+    messages.push_back(json::parse(text));
+  }
+  return messages;
+}
+
+// A page that connects while the run goes on: reads until a stats message says the source has run.
+void replayed_until_stats(const LiveUrl& url) {
+  LiveSocket socket(url);
+  beast::error_code ec;
+  socket.handshake(url.origin(), url.token, ec);
+  if (ec) throw std::runtime_error("the WebSocket handshake failed: " + ec.message());
+  for (;;) {
+    const std::string text = socket.read(ec);
+    if (ec) throw std::runtime_error("the stream ended before the run was seen running: " + ec.message());
+    const json m = json::parse(text);
+    if (m["type"] == "stats" && !m["components"].empty() && m["components"][0]["invocations"] > 0) return;
+  }
+}
+
+// --serve-keep: the run ends by itself, and fba-run goes on serving it (the page, and its messages to
+// a page that connects after the end) until SIGTERM, then exits with the run's status, its summary
+// the run's. For a success and a failure, so that the status is seen to be the run's, not 0.
+TEST_F(CliServe, WithServeKeepTheEndedRunIsServedUntilSigtermAndTheStatusIsTheRuns) {
+  struct Case {
+    const char* name;
+    const char* task;
+    int status;
+    const char* outcome;
+  };
+  for (const Case& c : {Case{"finite", kFinite, 0, "success"}, Case{"finite_failing", kFiniteFailing, 1, "failure"}}) {
+    SCOPED_TRACE(c.name);
+    const std::filesystem::path out = dir_.path() / (std::string(c.name) + "-out");
+    Child child(fba_run({dir_.file(std::string(c.name) + ".yaml", c.task), "--serve", "0", "--serve-keep", "-o", out.string()}));
+    const LiveUrl url = serve(child);
+    const std::string kept = child.read_line_with("still serving its live view", kHangLimit);
+    ASSERT_NE(kept.find("until SIGINT or SIGTERM"), std::string::npos) << child.output();
+    // The run's last line came first: the run is over.
+    ASSERT_NE(child.output().find("fba-run: " + std::string(c.status == 0 ? "success" : "failed")), std::string::npos) << child.output();
+    ASSERT_TRUE(child.running()) << child.output();
+
+    EXPECT_EQ(http_get(url, "/?token=" + url.token).result(), http::status::ok);
+    EXPECT_EQ(http_get(url, "/").result(), http::status::forbidden);  // still the run's token only
+    for (int page = 0; page < 2; ++page) {  // each page that connects is sent the whole run
+      const std::vector<json> messages = replayed(url);
+      EXPECT_EQ(messages.front()["type"], "task");
+      EXPECT_EQ(messages.back()["outcome"], c.outcome);
+      EXPECT_EQ(messages.back()["exit_code"], c.status);
+    }
+    EXPECT_TRUE(child.running()) << child.output();
+
+    EXPECT_EQ(child.wait(SIGTERM, kHangLimit), c.status) << child.output();
+    const json summary = json::parse(read_text(out / "summary.json"));
+    EXPECT_EQ(summary["outcome"], c.outcome) << "the stop of the serving is not the run's outcome";
+    EXPECT_EQ(summary["exit_code"], c.status);
+    EXPECT_TRUE(std::filesystem::is_regular_file(out / "report.html"));
+  }
+}
+
+// Without --serve-keep a run that ends exits by itself, serving or not: a script never waits on a
+// page. With it, a run stopped by a signal exits too: the signal asked fba-run to end.
+TEST_F(CliServe, WithoutServeKeepOrAfterASignalFbaRunExitsWhenTheRunEnds) {
+  Child finite(fba_run({dir_.file("finite.yaml", kFinite), "--serve", "0"}));
+  serve(finite);
+  const Result done = finite.wait();
+  EXPECT_EQ(done.status, 0) << done.output;
+  EXPECT_EQ(done.output.find("still serving"), std::string::npos) << done.output;
+
+  Child endless(fba_run({dir_.file("endless.yaml", kEndless), "--serve", "0", "--serve-keep"}));
+  const LiveUrl url = serve(endless);
+  replayed_until_stats(url);
+  EXPECT_EQ(endless.wait(SIGINT, kHangLimit), 130) << endless.output();
+  EXPECT_EQ(endless.output().find("still serving"), std::string::npos) << endless.output();
+}
+
+TEST_F(CliServe, ServeKeepWithoutServeIsRefused) {
+  const Result r = run_shell(program("fba-run") + " " + dir_.file("finite.yaml", kFinite) + " --serve-keep");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--serve-keep needs --serve"), std::string::npos) << r.output;
+}
+
 TEST_F(CliServe, BadAddressesAndAPortInUseAreRefusedBeforeTheRun) {
   const std::string task = dir_.file("finite.yaml", kFinite);
   for (const char* bad : {"70000", "nowhere:80", "http://x"}) {
