@@ -348,10 +348,14 @@ class GraspSynthesisFilter final : public fba::Component {
     Reach reach = reach_check(model, r.candidates);
     struct ReportReach {  // on every way out below: the checks made are known once the decision is
       GraspSynthesisFilter& self;
+      const fba::grasp::SynthesisResult& result;
       Reach& reach;
       int views;
-      ~ReportReach() { self.report_reach(reach, views); }
-    } report_reach_at_end{*this, reach, views};
+      ~ReportReach() {
+        self.report_reach(reach, views);
+        self.report_candidates(result.candidates, reach, views);
+      }
+    } report_reach_at_end{*this, r, reach, views};
     std::optional<std::size_t> first_reachable;
     for (std::size_t i = 0; i < r.candidates.size() && !first_reachable; ++i)
       if (reach.reachable(i)) first_reachable = i;
@@ -649,6 +653,38 @@ class GraspSynthesisFilter final : public fba::Component {
                                .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     } catch (const std::exception& e) {
       ctx_.log().error("could not report the reach check: {}", e.what());
+    }
+  }
+
+  // The candidates of the model analysed last (the one a grasp was selected on, or the search gave
+  // up on), best total first, as the result "candidates": {"views", "grasps": [GRASP...]}, each
+  // GRASP as docs/live-view.md has it (contacts, inward normals, approach, score) with its
+  // model_epsilon, whether it is reliable (its surface resolved) and whether the arm's reach check
+  // passed it over. The live page and report.html draw them beside the selected grasp: the data
+  // type carries the selected grasp only. Called from a destructor: throws nothing.
+  void report_candidates(const std::vector<fba::grasp::GraspCandidate>& candidates, const Reach& reach, int views) noexcept {
+    try {
+      auto xyz = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+      nlohmann::json grasps = nlohmann::json::array();
+      for (std::size_t i = 0; i < candidates.size(); ++i) {
+        const fba::grasp::GraspCandidate& c = candidates[i];
+        nlohmann::json contacts = nlohmann::json::array(), normals = nlohmann::json::array();
+        for (const auto& contact : c.grasp.contacts) {
+          contacts.push_back(xyz(contact.position));
+          normals.push_back(xyz(contact.normal));
+        }
+        grasps.push_back({{"contacts", std::move(contacts)},
+                          {"normals", std::move(normals)},
+                          {"approach", xyz(c.grasp.approach)},
+                          {"score", c.grasp.scores.total},
+                          {"model_epsilon", c.model_epsilon},
+                          {"reliable", !c.uncertain},
+                          {"passed_over", reach.passed_over(i)}});
+      }
+      ctx_.report("candidates", nlohmann::json{{"views", views}, {"grasps", std::move(grasps)}}
+                                    .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+    } catch (const std::exception& e) {
+      ctx_.log().error("could not report the candidates: {}", e.what());
     }
   }
 
