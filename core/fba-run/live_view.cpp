@@ -5,8 +5,8 @@
 #include <condition_variable>
 #include <cstdio>
 #include <fstream>
-#include <mutex>
 #include <iostream>
+#include <mutex>
 #include <sstream>
 
 #include <nlohmann/json.hpp>

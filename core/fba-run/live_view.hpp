@@ -33,9 +33,10 @@ class LiveView {
   // the server's pages sent what is queued and closed (with --serve-keep: left open, see below).
   void end(const fba::RunResult& result);
 
-  // With --serve-keep, once the run is over and its summary written: says so on stderr and serves
-  // the run's final state until a stop signal (State::stop), then closes the pages. Returns at once
-  // without --serve-keep, or when a signal has already stopped the run: it asked fba-run to end.
+  // With --serve-keep, once the run is over and its summary written (also a run that ended before
+  // its task ran, from the destructor): says so on stderr and serves the run's final state until a
+  // stop signal (State::stop), then closes the pages. Returns at once without --serve-keep, or when
+  // a signal has already stopped the run: it asked fba-run to end.
   void keep_serving();
 
  private:
