@@ -2,9 +2,11 @@
 #include "live_view.hpp"
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -41,6 +43,7 @@ LiveView::LiveView(const Options& o, const fba::TaskConfig& config) : config_(co
   options.address = *o.serve;
   options.page = fba::serve::PageFiles::load(web_dir_);
   server_ = std::make_unique<fba::serve::LiveServer>(std::move(options), record_);
+  keep_ = o.serve_keep;
   feed_->publish_to(server_.get());
   const std::string line = "fba-run: live view at " + server_->url() + "\n";
   std::fwrite(line.data(), 1, line.size(), stderr);  // one write: a reader never sees half the address
@@ -69,7 +72,8 @@ LiveView::~LiveView() {
     }
     end["summary"] = summary.is_object() ? summary : nlohmann::json(nullptr);
     feed_->end_with(end.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
-    if (server_) server_->finish(kEndGrace);
+    keep_serving();
+    close_pages();
   } catch (const std::exception& e) {  // a destructor says what failed and goes on
     std::cerr << "fba-run: live view: " << e.what() << "\n";
   }
@@ -109,6 +113,26 @@ void LiveView::end(const fba::RunResult& result) {
       std::error_code ec;
       fs::remove(report_, ec);  // not the placeholder, which the summary lists as the report
     }
+  if (!keep_) close_pages();
+}
+
+void LiveView::keep_serving() {
+  auto& st = state();
+  if (!server_ || !keep_ || st.stop.stop_requested()) return;
+  st.phase.store("serving the run's final state");
+  const std::string line = "fba-run: the run is over; still serving its live view at " + server_->url() +
+                           " (--serve-keep) until SIGINT or SIGTERM\n";
+  std::fwrite(line.data(), 1, line.size(), stderr);
+  // The signal watcher takes the signal and requests the stop; the callback this wait registers on
+  // the stop token wakes it.
+  std::mutex mutex;
+  std::condition_variable_any stopped;
+  std::unique_lock lock(mutex);
+  stopped.wait(lock, st.stop.get_token(), [] { return false; });
+  close_pages();
+}
+
+void LiveView::close_pages() {
   if (server_) server_->finish(kEndGrace);
 }
 

@@ -63,6 +63,7 @@ std::string refusal(Options& o, const std::string& timeout_text, const std::stri
     } catch (const std::invalid_argument& e) {
       return e.what();
     }
+  if (o.serve_keep && !serve) return "--serve-keep needs --serve [ADDR:]PORT: it keeps the live view's server after the run";
   return {};
 }
 
@@ -103,6 +104,10 @@ std::optional<Options> parse_options(int argc, char** argv, int& status) {
       "serve", po::value<std::string>(),
       "serve the run's live view (docs/live-view.md) at [ADDR:]PORT: 127.0.0.1 unless ADDR is given, PORT 0 for a free "
       "one; the page's address, with its token, is said on stderr")(
+      "serve-keep",
+      "with --serve: once the run is over, keep serving its final state (the page, and the run's data to every page "
+      "that connects) until SIGINT or SIGTERM; the exit status stays the run's. Without it fba-run exits when the run "
+      "ends, as a script expects; a run stopped by a signal exits then too")(
       "threads", po::value(&o.threads), "worker threads of the threaded executor, 0 to 256 (default: the task file's, else one per core)")(
       "log-level", po::value(&o.log_levels)->composing(),
       "LEVEL for every component and fba-run itself, or COMPONENT=LEVEL for one component of the task (a composite "
@@ -144,6 +149,7 @@ std::optional<Options> parse_options(int argc, char** argv, int& status) {
   o.check = vm.count("check") > 0;
   o.dot = vm.count("dot") > 0;
   o.profile_given = vm.count("profile") > 0;  // an empty name is refused, not the default
+  o.serve_keep = vm.count("serve-keep") > 0;
   if (o.run_id.empty()) o.run_id = random_run_id();
   const std::optional<std::string> serve = vm.count("serve") ? std::optional(vm["serve"].as<std::string>()) : std::nullopt;
   o.invalid = refusal(o, timeout_text, stop_grace_text, executor, serve);

@@ -28,8 +28,10 @@ struct Options {
   int threads = 0;
   std::optional<fba::ExecutorKind> executor;
   std::optional<fba::serve::ListenAddress> serve;  // --serve: the live view's address
-  // The first value refused (--timeout, --stop-grace, --threads, --dot-every, --executor), as
-  // fba-run says it: refused once the output folder can hold the summary that says so.
+  bool serve_keep = false;  // --serve-keep: after the run, serve its final state until SIGINT or SIGTERM
+  // The first value refused (--timeout, --stop-grace, --threads, --dot-every, --executor, --serve,
+  // --serve-keep without --serve), as fba-run says it: refused once the output folder can hold the
+  // summary that says so.
   std::string invalid;
 };
 

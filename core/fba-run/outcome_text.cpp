@@ -1,6 +1,6 @@
 // fba-run's last line (see outcome_text.hpp). The words come from what the task's components
 // report (Context::report) under the names the grasp loop's components use: "views" (the views a
-// model was made of), "grasp" (the selected grasp and its scores), "lift" (the hand's lift test:
+// model was made of), "grasp" (the selected grasp, its scores and its epsilon), "lift" (the hand's lift test:
 // held or not) and "failure" (why a component gave up). A task whose components report none of them
 // gets the final event and the samples its sensors produced.
 #include "outcome_text.hpp"
@@ -58,13 +58,18 @@ std::string views_text(const fba::RunResult& r) {
   return "after " + std::to_string(n) + (n == 1 ? " view" : " views");
 }
 
-// "grasp score 0.53", from the selected grasp's scores.
+// "grasp score 0.53, epsilon 0.057", from the selected grasp's scores and its force-closure
+// quality (the Ferrari-Canny epsilon on the model, "model_epsilon"), each when reported.
 std::string grasp_text(const fba::RunResult& r) {
   const auto grasp = reported(r, "grasp");
   if (!grasp || !grasp->value.is_object()) return {};
+  std::string s;
   const json& scores = grasp->value.value("scores", json::object());
-  if (!scores.is_object() || !scores.contains("total") || !scores["total"].is_number()) return {};
-  return "grasp score " + number(scores["total"].get<double>(), 2);
+  if (scores.is_object() && scores.contains("total") && scores["total"].is_number())
+    s = "grasp score " + number(scores["total"].get<double>(), 2);
+  if (const auto eps = grasp->value.find("model_epsilon"); eps != grasp->value.end() && eps->is_number())
+    s += (s.empty() ? "" : ", ") + std::string("epsilon ") + number(eps->get<double>(), 2);
+  return s;
 }
 
 // Joins the parts that are not empty: "held the object after 5 views, grasp score 0.53".

@@ -1,5 +1,5 @@
 // fba-run's last line: how the run ended, in words ("held the object after 5 views, grasp score
-// 0.53, in 2.8 s"), from the final event and what the components reported; the whole payload is
+// 0.53, epsilon 0.057, 2.8 s"), from the final event and what the components reported; the whole payload is
 // summary.json's.
 #pragma once
 

@@ -298,6 +298,7 @@ int run(int argc, char** argv) {
     st.task.store(nullptr);
   }
   task.reset();
+  live->keep_serving();  // --serve-keep: until a stop signal; the status stays the run's
   return status;
 }
 

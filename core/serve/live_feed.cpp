@@ -17,7 +17,11 @@ void LiveFeed::watch(Task& task, const TaskConfig& config) {
     for (const auto& [output, type] : c.output_types)
       if (find_view(type)) {
         const std::string port = c.name + "." + output;
-        watched_.push_back({port, task.watch(port)});
+        // A type whose every sample is shown (the poses visited) is kept sample by sample until
+        // taken, not only its newest: poses arrive faster than the updates at times (a burst of
+        // view targets, the camera at each view).
+        const std::size_t keep = viewed_samples(type) == ViewedSamples::Every ? kEveryViewedLimit : 1;
+        watched_.push_back({port, task.watch(port, keep)});
       }
 }
 
@@ -31,20 +35,22 @@ void LiveFeed::sample(const RunResult& now, const RunResult* previous) {
   publish(LiveMessage::Stats, stats_message(now, previous));
   for (; events_said_ < now.events.size(); ++events_said_)
     publish(LiveMessage::Event, event_message(events_said_, now.events[events_said_]));
-  for (const auto& w : watched_) {
-    const std::optional<Packet> p = w.latest->take();
-    if (!p || !*p) continue;
-    const ViewFunction view = find_view(p->type());
-    if (!view) continue;
-    std::string text;
-    try {
-      text = view(*p);
-    } catch (const std::exception& e) {  // a view must not throw; if one does, the run goes on without it
-      std::cerr << "fba-run: live view: the view of " << p->type()->name << " on " << w.port << " failed: " << e.what() << "\n";
-      continue;
+  // Each port's samples not taken yet: its newest, or every one in order for a type whose every
+  // sample is shown.
+  for (const auto& w : watched_)
+    while (const std::optional<Packet> p = w.latest->take()) {
+      if (!*p) continue;
+      const ViewFunction view = find_view(p->type());
+      if (!view) continue;
+      std::string text;
+      try {
+        text = view(*p);
+      } catch (const std::exception& e) {  // a view must not throw; if one does, the run goes on without it
+        std::cerr << "fba-run: live view: the view of " << p->type()->name << " on " << w.port << " failed: " << e.what() << "\n";
+        continue;
+      }
+      if (!text.empty()) publish(LiveMessage::View, view_message(w.port, p->type()->name, p->header(), text), w.port);
     }
-    if (!text.empty()) publish(LiveMessage::View, view_message(w.port, p->type()->name, p->header(), text), w.port);
-  }
 }
 
 void LiveFeed::end(const RunResult& result, const std::string& summary) {

@@ -24,10 +24,12 @@ class LiveFeed {
   // Each message from now on also goes to `server` (null: none).
   void publish_to(LiveServer* server) { server_ = server; }
 
-  // Watches every output whose data type has a view (Task::watch). Before task.run().
+  // Watches every output whose data type has a view (Task::watch): its newest sample, or every
+  // sample for a view that shows each (ViewedSamples::Every). Before task.run().
   void watch(Task& task, const TaskConfig& config);
 
-  // One sample of the running task (a Monitor's watcher, on its thread): stats, new events, views.
+  // One sample of the running task (a Monitor's watcher, on its thread): stats, new events, the
+  // views of what each watched port sent since the last sample.
   void sample(const RunResult& now, const RunResult* previous);
 
   // The run is over (its last sample given): the end message, with summary.json's text.

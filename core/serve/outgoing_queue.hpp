@@ -1,6 +1,7 @@
 // What the live view's server has yet to send one page: bounded by dropping the oldest stats and
-// view messages (a newer one says more), never the task, an event or the end, which a page needs
-// whole. A page too slow even for those is cut off rather than let the queue grow without bound.
+// view messages (a newer one says more), never the task, an event, a pose (each is a view visited)
+// or the end, which a page needs whole. A page too slow even for those is cut off rather than let
+// the queue grow without bound.
 #pragma once
 
 #include <cstddef>
@@ -38,7 +39,7 @@ class OutgoingQueue {
  private:
   void drop_one(bool front_in_flight) {
     for (auto it = queue_.begin() + (front_in_flight && !queue_.empty() ? 1 : 0); it != queue_.end(); ++it)
-      if (it->kind == LiveMessage::Stats || it->kind == LiveMessage::View) {
+      if (it->kind == LiveMessage::Stats || (it->kind == LiveMessage::View && !it->pose)) {
         queue_.erase(it);
         ++dropped_;
         return;

@@ -19,7 +19,7 @@ bool is_pose_view(const std::string& view_message) {
 LiveMessage RunRecord::add(LiveMessage::Kind kind, std::string text, std::string port) {
   const bool pose = kind == LiveMessage::View && is_pose_view(text);
   std::lock_guard lock(mutex_);
-  LiveMessage m{kind, std::move(port), std::make_shared<const std::string>(std::move(text)), ++seq_};
+  LiveMessage m{kind, std::move(port), std::make_shared<const std::string>(std::move(text)), ++seq_, pose};
   switch (kind) {
     case LiveMessage::Task: task_ = m; break;
     case LiveMessage::Stats: stats_ = m; break;

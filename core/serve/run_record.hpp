@@ -19,6 +19,7 @@ struct LiveMessage {
   std::string port;  // View: "component.output"
   std::shared_ptr<const std::string> text;
   std::uint64_t seq = 0;  // its place among every message added, from 1
+  bool pose = false;      // View: a pose, every one of which is kept (the views visited)
 };
 
 class RunRecord {

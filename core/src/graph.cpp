@@ -344,11 +344,12 @@ std::vector<Packet>& Graph::tap(const std::string& port, std::size_t keep) {
 }
 
 // Another consumer of the output, costing the other outputs nothing; the output pushes into it
-// like into a `latest` connection, which holds no producer back (not gating).
-std::shared_ptr<LatestSample> Graph::watch(const std::string& port) {
+// like into a `latest` connection (`drop_oldest` of `keep` to keep every sample), which holds no
+// producer back (not gating).
+std::shared_ptr<LatestSample> Graph::watch(const std::string& port, std::size_t keep) {
   if (ran_) throw std::logic_error("watch('" + port + "') after the task ran: call it before run()");
   OutputState& out = output(port, "watch");
-  auto w = std::make_shared<LatestSample>(port, out.type);
+  auto w = std::make_shared<LatestSample>(port, out.type, keep);
   out.consumers.push_back(&w->buffer());
   watches.push_back(w);
   return w;
@@ -512,7 +513,7 @@ Task::~Task() {
   kept->push_back(std::move(graph_));
 }
 const std::vector<Packet>& Task::tap(const std::string& port, std::size_t keep) { return graph_->tap(port, keep); }
-std::shared_ptr<LatestSample> Task::watch(const std::string& port) { return graph_->watch(port); }
+std::shared_ptr<LatestSample> Task::watch(const std::string& port, std::size_t keep) { return graph_->watch(port, keep); }
 RunResult Task::run() { return graph_->run(); }
 void Task::request_stop(Outcome outcome, const std::string& reason) { graph_->request_stop(outcome, reason); }
 void Task::emergency_safe_states() noexcept { graph_->emergency_safe_states(); }

@@ -82,7 +82,7 @@ class Graph {
   // The node's periodic ticks are over (finished, or its next tick would never come).
   void end_ticks(Node* n);
   std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
-  std::shared_ptr<LatestSample> watch(const std::string& port);
+  std::shared_ptr<LatestSample> watch(const std::string& port, std::size_t keep);
   // Created on first use, with as many threads as the executor has workers.
   ThreadPool& thread_pool();
   RunResult run();

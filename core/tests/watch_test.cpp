@@ -97,6 +97,25 @@ TEST_P(WatchBoth, AReaderThatNeverTakesHoldsNoProducerBack) {
   EXPECT_FALSE(watched->take()) << "a sample is taken once";
 }
 
+// keep > 1 (a view that shows every sample, the poses visited): each sample not taken yet waits, in
+// order, up to `keep`; beyond, the oldest go, counted as superseded.
+TEST(Watch, KeepingSamplesHandsEachInOrderUpToTheBound) {
+  fba::Task task(load(chain(10)), with(ExecutorKind::Deterministic));
+  const auto every = task.watch("pass.out", 16);
+  const auto bounded = task.watch("pass.out", 4);
+  ASSERT_EQ(task.run().outcome, Outcome::Success);
+  for (std::uint64_t seq = 0; seq < 10; ++seq) {
+    const auto p = every->take();
+    ASSERT_TRUE(p) << "sample " << seq << " was not kept";
+    EXPECT_EQ(p->header().seq, seq);
+  }
+  EXPECT_FALSE(every->take());
+  EXPECT_EQ(every->superseded(), 0u);
+  for (std::uint64_t seq = 6; seq < 10; ++seq) EXPECT_EQ(bounded->take()->header().seq, seq);  // the newest 4, oldest first
+  EXPECT_FALSE(bounded->take());
+  EXPECT_EQ(bounded->superseded(), 6u);
+}
+
 TEST(Watch, TwoReadersOfOnePortEachGetTheNewest) {
   fba::Task task(load(chain(10)), with(ExecutorKind::Deterministic));
   const auto a = task.watch("pass.out");
@@ -145,6 +164,11 @@ TEST(Views, ARegisteredViewIsFoundByItsTypeAndCanBeRemoved) {
   fba::register_view("fba.Int", &int_view);
   ASSERT_EQ(fba::find_view(type), &int_view);
   EXPECT_EQ(fba::find_view(type)(fba::Packet::make(std::make_shared<const std::int64_t>(7))), "7");
+  EXPECT_EQ(fba::viewed_samples(type), fba::ViewedSamples::Newest);  // unless registered otherwise
+  fba::register_view("fba.Int", &int_view, fba::ViewedSamples::Every);
+  EXPECT_EQ(fba::viewed_samples(type), fba::ViewedSamples::Every);
   fba::register_view("fba.Int", nullptr);
   EXPECT_EQ(fba::find_view(type), nullptr);
+  EXPECT_EQ(fba::viewed_samples(type), fba::ViewedSamples::Newest);
+  EXPECT_EQ(fba::viewed_samples(nullptr), fba::ViewedSamples::Newest);
 }

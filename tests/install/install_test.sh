@@ -3,10 +3,12 @@
 # only, and runs it with the installed fba-run and fba-inspect. Every step names what failed;
 # its full output is in a log under <work>. Usage (ctest passes all of these):
 #   install_test.sh --build DIR --example DIR --work DIR [--libdir lib] [--cmake cmake]
-#                   [--generator Ninja] [--cxx c++]
+#                   [--generator Ninja] [--cxx c++] [--web-page ON|OFF]
+# --web-page ON: the build made the live view's page (FBA_BUILD_WEB), which must then be installed
+# in share/fba/web with every file of it, and found there by the installed fba-run.
 set -uo pipefail
 
-build="" example="" work="" libdir=lib cmake=cmake generator=Ninja cxx=c++
+build="" example="" work="" libdir=lib cmake=cmake generator=Ninja cxx=c++ web_page=OFF
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build=$2 ;;
@@ -16,12 +18,13 @@ while [ $# -gt 0 ]; do
     --cmake) cmake=$2 ;;
     --generator) generator=$2 ;;
     --cxx) cxx=$2 ;;
+    --web-page) web_page=$2 ;;
     *) echo "install_test: unknown argument '$1'" >&2; exit 2 ;;
   esac
   shift 2
 done
 if [ -z "$build" ] || [ -z "$example" ] || [ -z "$work" ]; then
-  echo "usage: install_test.sh --build DIR --example DIR --work DIR [--libdir lib] [--cmake cmake] [--generator G] [--cxx c++]" >&2
+  echo "usage: install_test.sh --build DIR --example DIR --work DIR [--libdir lib] [--cmake cmake] [--generator G] [--cxx c++] [--web-page ON|OFF]" >&2
   exit 2
 fi
 
@@ -39,8 +42,8 @@ fail() {
 run() { local log=$1; shift; echo "    \$ $*" >>"$work/commands.txt"; "$@" >"$log" 2>&1; }
 
 # Nothing from the environment may help: the installed programs must find their libraries
-# through their RPATHs and their plugins beside themselves.
-unset FBA_PLUGIN_PATH LD_LIBRARY_PATH
+# through their RPATHs, their plugins and their page beside themselves.
+unset FBA_PLUGIN_PATH LD_LIBRARY_PATH FBA_WEB_DIR
 
 rm -rf "$work" || { echo "install_test: cannot remove $work" >&2; exit 1; }
 mkdir -p "$work" || { echo "install_test: cannot create $work" >&2; exit 1; }
@@ -74,6 +77,27 @@ if command -v readelf >/dev/null; then
   done < <(find "$prefix/bin" "$prefix/$libdir" -type f \( -name '*.so*' -o -perm -u+x \) 2>/dev/null)
   readelf -d "$prefix/$libdir/fba/plugins/fba-examples.so" | grep -qF '$ORIGIN/../..' ||
     fail "the installed example plugin has no RPATH \$ORIGIN/../.. to find libfba"
+fi
+
+if [ "$web_page" = ON ]; then
+  step "install layout: the live view's page in share/fba/web, every file of it"
+  built_web=$build/share/fba/web
+  web=$prefix/share/fba/web
+  [ -f "$built_web/index.html" ] || fail "the build made no page ($built_web/index.html): build fba_programs first"
+  for f in index.html report.html; do
+    [ -s "$web/$f" ] || fail "missing or empty in the install tree: $web/$f (see $work/install.log)"
+  done
+  # The same files as the build's page, byte for byte: a page missing its scripts or styles loads blank.
+  while IFS= read -r f; do
+    cmp -s "$built_web/$f" "$web/$f" || fail "share/fba/web/$f is not installed as built ($built_web/$f)"
+  done < <(cd "$built_web" && find . -type f | sed 's|^\./||')
+  # What the index loads (./assets/...) is there.
+  assets=$(grep -oE '(src|href)="\./assets/[^"]+"' "$web/index.html" | sed -E 's/^(src|href)="\.\///; s/"$//')
+  [ -n "$assets" ] || fail "$web/index.html loads no ./assets/ file: not the page vite builds"
+  for a in $assets; do
+    [ -s "$web/$a" ] || fail "$web/index.html loads $a, which is not installed"
+  done
+  grep -qF '<!--FBA_REPORT_DATA-->' "$web/report.html" || fail "$web/report.html has no <!--FBA_REPORT_DATA--> marker: not the report template"
 fi
 
 # (b) ------------------------------------------------------------------------------------------
@@ -139,6 +163,11 @@ run "$work/run-flag.log" "$prefix/bin/fba-run" --timeout 120 --plugin-path "$oot
   "$example/scale.yaml" || fail "fba-run --plugin-path exited with $? (0 expected)" "$work/run-flag.log"
 grep -q '"outcome": "success"' "$work/run-flag/summary.json" || fail "summary.json does not say success" "$work/run-flag/summary.json"
 grep -q '"name": "done"' "$work/run-flag/summary.json" || fail "the sink did not report 'done'" "$work/run-flag/summary.json"
+if [ "$web_page" = ON ]; then
+  # The installed fba-run found its installed page (bin/../share/fba/web): the report is filled in.
+  [ -s "$work/run-flag/report.html" ] || fail "the installed fba-run wrote no report.html: it did not find $prefix/share/fba/web" "$work/run-flag.log"
+  grep -qF 'id="fba-report"' "$work/run-flag/report.html" || fail "$work/run-flag/report.html holds no run data" "$work/run-flag.log"
+fi
 
 # (f) ------------------------------------------------------------------------------------------
 step "FBA_PLUGIN_PATH=$oot fba-run scale.yaml"

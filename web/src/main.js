@@ -110,10 +110,13 @@ state.on('view', (msg) => {
     case 'grasps': scene.setGrasps(msg); break;
     case 'regions': scene.setRegions(msg); break;
     case 'joints': scene.setJoints(msg); break;
-    case 'trajectory': break;  // listed by the server's summary; the arm's joint views show where it is
+    case 'trajectory': scene.setTrajectory(msg); break;
   }
 });
-state.on('end', () => renderHeader());
+state.on('end', (end) => {
+  scene.setRunEnd(end.summary);
+  renderHeader();
+});
 state.on('problem', () => renderProblems());
 
 // What the browser tests and the figures script read: the page's own counts, not its pixels.

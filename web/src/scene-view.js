@@ -6,7 +6,13 @@ import { el } from './dom.js';
 // The 3D scene in the world frame (z up, the table at z = 0): the octree model's occupied leaves as
 // one InstancedMesh of boxes coloured by height, the space not yet carved as translucent boxes, the
 // leaves synthesis asked to refine and its regions highlighted, the camera poses visited as numbered
-// frusta, the grasps, and the robot from the task's URDF. It renders only when something changed.
+// frusta, the grasps, the reach trajectory as the path of the palm (the robot's URDF posed at each
+// waypoint), and the robot from the task's URDF. It renders only when something changed.
+//
+// The grasp views (fba.Grasp) hold the selected grasp only: the candidates it was chosen from and
+// the palm's pose are what synthesis and the reach planner report (summary.json's results
+// synthesis.candidates and reach.pregrasp_palm), which the end message carries; the page adds them
+// then (setRunEnd).
 
 const COLORS = {
   low: new THREE.Color(0x2f6db5),
@@ -18,6 +24,8 @@ const COLORS = {
   selected: [0xe74c3c, 0x27ae60, 0x2e86de, 0xf39c12],
   approach: 0xffd166,
   palm: 0xd0d7e2,
+  passedOver: 0x5d6978,
+  trajectory: 0xc77dff,
 };
 
 const POSE_COLORS = [0x2bb673, 0x4cc9f0, 0xf4a261, 0xb388eb];
@@ -29,6 +37,7 @@ export const LAYERS = [
   ['views', 'camera views, in order', '#2bb673'],
   ['candidates', 'candidate grasps', '#7fb8d8'],
   ['selected', 'selected grasp', '#e74c3c'],
+  ['trajectory', 'reach: the palm\'s path', '#c77dff'],
   ['robot', 'robot', '#9aa4b1'],
 ];
 
@@ -89,8 +98,11 @@ export class SceneView {
     this.message = el('div', { class: 'panel-message' }, 'no 3D data yet: models, camera views and grasps appear here when the task sends them');
     container.append(this.legend, this.info, this.message);
     this.stats = { occupiedInstances: 0, occupiedInMessage: 0, uncarvedInstances: 0, refineInstances: 0, poses: 0,
-      candidates: 0, selected: false, robotLinks: 0, modelPort: null, modelSeq: null };
+      candidates: 0, selected: false, palm: false, robotLinks: 0, modelPort: null, modelSeq: null,
+      trajectoryPort: null, trajectoryWaypoints: 0, trajectoryPathPoints: 0, trajectoryLink: null, trajectoryProblem: null };
     this.poseLists = new Map();
+    this.graspView = null;
+    this.reported = { candidates: null, palm: null };
     try {
       this.renderer = new THREE.WebGLRenderer({ antialias: true });
     } catch (e) {
@@ -127,7 +139,7 @@ export class SceneView {
     this.refine = leafMesh(new THREE.MeshBasicMaterial({ color: COLORS.refine, transparent: true, opacity: 0.45, depthWrite: false }), 1);
     this.layers = {
       occupied: new THREE.Group(), uncarved: new THREE.Group(), refine: new THREE.Group(), views: new THREE.Group(),
-      candidates: new THREE.Group(), selected: new THREE.Group(), robot: new THREE.Group(),
+      candidates: new THREE.Group(), selected: new THREE.Group(), trajectory: new THREE.Group(), robot: new THREE.Group(),
     };
     for (const g of Object.values(this.layers)) this.scene.add(g);
     this.layers.occupied.add(this.occupied);
@@ -181,8 +193,13 @@ export class SceneView {
   setTask(task) {
     this.stats.robotLinks = 0;
     this.poseLists.clear();
+    this.graspView = null;
+    this.reported = { candidates: null, palm: null };
+    this.trajectory = null;
+    Object.assign(this.stats, { candidates: 0, selected: false, palm: false, trajectoryPort: null, trajectoryWaypoints: 0,
+      trajectoryPathPoints: 0, trajectoryLink: null, trajectoryProblem: null });
     if (!this.renderer) return;
-    for (const key of ['views', 'candidates', 'selected', 'robot']) {
+    for (const key of ['views', 'candidates', 'selected', 'trajectory', 'robot']) {
       disposeTree(this.layers[key]);
       this.layers[key].clear();
     }
@@ -322,19 +339,29 @@ export class SceneView {
   }
 
   setGrasps(msg) {
-    const v = msg.view;
-    this.stats.candidates = v.candidates.length;
-    this.stats.selected = !!v.selected;
-    this.selectedGrasp = v.selected;
+    this.graspView = msg.view;
+    this.renderGrasps();
+  }
+
+  // The grasps drawn: the view's candidates, or those synthesis reported; its selected grasp, with
+  // the palm the reach planner reported when the view has none.
+  renderGrasps() {
+    const v = this.graspView ?? { candidates: [], selected: null };
+    const candidates = v.candidates.length ? v.candidates : (this.reported.candidates ?? []);
+    const selected = v.selected ? { ...v.selected, palm: v.selected.palm ?? this.reported.palm } : null;
+    this.stats.candidates = candidates.length;
+    this.stats.selected = !!selected;
+    this.stats.palm = !!selected?.palm;
+    this.selectedGrasp = selected;
     if (!this.renderer) return;
     for (const key of ['candidates', 'selected']) {
       disposeTree(this.layers[key]);
       this.layers[key].clear();
     }
 
-    const scores = v.candidates.map((g) => g.score ?? 0);
+    const scores = candidates.map((g) => g.score ?? 0);
     const lo = Math.min(...scores), hi = Math.max(...scores);
-    const contacts = v.candidates.reduce((s, g) => s + g.contacts.length, 0);
+    const contacts = candidates.reduce((s, g) => s + g.contacts.length, 0);
     if (contacts) {
       const spheres = new THREE.InstancedMesh(new THREE.SphereGeometry(0.0025, 8, 6), new THREE.MeshBasicMaterial(), contacts);
       const normals = [];
@@ -342,8 +369,10 @@ export class SceneView {
       const dummy = new THREE.Object3D();
       const c = new THREE.Color();
       let k = 0;
-      for (const g of v.candidates) {
-        c.set(COLORS.candidate).lerp(new THREE.Color(0x00ffff), hi > lo ? ((g.score ?? 0) - lo) / (hi - lo) : 1);
+      for (const g of candidates) {
+        // Those the arm's reach check passed over, grey; the others by score.
+        if (g.passed_over) c.set(COLORS.passedOver);
+        else c.set(COLORS.candidate).lerp(new THREE.Color(0x00ffff), hi > lo ? ((g.score ?? 0) - lo) / (hi - lo) : 1);
         g.contacts.forEach((p, i) => {
           dummy.position.set(...p);
           dummy.updateMatrix();
@@ -364,9 +393,81 @@ export class SceneView {
         this.layers.candidates.add(new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ vertexColors: true, transparent: true, opacity: 0.6 })));
       }
     }
-    if (v.selected) this.layers.selected.add(this.graspObject(v.selected));
+    if (selected) this.layers.selected.add(this.graspObject(selected));
     this.updateInfo();
     this.invalidate();
+  }
+
+  // The run is over: what the grasp views do not carry, from the summary's results (see the top).
+  setRunEnd(summary) {
+    const results = Object.values(summary?.components ?? {}).map((c) => c?.results ?? {});
+    const found = (pick) => results.map(pick).find((x) => x !== undefined && x !== null);
+    const candidates = found((r) => (Array.isArray(r.candidates?.grasps) ? r.candidates.grasps : undefined));
+    const reach = found((r) => (r.reach?.pregrasp_palm || r.reach?.trajectory ? r.reach : undefined));
+    this.reported.candidates = candidates?.filter((g) => Array.isArray(g?.contacts) && g.contacts.every((p) => Array.isArray(p) && p.length === 3)) ?? null;
+    const palm = reach?.pregrasp_palm;
+    if (palm && Array.isArray(palm.position) && palm.position.length === 3 && Array.isArray(palm.quaternion_wxyz) && palm.quaternion_wxyz.length === 4) {
+      this.reported.palm = { position: palm.position, rotation: palm.quaternion_wxyz, at: 'pregrasp' };
+    }
+    this.reach = reach ?? null;
+    // A run whose trajectory view never came (ended before the next update) draws the summary's.
+    if (!this.trajectory && Array.isArray(reach?.trajectory?.names) && Array.isArray(reach?.trajectory?.points)) {
+      this.setTrajectory({ port: 'summary: reach', view: { kind: 'trajectory', ...reach.trajectory } });
+    }
+    if (this.graspView || this.reported.candidates?.length) this.renderGrasps();
+  }
+
+  // A joint trajectory (the reach planner's): the path of the link it carries, the robot's URDF
+  // posed at each waypoint, with its start and end marked.
+  setTrajectory(msg) {
+    this.trajectory = msg;
+    this.drawTrajectory();
+  }
+
+  drawTrajectory() {
+    const msg = this.trajectory;
+    if (!msg) return;
+    const v = msg.view;
+    Object.assign(this.stats, { trajectoryPort: msg.port, trajectoryWaypoints: v.points.length, trajectoryPathPoints: 0,
+      trajectoryLink: null, trajectoryProblem: null });
+    if (this.renderer) {
+      disposeTree(this.layers.trajectory);
+      this.layers.trajectory.clear();
+    }
+    if (!this.robot) {
+      this.stats.trajectoryProblem = this.robotError ?? 'no robot description (URDF) to draw it with';
+      this.updateInfo();
+      return;
+    }
+    const link = this.robot.carriedLink(v.names);
+    const known = v.names.filter((n) => this.robot.joints.has(n)).length;
+    if (!link || known === 0) {
+      this.stats.trajectoryProblem = `none of its joints (${v.names.join(', ')}) is in the robot's URDF`;
+      this.updateInfo();
+      return;
+    }
+    const points = this.robot.linkPositions(link, v.names, v.points.map((p) => p.positions));
+    this.stats.trajectoryLink = link;
+    this.stats.trajectoryPathPoints = points.length;
+    if (this.renderer && points.length) {
+      const color = new THREE.Color(COLORS.trajectory);
+      this.layers.trajectory.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints(points), new THREE.LineBasicMaterial({ color })));
+      const start = new THREE.Mesh(new THREE.SphereGeometry(0.004, 12, 8), new THREE.MeshBasicMaterial({ color }));
+      start.position.copy(points[0]);
+      const end = new THREE.Mesh(new THREE.OctahedronGeometry(0.006), new THREE.MeshBasicMaterial({ color: color.clone().offsetHSL(0, 0, 0.2) }));
+      end.position.copy(points[points.length - 1]);
+      this.layers.trajectory.add(start, end);
+    }
+    this.updateInfo();
+    this.invalidate();
+  }
+
+  // For the browser tests: where the trajectory's link is with the joints `names` at `positions`.
+  linkPositionAt(names, positions) {
+    if (!this.robot) return null;
+    const link = this.robot.carriedLink(names);
+    const [p] = this.robot.linkPositions(link, names, [positions]);
+    return p ? { link, position: [p.x, p.y, p.z] } : null;
   }
 
   graspObject(g) {
@@ -434,7 +535,10 @@ export class SceneView {
       el('span', { class: 'swatch', style: `background:#${new THREE.Color(POSE_COLORS[k % POSE_COLORS.length]).getHexString()}` }),
       ` ${port}: ${list.length} pose${list.length === 1 ? '' : 's'}  `)));
     if (s.candidates || s.selected) lines.push(`${s.candidates} candidate grasp${s.candidates === 1 ? '' : 's'}` +
-      (this.selectedGrasp ? `, selected: score ${this.selectedGrasp.score?.toFixed?.(4) ?? '?'}` : ', none selected'));
+      (this.selectedGrasp ? `, selected: score ${this.selectedGrasp.score?.toFixed?.(4) ?? '?'}` : ', none selected') +
+      (this.selectedGrasp?.palm?.at === 'pregrasp' ? ' (palm at the pregrasp)' : ''));
+    if (s.trajectoryPort) lines.push(`${s.trajectoryPort}: ${s.trajectoryWaypoints} waypoints` +
+      (s.trajectoryLink ? `, the ${s.trajectoryLink}'s path drawn` : `, not drawn: ${s.trajectoryProblem}`));
     if (this.robot) lines.push(`robot ${this.robot.name}: ${s.robotLinks} links`);
     if (this.robotError) lines.push(this.robotError);
     this.info.replaceChildren(...lines.map((l) => el('div', {}, ...[].concat(l))));

@@ -104,6 +104,39 @@ export class UrdfRobot {
       this.joints.set(j.name, { ...j, motion, axis: new THREE.Vector3(...j.axis).normalize(), value: 0 });
     }
     this.linkCount = linkObjects.size;
+    this.links = linkObjects;
+  }
+
+  hasLink(name) {
+    return this.links.has(name);
+  }
+
+  // The link that a trajectory over `names` carries: the palm, else the flange or tool0, else the
+  // child of the last of the joints named (the chain's tip). Null when none is known.
+  carriedLink(names) {
+    for (const name of ['palm', 'flange', 'tool0']) if (this.links.has(name)) return name;
+    for (let i = names.length - 1; i >= 0; i--) {
+      const j = this.joints.get(names[i]);
+      if (j) return j.child;
+    }
+    return null;
+  }
+
+  // Where `link` is in the robot's frame (the page's world) with the joints `names` at each of
+  // `configurations` (lists of positions, one per name); the other joints as they stand. The
+  // robot's pose is left as it was.
+  linkPositions(link, names, configurations) {
+    const target = this.links.get(link);
+    if (!target) return [];
+    const saved = new Map([...this.joints].map(([n, j]) => [n, j.value]));
+    const out = configurations.map((positions) => {
+      this.setJoints(names, positions);
+      this.object.updateMatrixWorld(true);
+      return target.getWorldPosition(new THREE.Vector3());
+    });
+    this.setJoints([...saved.keys()], [...saved.values()]);
+    this.object.updateMatrixWorld(true);
+    return out;
   }
 
   setJoints(names, positions) {

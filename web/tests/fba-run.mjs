@@ -1,5 +1,5 @@
 // A real fba-run for the browser tests: started with --serve 0, its page's address read from the
-// line it prints on stderr, stopped with SIGINT when a test is done with it. Arguments given to a
+// line it prints on stderr, stopped with a signal (SIGINT unless told) when a test is done with it. Arguments given to a
 // test: --fba-run PATH (the program) --source-dir DIR (the checkout: tasks/ and data/).
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
@@ -44,8 +44,24 @@ export class FbaRun {
     });
   }
 
-  async stop() {
-    if (this.child.exitCode === null && this.child.signalCode === null) this.child.kill('SIGINT');
+  get running() {
+    return this.child.exitCode === null && this.child.signalCode === null;
+  }
+
+  // Resolves when fba-run has said `text` on stderr; rejects when it exits without saying it.
+  said(text) {
+    return new Promise((resolve, reject) => {
+      const look = () => {
+        if (this.stderr.includes(text)) resolve();
+        else if (!this.running) reject(new Error(`fba-run exited without saying "${text}"; its stderr:\n${this.stderr}`));
+        else setTimeout(look, 100);
+      };
+      look();
+    });
+  }
+
+  async stop(signal = 'SIGINT') {
+    if (this.running) this.child.kill(signal);
     return this.exited;
   }
 }

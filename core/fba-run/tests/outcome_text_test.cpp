@@ -23,16 +23,29 @@ fba::Event event(const std::string& source, const std::string& name, const std::
   return e;
 }
 
-TEST(OutcomeText, AHeldObjectIsSaidWithItsViewsScoreAndTime) {
+TEST(OutcomeText, AHeldObjectIsSaidWithItsViewsScoreEpsilonAndTime) {
   fba::RunResult r;
   r.outcome = fba::Outcome::Success;
   r.wall_s = 2.8;
   const std::string lift = R"({"held": true, "slip_m": 0.0017, "contacts": [)" + std::string(1500, ' ') + "]}";
   r.components = {component("synthesis", fba::Kind::Filter,
-                            {{"views", "5"}, {"grasp", R"({"scores": {"total": 0.5251, "symmetry": 0.05}})"}}),
+                            {{"views", "5"}, {"grasp", R"({"scores": {"total": 0.5251, "symmetry": 0.05}, "model_epsilon": 0.05713})"}}),
                   component("hand", fba::Kind::Actuator, {{"lift", lift}})};
   r.final_event = event("hand", "held", lift);
+  EXPECT_EQ(outcome_text(r), "held the object after 5 views, grasp score 0.53, epsilon 0.057, 2.8 s");
+}
+
+// A grasp reported without its epsilon (a synthesis of another plugin, a summary of an older
+// fba) is said with what it has: the line names no number that was not reported.
+TEST(OutcomeText, AGraspWithoutEpsilonIsSaidWithItsScoreOnly) {
+  fba::RunResult r;
+  r.outcome = fba::Outcome::Success;
+  r.wall_s = 2.8;
+  r.components = {component("synthesis", fba::Kind::Filter, {{"views", "5"}, {"grasp", R"({"scores": {"total": 0.5251}})"}}),
+                  component("hand", fba::Kind::Actuator, {{"lift", R"({"held": true})"}})};
   EXPECT_EQ(outcome_text(r), "held the object after 5 views, grasp score 0.53, 2.8 s");
+  r.components[0].results["grasp"] = R"({"model_epsilon": 0.1234})";
+  EXPECT_EQ(outcome_text(r), "held the object after 5 views, epsilon 0.12, 2.8 s");
 }
 
 TEST(OutcomeText, APlainTaskSaysItsEventAndTheSamplesOfItsSensors) {
@@ -59,9 +72,9 @@ TEST(OutcomeText, ADroppedObjectIsAFailureWithTheHandsReason) {
   fba::RunResult r;
   r.outcome = fba::Outcome::Failure;
   r.wall_s = 3.14;
-  r.components = {component("synthesis", fba::Kind::Filter, {{"views", "1"}}),
+  r.components = {component("synthesis", fba::Kind::Filter, {{"views", "1"}, {"grasp", R"({"scores": {"total": 0.7}, "model_epsilon": 0.02})"}}),
                   component("hand", fba::Kind::Actuator, {{"lift", R"({"held": false, "reason": "slipped 4 cm"})"}})};
-  EXPECT_EQ(outcome_text(r), "failed: the object was not held after 1 view, 3.1 s (slipped 4 cm)");
+  EXPECT_EQ(outcome_text(r), "failed: the object was not held after 1 view, grasp score 0.7, epsilon 0.02, 3.1 s (slipped 4 cm)");
 }
 
 TEST(OutcomeText, ALongPayloadStaysInTheSummary) {

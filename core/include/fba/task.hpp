@@ -168,8 +168,9 @@ class Task {
   // intermediate one). Call before run(); read after.
   const std::vector<Packet>& tap(const std::string& port, std::size_t keep = SIZE_MAX);
   // The newest sample leaving "component.output", for a reader on another thread while run()
-  // runs (a live view); never holds the producer back. Call before run(); each call makes its own.
-  std::shared_ptr<LatestSample> watch(const std::string& port);
+  // runs (a live view); never holds the producer back. With `keep` > 1, every sample not taken
+  // yet, at most `keep` (see LatestSample). Call before run(); each call makes its own.
+  std::shared_ptr<LatestSample> watch(const std::string& port, std::size_t keep = 1);
 
   // Runs to the end; the result says how it ended. May be called once.
   RunResult run();

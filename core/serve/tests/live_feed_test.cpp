@@ -100,4 +100,63 @@ TEST(LiveFeed, ARunningTaskReachesAPageAsTaskStatsViewsEventsAndTheEnd) {
   EXPECT_EQ(last_seq["pass.out"], 19999);
 }
 
+// A type whose view shows every sample (the poses visited): a burst far faster than the updates
+// reaches the page whole and in order, none replaced by a newer one on the way (the watch, the
+// server's queue for a page), and the run's record keeps each for report.html. 200 samples, within
+// what a watch keeps between two updates (kEveryViewedLimit), so none may be lost whatever the timing.
+TEST(LiveFeed, EverySampleOfATypeViewedSampleBySampleReachesThePageInOrder) {
+  constexpr int kCount = 200;
+  static_assert(kCount <= static_cast<int>(fba::kEveryViewedLimit));
+  fba::register_view("fba.Int", int_as_pose, fba::ViewedSamples::Every);
+  TempDir dir;
+  const std::string text = R"(task: burst
+components:
+  src: { type: examples.counter, params: { count: )" + std::to_string(kCount) + R"( } }
+  sink: { type: examples.sink, params: { expected: )" + std::to_string(kCount) + R"( } }
+connections:
+  - src.out -> sink.in
+on:
+  sink.done: stop_success
+)";
+  const fba::TaskConfig config = fba::load_task_text(text, "burst.yaml", dir.path(), built_plugins());
+  fba::serve::RunRecord record;
+  fba::serve::LiveFeed feed(record, config, "burst-run", dir.path());
+  fba::serve::LiveServer server({}, record);
+  feed.publish_to(&server);
+  const LiveUrl url = parse_live_url(server.url());
+  LiveSocket page(url);
+  beast::error_code ec;
+  page.handshake(url.origin(), url.token, ec);
+  ASSERT_FALSE(ec) << ec.message();
+  std::vector<json> messages;
+  std::thread reader([&] {
+    beast::error_code e;
+    for (std::string t = page.read(e); !e; t = page.read(e)) messages.push_back(json::parse(t));
+  });
+
+  fba::Task task(config);
+  feed.watch(task, config);
+  fba_run::Monitor monitor([&task] { return task.snapshot(); });
+  monitor.watch([&feed](const fba::RunResult& now, const fba::RunResult* previous) { feed.sample(now, previous); });
+  monitor.start(std::chrono::milliseconds(100));  // the live view's period: the burst is over long before
+  const fba::RunResult result = task.run();
+  monitor.finish(result);
+  feed.end(result, fba::summary_json(result, config));
+  server.finish(kHangLimit);
+  reader.join();
+  fba::register_view("fba.Int", nullptr);
+  ASSERT_EQ(result.outcome, fba::Outcome::Success) << result.reason;
+
+  std::vector<std::int64_t> seen;
+  for (const json& m : messages)
+    if (m["type"] == "view" && m["port"] == "src.out") seen.push_back(m["seq"]);
+  std::vector<std::int64_t> every(kCount);
+  for (int i = 0; i < kCount; ++i) every[i] = i;
+  EXPECT_EQ(seen, every) << "the page was not sent each sample once, in order";
+  std::vector<std::int64_t> recorded;
+  for (const auto& m : record.replay().messages)
+    if (m.kind == fba::serve::LiveMessage::View) recorded.push_back(json::parse(*m.text)["seq"]);
+  EXPECT_EQ(recorded, every) << "report.html would not hold each sample in order";
+}
+
 }  // namespace

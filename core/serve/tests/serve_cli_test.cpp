@@ -17,6 +17,7 @@
 #include "support/live_client.hpp"
 #include "support/build_paths.hpp"
 #include "support/child_process.hpp"
+#include "support/fba_run.hpp"
 #include "support/temp_dir.hpp"
 
 namespace {
@@ -72,13 +73,8 @@ class CliServe : public ::testing::Test {
   TempDir web_{"web"}, dir_{"run"};
 };
 
-std::vector<std::string> fba_run(std::vector<std::string> args) {
-  args.insert(args.begin(), program("fba-run"));
-  return args;
-}
-
 TEST_F(CliServe, ThePageNeedsTheRunsToken) {
-  Child child(fba_run({dir_.file("endless.yaml", kEndless), "--serve", "0"}));
+  Child child(fba_run_command({dir_.file("endless.yaml", kEndless), "--serve", "0"}));
   const LiveUrl url = serve(child);
   EXPECT_EQ(http_get(url, "/?token=" + url.token).result(), http::status::ok);
   EXPECT_EQ(http_get(url, "/?token=" + url.token).body(), "<!doctype html><title>live</title>");
@@ -88,7 +84,7 @@ TEST_F(CliServe, ThePageNeedsTheRunsToken) {
 }
 
 TEST_F(CliServe, ThePageIsSentTheTaskStatsEventsAndTheEndInOrder) {
-  Child child(fba_run({dir_.file("endless.yaml", kEndless), "--serve", "0", "--run-id", "served-run"}));
+  Child child(fba_run_command({dir_.file("endless.yaml", kEndless), "--serve", "0", "--run-id", "served-run"}));
   const LiveUrl url = serve(child);
   LiveSocket socket(url);
   beast::error_code ec;
@@ -142,7 +138,7 @@ TEST_F(CliServe, ThePageIsSentTheTaskStatsEventsAndTheEndInOrder) {
 }
 
 TEST_F(CliServe, AWebSocketFromAnotherOriginIsRefused) {
-  Child child(fba_run({dir_.file("endless.yaml", kEndless), "--serve", "0"}));
+  Child child(fba_run_command({dir_.file("endless.yaml", kEndless), "--serve", "0"}));
   const LiveUrl url = serve(child);
   EXPECT_EQ(upgrade_status(url, url.origin(), url.token), http::status::switching_protocols);
   EXPECT_EQ(upgrade_status(url, "http://attacker.example", url.token), http::status::forbidden);
@@ -152,7 +148,7 @@ TEST_F(CliServe, AWebSocketFromAnotherOriginIsRefused) {
 }
 
 TEST_F(CliServe, AnOversizedMessageEndsItsConnection) {
-  Child child(fba_run({dir_.file("endless.yaml", kEndless), "--serve", "0"}));
+  Child child(fba_run_command({dir_.file("endless.yaml", kEndless), "--serve", "0"}));
   const LiveUrl url = serve(child);
   LiveSocket socket(url);
   beast::error_code ec;
@@ -202,6 +198,134 @@ TEST_F(CliServe, WithoutABuiltTemplateNoReportIsWrittenAndFbaRunSaysHowToGetOne)
   EXPECT_NE(r.output.find("npm"), std::string::npos) << r.output;
 }
 
+// Ends by itself with a failure: the sink's done is a failure event (exit 1).
+constexpr const char* kFiniteFailing = R"(task: finite_failing
+components:
+  source: { type: examples.counter, params: { count: 100 } }
+  sink: { type: examples.sink, params: { expected: 100 } }
+connections:
+  - source.out -> sink.in
+on:
+  sink.done: stop_failure
+)";
+
+// A page that connects after the run: the run's messages from the task to the end, read until the
+// server closes the stream or the end is in. Returns them in order.
+std::vector<json> replayed(const LiveUrl& url) {
+  LiveSocket socket(url);
+  beast::error_code ec;
+  socket.handshake(url.origin(), url.token, ec);
+  if (ec) throw std::runtime_error("the WebSocket handshake failed: " + ec.message());
+  std::vector<json> messages;
+  while (messages.empty() || messages.back().value("type", "") != "end") {
+    const std::string text = socket.read(ec);
+    if (ec) throw std::runtime_error("the stream ended before its end message: " + ec.message());
+    messages.push_back(json::parse(text));
+  }
+  return messages;
+}
+
+// A page that connects while the run goes on: reads until a stats message says the source has run.
+void replayed_until_stats(const LiveUrl& url) {
+  LiveSocket socket(url);
+  beast::error_code ec;
+  socket.handshake(url.origin(), url.token, ec);
+  if (ec) throw std::runtime_error("the WebSocket handshake failed: " + ec.message());
+  for (;;) {
+    const std::string text = socket.read(ec);
+    if (ec) throw std::runtime_error("the stream ended before the run was seen running: " + ec.message());
+    const json m = json::parse(text);
+    if (m["type"] == "stats" && !m["components"].empty() && m["components"][0]["invocations"] > 0) return;
+  }
+}
+
+// --serve-keep: the run ends by itself, and fba-run goes on serving it (the page, and its messages to
+// a page that connects after the end) until SIGTERM, then exits with the run's status, its summary
+// the run's. For a success and a failure, so that the status is seen to be the run's, not 0.
+TEST_F(CliServe, WithServeKeepTheEndedRunIsServedUntilSigtermAndTheStatusIsTheRuns) {
+  struct Case {
+    const char* name;
+    const char* task;
+    int status;
+    const char* outcome;
+  };
+  for (const Case& c : {Case{"finite", kFinite, 0, "success"}, Case{"finite_failing", kFiniteFailing, 1, "failure"}}) {
+    SCOPED_TRACE(c.name);
+    const std::filesystem::path out = dir_.path() / (std::string(c.name) + "-out");
+    Child child(fba_run_command({dir_.file(std::string(c.name) + ".yaml", c.task), "--serve", "0", "--serve-keep", "-o", out.string()}));
+    const LiveUrl url = serve(child);
+    const std::string kept = child.read_line_with("still serving its live view", kHangLimit);
+    ASSERT_NE(kept.find("until SIGINT or SIGTERM"), std::string::npos) << child.output();
+    // The run's last line came first: the run is over.
+    ASSERT_NE(child.output().find("fba-run: " + std::string(c.status == 0 ? "success" : "failed")), std::string::npos) << child.output();
+    ASSERT_TRUE(child.running()) << child.output();
+
+    EXPECT_EQ(http_get(url, "/?token=" + url.token).result(), http::status::ok);
+    EXPECT_EQ(http_get(url, "/").result(), http::status::forbidden);  // still the run's token only
+    for (int page = 0; page < 2; ++page) {  // each page that connects is sent the whole run
+      const std::vector<json> messages = replayed(url);
+      EXPECT_EQ(messages.front()["type"], "task");
+      EXPECT_EQ(messages.back()["outcome"], c.outcome);
+      EXPECT_EQ(messages.back()["exit_code"], c.status);
+    }
+    EXPECT_TRUE(child.running()) << child.output();
+
+    EXPECT_EQ(child.wait(SIGTERM, kHangLimit), c.status) << child.output();
+    const json summary = json::parse(read_text(out / "summary.json"));
+    EXPECT_EQ(summary["outcome"], c.outcome) << "the stop of the serving is not the run's outcome";
+    EXPECT_EQ(summary["exit_code"], c.status);
+    EXPECT_TRUE(std::filesystem::is_regular_file(out / "report.html"));
+  }
+}
+
+// Without --serve-keep a run that ends exits by itself, serving or not: a script never waits on a
+// page. With it, a run stopped by a signal exits too: the signal asked fba-run to end.
+TEST_F(CliServe, WithoutServeKeepOrAfterASignalFbaRunExitsWhenTheRunEnds) {
+  Child finite(fba_run_command({dir_.file("finite.yaml", kFinite), "--serve", "0"}));
+  serve(finite);
+  const Result done = finite.wait();
+  EXPECT_EQ(done.status, 0) << done.output;
+  EXPECT_EQ(done.output.find("still serving"), std::string::npos) << done.output;
+
+  Child endless(fba_run_command({dir_.file("endless.yaml", kEndless), "--serve", "0", "--serve-keep"}));
+  const LiveUrl url = serve(endless);
+  replayed_until_stats(url);
+  EXPECT_EQ(endless.wait(SIGINT, kHangLimit), 130) << endless.output();
+  EXPECT_EQ(endless.output().find("still serving"), std::string::npos) << endless.output();
+}
+
+// A task whose component refuses its configuration when constructed (the test plugin's mode).
+constexpr const char* kRefusing = R"(task: refusing
+components:
+  src: { type: examples.counter, params: { count: 10 } }
+  bad: { type: test.misbehaving, params: { mode: throw_in_constructor_int } }
+connections: [ src.out -> bad.in ]
+)";
+
+// A run that ended before its task ran is kept on the page too: its end says why, and SIGTERM
+// ends fba-run with the construction's status.
+TEST_F(CliServe, WithServeKeepARunThatEndedBeforeItsTaskRanIsServedUntilSigterm) {
+  Child child(fba_run_command({dir_.file("refusing.yaml", kRefusing), "--plugin-path", misbehaving_plugins(), "--serve", "0",
+                               "--serve-keep", "-o", (dir_.path() / "out").string()}));
+  const LiveUrl url = serve(child);
+  child.read_line_with("still serving its live view", kHangLimit);
+  ASSERT_TRUE(child.running()) << child.output();
+  const std::vector<json> messages = replayed(url);
+  EXPECT_EQ(messages.front()["type"], "task");
+  EXPECT_EQ(messages.back()["outcome"], "configuration_error");
+  EXPECT_EQ(messages.back()["exit_code"], 2);
+  EXPECT_NE(messages.back()["reason"].get<std::string>().find("component 'bad' (test.misbehaving) refused its configuration"),
+            std::string::npos)
+      << messages.back();
+  EXPECT_EQ(child.wait(SIGTERM, kHangLimit), 2) << child.output();
+}
+
+TEST_F(CliServe, ServeKeepWithoutServeIsRefused) {
+  const Result r = run_shell(program("fba-run") + " " + dir_.file("finite.yaml", kFinite) + " --serve-keep");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--serve-keep needs --serve"), std::string::npos) << r.output;
+}
+
 TEST_F(CliServe, BadAddressesAndAPortInUseAreRefusedBeforeTheRun) {
   const std::string task = dir_.file("finite.yaml", kFinite);
   for (const char* bad : {"70000", "nowhere:80", "http://x"}) {
@@ -209,7 +333,7 @@ TEST_F(CliServe, BadAddressesAndAPortInUseAreRefusedBeforeTheRun) {
     EXPECT_EQ(r.status, 2) << bad << "\n" << r.output;
     EXPECT_NE(r.output.find("--serve"), std::string::npos) << r.output;
   }
-  Child child(fba_run({dir_.file("endless.yaml", kEndless), "--serve", "0"}));
+  Child child(fba_run_command({dir_.file("endless.yaml", kEndless), "--serve", "0"}));
   const LiveUrl url = serve(child);
   const Result taken = run_shell(program("fba-run") + " " + task + " --serve " + url.port);
   EXPECT_EQ(taken.status, 2) << taken.output;

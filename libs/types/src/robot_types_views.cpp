@@ -16,7 +16,8 @@ namespace fba::types_detail {
 const bool robot_types_views_registered = [] {
   using namespace fba::views;
   // By the types' own names (type_of), so a renamed type keeps its view.
-  register_view(type_of<Pose>()->name, &pose_view);
+  // Every pose is shown, in order: the camera's are the views visited.
+  register_view(type_of<Pose>()->name, &pose_view, ViewedSamples::Every);
   register_view(type_of<JointState>()->name, &joint_state_view);
   register_view(type_of<JointTrajectory>()->name, &trajectory_view);
   register_view(type_of<Grasp>()->name, &grasp_view);

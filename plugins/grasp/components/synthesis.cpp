@@ -188,7 +188,7 @@ class GraspSynthesisFilter final : public fba::Component {
       "planning_performed",
       "no reliable grasp yet: regions were emitted for a new view; payload (JSON): views, samples, regions, candidates, "
       "uncertain_regions, regions_requested, points_requested (contacts to graze), best_total, seconds (wall time of the analysis), best (the best candidate's S1, S3, S4 and whether it is uncertain)"};
-  static constexpr fba::EventOut kGraspSelected{"grasp_selected", "a reliable grasp was selected; payload: the grasp as JSON"};
+  static constexpr fba::EventOut kGraspSelected{"grasp_selected", "a reliable grasp was selected; payload: the grasp as JSON, with its Ferrari-Canny epsilon on the model (model_epsilon)"};
   static constexpr fba::EventOut kFailed{"grasp_synthesis_failed", "the search gave up; payload: the reason"};
 #if FBA_GRASP_REACH
   static constexpr fba::OptionalIn<fba::JointState> kJointState{
@@ -350,10 +350,14 @@ class GraspSynthesisFilter final : public fba::Component {
     Reach reach = reach_check(model, r.candidates);
     struct ReportReach {  // on every way out below: the checks made are known once the decision is
       GraspSynthesisFilter& self;
+      const fba::grasp::SynthesisResult& result;
       Reach& reach;
       int views;
-      ~ReportReach() { self.report_reach(reach, views); }
-    } report_reach_at_end{*this, reach, views};
+      ~ReportReach() {
+        self.report_reach(reach, views);
+        self.report_candidates(result.candidates, reach, views);
+      }
+    } report_reach_at_end{*this, r, reach, views};
     std::optional<std::size_t> first_reachable;
     for (std::size_t i = 0; i < r.candidates.size() && !first_reachable; ++i)
       if (reach.reachable(i)) first_reachable = i;
@@ -376,7 +380,7 @@ class GraspSynthesisFilter final : public fba::Component {
                         c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                         c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
         reach.start_for(i);
-        return select(c.grasp, views, "surface");
+        return select(c.grasp, c.model_epsilon, views, "surface");
       }
       if (c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
     }
@@ -392,7 +396,7 @@ class GraspSynthesisFilter final : public fba::Component {
                           c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                           c.model_epsilon);
           reach.start_for(i);
-          return select(c.grasp, views, "contacts");
+          return select(c.grasp, c.model_epsilon, views, "contacts");
         }
       if (reach.active && !r.candidates.empty() && !first_reachable)
         return fail("no grasp the arm can reach after " + std::to_string(views) + " views: none of the " +
@@ -654,15 +658,51 @@ class GraspSynthesisFilter final : public fba::Component {
     }
   }
 
+  // The candidates of the model analysed last (the one a grasp was selected on, or the search gave
+  // up on), best total first, as the result "candidates": {"views", "grasps": [GRASP...]}, each
+  // GRASP as docs/live-view.md has it (contacts, inward normals, approach, score) with its
+  // model_epsilon, whether it is reliable (its surface resolved) and whether the arm's reach check
+  // passed it over. The live page and report.html draw them beside the selected grasp: the data
+  // type carries the selected grasp only. Called from a destructor: throws nothing.
+  void report_candidates(const std::vector<fba::grasp::GraspCandidate>& candidates, const Reach& reach, int views) noexcept {
+    try {
+      auto xyz = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+      nlohmann::json grasps = nlohmann::json::array();
+      for (std::size_t i = 0; i < candidates.size(); ++i) {
+        const fba::grasp::GraspCandidate& c = candidates[i];
+        nlohmann::json contacts = nlohmann::json::array(), normals = nlohmann::json::array();
+        for (const auto& contact : c.grasp.contacts) {
+          contacts.push_back(xyz(contact.position));
+          normals.push_back(xyz(contact.normal));
+        }
+        grasps.push_back({{"contacts", std::move(contacts)},
+                          {"normals", std::move(normals)},
+                          {"approach", xyz(c.grasp.approach)},
+                          {"score", c.grasp.scores.total},
+                          {"model_epsilon", c.model_epsilon},
+                          {"reliable", !c.uncertain},
+                          {"passed_over", reach.passed_over(i)}});
+      }
+      ctx_.report("candidates", nlohmann::json{{"views", views}, {"grasps", std::move(grasps)}}
+                                    .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+    } catch (const std::exception& e) {
+      ctx_.log().error("could not report the candidates: {}", e.what());
+    }
+  }
+
   // resolved: what the model had resolved (and two views pinned, with rim_deg) under the fingers:
   // "surface", each contact and its neighbourhood, or "contacts", the contacts only (after the
-  // last view).
-  void select(fba::Grasp g, int views, const char* resolved) {
+  // last view). model_epsilon: the grasp's Ferrari-Canny epsilon on the model, which fba::Grasp
+  // does not carry: the result and the event hold it beside the grasp ("model_epsilon"), for the
+  // run's last line and the summary's readers.
+  void select(fba::Grasp g, double model_epsilon, int views, const char* resolved) {
     ctx_.report("resolved", nlohmann::json(resolved).dump());
     // The carver integrates silhouettes in arrival order: the model's views are the first ones.
     for (int v = 0; v < views; ++v) g.views.push_back(v < int(view_index_.size()) ? view_index_[v] : v);
     g.stamp = ctx_(kOctree).packet().header().stamp_ns * 1e-9;
-    const std::string json = fba::grasp::grasp_to_json(g).dump();
+    nlohmann::json selected = fba::grasp::grasp_to_json(g);
+    selected["model_epsilon"] = model_epsilon;
+    const std::string json = selected.dump();
     ctx_.report("grasp", json);
     ctx_.emit(kGraspSelected, json);
     write_pictures(&g, ctx_(kOctree).get());

@@ -65,6 +65,11 @@ TEST(GraspSynthesisComponent, SelectsAGraspOnACylinderWithContactsOnItsSide) {
   ASSERT_EQ(selected.size(), 1u);
   const fba::Grasp from_event = fba::grasp::grasp_from_json(nlohmann::json::parse(selected[0].payload), "grasp_selected");
   EXPECT_EQ(from_event.contacts[0].position, g.contacts[0].position);
+  // Its force-closure quality beside it (the run's last line says it): a selected grasp is force
+  // closure on the model, so its epsilon there is positive.
+  const nlohmann::json payload = nlohmann::json::parse(selected[0].payload);
+  ASSERT_TRUE(payload.contains("model_epsilon") && payload["model_epsilon"].is_number()) << payload;
+  EXPECT_GT(payload["model_epsilon"].get<double>(), 0.0) << payload;
   EXPECT_EQ(h.stage(), "grasp_synthesis");
   EXPECT_TRUE(h.values<fba::RegionsOfInterest>("regions").empty());
 
