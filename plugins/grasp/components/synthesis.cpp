@@ -273,8 +273,10 @@ class GraspSynthesisFilter final : public fba::Component {
       quick.first_solution = true;
       quick.check_start = false;
       reach_.emplace(fba::motion::ReachParameters::planner(ctx, robot, quick));
-      quick.check_start = true;
-      reach_start_.emplace(fba::motion::ReachParameters::planner(ctx, robot, quick));
+      // The one to select: the whole plan, path search and all, as motion.reach_planner makes it
+      // (the same parameters, the same seed, from the same joints), so that no grasp selected is
+      // one the arm then cannot take.
+      reach_plan_.emplace(fba::motion::ReachParameters::planner(ctx, robot));
       reach_checks_ = ctx(kReachChecks);
       params_.pregrasp_distance = reach_->params().standoff;  // the table's check at the pregrasp, where the path ends
     }
@@ -379,7 +381,7 @@ class GraspSynthesisFilter final : public fba::Component {
                         "({:.3f}, {:.3f}, {:.3f})",
                         c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                         c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
-        reach.start_for(i);
+        if (!reach.plannable(i)) continue;
         return select(c.grasp, c.model_epsilon, views, "surface");
       }
       if (c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
@@ -390,12 +392,12 @@ class GraspSynthesisFilter final : public fba::Component {
       // curved objects such as the banana two rims cross on little of the surface, and a whole
       // neighbourhood is rarely pinned.
       for (std::size_t i = 0; i < r.candidates.size(); ++i)
-        if (const auto& c = r.candidates[i]; !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i)) {
+        if (const auto& c = r.candidates[i];
+            !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i) && reach.plannable(i)) {
           ctx_.log().info("selected after the last view, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
                           "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
                           c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                           c.model_epsilon);
-          reach.start_for(i);
           return select(c.grasp, c.model_epsilon, views, "contacts");
         }
       if (reach.active && !r.candidates.empty() && !first_reachable)
@@ -539,7 +541,7 @@ class GraspSynthesisFilter final : public fba::Component {
     std::vector<std::optional<Verdict>> ahead;
     std::function<void()> prepare;  // once, before the first check (the model's obstacles)
     std::function<Verdict(std::size_t)> check;  // thread-safe
-    std::function<Verdict(std::size_t)> check_start;  // the same from where the arm stands
+    std::function<Verdict(std::size_t)> check_plan;  // the whole plan, from where the arm stands
     nlohmann::json start;  // for the candidate selected: whether the arm starts from where it stands
     fba::ParallelFor parallel_for;
     std::size_t batch = 1;
@@ -563,14 +565,22 @@ class GraspSynthesisFilter final : public fba::Component {
       return v.ok;
     }
     bool passed_over(std::size_t i) const { return active && state[i] == 0; }
-    // Whether the arm can start the selected candidate's reach from where it stands: its hand clear
-    // of the model, or backed out of it. When it cannot, motion.reach_planner refuses the plan from
-    // there; no other candidate would do better, so it is selected all the same, and said.
-    void start_for(std::size_t i) {
-      if (!active || !check_start) return;
-      const Verdict v = check_start(i);
-      start = v.ok ? nlohmann::json("clear") : nlohmann::json{{"refusal", v.refusal}, {"reason", v.why}};
-      if (!v.ok) log->warn("the arm cannot start the selected grasp's reach from where it stands ({}): {}", v.refusal, v.why);
+    // The whole plan for a candidate about to be selected (the path search is too costly for every
+    // candidate): one whose path the planner does not find is passed over like the others. The
+    // start (the arm's hand in the model where it stands, and no way to back out) is the same for
+    // every candidate, so no other would do better: the candidate is selected all the same, and said.
+    bool plannable(std::size_t i) {
+      if (!active || !check_plan) return true;
+      const Verdict v = check_plan(i);
+      if (v.ok || v.refusal == fba::motion::to_string(fba::motion::Refusal::Start)) {
+        start = v.ok ? nlohmann::json("clear") : nlohmann::json{{"refusal", v.refusal}, {"reason", v.why}};
+        if (!v.ok) log->warn("the arm cannot start the selected grasp's reach from where it stands ({}): {}", v.refusal, v.why);
+        return true;
+      }
+      log->debug("candidate {}: passed over at selection, {}: {}", i, v.refusal, v.why);
+      state[i] = 0;
+      passed.add(v.refusal, v.why);
+      return false;
     }
     std::string unchecked_text() const {
       return unchecked == 0 ? "" : "; " + std::to_string(unchecked) + " not checked (reach_checks: " + std::to_string(budget) + ")";
@@ -613,15 +623,16 @@ class GraspSynthesisFilter final : public fba::Component {
     // The model's obstacles, built once for the checks of this model.
     auto obstacles = std::make_shared<std::shared_ptr<const fba::motion::ModelObstacles>>();
     reach.prepare = [&model, obstacles] { *obstacles = fba::motion::ReachPlanner::obstacles(model); };
-    auto check_with = [&candidates, joints, why, obstacles](const fba::motion::ReachPlanner& planner) {
-      return [&planner, &candidates, joints, why, obstacles](std::size_t i) -> Reach::Verdict {
+    auto check_with = [&candidates, joints, why, obstacles](const fba::motion::ReachPlanner& planner, bool whole) {
+      return [&planner, &candidates, joints, why, obstacles, whole](std::size_t i) -> Reach::Verdict {
         if (!joints) return {false, false, fba::motion::to_string(fba::motion::Refusal::Start), why};
-        const fba::motion::ReachPlan plan = planner.reachable(candidates[i].grasp, *obstacles, *joints);
+        const fba::motion::ReachPlan plan =
+            whole ? planner.plan(candidates[i].grasp, *obstacles, *joints) : planner.reachable(candidates[i].grasp, *obstacles, *joints);
         return {plan.ok, plan.figures.ik_attempts > 0, fba::motion::to_string(plan.refusal), plan.why};
       };
     };
-    reach.check = check_with(*reach_);
-    reach.check_start = check_with(*reach_start_);
+    reach.check = check_with(*reach_, false);
+    reach.check_plan = check_with(*reach_plan_, true);
 #endif
     return reach;
   }
@@ -772,7 +783,7 @@ class GraspSynthesisFilter final : public fba::Component {
   int requested_views_ = -1;      // the model views of the last regions request
   bool done_ = false;
 #if FBA_GRASP_REACH
-  std::optional<fba::motion::ReachPlanner> reach_, reach_start_;  // with joint_state connected: the grasp alone, and with the start
+  std::optional<fba::motion::ReachPlanner> reach_, reach_plan_;  // with joint_state connected: the grasp alone, and the whole plan
   int reach_checks_ = 0;
   bool told_no_joints_ = false;
 #endif

@@ -192,8 +192,8 @@ TEST(GraspSynthesisReach, ItsReachParametersAreTheReachPlannersOwn) {
     EXPECT_EQ(s->doc, p.doc) << p.name;
   }
   // The robot's (urdf, base_pose, flange_to_palm, flange_to_camera), then base_link, flange_link, standoff, lift_height,
-  // contact_allowance, max_backout, seed, ik_attempts.
-  EXPECT_EQ(shared, 12);
+  // contact_allowance, max_backout, seed, ik_attempts, planning_time, path_checks.
+  EXPECT_EQ(shared, 14);
   EXPECT_NE(synthesis->spec.find_input("joint_state"), nullptr);
   EXPECT_NE(synthesis->spec.find_event("unreachable"), nullptr);
 }
@@ -243,4 +243,27 @@ TEST(GraspSynthesisReach, ItsReachCheckPutsThePalmWhereThePlannerDoesWhenFlangeT
   ASSERT_FALSE(refused.is_null());
   EXPECT_EQ(refused["refusal"], start["refusal"]);
   EXPECT_EQ(refused["reason"], start["reason"]);
+}
+
+// The grasp about to be selected is planned whole, path search and all, as motion.reach_planner
+// plans it: with a path search that gives up at once (path_checks 1: only a straight joint-space
+// line passes), the candidates whose path needs searching are passed over for "path", none is
+// selected from this model, and views are asked for; with the search, the one selected is planned.
+TEST(GraspSynthesisReach, TheGraspSelectedIsOneThePlannerFindsAPathFor) {
+  const std::vector<double> box = reach::standing({0.06, 0.12, 0.20});  // tall: the arm's way from home to its side is searched
+  const std::string table = "table_z: [0.001], edge_margin_mm: 0";
+  const reach::Outcome searched = reach::synthesise(box, home(), table);
+  ASSERT_EQ(searched.grasps.size(), 1u) << searched.run.reason;
+  EXPECT_TRUE(plan_of(searched.grasps[0], box, {}).is_null());
+  const nlohmann::json refused = plan_of(searched.grasps[0], box, {{"path_checks", std::int64_t{1}}});
+  ASSERT_FALSE(refused.is_null());
+  ASSERT_EQ(refused["refusal"], "path") << refused;
+
+  const reach::Outcome straight = reach::synthesise(box, home(), table + ", path_checks: 1");
+  EXPECT_TRUE(straight.grasps.empty());
+  const auto report = nlohmann::json::parse(straight.result("reach"));
+  ASSERT_TRUE(report["passed_over"].contains("path")) << report;
+  EXPECT_EQ(report["passed_over"]["path"]["example"].get<std::string>().rfind("no collision-free path found in 1 poses checked", 0), 0u)
+      << report;
+  EXPECT_EQ(straight.regions.size(), 1u);
 }

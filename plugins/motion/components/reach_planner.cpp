@@ -68,13 +68,6 @@ class ReachPlannerFilter final : public fba::Component {
       fba::Param<double>("hand_time", 1.0, "seconds the arm stands still while the hand opens or closes").range(0, 60);
   static constexpr auto kFingerForce = fba::Param<double>("finger_force", 10.0, "newtons at each pad when closing").range(0.1, 1000);
   static constexpr fba::Param<bool> kRetreat{"retreat", true, "after the hold: put the object back, open the hand, back out to the standoff"};
-  static constexpr auto kPlanningTime =
-      fba::Param<double>("planning_time", 30, "seconds of wall time the collision-free path search may take at most: a guard "
-                         "(path_checks ends it first, at the same point on any machine)").range(0.001, 600);
-  static constexpr auto kPathChecks =
-      fba::Param<std::int64_t>("path_checks", 20000, "poses the collision-free path search may check before it gives up: "
-                                                     "its bound, the same on a loaded machine as on an idle one")
-          .range(1, 10'000'000);
   static constexpr auto kSpeed =
       fba::Param<double>("speed_scale", 0.5, "share of each joint's URDF velocity limit the trajectory uses").range(0.01, 1.0);
   static constexpr auto kAcceleration =
@@ -90,7 +83,7 @@ class ReachPlannerFilter final : public fba::Component {
                                        "the table, the arm and the carved model): a timed joint trajectory and the hand's commands.");
     spec.add(kGrasp, kOctree, kJointState, kTrajectory, kHand, kUnreachable);
     ReachParameters::add(spec)  // shared with grasp.synthesis, which checks reachability with them
-        .add(kHoldTime, kHandTime, kFingerForce, kRetreat, kPlanningTime, kPathChecks, kSpeed, kAcceleration, kSamplePeriod, kObject)
+        .add(kHoldTime, kHandTime, kFingerForce, kRetreat, kSpeed, kAcceleration, kSamplePeriod, kObject)
         .stages({"idle", "plan", "approach", "close", "lift", "hold", "retreat"},
                 {{"idle", "plan"}, {"plan", "idle"}, {"plan", "approach"}, {"approach", "plan"}, {"approach", "close"},
                  {"close", "plan"}, {"close", "lift"}, {"lift", "plan"}, {"lift", "hold"}, {"hold", "plan"}, {"hold", "retreat"},
@@ -124,8 +117,6 @@ class ReachPlannerFilter final : public fba::Component {
     p.hand_s = ctx(kHandTime);
     p.finger_force = ctx(kFingerForce);
     p.retreat = ctx(kRetreat);
-    p.planning_time = ctx(kPlanningTime);
-    p.path_checks = static_cast<std::size_t>(ctx(kPathChecks));
     p.speed_scale = ctx(kSpeed);
     p.acceleration = ctx(kAcceleration);
     p.sample_period = ctx(kSamplePeriod);

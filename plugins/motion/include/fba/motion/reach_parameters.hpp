@@ -1,6 +1,6 @@
 // The reach planner's parameters as components declare them: motion.reach_planner, which plans
 // the arm's motion to a grasp, and grasp.synthesis, which passes over the grasps the arm cannot
-// reach (ReachPlanner::reachable). Declared once here, with their names, defaults and ranges, so
+// reach (ReachPlanner::reachable, and plan() for the one it selects). Declared once here, with their names, defaults and ranges, so
 // that the two components read the same robot and cannot disagree on what is reachable; a task
 // that changes one sets it on both. The robot itself (urdf, base_pose, flange_to_palm,
 // flange_to_camera) is arm::RobotParameters, which every component that reads the robot declares:
@@ -8,6 +8,7 @@
 // parameter flange_to_palm measured it.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -41,11 +42,19 @@ struct ReachParameters {
       fba::Param<int>("seed", 1, "seed of the path search and the IK's random starts: the same plan on every run").range(1, 2147483647);
   static constexpr auto kIkAttempts =
       fba::Param<int>("ik_attempts", 32, "IK starts for the pregrasp: the current joints, then random ones").range(1, 10000);
+  static constexpr auto kPlanningTime =
+      fba::Param<double>("planning_time", 30, "seconds of wall time the collision-free path search may take at most: a guard "
+                         "(path_checks ends it first, at the same point on any machine)").range(0.001, 600);
+  static constexpr auto kPathChecks =
+      fba::Param<std::int64_t>("path_checks", 20000, "poses the collision-free path search may check before it gives up: "
+                                                     "its bound, the same on a loaded machine as on an idle one")
+          .range(1, 10'000'000);
 
   // Declares them, with the robot's, on a component's spec.
   static fba::Spec& add(fba::Spec& spec) {
     arm::RobotParameters::add(spec);
-    return spec.add(kBaseLink, kFlangeLink, kStandoff, kLiftHeight, kContactAllowance, kMaxBackout, kSeed, kIkAttempts);
+    return spec.add(kBaseLink, kFlangeLink, kStandoff, kLiftHeight, kContactAllowance, kMaxBackout, kSeed, kIkAttempts, kPlanningTime,
+                    kPathChecks);
   }
   // `p` with these parameters' values, the palm on the flange where `robot` places it.
   static ReachParams read(const fba::Context& ctx, const arm::RobotDescription& robot, ReachParams p = {}) {
@@ -56,6 +65,8 @@ struct ReachParameters {
     p.max_backout = ctx(kMaxBackout);
     p.seed = static_cast<std::uint32_t>(ctx(kSeed));
     p.ik_attempts = ctx(kIkAttempts);
+    p.planning_time = ctx(kPlanningTime);
+    p.path_checks = static_cast<std::size_t>(ctx(kPathChecks));
     return p;
   }
   // The planner they describe, the rest of `p` as given. Throws as ReachPlanner's constructor, and
