@@ -377,11 +377,11 @@ class GraspSynthesisFilter final : public fba::Component {
                           c.model_epsilon, stability_share_, best_epsilon);
           break;  // the reliable ones after it are less stable still
         }
+        if (!reach.plannable(i)) continue;
         ctx_.log().info("selected: total {:.3f} (S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model about its centre "
                         "({:.3f}, {:.3f}, {:.3f})",
                         c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                         c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
-        if (!reach.plannable(i)) continue;
         return select(c.grasp, c.model_epsilon, views, "surface");
       }
       if (c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
