@@ -42,6 +42,7 @@
 #if FBA_GRASP_REACH
 #include <fba/types/joint_state.hpp>
 
+#include "fba/motion/hand_geometry.hpp"
 #include "fba/motion/reach_parameters.hpp"
 #include "fba/motion/reach_planner.hpp"
 #include "motion_hand.hpp"
@@ -465,6 +466,18 @@ class GraspSynthesisFilter final : public fba::Component {
       for (const auto& x : surface.samples) all.extend(x.position);
       roi.boxes.emplace_back(all.min() - margin, all.max() + margin);
     }
+    // The space the hand sweeps for the best candidates the model blocked: what blocks them may be
+    // space no view has carved yet, which the generic criterion leaves in coarse nodes (over a small
+    // object, most of a node's projection outside the silhouette keeps it unsplit), so the carver is
+    // asked to refine it, and carves what its views already show empty. Kept asked for on every
+    // later model (the carver keeps detail only where the regions of the moment ask), the latest few.
+#if FBA_GRASP_REACH
+    constexpr std::size_t kSweptCandidates = 3, kSweptKept = 6;
+    for (std::size_t k = 0; k < reach.model_blocked.size() && k < kSweptCandidates; ++k)
+      swept_.push_back(hand_sweep(r.candidates[reach.model_blocked[k]].grasp));
+    if (swept_.size() > kSweptKept) swept_.erase(swept_.begin(), swept_.end() - kSweptKept);
+    roi.boxes.insert(roi.boxes.end(), swept_.begin(), swept_.end());
+#endif
     // What keeps the best candidates from selection for want of two grazing views: the unpinned
     // surface under their fingers (each contact and its neighbourhood, as synthesis judges it), one
     // group per candidate. The next view should graze it. The candidates above the threshold, else
@@ -538,6 +551,7 @@ class GraspSynthesisFilter final : public fba::Component {
     std::size_t budget = 0, costly = 0;
     std::size_t unchecked = 0;       // candidates asked for once the budget was spent
     std::vector<signed char> state;  // per candidate: -1 not asked yet, 0 passed over, 1 reachable, 2 not checked
+    std::vector<std::size_t> model_blocked;  // passed over, the robot in the model (occupied or not yet carved), in order
     std::vector<std::optional<Verdict>> ahead;
     std::function<void()> prepare;  // once, before the first check (the model's obstacles)
     std::function<Verdict(std::size_t)> check;  // thread-safe
@@ -562,6 +576,7 @@ class GraspSynthesisFilter final : public fba::Component {
       costly += v.costly ? 1 : 0;
       state[i] = v.ok ? 1 : 0;
       if (!v.ok) passed.add(v.refusal, v.why);
+      if (!v.ok && v.why.find("the model") != std::string::npos) model_blocked.push_back(i);
       return v.ok;
     }
     bool passed_over(std::size_t i) const { return active && state[i] == 0; }
@@ -721,6 +736,18 @@ class GraspSynthesisFilter final : public fba::Component {
     done_ = true;
   }
 
+#if FBA_GRASP_REACH
+  // The space the open hand passes through on its way in: from the contacts back along the
+  // approach past the palm's back at the standoff, as wide as the open hand around the contacts.
+  Eigen::AlignedBox3d hand_sweep(const fba::Grasp& g) const {
+    const Eigen::Vector3d back = -g.approach.normalized() * (fba::motion::hand::kPadDistance + reach_->params().standoff);
+    const Eigen::Vector3d side = Eigen::Vector3d::Constant(0.5 * fba::motion::hand::kSpreadMax);
+    Eigen::AlignedBox3d box;
+    for (const auto& c : g.contacts) box.extend(c.position).extend(c.position + back);
+    return {box.min() - side, box.max() + side};
+  }
+#endif
+
   // With an output folder, every model analysed, as exploration/model_<views>views.ply: the loop's
   // iterations, up to the model the grasp was selected on (or the search gave up on). A refined
   // model of the same views replaces the file: the last one is what that view's decision used.
@@ -783,6 +810,7 @@ class GraspSynthesisFilter final : public fba::Component {
   int requested_views_ = -1;      // the model views of the last regions request
   bool done_ = false;
 #if FBA_GRASP_REACH
+  std::vector<Eigen::AlignedBox3d> swept_;  // the hand's way in for candidates the model blocked (hand_sweep)
   std::optional<fba::motion::ReachPlanner> reach_, reach_plan_;  // with joint_state connected: the grasp alone, and the whole plan
   int reach_checks_ = 0;
   bool told_no_joints_ = false;

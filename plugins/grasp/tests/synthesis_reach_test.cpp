@@ -267,3 +267,27 @@ TEST(GraspSynthesisReach, TheGraspSelectedIsOneThePlannerFindsAPathFor) {
       << report;
   EXPECT_EQ(straight.regions.size(), 1u);
 }
+
+// A candidate the model blocks (the hand's way in runs into it: here a slab held over the box,
+// standing for space no view has carved yet) has the space the open hand sweeps asked for, with
+// the regions, so that the carver refines it and carves what its views already show empty.
+TEST(GraspSynthesisReach, TheHandsWayInForACandidateTheModelBlocksIsAskedFor) {
+  // A 5 cm box 10 cm tall under a 25 cm slab 1 cm over it: every candidate's hand is in the slab.
+  std::vector<double> scene = reach::standing({0.05, 0.05, 0.10});
+  for (double v : {0.0, 0.0, 0.115, 0.25, 0.25, 0.01}) scene.push_back(v);
+  const std::string params = "table_z: [0.001], edge_margin_mm: 0, max_views: 100";
+  const reach::Outcome o = reach::synthesise(scene, home(), params);
+  EXPECT_TRUE(o.grasps.empty());
+  const auto report = nlohmann::json::parse(o.result("reach"));
+  ASSERT_TRUE(report["passed_over"].contains("collision")) << report;
+  // Without the arm the candidates' surface regions are asked for; with it, the same and the way
+  // in of the three best the model blocked: each from its contacts back past the palm at the
+  // standoff, reaching from the box's sides up into the slab.
+  const reach::Outcome free = reach::synthesise(scene, {}, params + ", threshold: 0.99");
+  ASSERT_EQ(o.regions.size(), 1u);
+  ASSERT_EQ(free.regions.size(), 1u);
+  int sweeps = 0;
+  for (const auto& b : o.regions[0].boxes) sweeps += b.max().z() > 0.11 && b.sizes().x() > 0.15 && b.sizes().y() > 0.15;
+  EXPECT_EQ(sweeps, 3);
+  for (const auto& b : free.regions[0].boxes) EXPECT_FALSE(b.sizes().x() > 0.15 && b.sizes().y() > 0.15);
+}
