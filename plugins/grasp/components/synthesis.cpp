@@ -33,6 +33,7 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/vision/octree_carver.hpp"
+#include "fba/vision/ply_leaves_parameter.hpp"
 
 #include "fba/grasp/grasp_json.hpp"
 #include "fba/grasp/model_surface.hpp"
@@ -178,12 +179,7 @@ class GraspSynthesisFilter final : public fba::Component {
       "table_z", {}, "[z]: the table the object stands on (world z, up); grasps whose hand would reach into it are left out. "
       "Empty: no table")
       .size({0, 1});
-  static constexpr auto kPlyLeaves = fba::Param<std::string>(
-      "ply_leaves", "seen",
-      "which occupied leaves the models in exploration/ hold: seen, those two views saw whole (the object as the views show it; "
-      "space no view could carve, such as the top of a root box no camera framed, is left out), or occupied, every one (the "
-      "model the search analysed)")
-                                         .choices({"seen", "occupied"});
+  static constexpr auto kPlyLeaves = fba::vision::PlyLeavesParameter::kPlyLeaves;  // shared with vision.octree_carver
   static constexpr fba::EventOut kPlanningPerformed{
       "planning_performed",
       "no reliable grasp yet: regions were emitted for a new view; payload (JSON): views, samples, regions, candidates, "
@@ -253,7 +249,7 @@ class GraspSynthesisFilter final : public fba::Component {
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);
-    ply_leaves_ = ctx(kPlyLeaves) == "occupied" ? fba::vision::PlyLeaves::Occupied : fba::vision::PlyLeaves::Seen;
+    ply_leaves_ = fba::vision::PlyLeavesParameter::read(ctx);
     edge_margin_ = ctx(kEdgeMarginMm) / 1000;
     params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first
     // The model's surface and the search borrow the task's threads, as carving does: the loop waits
