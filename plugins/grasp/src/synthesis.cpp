@@ -377,8 +377,9 @@ std::vector<std::size_t> uncertain_regions(const std::vector<GraspRegion>& regio
 }
 
 // The samples a contact may take: in a region, at least edge_margin inside it, and high enough for
-// a finger to touch above the table; in a fixed shuffle, an even and reproducible subset of the
-// surface whatever its first entries are. Counts the others in result.near_edge and result.too_low.
+// a finger to touch above the table; shuffled with a fixed seed, so that its first entries (the
+// thumbs tried) are an even, reproducible subset of the surface. Counts the samples left out in
+// result.near_edge and result.too_low.
 std::vector<std::size_t> contact_pool(const std::vector<SurfaceSample>& s, const std::vector<std::size_t>& region_of,
                                       const SynthesisParams& p, SynthesisResult& result) {
   std::vector<std::size_t> pool;
