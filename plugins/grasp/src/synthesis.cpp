@@ -615,8 +615,8 @@ QualityParams model_quality(const SynthesisParams& p) {
 // The candidates kept, from `all` (best total first) into result.candidates: taken in order, each
 // kept unless it repeats one kept, the model stands in the hand's way, or it is not force closure
 // on the model about the object's centre (torques over the samples' farthest distance from it, as
-// the true measure scales them by r_max); at most max_candidates, after at most max_checks
-// force-closure checks. The hulls (the costly part) are computed ahead, a few at once with a
+// the true measure scales them by r_max); at most max_candidates of each kind (see below), after
+// at most max_checks force-closure checks. The hulls (the costly part) are computed ahead, a few at once with a
 // parallel_for, for the next candidates that repeat none kept so far and the hand can take: the
 // same choices as one at a time, a hull now and then computed for nothing.
 void select_candidates(std::vector<GraspCandidate>& all, const std::vector<SurfaceSample>& s, const SynthesisParams& p,
