@@ -46,28 +46,13 @@ double seconds(const std::string& text, const std::string& option) { return kCli
 
 int main(int argc, char** argv) {
   fba::emulators::CanopenArmOptions options;
-  std::string link, socketcan;
-  bool exit_with_parent = false;
+  std::string socketcan;
   std::vector<fba::emulators::ScheduledFault> schedule;
   fba::emulators::CanopenArmEmulator* emulator = nullptr;  // the actions below run once it exists
-  std::vector<std::string> args(argv + 1, argv + argc);
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (a == "--exit-with-parent") {
-      exit_with_parent = true;
-      continue;
-    }
-    if (i + 1 >= args.size()) kCli.fail(a == "" ? "an empty argument" : "'" + a + "' needs a value or is unknown");
-    const std::string v = args[++i];
+  const auto common = kCli.read(argc, argv, {}, [&](const std::string& a, const std::string& v) {
     if (a == "--nodes") {
       options.nodes.clear();
       for (const auto& id : kCli.split(v, ',')) options.nodes.push_back(kCli.integer(id, a, 1, 127));
-    } else if (a == "--link") {
-      link = v;
     } else if (a == "--socketcan") {
       socketcan = v;
     } else if (a == "--heartbeat-ms") {
@@ -106,13 +91,12 @@ int main(int argc, char** argv) {
     } else if (a == "--silent") {
       options.silent.push_back(kCli.integer(v, a, 1, 127));
     } else {
-      kCli.fail("unknown option '" + a + "'");
+      return false;
     }
-  }
-
-  fba::emulators::catch_stop_signals();
-
-  try {
+    return true;
+  });
+  const std::string& link = common.link;
+  return fba::emulators::run_program(kCli, "CANopen arm emulator", [&] {
     std::unique_ptr<fba::can::CanBus> bus;
     std::function<void()> noise;
     fba::can::Pty pty;
@@ -133,12 +117,6 @@ int main(int argc, char** argv) {
     }
     fba::emulators::CanopenArmEmulator emu(*bus, options, noise);
     emulator = &emu;
-    const std::string end =
-        fba::emulators::run_device([&] { return emu.run(); }, [&] { emu.stop(); }, schedule, link, exit_with_parent);
-    std::cout << "CANopen arm emulator: " << end << std::endl;
-  } catch (const std::exception& e) {
-    std::cerr << "fba-canopen-arm-emulator: " << e.what() << std::endl;
-    return 1;
-  }
-  return 0;
+    return fba::emulators::run_device([&] { return emu.run(); }, [&] { emu.stop(); }, schedule, link, common.exit_with_parent);
+  });
 }

@@ -3,7 +3,9 @@
 // with an object between the fingers. Faults can be scheduled to try the driver's reactions. Ends on
 // SIGINT or SIGTERM.
 
+#include <functional>
 #include <iostream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -41,36 +43,14 @@ const fba::emulators::ProgramOptions kCli{"fba-robotiq-3f-emulator", kUsage};
 
 int main(int argc, char** argv) {
   fba::emulators::Robotiq3fOptions options;
-  std::string link;
-  bool exit_with_parent = false;
   std::vector<fba::emulators::ScheduledFault> schedule;
   fba::emulators::Robotiq3fEmulator* emulator = nullptr;  // the actions below run once it exists
-  std::vector<std::string> args(argv + 1, argv + argc);
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (a == "--no-object") {
-      options.object = false;
-      continue;
-    }
-    if (a == "--never-activate") {
-      options.activates = false;
-      continue;
-    }
-    if (a == "--exit-with-parent") {
-      exit_with_parent = true;
-      continue;
-    }
-    if (i + 1 >= args.size()) kCli.fail(a.empty() ? "an empty argument" : "'" + a + "' needs a value or is unknown");
-    const std::string v = args[++i];
+  const std::map<std::string, std::function<void()>> flags{{"--no-object", [&] { options.object = false; }},
+                                                           {"--never-activate", [&] { options.activates = false; }}};
+  const auto common = kCli.read(argc, argv, flags, [&](const std::string& a, const std::string& v) {
     constexpr double kLong = 1e6;
     if (a == "--slave") {
       options.slave_id = kCli.integer(v, a, 1, 247);
-    } else if (a == "--link") {
-      link = v;
     } else if (a == "--activation-s") {
       options.activation_s = kCli.number(v, a, 0, 120);
     } else if (a == "--object-width") {
@@ -105,25 +85,18 @@ int main(int argc, char** argv) {
     } else if (a == "--disconnect-after") {
       schedule.push_back({kCli.number(v, a, 0, kLong), [&emulator] { emulator->disconnect(); }});
     } else {
-      kCli.fail("unknown option '" + a + "'");
+      return false;
     }
-  }
-
-  fba::emulators::catch_stop_signals();
-
-  try {
+    return true;
+  });
+  const std::string& link = common.link;
+  return fba::emulators::run_program(kCli, "Robotiq 3-Finger emulator", [&] {
     fba::can::Pty pty = fba::can::open_pty();
     fba::emulators::link_terminal(pty.slave_path, link);
     fba::emulators::Robotiq3fEmulator emu(std::move(pty.master), "emulator:" + pty.slave_path, options);
     emulator = &emu;
     std::cout << "Robotiq 3-Finger emulator: Modbus RTU slave " << options.slave_id << " on " << pty.slave_path
               << (link.empty() ? "" : " (link " + link + ")") << std::endl;
-    const std::string end =
-        fba::emulators::run_device([&] { return emu.run(); }, [&] { emu.stop(); }, schedule, link, exit_with_parent);
-    std::cout << "Robotiq 3-Finger emulator: " << end << std::endl;
-  } catch (const std::exception& e) {
-    std::cerr << "fba-robotiq-3f-emulator: " << e.what() << std::endl;
-    return 1;
-  }
-  return 0;
+    return fba::emulators::run_device([&] { return emu.run(); }, [&] { emu.stop(); }, schedule, link, common.exit_with_parent);
+  });
 }

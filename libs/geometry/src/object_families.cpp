@@ -1,6 +1,7 @@
 #include "fba/geometry/object_families.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -46,6 +47,15 @@ class Draws {
 // A length as the manifest prints it and the mesh is made from it: 0.1 mm.
 double mm10(double v) { return std::round(v * 1e4) / 1e4; }
 double hundredths(double v) { return std::round(v * 100) / 100; }
+
+// A length a family draws: uniform in [lo, hi], or with `log` log-uniform (every ratio as likely as
+// its inverse); recorded as the object's parameter `key`.
+struct LengthRange {
+  const char* key;
+  double lo, hi;
+  bool log = false;
+};
+constexpr bool kLog = true;
 
 Vector3f at(double x, double y, double z) { return Vector3d(x, y, z).cast<float>(); }
 
@@ -395,6 +405,15 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
       p.emplace_back(key, v);
       return v;
     };
+    // A length drawn in its range, to 0.1 mm, and recorded; several in turn, in the order given.
+    const auto length = [&](const LengthRange& r) {
+      return draw(r.key, mm10(r.log ? d.log_uniform(r.lo, r.hi) : d.uniform(r.lo, r.hi)));
+    };
+    const auto lengths = [&]<std::size_t N>(const LengthRange(&ranges)[N]) {
+      std::array<double, N> out;
+      for (std::size_t i = 0; i < N; ++i) out[i] = length(ranges[i]);
+      return out;
+    };
     TriangleMesh s;
     std::vector<ConvexPart> parts;
     switch (family) {
@@ -402,9 +421,8 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         // Blocks: each side 3-15 cm, log-uniform (every aspect ratio, cubes to sticks); plates:
         // 4-15 cm by 4-15 cm, 1-3 cm thick.
         o.kind = even ? "block" : "plate";
-        const double sx = draw("size_x", mm10(even ? d.log_uniform(0.03, 0.15) : d.uniform(0.04, 0.15)));
-        const double sy = draw("size_y", mm10(even ? d.log_uniform(0.03, 0.15) : d.uniform(0.04, 0.15)));
-        const double sz = draw("size_z", mm10(even ? d.log_uniform(0.03, 0.15) : d.uniform(0.01, 0.03)));
+        const auto [sx, sy, sz] = even ? lengths({{"size_x", 0.03, 0.15, kLog}, {"size_y", 0.03, 0.15, kLog}, {"size_z", 0.03, 0.15, kLog}})
+                                       : lengths({{"size_x", 0.04, 0.15}, {"size_y", 0.04, 0.15}, {"size_z", 0.01, 0.03}});
         s = make_box_shape(sx, sy, sz);
         parts = {box_part(Vector3d(-sx, -sy, -sz) / 2, Vector3d(sx, sy, sz) / 2)};
         break;
@@ -413,7 +431,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         // Radius 1-6 cm; height over diameter 1-4 (long) or 0.2-1 (short, discs), log-uniform;
         // at least 1.5 cm tall.
         o.kind = even ? "long" : "short";
-        const double r = draw("radius", mm10(d.uniform(0.01, 0.06)));
+        const double r = length({"radius", 0.01, 0.06});
         const double aspect = even ? d.log_uniform(1, 4) : d.log_uniform(0.2, 1);
         const double h = draw("height", mm10(2 * r * aspect));
         if (h < 0.015) continue;
@@ -425,7 +443,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
       }
       case ObjectFamily::sphere: {
         o.kind = "sphere";
-        const double r = draw("radius", mm10(d.uniform(0.02, 0.07)));
+        const double r = length({"radius", 0.02, 0.07});
         s = make_superquadric_shape(Vector3d::Constant(r), 1, 1);
         parts.emplace_back();
         parts[0].kind = ConvexPart::Kind::ellipsoid;
@@ -435,9 +453,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
       case ObjectFamily::ellipsoid: {
         // Semi-axes 1.5-7.5 cm each, log-uniform.
         o.kind = "ellipsoid";
-        const double a = draw("semi_x", mm10(d.log_uniform(0.015, 0.075)));
-        const double b = draw("semi_y", mm10(d.log_uniform(0.015, 0.075)));
-        const double c = draw("semi_z", mm10(d.log_uniform(0.015, 0.075)));
+        const auto [a, b, c] = lengths({{"semi_x", 0.015, 0.075, kLog}, {"semi_y", 0.015, 0.075, kLog}, {"semi_z", 0.015, 0.075, kLog}});
         s = make_superquadric_shape(Vector3d(a, b, c), 1, 1);
         parts.emplace_back();
         parts[0].kind = ConvexPart::Kind::ellipsoid;
@@ -447,9 +463,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
       case ObjectFamily::superquadric: {
         // Semi-axes 2-6.5 cm; exponents 0.2 (a rounded box) to 2 (an octahedron), the convex ones.
         o.kind = "superquadric";
-        const double a = draw("semi_x", mm10(d.uniform(0.02, 0.065)));
-        const double b = draw("semi_y", mm10(d.uniform(0.02, 0.065)));
-        const double c = draw("semi_z", mm10(d.uniform(0.02, 0.065)));
+        const auto [a, b, c] = lengths({{"semi_x", 0.02, 0.065}, {"semi_y", 0.02, 0.065}, {"semi_z", 0.02, 0.065}});
         const double e1 = draw("exponent_ns", hundredths(d.uniform(0.2, 2.0)));
         const double e2 = draw("exponent_ew", hundredths(d.uniform(0.2, 2.0)));
         s = make_superquadric_shape(Vector3d(a, b, c), e1, e2);
@@ -461,7 +475,7 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         // along the ring's axis (a flat washer to a band), log-uniform.
         o.kind = "ring";
         const double hole = d.uniform(0.01, 0.045);
-        const double radial = draw("tube_radial", mm10(d.uniform(0.01, 0.02)));
+        const double radial = length({"tube_radial", 0.01, 0.02});
         const double vertical = draw("tube_vertical", mm10(radial * d.log_uniform(0.5, 2)));
         const double major = mm10(hole + radial);
         p.insert(p.begin(), {"major_radius", major});
@@ -473,11 +487,8 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         // Bars 6-15 cm and 4-12 cm long, 1.5-4.5 cm wide; 1.5-5 cm thick; each bar at least 1.5 cm
         // longer than the other is wide.
         o.kind = "L";
-        const double lx = draw("length_x", mm10(d.uniform(0.06, 0.15)));
-        const double wx = draw("width_x", mm10(d.uniform(0.015, 0.045)));
-        const double ly = draw("length_y", mm10(d.uniform(0.04, 0.12)));
-        const double wy = draw("width_y", mm10(d.uniform(0.015, 0.045)));
-        const double t = draw("thickness", mm10(d.uniform(0.015, 0.05)));
+        const auto [lx, wx, ly, wy, t] = lengths({{"length_x", 0.06, 0.15}, {"width_x", 0.015, 0.045}, {"length_y", 0.04, 0.12},
+                                                  {"width_y", 0.015, 0.045}, {"thickness", 0.015, 0.05}});
         if (lx < wy + 0.015 || ly < wx + 0.015) continue;
         s = make_l_shape(lx, wx, ly, wy, t);
         parts = {box_part(Vector3d(0, 0, 0), Vector3d(lx, wx, t)), box_part(Vector3d(0, 0, 0), Vector3d(wy, ly, t))};
@@ -487,11 +498,8 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         // A bar 6-15 cm long, 1.5-4.5 cm wide; a stem 3-10 cm beyond it, 1.5-4.5 cm wide; 1.5-5 cm
         // thick; the bar at least 3 cm longer than the stem is wide.
         o.kind = "T";
-        const double bl = draw("bar_length", mm10(d.uniform(0.06, 0.15)));
-        const double bw = draw("bar_width", mm10(d.uniform(0.015, 0.045)));
-        const double sl = draw("stem_length", mm10(d.uniform(0.03, 0.10)));
-        const double sw = draw("stem_width", mm10(d.uniform(0.015, 0.045)));
-        const double t = draw("thickness", mm10(d.uniform(0.015, 0.05)));
+        const auto [bl, bw, sl, sw, t] = lengths({{"bar_length", 0.06, 0.15}, {"bar_width", 0.015, 0.045}, {"stem_length", 0.03, 0.10},
+                                                  {"stem_width", 0.015, 0.045}, {"thickness", 0.015, 0.05}});
         if (bl < sw + 0.03) continue;
         s = make_t_shape(bl, bw, sl, sw, t);
         parts = {box_part(Vector3d(-bl / 2, 0, 0), Vector3d(bl / 2, bw, t)), box_part(Vector3d(-sw / 2, -sl, 0), Vector3d(sw / 2, 0, t))};
@@ -501,11 +509,8 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         // A handle of radius 0.8-1.8 cm, 5-12 cm long; a head 1.5-6 cm along the handle, 3-12 cm
         // across, 2-5 cm tall, whose face leaves at least 3 mm around the handle.
         o.kind = "tool";
-        const double rh = draw("handle_radius", mm10(d.uniform(0.008, 0.018)));
-        const double lh = draw("handle_length", mm10(d.uniform(0.05, 0.12)));
-        const double hx = draw("head_x", mm10(d.uniform(0.015, 0.06)));
-        const double hy = draw("head_y", mm10(d.uniform(0.03, 0.12)));
-        const double hz = draw("head_z", mm10(d.uniform(0.02, 0.05)));
+        const auto [rh, lh, hx, hy, hz] = lengths({{"handle_radius", 0.008, 0.018}, {"handle_length", 0.05, 0.12}, {"head_x", 0.015, 0.06},
+                                                   {"head_y", 0.03, 0.12}, {"head_z", 0.02, 0.05}});
         if (std::min(hy, hz) < 2 * rh + 0.006) continue;
         s = make_tool_shape(rh, lh, hx, hy, hz);
         parts = {box_part(Vector3d(0, -hy / 2, -hz / 2), Vector3d(hx, hy / 2, hz / 2))};
@@ -522,13 +527,10 @@ FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int
         // square (alternately), of radius or half-side 0.6 cm up to what leaves walls of 1.2 cm,
         // placed anywhere that leaves walls of 1 cm.
         o.kind = even ? "round hole" : "square hole";
-        const double sx = draw("size_x", mm10(d.uniform(0.05, 0.15)));
-        const double sy = draw("size_y", mm10(d.uniform(0.05, 0.15)));
-        const double sz = draw("size_z", mm10(d.uniform(0.015, 0.06)));
-        const double size = draw(even ? "hole_radius" : "hole_half_side", mm10(d.uniform(0.006, std::min(sx, sy) / 2 - 0.012)));
+        const auto [sx, sy, sz] = lengths({{"size_x", 0.05, 0.15}, {"size_y", 0.05, 0.15}, {"size_z", 0.015, 0.06}});
+        const double size = length({even ? "hole_radius" : "hole_half_side", 0.006, std::min(sx, sy) / 2 - 0.012});
         const double mx = sx / 2 - size - 0.01, my = sy / 2 - size - 0.01;
-        const double x = draw("hole_x", mm10(d.uniform(-mx, mx)));
-        const double y = draw("hole_y", mm10(d.uniform(-my, my)));
+        const auto [x, y] = lengths({{"hole_x", -mx, mx}, {"hole_y", -my, my}});
         s = make_holed_box_shape(sx, sy, sz, even, size, x, y);
         parts = {box_part(Vector3d(-sx, -sy, -sz) / 2, Vector3d(sx, sy, sz) / 2)};  // its hull
         break;

@@ -308,33 +308,15 @@ TriangleMesh grid_to_mesh(const VoxelGrid& grid) {
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
         if (!grid.occupied(i, j, k)) continue;
+        const int at[3] = {i, j, k};
         for (int axis = 0; axis < 3; ++axis) {
-          const int u = (axis + 1) % 3, v = (axis + 2) % 3;
           for (int dir : {-1, 1}) {
             int nb[3] = {i, j, k};
             nb[axis] += dir;
             if (occupied(nb[0], nb[1], nb[2])) continue;
-            // Face corners base, +u, +u+v, +v; counter-clockwise around +axis since u x v = axis.
-            int c[4][3];
-            for (int q = 0; q < 4; ++q) {
-              c[q][0] = i;
-              c[q][1] = j;
-              c[q][2] = k;
-              if (dir > 0) c[q][axis] += 1;
-            }
-            c[1][u] += 1;
-            c[2][u] += 1;
-            c[2][v] += 1;
-            c[3][v] += 1;
-            int idx[4];
-            for (int q = 0; q < 4; ++q) idx[q] = corner(c[q][0], c[q][1], c[q][2]);
-            if (dir > 0) {
-              mesh.triangles.emplace_back(idx[0], idx[1], idx[2]);
-              mesh.triangles.emplace_back(idx[0], idx[2], idx[3]);
-            } else {
-              mesh.triangles.emplace_back(idx[0], idx[2], idx[1]);
-              mesh.triangles.emplace_back(idx[0], idx[3], idx[2]);
-            }
+            // The voxel's face towards its empty neighbour: on its far side along axis for +dir.
+            add_lattice_square(mesh, axis, dir, at[axis] + (dir > 0 ? 1 : 0), at, 1,
+                               [&](const int p[3]) { return corner(p[0], p[1], p[2]); });
           }
         }
       }

@@ -1,4 +1,8 @@
+#include <array>
 #include <cmath>
+#include <map>
+#include <string>
+#include <vector>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -152,6 +156,53 @@ TEST(VoxelMetrics, GridMeshIsClosedAndVoxelisesBackToTheGrid) {
 
 namespace fba::geometry {
 namespace {
+
+// The corners of each square in the order add_lattice_square asks for them, and its two triangles.
+TEST(LatticeSquare, CornersGoAcrossTheOtherTwoAxesAndTheTrianglesFaceDir) {
+  for (int axis = 0; axis < 3; ++axis)
+    for (int dir : {-1, 1}) {
+      SCOPED_TRACE("axis " + std::to_string(axis) + ", dir " + std::to_string(dir));
+      TriangleMesh mesh;
+      std::vector<Eigen::Vector3i> asked;
+      const int origin[3] = {1, 2, 3};
+      add_lattice_square(mesh, axis, dir, 7, origin, 2, [&](const int p[3]) {
+        asked.emplace_back(p[0], p[1], p[2]);
+        mesh.vertices.emplace_back(p[0], p[1], p[2]);
+        return static_cast<int>(mesh.vertices.size()) - 1;
+      });
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      Eigen::Vector3i base(1, 2, 3);
+      base[axis] = 7;
+      const Eigen::Vector3i eu = 2 * Eigen::Vector3i::Unit(u), ev = 2 * Eigen::Vector3i::Unit(v);
+      const std::vector<Eigen::Vector3i> expected{base, base + eu, base + eu + ev, base + ev};
+      EXPECT_EQ(asked, expected);
+      ASSERT_EQ(mesh.triangles.size(), 2u);
+      double area = 0;
+      for (const auto& t : mesh.triangles) {
+        const Eigen::Vector3f a = mesh.vertices[t[0]], b = mesh.vertices[t[1]], c = mesh.vertices[t[2]];
+        const Eigen::Vector3f n = (b - a).cross(c - a);
+        EXPECT_TRUE(n.normalized().isApprox(static_cast<float>(dir) * Eigen::Vector3f::Unit(axis))) << n.transpose();
+        area += n.norm() / 2;
+      }
+      EXPECT_DOUBLE_EQ(area, 4.0);
+    }
+}
+
+// Welded corners: two squares side by side share the two corners of their common edge.
+TEST(LatticeSquare, AWeldingVertexFunctionSharesCornersBetweenSquares) {
+  TriangleMesh mesh;
+  std::map<std::array<int, 3>, int> index;
+  const auto vertex = [&](const int p[3]) {
+    const auto [it, added] = index.emplace(std::array<int, 3>{p[0], p[1], p[2]}, static_cast<int>(mesh.vertices.size()));
+    if (added) mesh.vertices.emplace_back(p[0], p[1], p[2]);
+    return it->second;
+  };
+  const int left[3] = {0, 0, 0}, right[3] = {1, 0, 0};
+  add_lattice_square(mesh, 2, 1, 0, left, 1, vertex);
+  add_lattice_square(mesh, 2, 1, 0, right, 1, vertex);
+  EXPECT_EQ(mesh.vertices.size(), 6u);
+  EXPECT_EQ(mesh.triangles.size(), 4u);
+}
 
 TEST(VoxelizeLattice, RecoversGridFromItsSurfaceEvenWithFacesInsideTheSolid) {
   VoxelGrid g = voxelize(make_uv_sphere({0.1, 0, -0.1}, 0.6, 48, 24), kUnitCube, 4);

@@ -33,6 +33,7 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/vision/octree_carver.hpp"
+#include "fba/vision/ply_leaves_parameter.hpp"
 
 #include "fba/grasp/grasp_json.hpp"
 #include "fba/grasp/model_surface.hpp"
@@ -179,12 +180,7 @@ class GraspSynthesisFilter final : public fba::Component {
       "table_z", {}, "[z]: the table the object stands on (world z, up); grasps whose hand would reach into it are left out. "
       "Empty: no table")
       .size({0, 1});
-  static constexpr auto kPlyLeaves = fba::Param<std::string>(
-      "ply_leaves", "seen",
-      "which occupied leaves the models in exploration/ hold: seen, those two views saw whole (the object as the views show it; "
-      "space no view could carve, such as the top of a root box no camera framed, is left out), or occupied, every one (the "
-      "model the search analysed)")
-                                         .choices({"seen", "occupied"});
+  static constexpr auto kPlyLeaves = fba::vision::PlyLeavesParameter::kPlyLeaves;  // shared with vision.octree_carver
   static constexpr fba::EventOut kPlanningPerformed{
       "planning_performed",
       "no reliable grasp yet: regions were emitted for a new view; payload (JSON): views, samples, regions, candidates, "
@@ -254,7 +250,7 @@ class GraspSynthesisFilter final : public fba::Component {
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);
-    ply_leaves_ = ctx(kPlyLeaves) == "occupied" ? fba::vision::PlyLeaves::Occupied : fba::vision::PlyLeaves::Seen;
+    ply_leaves_ = fba::vision::PlyLeavesParameter::read(ctx);
     edge_margin_ = ctx(kEdgeMarginMm) / 1000;
     params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first
     // The model's surface and the search borrow the task's threads, as carving does: the loop waits
@@ -304,6 +300,8 @@ class GraspSynthesisFilter final : public fba::Component {
   }
 
  private:
+  // One model: its surface, the candidates on it, and the decision: a grasp selected, the search
+  // given up, or views asked for where the model would resolve the candidates.
   void analyse(const fba::Octree& model) {
     const auto start = std::chrono::steady_clock::now();
     const int views = model.views;
@@ -312,22 +310,7 @@ class GraspSynthesisFilter final : public fba::Component {
     // The model's views are the first silhouettes (the carver takes them in arrival order).
     const std::span<const fba::grasp::SilhouetteRim> rims = std::span(rims_).first(std::min<std::size_t>(rims_.size(), std::size_t(views)));
     const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_, params_.table_z, params_.parallel_for});
-    if (surface.samples.empty() && surface.leaves > 0) {
-      const std::string table = "none of its " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
-                                " views is joined to the table at z = " + fixed(params_.table_z.value_or(0));
-      // An object outside the workspace is seen through it: the views' cones cross the root box
-      // and end on its faces, away from the table.
-      if (const std::string faces = bounds_reached(model); !faces.empty())
-        return fail("the carved model reaches the workspace's bounds at " + faces + " (the carver's root box " + box_text(model.bounds) +
-                    "), and " + table + ": the object may be larger than or outside the workspace");
-      return fail("none of the model's " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
-                  " views is joined to the table at z = " + fixed(params_.table_z.value_or(0)) +
-                  ": the object rests on it (check table_z, and the carver's bounds reach down to it)");
-    }
-    if (surface.samples.empty())
-      return fail("the model is empty after " + std::to_string(views) +
-                  " views: no occupied leaf to grasp (no target in the silhouettes, or the object outside the workspace, the carver's "
-                  "root box " + box_text(model.bounds) + ")");
+    if (const std::string why = empty_surface_reason(model, surface, views); !why.empty()) return fail(why);
     fba::grasp::ModelSurface observed = surface;
     if (rim_deg_ > 0 && !rims.empty()) fba::grasp::mark_unobserved(observed.samples, rims, surface.finest_edge, rim_deg_, rim_separation_deg_);
     fba::grasp::SynthesisParams p = params_;
@@ -336,7 +319,6 @@ class GraspSynthesisFilter final : public fba::Component {
     const fba::grasp::SynthesisResult r = fba::grasp::synthesise(observed.samples, p);
 
     // The candidates come reliable first, the most stable on the model first: not by total.
-    auto total_of = [](const fba::grasp::GraspCandidate* c) { return c ? c->grasp.scores.total : 0.0; };
     const fba::grasp::GraspCandidate* best =
         r.candidates.empty() ? nullptr : &*std::max_element(r.candidates.begin(), r.candidates.end(), [](const auto& a, const auto& b) {
           return a.grasp.scores.total < b.grasp.scores.total;
@@ -365,144 +347,19 @@ class GraspSynthesisFilter final : public fba::Component {
     for (std::size_t i = 0; i < r.candidates.size() && !first_reachable; ++i)
       if (reach.reachable(i)) first_reachable = i;
     if (reach.active && !r.candidates.empty() && !first_reachable) say_unreachable(reach, views, r.candidates.size());
-    const fba::grasp::GraspCandidate* best_resolved = nullptr;  // by total, of those on resolved surface
     const double best_epsilon = first_reachable ? r.candidates[*first_reachable].model_epsilon : 0.0;
-    for (std::size_t i = 0; i < r.candidates.size(); ++i) {  // best first
-      const auto& c = r.candidates[i];
-      if (c.uncertain) continue;
-      if (c.grasp.scores.total >= threshold_) {
-        if (!reach.reachable(i)) continue;
-        if (views < max_views_ && c.model_epsilon < stability_share_ * best_epsilon) {
-          ctx_.log().info("not selected yet: the most stable reliable candidate on resolved surface has epsilon {:.4f} on the "
-                          "model, below {:.2f} of the best reliable candidate's {:.4f}, whose surface is not all resolved",
-                          c.model_epsilon, stability_share_, best_epsilon);
-          break;  // the reliable ones after it are less stable still
-        }
-        if (!reach.plannable(i)) continue;
-        ctx_.log().info("selected: total {:.3f} (S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model about its centre "
-                        "({:.3f}, {:.3f}, {:.3f})",
-                        c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
-                        c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
-        return select(c.grasp, c.model_epsilon, views, "surface");
-      }
-      if (c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
-    }
-    if (views >= max_views_) {
-      // The last view: settle for a reliable candidate whose contacts are resolved (pinned by two
-      // views, with rim_deg), though the surface around them is not all resolved yet: on thin,
-      // curved objects such as the banana two rims cross on little of the surface, and a whole
-      // neighbourhood is rarely pinned.
-      for (std::size_t i = 0; i < r.candidates.size(); ++i)
-        if (const auto& c = r.candidates[i];
-            !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i) && reach.plannable(i)) {
-          ctx_.log().info("selected after the last view, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
-                          "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
-                          c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
-                          c.model_epsilon);
-          return select(c.grasp, c.model_epsilon, views, "contacts");
-        }
-      if (reach.active && !r.candidates.empty() && !first_reachable)
-        return fail("no grasp the arm can reach after " + std::to_string(views) + " views: none of the " +
-                    std::to_string(r.candidates.size()) + " candidates is reachable by the arm; passed over: " +
-                    reach.passed.text() + reach.unchecked_text());
-      // The candidates the arm cannot reach, whatever else held the others back.
-      const std::string passed = reach.passed.total > 0 ? "; passed over as out of the arm's reach: " + reach.passed.text() : "";
-      std::string reason = "no reliable grasp after " + std::to_string(views) + " views: ";
-      // Which criteria held it back: what a user tunes (weights, hand geometry) or learns about the object.
-      auto criteria = [](const fba::grasp::GraspCandidate& c) {
-        return " (S1 symmetry " + fixed(c.grasp.scores.symmetry) + ", S3 safety margin " + fixed(c.grasp.scores.safety_margin) +
-               ", S4 curvature " + fixed(c.grasp.scores.curvature) + ")";
-      };
-      if (r.candidates.empty()) {  // what removed them, not a best total of nothing
-        if (r.below_table > 0 || r.hand_unfit > 0 || r.too_low > 0)
-          return fail(reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
-                      " would put the hand into the table (as a pinch too), " + std::to_string(r.hand_unfit) +
-                      " wider than the hand takes; " + std::to_string(r.too_low) +
-                      " surface samples too low for a finger to touch above the table" + passed);
-        if (r.hand_blocked > 0 || r.not_force_closure > 0)
-          return fail(reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) +
-                      " blocked by the model in the hand's way, " + std::to_string(r.not_force_closure) +
-                      " not force closure on the model" + passed);
-        return fail(reason + "no candidate the hand can reach" + passed);
-      }
-      if (!best_resolved) {
-        // Nothing to weigh against the threshold: the model never resolved where the candidates are.
-        return fail(reason + "none of the " + std::to_string(r.candidates.size()) +
-                    " candidates has its contacts and the surface around them resolved" +
-                    (rim_deg_ > 0 ? " (pinned by two views' rims)" : "") + ", nor a reliable one its contacts; the best, of total " +
-                    fixed(total_of(best)) + criteria(*best) + ", touches a part of the model not yet resolved (threshold " +
-                    fixed(threshold_) + ")" + passed);
-      }
-      reason += "best total " + fixed(total_of(best_resolved)) + criteria(*best_resolved) + " < threshold " + fixed(threshold_);
-      if (total_of(best) > total_of(best_resolved))
-        reason += " (a candidate of total " + fixed(total_of(best)) + " touches a part of the model not yet resolved)";
-      return fail(reason + passed);
-    }
+    if (select_on_resolved_surface(r, reach, views, best_epsilon)) return;
+    if (views >= max_views_) return settle_at_last_view(r, reach, views, first_reachable.has_value(), best);
+
     // One request per view: the carver's refinement on it brings a new model of the same views,
     // whose regions differ a little again; answering each would circle between the two for ever.
     // The view asked for is still on its way: back to waiting for it.
     if (views == requested_views_) return stages_.go("exploration_movement");
     requested_views_ = views;
-
-    // Where more information would help: the unresolved regions of the best candidates, else every
-    // unresolved region, else (all resolved, none reliable) the best candidates' regions, else (no
-    // candidate at all) the whole model: more views may still carve it to a size the hand takes.
-    // The candidates the arm cannot reach are left out: views that resolve them would not help.
-    std::vector<const fba::grasp::GraspCandidate*> kept;
-    for (std::size_t i = 0; i < r.candidates.size(); ++i)
-      if (!reach.passed_over(i)) kept.push_back(&r.candidates[i]);
-    std::set<std::size_t> wanted;
-    for (const auto* c : kept)
-      for (std::size_t g : c->regions)
-        if (r.regions[g].uncertain_share > 0) wanted.insert(g);
-    if (wanted.empty()) wanted.insert(r.uncertain_regions.begin(), r.uncertain_regions.end());
-    if (wanted.empty())
-      for (const auto* c : kept) wanted.insert(c->regions.begin(), c->regions.end());
-    fba::RegionsOfInterest roi;
-    const Eigen::Vector3d margin = Eigen::Vector3d::Constant(surface.finest_edge);
-    for (std::size_t g : wanted) roi.boxes.emplace_back(r.regions[g].box.min() - margin, r.regions[g].box.max() + margin);
-    if (roi.boxes.empty()) {
-      Eigen::AlignedBox3d all;
-      for (const auto& x : surface.samples) all.extend(x.position);
-      roi.boxes.emplace_back(all.min() - margin, all.max() + margin);
-    }
-    // The space the hand sweeps for the best candidates the model blocked: what blocks them may be
-    // space no view has carved yet, which the generic criterion leaves in coarse nodes (over a small
-    // object, most of a node's projection outside the silhouette keeps it unsplit), so the carver is
-    // asked to refine it, and carves what its views already show empty. Kept asked for on every
-    // later model (the carver keeps detail only where the regions of the moment ask), the latest few.
-#if FBA_GRASP_REACH
-    constexpr std::size_t kSweptCandidates = 3, kSweptKept = 6;
-    for (std::size_t k = 0; k < reach.model_blocked.size() && k < kSweptCandidates; ++k)
-      swept_.push_back(hand_sweep(r.candidates[reach.model_blocked[k]].grasp));
-    if (swept_.size() > kSweptKept) swept_.erase(swept_.begin(), swept_.end() - kSweptKept);
-    roi.boxes.insert(roi.boxes.end(), swept_.begin(), swept_.end());
-#endif
-    // What keeps the best candidates from selection for want of two grazing views: the unpinned
-    // surface under their fingers (each contact and its neighbourhood, as synthesis judges it), one
-    // group per candidate. The next view should graze it. The candidates above the threshold, else
-    // the best few.
-    if (rim_deg_ > 0 && !rims.empty()) {
-      const auto& samples = observed.samples;
-      constexpr std::size_t kMostCandidates = 5, kFewCandidates = 3;
-      const bool any_reliable = !kept.empty() && kept.front()->grasp.scores.total >= threshold_;
-      const double r2 = surface.radius * surface.radius;
-      for (std::size_t i = 0; i < kept.size() && i < (any_reliable ? kMostCandidates : kFewCandidates); ++i) {
-        const auto& c = *kept[i];
-        if (any_reliable && c.grasp.scores.total < threshold_) break;
-        for (const auto& x : samples) {
-          if (!x.unpinned) continue;
-          bool near = false;
-          for (std::size_t contact : c.samples) near |= (x.position - samples[contact].position).squaredNorm() <= r2;
-          if (near) roi.points.push_back({x.position, x.normal.normalized(), int(i)});
-        }
-      }
-      roi.rim_deg = rim_deg_;
-      roi.rim_separation_deg = rim_separation_deg_;
-    }
+    fba::RegionsOfInterest roi = regions_to_resolve(r, reach, surface, observed.samples, !rims.empty(), views);
+    ask_for_ways_in(roi, r, reach);
     const std::size_t requested = roi.boxes.size();
     const std::size_t points = roi.points.size();
-    roi.model_views = views;
     regions_asked_ = roi.boxes;
     ctx_(kRegions).emit(std::move(roi));
     nlohmann::json j{{"views", views},
@@ -716,6 +573,177 @@ class GraspSynthesisFilter final : public fba::Component {
     }
   }
 
+  static double total_of(const fba::grasp::GraspCandidate* c) { return c ? c->grasp.scores.total : 0.0; }
+
+  // Which criteria held a candidate back: what a user tunes (weights, hand geometry) or learns
+  // about the object.
+  static std::string criteria(const fba::grasp::GraspCandidate& c) {
+    return " (S1 symmetry " + fixed(c.grasp.scores.symmetry) + ", S3 safety margin " + fixed(c.grasp.scores.safety_margin) +
+           ", S4 curvature " + fixed(c.grasp.scores.curvature) + ")";
+  }
+
+  // Why the model gives no surface to grasp, "" when it gives one: no occupied leaf joined to the
+  // table, or no occupied leaf at all.
+  std::string empty_surface_reason(const fba::Octree& model, const fba::grasp::ModelSurface& surface, int views) const {
+    if (!surface.samples.empty()) return "";
+    if (surface.leaves > 0) {
+      const std::string table = "none of its " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
+                                " views is joined to the table at z = " + fixed(params_.table_z.value_or(0));
+      // An object outside the workspace is seen through it: the views' cones cross the root box
+      // and end on its faces, away from the table.
+      if (const std::string faces = bounds_reached(model); !faces.empty())
+        return "the carved model reaches the workspace's bounds at " + faces + " (the carver's root box " + box_text(model.bounds) +
+               "), and " + table + ": the object may be larger than or outside the workspace";
+      return "none of the model's " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
+             " views is joined to the table at z = " + fixed(params_.table_z.value_or(0)) +
+             ": the object rests on it (check table_z, and the carver's bounds reach down to it)";
+    }
+    return "the model is empty after " + std::to_string(views) +
+           " views: no occupied leaf to grasp (no target in the silhouettes, or the object outside the workspace, the carver's "
+           "root box " + box_text(model.bounds) + ")";
+  }
+
+  // Selects the best reliable candidate the arm reaches whose contacts and the surface around them
+  // are resolved, in the candidates' order (best first); before the last view, only when it is at
+  // least stability_share as stable as the best reachable candidate (`best_epsilon`), resolved or
+  // not: views may still resolve that one. Returns whether it selected one.
+  bool select_on_resolved_surface(const fba::grasp::SynthesisResult& r, Reach& reach, int views, double best_epsilon) {
+    for (std::size_t i = 0; i < r.candidates.size(); ++i) {  // best first
+      const auto& c = r.candidates[i];
+      if (c.uncertain || c.grasp.scores.total < threshold_ || !reach.reachable(i)) continue;
+      if (views < max_views_ && c.model_epsilon < stability_share_ * best_epsilon) {
+        ctx_.log().info("not selected yet: the most stable reliable candidate on resolved surface has epsilon {:.4f} on the "
+                        "model, below {:.2f} of the best reliable candidate's {:.4f}, whose surface is not all resolved",
+                        c.model_epsilon, stability_share_, best_epsilon);
+        return false;  // the reliable ones after it are less stable still
+      }
+      if (!reach.plannable(i)) continue;
+      ctx_.log().info("selected: total {:.3f} (S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model about its centre "
+                      "({:.3f}, {:.3f}, {:.3f})",
+                      c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
+                      c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
+      select(c.grasp, c.model_epsilon, views, "surface");
+      return true;
+    }
+    return false;
+  }
+
+  // The last view, and no candidate selected on resolved surface: settle for a reliable candidate
+  // whose contacts are resolved (pinned by two views, with rim_deg), though the surface around them
+  // is not all resolved yet: on thin, curved objects such as the banana two rims cross on little
+  // of the surface, and a whole neighbourhood is rarely pinned. Else the search gives up, saying
+  // what held the candidates back.
+  void settle_at_last_view(const fba::grasp::SynthesisResult& r, Reach& reach, int views, bool any_reachable,
+                           const fba::grasp::GraspCandidate* best) {
+    for (std::size_t i = 0; i < r.candidates.size(); ++i)
+      if (const auto& c = r.candidates[i];
+          !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i) && reach.plannable(i)) {
+        ctx_.log().info("selected after the last view, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
+                        "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
+                        c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
+                        c.model_epsilon);
+        return select(c.grasp, c.model_epsilon, views, "contacts");
+      }
+    if (reach.active && !r.candidates.empty() && !any_reachable)
+      return fail("no grasp the arm can reach after " + std::to_string(views) + " views: none of the " +
+                  std::to_string(r.candidates.size()) + " candidates is reachable by the arm; passed over: " + reach.passed.text() +
+                  reach.unchecked_text());
+    fail(no_reliable_grasp_reason(r, reach, views, best));
+  }
+
+  // Why the last view gave no reliable grasp: what removed the candidates, or what held back the
+  // best one on resolved surface (`best`: the best of all), and the candidates the arm cannot reach.
+  std::string no_reliable_grasp_reason(const fba::grasp::SynthesisResult& r, const Reach& reach, int views,
+                                       const fba::grasp::GraspCandidate* best) const {
+    const std::string passed = reach.passed.total > 0 ? "; passed over as out of the arm's reach: " + reach.passed.text() : "";
+    std::string reason = "no reliable grasp after " + std::to_string(views) + " views: ";
+    if (r.candidates.empty()) {  // what removed them, not a best total of nothing
+      if (r.below_table > 0 || r.hand_unfit > 0 || r.too_low > 0)
+        return reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
+               " would put the hand into the table (as a pinch too), " + std::to_string(r.hand_unfit) + " wider than the hand takes; " +
+               std::to_string(r.too_low) + " surface samples too low for a finger to touch above the table" + passed;
+      if (r.hand_blocked > 0 || r.not_force_closure > 0)
+        return reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) + " blocked by the model in the hand's way, " +
+               std::to_string(r.not_force_closure) + " not force closure on the model" + passed;
+      return reason + "no candidate the hand can reach" + passed;
+    }
+    // The best on resolved surface: of the candidates whose contacts and surroundings are resolved,
+    // all below the threshold here (a reliable one the arm could not reach is not weighed).
+    const fba::grasp::GraspCandidate* best_resolved = nullptr;
+    for (const auto& c : r.candidates)
+      if (!c.uncertain && c.grasp.scores.total < threshold_ && c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
+    if (!best_resolved) {
+      // Nothing to weigh against the threshold: the model never resolved where the candidates are.
+      return reason + "none of the " + std::to_string(r.candidates.size()) +
+             " candidates has its contacts and the surface around them resolved" + (rim_deg_ > 0 ? " (pinned by two views' rims)" : "") +
+             ", nor a reliable one its contacts; the best, of total " + fixed(total_of(best)) + criteria(*best) +
+             ", touches a part of the model not yet resolved (threshold " + fixed(threshold_) + ")" + passed;
+    }
+    reason += "best total " + fixed(total_of(best_resolved)) + criteria(*best_resolved) + " < threshold " + fixed(threshold_);
+    if (total_of(best) > total_of(best_resolved))
+      reason += " (a candidate of total " + fixed(total_of(best)) + " touches a part of the model not yet resolved)";
+    return reason + passed;
+  }
+
+  // Where more information would help: the unresolved regions of the best candidates, else every
+  // unresolved region, else (all resolved, none reliable) the best candidates' regions, else (no
+  // candidate at all) the whole model: more views may still carve it to a size the hand takes.
+  // The candidates the arm cannot reach are left out: views that resolve them would not help.
+  // With rims (rim_deg), also the unpinned points the next view should graze.
+  fba::RegionsOfInterest regions_to_resolve(const fba::grasp::SynthesisResult& r, const Reach& reach,
+                                            const fba::grasp::ModelSurface& surface,
+                                            const std::vector<fba::grasp::SurfaceSample>& observed, bool rims, int views) const {
+    std::vector<const fba::grasp::GraspCandidate*> kept;
+    for (std::size_t i = 0; i < r.candidates.size(); ++i)
+      if (!reach.passed_over(i)) kept.push_back(&r.candidates[i]);
+    std::set<std::size_t> wanted;
+    for (const auto* c : kept)
+      for (std::size_t g : c->regions)
+        if (r.regions[g].uncertain_share > 0) wanted.insert(g);
+    if (wanted.empty()) wanted.insert(r.uncertain_regions.begin(), r.uncertain_regions.end());
+    if (wanted.empty())
+      for (const auto* c : kept) wanted.insert(c->regions.begin(), c->regions.end());
+    fba::RegionsOfInterest roi;
+    const Eigen::Vector3d margin = Eigen::Vector3d::Constant(surface.finest_edge);
+    for (std::size_t g : wanted) roi.boxes.emplace_back(r.regions[g].box.min() - margin, r.regions[g].box.max() + margin);
+    if (roi.boxes.empty()) {
+      Eigen::AlignedBox3d all;
+      for (const auto& x : surface.samples) all.extend(x.position);
+      roi.boxes.emplace_back(all.min() - margin, all.max() + margin);
+    }
+    if (rim_deg_ > 0 && rims) {
+      roi.points = unpinned_under_fingers(kept, observed, surface.radius);
+      roi.rim_deg = rim_deg_;
+      roi.rim_separation_deg = rim_separation_deg_;
+    }
+    roi.model_views = views;
+    return roi;
+  }
+
+  // What keeps the best candidates from selection for want of two grazing views: the unpinned
+  // surface under their fingers (each contact and its neighbourhood within `radius`, as synthesis
+  // judges it), one group per candidate. The next view should graze it. The candidates above the
+  // threshold, else the best few.
+  std::vector<fba::RegionsOfInterest::SurfacePoint> unpinned_under_fingers(const std::vector<const fba::grasp::GraspCandidate*>& kept,
+                                                                    const std::vector<fba::grasp::SurfaceSample>& samples,
+                                                                    double radius) const {
+    std::vector<fba::RegionsOfInterest::SurfacePoint> points;
+    constexpr std::size_t kMostCandidates = 5, kFewCandidates = 3;
+    const bool any_reliable = !kept.empty() && kept.front()->grasp.scores.total >= threshold_;
+    const double r2 = radius * radius;
+    for (std::size_t i = 0; i < kept.size() && i < (any_reliable ? kMostCandidates : kFewCandidates); ++i) {
+      const auto& c = *kept[i];
+      if (any_reliable && c.grasp.scores.total < threshold_) break;
+      for (const auto& x : samples) {
+        if (!x.unpinned) continue;
+        bool near = false;
+        for (std::size_t contact : c.samples) near |= (x.position - samples[contact].position).squaredNorm() <= r2;
+        if (near) points.push_back({x.position, x.normal.normalized(), int(i)});
+      }
+    }
+    return points;
+  }
+
   // resolved: what the model had resolved (and two views pinned, with rim_deg) under the fingers:
   // "surface", each contact and its neighbourhood, or "contacts", the contacts only (after the
   // last view). model_epsilon: the grasp's Ferrari-Canny epsilon on the model, which fba::Grasp
@@ -734,6 +762,22 @@ class GraspSynthesisFilter final : public fba::Component {
     write_pictures(&g, ctx_(kOctree).get());
     ctx_(kGrasp).emit(std::move(g));
     done_ = true;
+  }
+
+  // The space the hand sweeps for the best candidates the model blocked: what blocks them may be
+  // space no view has carved yet, which the generic criterion leaves in coarse nodes (over a small
+  // object, most of a node's projection outside the silhouette keeps it unsplit), so the carver is
+  // asked to refine it, and carves what its views already show empty. Kept asked for on every
+  // later model (the carver keeps detail only where the regions of the moment ask), the latest few.
+  void ask_for_ways_in([[maybe_unused]] fba::RegionsOfInterest& roi, [[maybe_unused]] const fba::grasp::SynthesisResult& r,
+                       [[maybe_unused]] const Reach& reach) {
+#if FBA_GRASP_REACH
+    constexpr std::size_t kSweptCandidates = 3, kSweptKept = 6;
+    for (std::size_t k = 0; k < reach.model_blocked.size() && k < kSweptCandidates; ++k)
+      swept_.push_back(hand_sweep(r.candidates[reach.model_blocked[k]].grasp));
+    if (swept_.size() > kSweptKept) swept_.erase(swept_.begin(), swept_.end() - kSweptKept);
+    roi.boxes.insert(roi.boxes.end(), swept_.begin(), swept_.end());
+#endif
   }
 
 #if FBA_GRASP_REACH

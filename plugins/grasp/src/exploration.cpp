@@ -97,6 +97,99 @@ std::vector<PointNeed> points_to_pin(const RegionsOfInterest& regions, std::span
   return out;
 }
 
+// Refuses parameters out of their ranges, excluded flags that are not one per candidate view, and
+// surface points that cannot be grazed (std::invalid_argument, with the values found).
+void check_request(const RegionsOfInterest& regions, std::size_t candidates, const std::vector<bool>& excluded,
+                   const ExplorationParams& params) {
+  if (!(params.movement_weight >= 0) || !(params.half_fov_deg > 0 && params.half_fov_deg < 180) ||
+      !(params.min_gain >= 0 && params.min_gain <= 1) || params.max_rays == 0)
+    throw std::invalid_argument(fmt::format(
+        "exploration parameters: expected movement_weight >= 0, half_fov_deg in (0, 180), min_gain in [0, 1] and "
+        "max_rays > 0; found {}, {}, {} and {}",
+        params.movement_weight, params.half_fov_deg, params.min_gain, params.max_rays));
+  if (!excluded.empty() && excluded.size() != candidates)
+    throw std::invalid_argument(fmt::format("exploration: {} excluded flags for {} candidate views; expected one each",
+                                            excluded.size(), candidates));
+
+  if (!regions.points.empty() && (!(regions.rim_deg > 0 && regions.rim_deg < 90) ||
+                                  !(regions.rim_separation_deg > 0 && regions.rim_separation_deg < 90)))
+    throw std::invalid_argument(fmt::format(
+        "exploration: a request with surface points needs rim_deg and rim_separation_deg in (0, 90) degrees; found {} and {}",
+        regions.rim_deg, regions.rim_separation_deg));
+  for (const auto& p : regions.points)
+    if (!p.position.allFinite() || !p.normal.allFinite() || p.normal.norm() < 1e-9)
+      throw std::invalid_argument(fmt::format(
+          "exploration: a requested surface point needs a finite position and a non-zero normal; found ({}, {}, {}) with "
+          "normal ({}, {}, {})",
+          p.position.x(), p.position.y(), p.position.z(), p.normal.x(), p.normal.y(), p.normal.z()));
+}
+
+// What the views look at, the centre a move turns about: the uncertain nodes' mean, else the
+// surface points', else the model's root box's centre.
+Eigen::Vector3d looked_at(const Octree& model, const std::vector<OctreeCell>& targets, const std::vector<PointNeed>& needs) {
+  Eigen::Vector3d centre = model.bounds.center();
+  if (!targets.empty()) {
+    centre.setZero();
+    for (const auto& t : targets) centre += t.centre;
+    centre /= double(targets.size());
+  } else if (!needs.empty()) {
+    centre.setZero();
+    for (const auto& p : needs) centre += p.position;
+    centre /= double(needs.size());
+  }
+  return centre;
+}
+
+// The view chosen among the scored ones, and why (choice.best, choice.reason): the best score among
+// the unvisited views whose gain reaches min_gain; none when no uncertain node is left in the
+// `boxes` regions and no view grazes a point, when every view has been visited, or when none is
+// worth the move.
+void pick_view(ViewChoice& choice, std::size_t boxes, std::size_t candidates, double min_gain) {
+  const std::string where = fmt::format("{} region{}", boxes, boxes == 1 ? "" : "s");
+  if (choice.targets == 0 && !choice.by_points) {
+    choice.reason = fmt::format("no uncertain node of the model is left inside the {}", where);
+    if (choice.points > 0) choice.reason += fmt::format(", and no unvisited view grazes any of the {} surface points to pin", choice.points);
+    return;
+  }
+  // The best score among the views worth the move: the cost ranks them, it does not disqualify the
+  // only views that see enough (a far view that sees much must not lose to a near one that sees nothing).
+  const ViewScore* best = nullptr;
+  const ViewScore* most = nullptr;  // the unvisited view that sees most
+  for (const auto& s : choice.scores) {
+    if (s.excluded) continue;
+    if (!most || s.gain > most->gain) most = &s;
+    if (s.gain >= min_gain && (!best || s.score > best->score)) best = &s;
+  }
+  if (!most) {
+    choice.reason = fmt::format("all {} candidate views have been visited; {} uncertain nodes remain in the {}",
+                                candidates, choice.targets, where);
+    return;
+  }
+  if (!best) {
+    choice.reason = fmt::format(
+        "no unvisited view is worth the move: the best, view {}, sees {} of the {} uncertain nodes in the {} ({:.1f}%), "
+        "below min_gain {:.1f}%",
+        most->index, most->seen, choice.rays, where, 100 * most->gain, 100 * min_gain);
+    if (choice.points > 0) choice.reason += fmt::format("; none grazes any of the {} surface points to pin in a new direction", choice.points);
+    return;
+  }
+  choice.best = best->index;
+  if (choice.by_points) {
+    choice.reason = fmt::format(
+        "view {} grazes {} of the {} surface points still to pin in a new direction ({} completing a pair, {} for the first "
+        "time; gain {:.3f}); moving {:.0f} deg costs {:.3f}: score {:.3f}",
+        best->index, best->pins + best->first, choice.points, best->pins, best->first, best->gain,
+        best->move_angle * 180 / std::numbers::pi, best->cost, best->score);
+    return;
+  }
+  choice.reason = fmt::format(
+      "view {} sees {} of the {} uncertain nodes in the {} ({:.1f}%; {} hidden behind the model, {} out of view); "
+      "moving {:.0f} deg costs {:.3f}: score {:.3f}",
+      best->index, best->seen, choice.rays, where, 100 * best->gain, best->hidden, best->outside,
+      best->move_angle * 180 / std::numbers::pi, best->cost, best->score);
+  if (choice.rays < choice.targets) choice.reason += fmt::format(" (one ray per {:.1f} of {} nodes)", double(choice.targets) / choice.rays, choice.targets);
+}
+
 }  // namespace
 
 std::vector<OctreeCell> uncertain_targets(const Octree& model, const RegionsOfInterest& regions) {
@@ -135,27 +228,7 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
                        std::span<const Eigen::Isometry3d> candidates, const std::optional<Eigen::Isometry3d>& current,
                        const std::vector<bool>& excluded, const ExplorationParams& params,
                        std::span<const Eigen::Vector3d> taken) {
-  if (!(params.movement_weight >= 0) || !(params.half_fov_deg > 0 && params.half_fov_deg < 180) ||
-      !(params.min_gain >= 0 && params.min_gain <= 1) || params.max_rays == 0)
-    throw std::invalid_argument(fmt::format(
-        "exploration parameters: expected movement_weight >= 0, half_fov_deg in (0, 180), min_gain in [0, 1] and "
-        "max_rays > 0; found {}, {}, {} and {}",
-        params.movement_weight, params.half_fov_deg, params.min_gain, params.max_rays));
-  if (!excluded.empty() && excluded.size() != candidates.size())
-    throw std::invalid_argument(fmt::format("exploration: {} excluded flags for {} candidate views; expected one each",
-                                            excluded.size(), candidates.size()));
-
-  if (!regions.points.empty() && (!(regions.rim_deg > 0 && regions.rim_deg < 90) ||
-                                  !(regions.rim_separation_deg > 0 && regions.rim_separation_deg < 90)))
-    throw std::invalid_argument(fmt::format(
-        "exploration: a request with surface points needs rim_deg and rim_separation_deg in (0, 90) degrees; found {} and {}",
-        regions.rim_deg, regions.rim_separation_deg));
-  for (const auto& p : regions.points)
-    if (!p.position.allFinite() || !p.normal.allFinite() || p.normal.norm() < 1e-9)
-      throw std::invalid_argument(fmt::format(
-          "exploration: a requested surface point needs a finite position and a non-zero normal; found ({}, {}, {}) with "
-          "normal ({}, {}, {})",
-          p.position.x(), p.position.y(), p.position.z(), p.normal.x(), p.normal.y(), p.normal.z()));
+  check_request(regions, candidates.size(), excluded, params);
 
   ViewChoice choice;
   const std::vector<PointNeed> needs = points_to_pin(regions, taken);
@@ -170,16 +243,7 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
   std::vector<const OctreeCell*> rays;
   for (std::size_t i = 0; i < choice.rays; ++i) rays.push_back(&targets[i * targets.size() / choice.rays]);
 
-  Eigen::Vector3d centre = model.bounds.center();
-  if (!targets.empty()) {
-    centre.setZero();
-    for (const auto& t : targets) centre += t.centre;
-    centre /= double(targets.size());
-  } else if (!needs.empty()) {
-    centre.setZero();
-    for (const auto& p : needs) centre += p.position;
-    centre /= double(needs.size());
-  }
+  const Eigen::Vector3d centre = looked_at(model, targets, needs);
   const double cos_half_fov = std::cos(params.half_fov_deg * std::numbers::pi / 180);
 
   // Each view's score on its own: at once with a parallel_for.
@@ -228,49 +292,7 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
     s.score = s.gain - s.cost;
   }
 
-  const std::string where = fmt::format("{} region{}", regions.boxes.size(), regions.boxes.size() == 1 ? "" : "s");
-  if (targets.empty() && !choice.by_points) {
-    choice.reason = fmt::format("no uncertain node of the model is left inside the {}", where);
-    if (!needs.empty()) choice.reason += fmt::format(", and no unvisited view grazes any of the {} surface points to pin", needs.size());
-    return choice;
-  }
-  // The best score among the views worth the move: the cost ranks them, it does not disqualify the
-  // only views that see enough (a far view that sees much must not lose to a near one that sees nothing).
-  const ViewScore* best = nullptr;
-  const ViewScore* most = nullptr;  // the unvisited view that sees most
-  for (const auto& s : choice.scores) {
-    if (s.excluded) continue;
-    if (!most || s.gain > most->gain) most = &s;
-    if (s.gain >= params.min_gain && (!best || s.score > best->score)) best = &s;
-  }
-  if (!most) {
-    choice.reason = fmt::format("all {} candidate views have been visited; {} uncertain nodes remain in the {}",
-                                candidates.size(), targets.size(), where);
-    return choice;
-  }
-  if (!best) {
-    choice.reason = fmt::format(
-        "no unvisited view is worth the move: the best, view {}, sees {} of the {} uncertain nodes in the {} ({:.1f}%), "
-        "below min_gain {:.1f}%",
-        most->index, most->seen, rays.size(), where, 100 * most->gain, 100 * params.min_gain);
-    if (!needs.empty()) choice.reason += fmt::format("; none grazes any of the {} surface points to pin in a new direction", needs.size());
-    return choice;
-  }
-  choice.best = best->index;
-  if (choice.by_points) {
-    choice.reason = fmt::format(
-        "view {} grazes {} of the {} surface points still to pin in a new direction ({} completing a pair, {} for the first "
-        "time; gain {:.3f}); moving {:.0f} deg costs {:.3f}: score {:.3f}",
-        best->index, best->pins + best->first, needs.size(), best->pins, best->first, best->gain,
-        best->move_angle * 180 / std::numbers::pi, best->cost, best->score);
-    return choice;
-  }
-  choice.reason = fmt::format(
-      "view {} sees {} of the {} uncertain nodes in the {} ({:.1f}%; {} hidden behind the model, {} out of view); "
-      "moving {:.0f} deg costs {:.3f}: score {:.3f}",
-      best->index, best->seen, rays.size(), where, 100 * best->gain, best->hidden, best->outside,
-      best->move_angle * 180 / std::numbers::pi, best->cost, best->score);
-  if (rays.size() < targets.size()) choice.reason += fmt::format(" (one ray per {:.1f} of {} nodes)", double(targets.size()) / rays.size(), targets.size());
+  pick_view(choice, regions.boxes.size(), candidates.size(), params.min_gain);
   return choice;
 }
 

@@ -12,7 +12,6 @@
 #include <iterator>
 #include <limits>
 #include <numbers>
-#include <numeric>
 #include <optional>
 #include <queue>
 #include <random>
@@ -267,26 +266,25 @@ void estimate_curvature(std::span<SurfaceSample> samples, double radius, const P
   for (std::size_t i = 0; i < samples.size(); ++i) samples[i].curvature = k[i];
 }
 
-SynthesisResult synthesise(std::span<const SurfaceSample> input, const SynthesisParams& p) {
-  check_params(p);
-  const std::vector<SurfaceSample> s = normalised_input(input);
-  const HandGeometry& hand = p.hand;
-  const double sharp = p.sharp_curvature > 0 ? p.sharp_curvature : 2.0 / hand.finger_width;
-  const double safety_ref = p.safety_reference > 0 ? p.safety_reference : hand.finger_width;
-  const std::size_t n = s.size();
-  const SampleCells cells(s, hand.finger_width);
-  const std::vector<std::vector<std::size_t>> nb = NeighbourGrid(s, p.neighbour_radius).neighbourhoods(false, p.parallel_for);
+namespace {
 
-  // Regions: connected graspable samples whose normals turn gently.
-  const double max_step = p.max_normal_step_deg * kDeg;
+constexpr std::size_t kNoRegion = std::numeric_limits<std::size_t>::max();
+
+// Each sample's neighbours (NeighbourGrid::neighbourhoods).
+using Neighbourhoods = std::vector<std::vector<std::size_t>>;
+
+// The graspable regions: connected samples whose |curvature| is at most `sharp` and whose normals
+// turn by at most `max_step` (radians) between neighbours, appended to `regions`. Returns each
+// sample's region, kNoRegion for a sample in none (a sharp feature).
+std::vector<std::size_t> grow_regions(const std::vector<SurfaceSample>& s, const Neighbourhoods& nb, double sharp, double max_step,
+                                      std::vector<GraspRegion>& regions) {
+  const std::size_t n = s.size();
   std::vector<bool> graspable(n);
   for (std::size_t i = 0; i < n; ++i) graspable[i] = std::abs(s[i].curvature) <= sharp;
-  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
-  std::vector<std::size_t> region_of(n, kNone);
-  SynthesisResult result;
+  std::vector<std::size_t> region_of(n, kNoRegion);
   for (std::size_t seed = 0; seed < n; ++seed) {
-    if (!graspable[seed] || region_of[seed] != kNone) continue;
-    const std::size_t r = result.regions.size();
+    if (!graspable[seed] || region_of[seed] != kNoRegion) continue;
+    const std::size_t r = regions.size();
     GraspRegion region;
     std::vector<std::size_t> stack{seed};
     region_of[seed] = r;
@@ -295,7 +293,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
       stack.pop_back();
       region.samples.push_back(i);
       for (std::size_t j : nb[i])
-        if (graspable[j] && region_of[j] == kNone && angle_between(s[i].normal, s[j].normal) <= max_step) {
+        if (graspable[j] && region_of[j] == kNoRegion && angle_between(s[i].normal, s[j].normal) <= max_step) {
           region_of[j] = r;
           stack.push_back(j);
         }
@@ -314,16 +312,22 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
     region.normal = normal.norm() > 1e-9 * m ? normal.normalized() : Eigen::Vector3d::Zero();
     region.mean_curvature = k / m;
     region.uncertain_share = unsure / m;
-    result.regions.push_back(std::move(region));
+    regions.push_back(std::move(region));
   }
+  return region_of;
+}
 
-  // Safety margin: distance within the region to its boundary, where a sample borders another
-  // region, an ungraspable sample, or no samples at all (its neighbours all lie to one side).
+// The safety margin: each sample's distance within its region to the region's boundary, where a
+// sample borders another region, an ungraspable sample, or no samples at all (its neighbours all
+// lie to one side); 0 for a sample in no region, 1e3 in a closed region (no boundary).
+std::vector<double> boundary_distances(const std::vector<SurfaceSample>& s, const Neighbourhoods& nb,
+                                       const std::vector<std::size_t>& region_of, double neighbour_radius) {
+  const std::size_t n = s.size();
   std::vector<double> dist(n, std::numeric_limits<double>::infinity());
   using Item = std::pair<double, std::size_t>;
   std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
   for (std::size_t i = 0; i < n; ++i) {
-    if (region_of[i] == kNone) continue;
+    if (region_of[i] == kNoRegion) continue;
     bool boundary = nb[i].size() < 3;
     Eigen::Vector3d offset = Eigen::Vector3d::Zero();
     for (std::size_t j : nb[i]) {
@@ -333,7 +337,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
     if (!nb[i].empty()) {
       offset /= static_cast<double>(nb[i].size());
       offset -= offset.dot(s[i].normal) * s[i].normal;
-      if (offset.norm() > 0.35 * p.neighbour_radius) boundary = true;  // a one-sided neighbourhood
+      if (offset.norm() > 0.35 * neighbour_radius) boundary = true;  // a one-sided neighbourhood
     }
     if (boundary) {
       dist[i] = 0;
@@ -353,25 +357,34 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
       }
     }
   }
-  result.boundary_distance.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    result.boundary_distance[i] = region_of[i] == kNone ? 0.0 : std::min(dist[i], 1e3);  // closed region: no boundary
+  std::vector<double> out(n);
+  for (std::size_t i = 0; i < n; ++i) out[i] = region_of[i] == kNoRegion ? 0.0 : std::min(dist[i], 1e3);
+  return out;
+}
 
-  std::vector<std::size_t> order(result.regions.size());
-  std::iota(order.begin(), order.end(), 0);
-  for (std::size_t r : order)
-    if (result.regions[r].uncertain_share > 0) result.uncertain_regions.push_back(r);
-  std::stable_sort(result.uncertain_regions.begin(), result.uncertain_regions.end(), [&](std::size_t a, std::size_t b) {
-    const auto& ra = result.regions[a];
-    const auto& rb = result.regions[b];
+// The regions with unresolved samples (where more views would help), the most unresolved area
+// first.
+std::vector<std::size_t> uncertain_regions(const std::vector<GraspRegion>& regions) {
+  std::vector<std::size_t> out;
+  for (std::size_t r = 0; r < regions.size(); ++r)
+    if (regions[r].uncertain_share > 0) out.push_back(r);
+  std::stable_sort(out.begin(), out.end(), [&](std::size_t a, std::size_t b) {
+    const auto& ra = regions[a];
+    const auto& rb = regions[b];
     return ra.uncertain_share * ra.samples.size() > rb.uncertain_share * rb.samples.size();
   });
+  return out;
+}
 
-  // Candidates: a thumb opposing two fingers, within the hand's reach, each contact at least the
-  // edge margin inside its region and high enough for a finger to touch above the table.
+// The samples a contact may take: in a region, at least edge_margin inside it, and high enough for
+// a finger to touch above the table; shuffled with a fixed seed, so that its first entries (the
+// thumbs tried) are an even, reproducible subset of the surface. Counts the samples left out in
+// result.near_edge and result.too_low.
+std::vector<std::size_t> contact_pool(const std::vector<SurfaceSample>& s, const std::vector<std::size_t>& region_of,
+                                      const SynthesisParams& p, SynthesisResult& result) {
   std::vector<std::size_t> pool;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (region_of[i] == kNone) continue;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (region_of[i] == kNoRegion) continue;
     const bool near_edge = result.boundary_distance[i] < p.edge_margin;
     const bool too_low = !near_edge && p.table_z && p.robot_hand.finger_radius > 0 &&
                          s[i].position.z() - p.robot_hand.finger_radius * (1 - s[i].normal.z()) < *p.table_z + p.table_clearance;
@@ -379,155 +392,244 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
     result.too_low += too_low;
     if (!near_edge && !too_low) pool.push_back(i);
   }
-  std::mt19937 rng(0);  // a fixed shuffle: an even, reproducible subset of the surface
+  std::mt19937 rng(0);
   std::shuffle(pool.begin(), pool.end(), rng);
-  if (pool.size() < 3) return result;
-  const std::vector<std::size_t> thumbs(pool.begin(), pool.begin() + std::min(pool.size(), p.max_thumbs));
+  return pool;
+}
 
+// The object's centre for S1 and force closure: the given one, else the samples' mean.
+Eigen::Vector3d object_centre(const std::vector<SurfaceSample>& s, const SynthesisParams& p) {
+  if (p.object_centre) return *p.object_centre;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  if (p.object_centre) {
-    centre = *p.object_centre;
-  } else {
-    for (const auto& x : s) centre += x.position / static_cast<double>(n);
-  }
-  result.centre = centre;
-  const double cos_thumb = std::cos(p.thumb_alignment_deg * kDeg);
-  const double cos_finger = std::cos(p.finger_alignment_deg * kDeg);
-  const double balance = p.balance_deg * kDeg;
-  const double sin_plane = std::sin(p.plane_alignment_deg * kDeg);
-  const double reach = std::hypot(hand.aperture_max, hand.spread_max / 2);
-  const double min_spread = std::max(hand.spread_min, hand.finger_width);
-  const double min_spread2 = min_spread * min_spread, max_spread2 = hand.spread_max * hand.spread_max;
-  const Eigen::Vector3d preferred = p.preferred_approach.normalized();
-  const double weights = p.weight_symmetry + p.weight_safety + p.weight_curvature;
-  auto s4 = [&](std::size_t i) { return std::clamp(0.5 - 0.5 * s[i].curvature / p.curvature_scale, 0.0, 1.0); };
-  auto s3 = [&](std::size_t i) { return std::min(1.0, result.boundary_distance[i] / safety_ref); };
+  for (const auto& x : s) centre += x.position / static_cast<double>(s.size());
+  return centre;
+}
 
-  // Each thumb's candidates apart, at once with a parallel_for, then in the thumbs' order: the same
-  // list whatever the threads.
-  std::vector<std::vector<GraspCandidate>> per_thumb(thumbs.size());
-  std::vector<std::size_t> below_table(thumbs.size(), 0), hand_unfit(thumbs.size(), 0);
-  auto search = [&](std::size_t ti) {
-    const std::size_t t = thumbs[ti];
-    std::vector<GraspCandidate>& all = per_thumb[ti];
-    const Eigen::Vector3d tp = s[t].position;
-    const Eigen::Vector3d tn = -s[t].normal;  // inward: where the thumb pushes
-    // Finger positions the thumb can oppose: in reach, facing back towards the thumb.
-    std::vector<std::size_t> fingers;
-    for (std::size_t f : pool) {
-      if (fingers.size() >= p.max_fingers) break;
-      const Eigen::Vector3d d = tp - s[f].position;
-      const double len = d.norm();
-      if (len < hand.aperture_min || len > reach) continue;
-      if (-s[f].normal.dot(d / len) < cos_finger) continue;
-      if (tn.dot(-d / len) < cos_thumb * 0.5) continue;  // loose: the exact axis needs both fingers
-      fingers.push_back(f);
-    }
+// The candidates of one thumb, in the order of its finger pairs, and how many the table left out.
+struct ThumbCandidates {
+  std::vector<GraspCandidate> candidates;
+  std::size_t below_table = 0, hand_unfit = 0;
+};
+
+// Candidates: a thumb opposing two fingers, within the hand's reach, in equilibrium, scored (S1,
+// S3, S4 and their weighted total) and clear of the table.
+class CandidateSearch {
+ public:
+  CandidateSearch(const std::vector<SurfaceSample>& s, const Neighbourhoods& nb, const std::vector<std::size_t>& region_of,
+                  const std::vector<double>& boundary_distance, const std::vector<std::size_t>& pool, const Eigen::Vector3d& centre,
+                  const SynthesisParams& p)
+      : s_(s), nb_(nb), region_of_(region_of), boundary_distance_(boundary_distance), pool_(pool), centre_(centre), p_(p),
+        hand_(p.hand),
+        safety_ref_(p.safety_reference > 0 ? p.safety_reference : p.hand.finger_width),
+        cos_thumb_(std::cos(p.thumb_alignment_deg * kDeg)),
+        cos_finger_(std::cos(p.finger_alignment_deg * kDeg)),
+        balance_(p.balance_deg * kDeg),
+        sin_plane_(std::sin(p.plane_alignment_deg * kDeg)),
+        reach_(std::hypot(p.hand.aperture_max, p.hand.spread_max / 2)),
+        min_spread2_(std::max(p.hand.spread_min, p.hand.finger_width) * std::max(p.hand.spread_min, p.hand.finger_width)),
+        max_spread2_(p.hand.spread_max * p.hand.spread_max),
+        preferred_(p.preferred_approach.normalized()),
+        weights_(p.weight_symmetry + p.weight_safety + p.weight_curvature) {}
+
+  ThumbCandidates for_thumb(std::size_t t) const {
+    ThumbCandidates out;
+    const std::vector<std::size_t> fingers = opposable_fingers(t);
     for (std::size_t a = 0; a < fingers.size(); ++a) {
       for (std::size_t b = a + 1; b < fingers.size(); ++b) {
         const std::size_t f1 = fingers[a], f2 = fingers[b];
-        const Eigen::Vector3d p1 = s[f1].position, p2 = s[f2].position;
-        const double spread2 = (p1 - p2).squaredNorm();  // no root for the many pairs out of range
-        if (spread2 < min_spread2 || spread2 > max_spread2) continue;
-        const double spread = std::sqrt(spread2);
-        const Eigen::Vector3d mid = (p1 + p2) / 2;
-        const double aperture = (mid - tp).norm();
-        if (aperture < hand.aperture_min || aperture > hand.aperture_max) continue;
-        const Eigen::Vector3d axis = (mid - tp) / aperture;
-        if (tn.dot(axis) < cos_thumb) continue;
-        if (-s[f1].normal.dot(-axis) < cos_finger || -s[f2].normal.dot(-axis) < cos_finger) continue;
-        // The fingers' sideways pushes cancel: their resultant opposes the thumb.
-        const Eigen::Vector3d resultant = -s[f1].normal - s[f2].normal;
-        if (angle_between(resultant, -axis) > balance) continue;
-        if (std::abs((p1 - p2).dot(axis)) > 0.5 * spread) continue;  // side by side, not one behind the other
-        const Eigen::Vector3d plane = (p1 - tp).cross(p2 - tp);
-        if (plane.norm() < 1e-12) continue;
-        const Eigen::Vector3d normal = plane.normalized();
-        // Three forces in equilibrium lie in one plane: each contact must be able to push within it.
-        if (std::abs(s[t].normal.dot(normal)) > sin_plane || std::abs(s[f1].normal.dot(normal)) > sin_plane ||
-            std::abs(s[f2].normal.dot(normal)) > sin_plane)
+        const std::optional<Opposition> o = opposition(t, f1, f2);
+        if (!o) continue;
+        GraspCandidate cand = scored_candidate(t, f1, f2, *o);
+        const TableFit fit = table_check(cand.grasp);
+        if (fit != TableFit::Clear) {
+          ++(fit == TableFit::Unfit ? out.hand_unfit : out.below_table);
           continue;
-
-        // S1: angles around the object's centre (projected on the contacts' plane) near 120
-        // degrees, and the triangle's centre near the object's.
-        const Eigen::Vector3d c = centre - (centre - tp).dot(normal) * normal;
-        const std::array<Eigen::Vector3d, 3> v = {tp - c, p1 - c, p2 - c};
-        double deviation = 0;
-        for (int k = 0; k < 3; ++k)
-          deviation = std::max(deviation, std::abs(angle_between(v[k], v[(k + 1) % 3]) / kDeg - 120.0));
-        const double radius = (v[0].norm() + v[1].norm() + v[2].norm()) / 3;
-        const double off_centre = ((tp + p1 + p2) / 3 - centre).norm();
-        const double symmetry =
-            std::max(0.0, 1 - deviation / 120.0) * std::max(0.0, 1 - off_centre / std::max(radius, 1e-12));
-        const double safety = std::min({s3(t), s3(f1), s3(f2)});
-        const double curvature = (s4(t) + s4(f1) + s4(f2)) / 3;
-
-        GraspCandidate cand;
-        Grasp& g = cand.grasp;
-        g.contacts = {GraspContact{tp, tn}, GraspContact{p1, -s[f1].normal}, GraspContact{p2, -s[f2].normal}};
-        g.approach = normal.dot(preferred) >= 0 ? normal : Eigen::Vector3d(-normal);
-        g.spread = spread;
-        g.aperture = std::min(aperture + hand.finger_width, hand.aperture_max + hand.finger_width);
-        if (p.table_z && p.robot_hand) {
-          // The robot's own hand at each pose, whatever the approach: on the pads, else as a pinch.
-          const TableFit fit = table_fit(g, p.robot_hand, *p.table_z, p.table_clearance);
-          if (fit != TableFit::Clear) {
-            ++(fit == TableFit::Unfit ? hand_unfit : below_table)[ti];
-            continue;
-          }
-        } else if (p.table_z) {
-          // From above or level only: from below, the hand would come through the table.
-          if (g.approach.z() > 1e-9) g.approach = -g.approach;
-          const double floor = *p.table_z + p.table_clearance;
-          if (hand_lowest_z(g, hand) < floor || hand_lowest_z(g, hand, p.pregrasp_distance) < floor) {
-            ++below_table[ti];
-            continue;
-          }
         }
-        g.scores = {symmetry, safety, curvature,
-                    (p.weight_symmetry * symmetry + p.weight_safety * safety + p.weight_curvature * curvature) / weights};
-        cand.samples = {t, f1, f2};
-        cand.regions = {region_of[t], region_of[f1], region_of[f2]};
-        for (std::size_t i : cand.samples) {
-          cand.contacts_uncertain = cand.contacts_uncertain || s[i].unresolved();
-          for (std::size_t j : nb[i]) cand.uncertain = cand.uncertain || s[j].unresolved();
-        }
-        cand.uncertain = cand.uncertain || cand.contacts_uncertain;
-        all.push_back(std::move(cand));
+        mark_uncertain(cand);
+        out.candidates.push_back(std::move(cand));
       }
     }
-  };
-  for_each_index(p.parallel_for, thumbs.size(), search);
-  std::vector<GraspCandidate> all;
-  for (std::size_t ti = 0; ti < thumbs.size(); ++ti) {
-    result.below_table += below_table[ti];
-    result.hand_unfit += hand_unfit[ti];
-    std::move(per_thumb[ti].begin(), per_thumb[ti].end(), std::back_inserter(all));
+    return out;
   }
-  std::stable_sort(all.begin(), all.end(),
-                   [](const auto& a, const auto& b) { return a.grasp.scores.total > b.grasp.scores.total; });
-  // Distinct candidates: one whose contacts all lie within a finger's width of a better one's
-  // (fingers swapped or not) adds nothing.
-  auto same = [&](const GraspCandidate& a, const GraspCandidate& b) {
-    auto near = [&](int i, int j) {
-      return (a.grasp.contacts[i].position - b.grasp.contacts[j].position).norm() < hand.finger_width;
-    };
-    return near(0, 0) && ((near(1, 1) && near(2, 2)) || (near(1, 2) && near(2, 1)));
+
+ private:
+  // How a thumb and two fingers oppose: the normal of their plane, the fingers' spread and the
+  // thumb's distance from the fingers' midpoint.
+  struct Opposition {
+    Eigen::Vector3d normal;
+    double spread, aperture;
   };
-  // Force closure on the model: the contacts where the model puts them, pushing along its normals,
-  // about the object's centre; torques over the samples' farthest distance from it, as the true
-  // measure scales them by r_max.
-  double r_max = 0;
-  for (const auto& x : s) r_max = std::max(r_max, (x.position - centre).norm());
+
+  // Finger positions thumb t can oppose: in reach, facing back towards the thumb; at most
+  // max_fingers, in the pool's order.
+  std::vector<std::size_t> opposable_fingers(std::size_t t) const {
+    const Eigen::Vector3d tp = s_[t].position;
+    const Eigen::Vector3d tn = -s_[t].normal;  // inward: where the thumb pushes
+    std::vector<std::size_t> fingers;
+    for (std::size_t f : pool_) {
+      if (fingers.size() >= p_.max_fingers) break;
+      const Eigen::Vector3d d = tp - s_[f].position;
+      const double len = d.norm();
+      if (len < hand_.aperture_min || len > reach_) continue;
+      if (-s_[f].normal.dot(d / len) < cos_finger_) continue;
+      if (tn.dot(-d / len) < cos_thumb_ * 0.5) continue;  // loose: the exact axis needs both fingers
+      fingers.push_back(f);
+    }
+    return fingers;
+  }
+
+  // Whether thumb t and fingers f1, f2 oppose each other as the hand can: spread and aperture in
+  // its ranges, each contact pushing along the thumb-to-fingers axis, the fingers side by side and
+  // their sideways pushes cancelling, and all three able to push within their plane.
+  std::optional<Opposition> opposition(std::size_t t, std::size_t f1, std::size_t f2) const {
+    const Eigen::Vector3d tp = s_[t].position;
+    const Eigen::Vector3d tn = -s_[t].normal;
+    const Eigen::Vector3d p1 = s_[f1].position, p2 = s_[f2].position;
+    const double spread2 = (p1 - p2).squaredNorm();  // no root for the many pairs out of range
+    if (spread2 < min_spread2_ || spread2 > max_spread2_) return std::nullopt;
+    const double spread = std::sqrt(spread2);
+    const Eigen::Vector3d mid = (p1 + p2) / 2;
+    const double aperture = (mid - tp).norm();
+    if (aperture < hand_.aperture_min || aperture > hand_.aperture_max) return std::nullopt;
+    const Eigen::Vector3d axis = (mid - tp) / aperture;
+    if (tn.dot(axis) < cos_thumb_) return std::nullopt;
+    if (-s_[f1].normal.dot(-axis) < cos_finger_ || -s_[f2].normal.dot(-axis) < cos_finger_) return std::nullopt;
+    // The fingers' sideways pushes cancel: their resultant opposes the thumb.
+    const Eigen::Vector3d resultant = -s_[f1].normal - s_[f2].normal;
+    if (angle_between(resultant, -axis) > balance_) return std::nullopt;
+    if (std::abs((p1 - p2).dot(axis)) > 0.5 * spread) return std::nullopt;  // side by side, not one behind the other
+    const Eigen::Vector3d plane = (p1 - tp).cross(p2 - tp);
+    if (plane.norm() < 1e-12) return std::nullopt;
+    const Eigen::Vector3d normal = plane.normalized();
+    // Three forces in equilibrium lie in one plane: each contact must be able to push within it.
+    if (std::abs(s_[t].normal.dot(normal)) > sin_plane_ || std::abs(s_[f1].normal.dot(normal)) > sin_plane_ ||
+        std::abs(s_[f2].normal.dot(normal)) > sin_plane_)
+      return std::nullopt;
+    return Opposition{normal, spread, aperture};
+  }
+
+  // The grasp of thumb t and fingers f1, f2 (contacts, approach nearest the preferred one, spread,
+  // aperture) with its scores, its samples and their regions.
+  GraspCandidate scored_candidate(std::size_t t, std::size_t f1, std::size_t f2, const Opposition& o) const {
+    const Eigen::Vector3d tp = s_[t].position, p1 = s_[f1].position, p2 = s_[f2].position;
+    // S1: angles around the object's centre (projected on the contacts' plane) near 120 degrees,
+    // and the triangle's centre near the object's.
+    const Eigen::Vector3d c = centre_ - (centre_ - tp).dot(o.normal) * o.normal;
+    const std::array<Eigen::Vector3d, 3> v = {tp - c, p1 - c, p2 - c};
+    double deviation = 0;
+    for (int k = 0; k < 3; ++k) deviation = std::max(deviation, std::abs(angle_between(v[k], v[(k + 1) % 3]) / kDeg - 120.0));
+    const double radius = (v[0].norm() + v[1].norm() + v[2].norm()) / 3;
+    const double off_centre = ((tp + p1 + p2) / 3 - centre_).norm();
+    const double symmetry = std::max(0.0, 1 - deviation / 120.0) * std::max(0.0, 1 - off_centre / std::max(radius, 1e-12));
+    const double safety = std::min({s3(t), s3(f1), s3(f2)});
+    const double curvature = (s4(t) + s4(f1) + s4(f2)) / 3;
+
+    GraspCandidate cand;
+    Grasp& g = cand.grasp;
+    g.contacts = {GraspContact{tp, -s_[t].normal}, GraspContact{p1, -s_[f1].normal}, GraspContact{p2, -s_[f2].normal}};
+    g.approach = o.normal.dot(preferred_) >= 0 ? o.normal : Eigen::Vector3d(-o.normal);
+    g.spread = o.spread;
+    g.aperture = std::min(o.aperture + hand_.finger_width, hand_.aperture_max + hand_.finger_width);
+    g.scores = {symmetry, safety, curvature,
+                (p_.weight_symmetry * symmetry + p_.weight_safety * safety + p_.weight_curvature * curvature) / weights_};
+    cand.samples = {t, f1, f2};
+    cand.regions = {region_of_[t], region_of_[f1], region_of_[f2]};
+    return cand;
+  }
+
+  // S3: how far inside its region a sample lies, 1 from safety_reference on.
+  double s3(std::size_t i) const { return std::min(1.0, boundary_distance_[i] / safety_ref_); }
+  // S4: slightly concave best, then flat, then convex.
+  double s4(std::size_t i) const { return std::clamp(0.5 - 0.5 * s_[i].curvature / p_.curvature_scale, 0.0, 1.0); }
+
+  // Whether the hand takes g clear of the table (Clear without one). The robot's own hand at each
+  // pose, whatever the approach: on its pads, else as a pinch (table_fit, which sets
+  // g.pinch_depth). Without it, HandGeometry's hand from above or level only (g.approach turned
+  // down if it points up: from below, the hand would come through the table), at the grasp and
+  // at its pregrasp.
+  TableFit table_check(Grasp& g) const {
+    if (!p_.table_z) return TableFit::Clear;
+    if (p_.robot_hand) return table_fit(g, p_.robot_hand, *p_.table_z, p_.table_clearance);
+    if (g.approach.z() > 1e-9) g.approach = -g.approach;
+    const double floor = *p_.table_z + p_.table_clearance;
+    if (hand_lowest_z(g, hand_) < floor || hand_lowest_z(g, hand_, p_.pregrasp_distance) < floor) return TableFit::Table;
+    return TableFit::Clear;
+  }
+
+  // A candidate is uncertain when a contact or a sample beside one is unresolved; its contacts are
+  // when one of them is.
+  void mark_uncertain(GraspCandidate& cand) const {
+    for (std::size_t i : cand.samples) {
+      cand.contacts_uncertain = cand.contacts_uncertain || s_[i].unresolved();
+      for (std::size_t j : nb_[i]) cand.uncertain = cand.uncertain || s_[j].unresolved();
+    }
+    cand.uncertain = cand.uncertain || cand.contacts_uncertain;
+  }
+
+  const std::vector<SurfaceSample>& s_;
+  const Neighbourhoods& nb_;
+  const std::vector<std::size_t>& region_of_;
+  const std::vector<double>& boundary_distance_;
+  const std::vector<std::size_t>& pool_;
+  const Eigen::Vector3d centre_;
+  const SynthesisParams& p_;
+  const HandGeometry& hand_;
+  const double safety_ref_, cos_thumb_, cos_finger_, balance_, sin_plane_, reach_, min_spread2_, max_spread2_;
+  const Eigen::Vector3d preferred_;
+  const double weights_;
+};
+
+// Every thumb's candidates, the thumbs searched at once with a parallel_for and their candidates
+// joined in the thumbs' order (the same list whatever the threads), best total first; the table's
+// leaving-outs counted in result.
+std::vector<GraspCandidate> search_candidates(const CandidateSearch& search, const std::vector<std::size_t>& thumbs,
+                                              const ParallelFor& parallel_for, SynthesisResult& result) {
+  std::vector<ThumbCandidates> per_thumb(thumbs.size());
+  for_each_index(parallel_for, thumbs.size(), [&](std::size_t ti) { per_thumb[ti] = search.for_thumb(thumbs[ti]); });
+  std::vector<GraspCandidate> all;
+  for (ThumbCandidates& c : per_thumb) {
+    result.below_table += c.below_table;
+    result.hand_unfit += c.hand_unfit;
+    std::move(c.candidates.begin(), c.candidates.end(), std::back_inserter(all));
+  }
+  std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.grasp.scores.total > b.grasp.scores.total; });
+  return all;
+}
+
+// Distinct candidates: one whose contacts all lie within a finger's width of another's (fingers
+// swapped or not) adds nothing to it.
+bool same_contacts(const GraspCandidate& a, const GraspCandidate& b, double finger_width) {
+  auto near = [&](int i, int j) { return (a.grasp.contacts[i].position - b.grasp.contacts[j].position).norm() < finger_width; };
+  return near(0, 0) && ((near(1, 1) && near(2, 2)) || (near(1, 2) && near(2, 1)));
+}
+
+// Force closure on the model: the contacts where the model puts them, pushing along its normals,
+// their friction cones narrowed by normal_error_deg (inscribed_cone_deg).
+QualityParams model_quality(const SynthesisParams& p) {
   QualityParams quality;
   quality.friction = p.friction;
   if (p.normal_error_deg > 0) quality.friction = std::tan((inscribed_cone_deg(p.friction) - p.normal_error_deg) * kDeg);
-  // The candidates are taken in order, each kept unless it repeats one kept, the hand cannot take
-  // it, or it is not force closure. The hulls (the costly part) are computed ahead, a few at once
-  // with a parallel_for, for the next candidates that repeat none kept so far and the hand can take:
-  // the same choices as one at a time, a hull now and then computed for nothing.
+  return quality;
+}
+
+// The candidates kept, from `all` (best total first) into result.candidates: taken in order, each
+// kept unless it repeats one kept, the model stands in the hand's way, or it is not force closure
+// on the model about the object's centre (torques over the samples' farthest distance from it, as
+// the true measure scales them by r_max); at most max_candidates of each kind (see below), after
+// at most max_checks force-closure checks. The hulls (the costly part) are computed ahead, a few at once with a
+// parallel_for, for the next candidates that repeat none kept so far and the hand can take: the
+// same choices as one at a time, a hull now and then computed for nothing.
+void select_candidates(std::vector<GraspCandidate>& all, const std::vector<SurfaceSample>& s, const SynthesisParams& p,
+                       SynthesisResult& result) {
+  const HandGeometry& hand = p.hand;
+  const Eigen::Vector3d centre = result.centre;
+  const SampleCells cells(s, hand.finger_width);
+  double r_max = 0;
+  for (const auto& x : s) r_max = std::max(r_max, (x.position - centre).norm());
+  const QualityParams quality = model_quality(p);
   auto repeats = [&](const GraspCandidate& c) {
-    return std::any_of(result.candidates.begin(), result.candidates.end(), [&](const auto& k) { return same(c, k); });
+    return std::any_of(result.candidates.begin(), result.candidates.end(),
+                       [&](const auto& k) { return same_contacts(c, k, hand.finger_width); });
   };
   std::vector<signed char> blocked(all.size(), -1);  // -1: not checked yet
   auto hand_blocked = [&](std::size_t i) {
@@ -582,15 +684,40 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
     ++kept[kind(c)];
     result.candidates.push_back(std::move(c));
   }
-  if (p.rank_total) {
-    // The reliable candidates first, the most stable on the model first; the rest by total.
-    const double reliable = *p.rank_total;
-    std::stable_sort(result.candidates.begin(), result.candidates.end(), [&](const auto& a, const auto& b) {
-      const bool ra = a.grasp.scores.total >= reliable, rb = b.grasp.scores.total >= reliable;
-      if (ra != rb) return ra;
-      return ra && a.model_epsilon > b.model_epsilon;
-    });
-  }
+}
+
+// The reliable candidates (total at least `reliable`) first, the most stable on the model first;
+// the rest in their order, by total.
+void rank_reliable_first(std::vector<GraspCandidate>& candidates, double reliable) {
+  std::stable_sort(candidates.begin(), candidates.end(), [&](const auto& a, const auto& b) {
+    const bool ra = a.grasp.scores.total >= reliable, rb = b.grasp.scores.total >= reliable;
+    if (ra != rb) return ra;
+    return ra && a.model_epsilon > b.model_epsilon;
+  });
+}
+
+}  // namespace
+
+SynthesisResult synthesise(std::span<const SurfaceSample> input, const SynthesisParams& p) {
+  check_params(p);
+  const std::vector<SurfaceSample> s = normalised_input(input);
+  const Neighbourhoods nb = NeighbourGrid(s, p.neighbour_radius).neighbourhoods(false, p.parallel_for);
+  const double sharp = p.sharp_curvature > 0 ? p.sharp_curvature : 2.0 / p.hand.finger_width;
+
+  SynthesisResult result;
+  const std::vector<std::size_t> region_of = grow_regions(s, nb, sharp, p.max_normal_step_deg * kDeg, result.regions);
+  result.boundary_distance = boundary_distances(s, nb, region_of, p.neighbour_radius);
+  result.uncertain_regions = uncertain_regions(result.regions);
+
+  const std::vector<std::size_t> pool = contact_pool(s, region_of, p, result);
+  if (pool.size() < 3) return result;
+  const std::vector<std::size_t> thumbs(pool.begin(), pool.begin() + std::min(pool.size(), p.max_thumbs));
+  result.centre = object_centre(s, p);
+
+  const CandidateSearch search(s, nb, region_of, result.boundary_distance, pool, result.centre, p);
+  std::vector<GraspCandidate> all = search_candidates(search, thumbs, p.parallel_for, result);
+  select_candidates(all, s, p, result);
+  if (p.rank_total) rank_reliable_first(result.candidates, *p.rank_total);
   return result;
 }
 

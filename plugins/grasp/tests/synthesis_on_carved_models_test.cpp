@@ -12,12 +12,12 @@
 #include <fba/types/octree.hpp>
 
 #include "fba/geometry/mesh_io.hpp"
-#include "fba/geometry/renderer.hpp"
 #include "fba/geometry/viewpoints.hpp"
 #include "fba/grasp/object_surface.hpp"
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/image_set.hpp"
 #include "fba/vision/octree_carver.hpp"
+#include "perfect_masks.hpp"
 #include "support/built_plugins.hpp"
 #include "support/data_sets.hpp"
 
@@ -33,21 +33,13 @@ std::string events_text(const ComponentHarness& h) {
   return out;
 }
 
-fba::vision::CarverParams carve_params(int depth) {
-  fba::vision::CarverParams p;
-  p.max_depth = depth;
-  p.detail_after_views = 0;
-  p.threads = 1;
-  return p;
-}
-
 TEST(GraspSynthesisOnCarvedModels, TheDinoCarvedAtDepth6YieldsAGrasp) {
   const auto set = fba::vision::ImageSet::load(fba::test::kDinoPar);
   fba::vision::ExtractionParams extraction;  // the providers' recipe, as tasks/carve_dino.yaml
   extraction.binarise.threshold = 0.19;
   extraction.binarise.dilate_px = 10;
   extraction.binarise.erode_px = 7;
-  fba::vision::OctreeCarver carver(carve_params(6));
+  fba::vision::OctreeCarver carver(fba::test::carver_params(6));
   const Eigen::AlignedBox3d box(Eigen::Vector3d(-0.061897, -0.018874, -0.057845), Eigen::Vector3d(0.010897, 0.068227, 0.015495));
   carver.set_bounds(box);
   for (std::size_t i = 0; i < set.size(); ++i) {
@@ -79,25 +71,11 @@ class GraspSynthesisOnCarvedYcb : public testing::TestWithParam<const char*> {};
 TEST_P(GraspSynthesisOnCarvedYcb, TheSelectedGraspIsForceClosureOnTheTrueMesh) {
   const auto mesh = fba::geometry::load_mesh(fba::test::ycb_mesh(GetParam()));
   const Eigen::AlignedBox3d box = fba::geometry::mesh_bounds(mesh);
-  const int width = 320, height = 240;
-  const double focal = 300;
-  const double distance = fba::geometry::framing_distance(box, width, height, focal);
-  fba::vision::OctreeCarver carver(carve_params(6));
-  carver.set_bounds(box);
-  const auto poses = fba::geometry::hemisphere_views(12, 10 * M_PI / 180, 70 * M_PI / 180, distance, box.center());
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    auto frame = std::make_shared<fba::Frame>();
-    frame->camera = fba::geometry::make_camera(width, height, focal, focal, (width - 1) / 2.0, (height - 1) / 2.0, poses[i]);
-    frame->has_pose = true;
-    frame->index = int(i);
-    const auto rendered = fba::geometry::render(mesh, frame->camera);
-    frame->image = rendered.colour;
-    const auto r = fba::vision::silhouette_from_mask(rendered.mask, frame);
-    ASSERT_TRUE(r.ok()) << r.error;
-    carver.add_view(*r.silhouette);
-  }
+  const double distance = fba::geometry::framing_distance(box, fba::test::kMaskWidth, fba::test::kMaskHeight, fba::test::kMaskFocal);
+  const auto model = fba::test::carve_perfect_masks(
+      mesh, box, fba::geometry::hemisphere_views(12, 10 * M_PI / 180, 70 * M_PI / 180, distance, box.center()));
   ComponentHarness h(built_plugins(), "grasp.synthesis");
-  h.push<fba::Octree>("octree", *carver.snapshot());
+  h.push<fba::Octree>("octree", *model);
   h.run();
   const auto grasps = h.values<fba::Grasp>("grasp");
   ASSERT_EQ(grasps.size(), 1u) << events_text(h);

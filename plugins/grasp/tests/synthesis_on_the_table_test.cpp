@@ -14,16 +14,15 @@
 #include <fba/types/octree.hpp>
 
 #include "fba/geometry/object_families.hpp"
-#include "fba/geometry/renderer.hpp"
 #include "fba/geometry/viewpoints.hpp"
 #include "fba/grasp/model_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
 #include "fba/motion/hand_geometry.hpp"
 #include "fba/motion/hand_placement.hpp"
 #include "fba/motion/reach_planner.hpp"
-#include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/octree_carver.hpp"
 #include "motion_hand.hpp"
+#include "perfect_masks.hpp"
 #include "support/built_plugins.hpp"
 
 // A namespace of its own: the tests of this folder are compiled as one unity source.
@@ -46,27 +45,8 @@ fba::TriangleMesh standing(fba::TriangleMesh mesh) {
 // Twelve views around the object at elevations min_deg..70 degrees, 0.3 m from a point 5 cm above
 // the table, as the loop's views; perfect masks; carved at depth 6 in the workspace.
 std::shared_ptr<const fba::Octree> carve(const fba::TriangleMesh& mesh, double min_deg) {
-  fba::vision::CarverParams params;
-  params.max_depth = 6;
-  params.detail_after_views = 0;
-  params.threads = 1;
-  fba::vision::OctreeCarver carver(params);
-  carver.set_bounds(kWorkspace);
-  const int width = 320, height = 240;
-  const double focal = 300;
-  const auto poses = fba::geometry::hemisphere_views(12, min_deg * M_PI / 180, 70 * M_PI / 180, 0.3, Eigen::Vector3d(0, 0, 0.05));
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    auto frame = std::make_shared<fba::Frame>();
-    frame->camera = fba::geometry::make_camera(width, height, focal, focal, (width - 1) / 2.0, (height - 1) / 2.0, poses[i]);
-    frame->has_pose = true;
-    frame->index = int(i);
-    const auto rendered = fba::geometry::render(mesh, frame->camera);
-    frame->image = rendered.colour;
-    const auto r = fba::vision::silhouette_from_mask(rendered.mask, frame);
-    EXPECT_TRUE(r.ok()) << r.error;
-    if (r.ok()) carver.add_view(*r.silhouette);
-  }
-  return carver.snapshot();
+  return fba::test::carve_perfect_masks(
+      mesh, kWorkspace, fba::geometry::hemisphere_views(12, min_deg * M_PI / 180, 70 * M_PI / 180, 0.3, Eigen::Vector3d(0, 0, 0.05)));
 }
 
 // The lowest point of the robot's hand over its poses for `g` (open at the pregrasp 5 cm back,

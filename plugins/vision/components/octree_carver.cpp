@@ -20,6 +20,7 @@
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/vision/model_picture.hpp"
 #include "fba/vision/octree_carver.hpp"
+#include "fba/vision/ply_leaves_parameter.hpp"
 
 namespace {
 
@@ -79,12 +80,7 @@ class OctreeCarverFilter final : public fba::Component {
   static constexpr auto kMemoryBudgetMiB = fba::Param<double>(
       "memory_budget_mib", 4096, "MiB the model may use: a max_depth whose worst case exceeds it is refused, with the figure")
                                                .range(1, 1 << 20);
-  static constexpr auto kPlyLeaves = fba::Param<std::string>(
-      "ply_leaves", "seen",
-      "which occupied leaves model.ply holds: seen, those two views saw whole (the object as the views show it; space no view "
-      "could carve, such as the top of a root box no camera framed, is left out), or occupied, every one (the model as "
-      "synthesis and the checks use it)")
-                                         .choices({"seen", "occupied"});
+  static constexpr auto kPlyLeaves = fba::vision::PlyLeavesParameter::kPlyLeaves;  // shared with grasp.synthesis
   static constexpr fba::EventOut kBoundsEstimated{"bounds_estimated", "the root box was estimated from the first silhouettes; payload: the box"};
   static constexpr fba::EventOut kSuspectModel{
       "suspect_model",
@@ -130,7 +126,7 @@ class OctreeCarverFilter final : public fba::Component {
         bounds_views_(static_cast<std::size_t>(ctx(kBoundsViews))),
         margin_(ctx(kBoundsMargin)),
         compare_uniform_(ctx(kCompareUniform)),
-        ply_leaves_(ctx(kPlyLeaves) == "occupied" ? fba::vision::PlyLeaves::Occupied : fba::vision::PlyLeaves::Seen) {
+        ply_leaves_(fba::vision::PlyLeavesParameter::read(ctx)) {
     if (compare_uniform_) {
       // Uniform detail to the same depth: every node on the outline split, no grasp criteria.
       fba::vision::CarverParams p = carver_->params();

@@ -8,6 +8,7 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/renderer.hpp"
+#include "fba/geometry/voxelize.hpp"
 #include "fba/vision/octree_carver.hpp"
 
 namespace fba::vision {
@@ -133,27 +134,10 @@ class SurfaceBuilder {
     return inside_(t_.cell(depth, c.x[0] / c.s, c.x[1] / c.s, c.x[2] / c.s, n));
   }
 
-  // A square in the plane axis = plane covering cell c's extent along the two other axes, two
-  // triangles wound counter-clockwise seen from the side `dir` points to.
+  // The square in the plane axis = plane covering cell c's extent along the two other axes, facing
+  // the side `dir` points to.
   void face(int axis, int dir, int plane, const Cell& c) {
-    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const int su[4] = {0, 1, 1, 0}, sv[4] = {0, 0, 1, 1};
-    int idx[4];
-    for (int i = 0; i < 4; ++i) {
-      int p[3];
-      p[axis] = plane;
-      p[u] = c.x[u] + su[i] * c.s;
-      p[v] = c.x[v] + sv[i] * c.s;
-      idx[i] = vertex(p);
-    }
-    // (u, v, axis) is right-handed, so u x v points along +axis: keep the order for +dir.
-    if (dir > 0) {
-      mesh_.triangles.emplace_back(idx[0], idx[1], idx[2]);
-      mesh_.triangles.emplace_back(idx[0], idx[2], idx[3]);
-    } else {
-      mesh_.triangles.emplace_back(idx[0], idx[2], idx[1]);
-      mesh_.triangles.emplace_back(idx[0], idx[3], idx[2]);
-    }
+    geometry::add_lattice_square(mesh_, axis, dir, plane, c.x, c.s, [this](const int p[3]) { return vertex(p); });
   }
 
   // Welds face corners: lattice point -> vertex index, in an open-addressing table (a node-based

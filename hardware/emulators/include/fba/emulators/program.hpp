@@ -12,11 +12,19 @@
 #include <filesystem>
 #include <functional>
 #include <iostream>
+#include <map>
 #include <string>
 #include <thread>
 #include <vector>
 
 namespace fba::emulators {
+
+// The options every emulator program takes: a driver's launcher starts one with --link PATH
+// --exit-with-parent (launcher.hpp), and a person may give them too.
+struct CommonOptions {
+  std::string link;  // where to link the pseudo-terminal ("": nowhere)
+  bool exit_with_parent = false;
+};
 
 // Option parsing for one program: every mistake ends the program with exit 2, the reason and the usage.
 struct ProgramOptions {
@@ -58,6 +66,38 @@ struct ProgramOptions {
     auto out = split(text, ':');
     if (out.size() != parts) fail(option + " takes " + form + ", not '" + text + "'");
     return out;
+  }
+
+  // Reads the command line argv[1..argc): -h or --help prints the usage and ends the program (exit 0);
+  // --link PATH and --exit-with-parent fill the result; an option named in `flags` takes no value and
+  // runs its action; any other takes the next argument as its value and goes to `option(name, value)`,
+  // which returns false for a name it does not know. A mistake ends the program through fail().
+  CommonOptions read(int argc, char** argv, const std::map<std::string, std::function<void()>>& flags,
+                     const std::function<bool(const std::string&, const std::string&)>& option) const {
+    CommonOptions common;
+    const std::vector<std::string> args(argv + 1, argv + argc);
+    for (std::size_t i = 0; i < args.size(); ++i) {
+      const std::string& a = args[i];
+      if (a == "-h" || a == "--help") {
+        std::cout << usage;
+        std::exit(0);
+      }
+      if (a == "--exit-with-parent") {
+        common.exit_with_parent = true;
+        continue;
+      }
+      if (const auto flag = flags.find(a); flag != flags.end()) {
+        flag->second();
+        continue;
+      }
+      if (i + 1 >= args.size()) fail(a.empty() ? "an empty argument" : "'" + a + "' needs a value or is unknown");
+      const std::string& v = args[++i];
+      if (a == "--link")
+        common.link = v;
+      else if (!option(a, v))
+        fail("unknown option '" + a + "'");
+    }
+    return common;
   }
 };
 
@@ -120,6 +160,22 @@ inline std::string run_device(const std::function<std::string()>& run, const std
   if (!link.empty()) std::filesystem::remove(link);
   if (orphaned) return "stopped: the program that started it has ended";
   return detail::stop_signal ? "stopped" : reason;
+}
+
+// The rest of an emulator program's main once its options are read: the stop signals caught (before
+// the terminal is opened), then `device`, which opens the device and runs it (run_device) and returns
+// why it ended, printed as "<title>: <reason>". Returns main's exit status: 0, or 1 when `device`
+// throws, with "<program>: <what>" on stderr.
+inline int run_program(const ProgramOptions& cli, const std::string& title, const std::function<std::string()>& device) {
+  catch_stop_signals();
+  try {
+    const std::string end = device();
+    std::cout << title << ": " << end << std::endl;
+  } catch (const std::exception& e) {
+    std::cerr << cli.name << ": " << e.what() << std::endl;
+    return 1;
+  }
+  return 0;
 }
 
 }  // namespace fba::emulators

@@ -78,4 +78,32 @@ std::size_t carved_away(const VoxelGrid& truth, const VoxelGrid& model);
 // outward), only where an occupied voxel meets an empty one: for rendering and PLY export.
 TriangleMesh grid_to_mesh(const VoxelGrid& grid);
 
+// Appends to `mesh` a square face on the integer lattice: in the plane p[axis] = `plane`, from
+// `origin` across `size` along the two other axes (u = axis + 1, v = axis + 2, mod 3), as two
+// triangles wound counter-clockwise seen from the side `dir` (+1 or -1) points to; the outward face
+// of a solid cell on the other side. `vertex(p)` returns the mesh's index of lattice point p (an
+// int[3]), adding it or welding it to an earlier one; it is asked for the corners in the order
+// origin, +u, +u+v, +v. grid_to_mesh's faces and the carver's octree surface are these squares.
+template <class VertexOf>
+void add_lattice_square(TriangleMesh& mesh, int axis, int dir, int plane, const int origin[3], int size, VertexOf&& vertex) {
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const int su[4] = {0, 1, 1, 0}, sv[4] = {0, 0, 1, 1};
+  int idx[4];
+  for (int q = 0; q < 4; ++q) {
+    int p[3];
+    p[axis] = plane;
+    p[u] = origin[u] + su[q] * size;
+    p[v] = origin[v] + sv[q] * size;
+    idx[q] = vertex(p);
+  }
+  // (u, v, axis) is right-handed, so u x v points along +axis: the corners' order faces +dir.
+  if (dir > 0) {
+    mesh.triangles.emplace_back(idx[0], idx[1], idx[2]);
+    mesh.triangles.emplace_back(idx[0], idx[2], idx[3]);
+  } else {
+    mesh.triangles.emplace_back(idx[0], idx[2], idx[1]);
+    mesh.triangles.emplace_back(idx[0], idx[3], idx[2]);
+  }
+}
+
 }  // namespace fba::geometry
