@@ -284,7 +284,9 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
     joints_ = Eigen::Map<const Eigen::VectorXd>(s.positions.data(), static_cast<Eigen::Index>(s.positions.size()));
     publish_initial(joints_, s.velocities, now);
     if (moving_) {
-      publish_state(s.positions, s.velocities, now);
+      // At the target the drives stand still: the state says so, which is what reach planning
+      // waits for before it plans from these joints.
+      publish_state(s.positions, s.reached ? std::vector<double>(s.positions.size(), 0.0) : s.velocities, now);
       if (s.reached) {
         moving_ = false;
         arrive(joints_, now);
@@ -358,6 +360,7 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
     }
     following_ = false;
     arm_->end_cyclic();
+    publish_state(fba::arm::values(joints_), std::vector<double>(static_cast<std::size_t>(joints_.size()), 0.0), now);  // settled: still
     arrive(joints_, now);
   }
 

@@ -5,6 +5,7 @@
 // component runs (each joint state or model that arrives). With an output folder, a plan's
 // pictures are written there once the plan is sent: robot_pregrasp.png and robot_lift.png
 // (fba/motion/robot_picture.hpp).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -42,6 +43,12 @@ nlohmann::json pose_json(const Eigen::Isometry3d& t) {
   return {{"position", {p.x(), p.y(), p.z()}}, {"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
 }
 
+// Whether the arm stands still in `s`: every velocity it gives below 1e-3 rad/s (none given: a
+// state from a source that does not measure them, taken as still).
+bool at_rest(const fba::JointState& s) {
+  return std::all_of(s.velocities.begin(), s.velocities.end(), [](double v) { return std::abs(v) < 1e-3; });
+}
+
 // The trajectory as summary.json carries it: the joints' names, and each waypoint's time and
 // positions (velocities follow from them).
 nlohmann::json trajectory_json(const fba::JointTrajectory& t) {
@@ -55,7 +62,8 @@ class ReachPlannerFilter final : public fba::Component {
   static constexpr fba::In<fba::Grasp> kGrasp{"grasp", "the grasp to take (world frame, the table at z = 0)"};
   static constexpr fba::In<fba::Octree> kOctree{
       "octree", "the carved model: its occupied and not-yet-carved leaves are obstacles until the fingers close (the newest is used)"};
-  static constexpr fba::In<fba::JointState> kJointState{"joint_state", "the arm's joints: the plan starts from the newest"};
+  static constexpr fba::In<fba::JointState> kJointState{
+      "joint_state", "the arm's joints: the plan starts from the newest at rest (a grasp that comes while the arm moves waits for it)"};
   static constexpr fba::Out<fba::JointTrajectory> kTrajectory{
       "trajectory", "the arm's timed joint trajectory, every joint on every waypoint: the path, the approach, the lift and the retreat"};
   static constexpr fba::Out<fba::HandCommand> kHand{
@@ -101,7 +109,10 @@ class ReachPlannerFilter final : public fba::Component {
     if (auto in = ctx_(kGrasp); in.has()) pending_ = in.get();
     const fba::Octree* model = ctx_(kOctree).latest();
     const fba::JointState* joints = ctx_(kJointState).latest();
-    if (pending_ && model && joints) {
+    // An arm refuses a trajectory while it moves (it starts where the arm stands still), and a
+    // plan from a moving arm's joints starts where it no longer is: a grasp selected while the
+    // arm is on its way to a view waits for it to stop.
+    if (pending_ && model && joints && at_rest(*joints)) {
       const fba::Grasp grasp = *pending_;
       pending_.reset();
       plan(grasp, *model, *joints);

@@ -77,6 +77,29 @@ TEST(ReachPlannerComponent, PlansTheGraspFromTheNewestModelAndJointsAndItsStages
   EXPECT_EQ(h.failure(), "");
 }
 
+// A grasp that comes while the arm moves (to a view asked for before it was selected) waits for
+// the arm to stop: the arm takes a trajectory only where it stands still, and the plan starts from
+// the joints where it stopped.
+TEST(ReachPlannerComponent, AGraspWaitsForTheArmToStandStill) {
+  ComponentHarness h(fba::test::built_plugins(), "motion.reach_planner");
+  h.push("octree", box_model(kBox));
+  fba::JointState moving = named_joints(home());
+  moving.velocities.assign(moving.positions.size(), 0.0);
+  moving.velocities[1] = 0.2;
+  h.push("joint_state", moving);
+  h.push("grasp", box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07));
+  h.run();
+  EXPECT_TRUE(h.packets("trajectory").empty());
+  EXPECT_EQ(h.stage(), "idle");
+  fba::JointState still = named_joints(home());
+  still.velocities.assign(still.positions.size(), 0.0);
+  h.push("joint_state", still);
+  h.run();
+  ASSERT_EQ(h.packets("trajectory").size(), 1u) << h.failure();
+  const Eigen::VectorXd start = home();
+  EXPECT_EQ(h.values<fba::JointTrajectory>("trajectory")[0].points.front().positions, std::vector<double>(start.data(), start.data() + 6));
+}
+
 TEST(ReachPlannerComponent, AGraspItCannotTakeIsAnUnreachableEventWithTheRefusalAndTheReason) {
   ComponentHarness h(fba::test::built_plugins(), "motion.reach_planner");
   h.push("octree", box_model(kBox));
