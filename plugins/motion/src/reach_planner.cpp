@@ -249,7 +249,8 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
   RobotCollision robot(s.arm, p.flange_from_palm);
   robot.set_hand(hand.opening, hand.spread);
   const std::array<Eigen::Vector3d, 3> contacts{grasp.contacts[0].position, grasp.contacts[1].position, grasp.contacts[2].position};
-  robot.set_model(std::move(model), contacts, p.contact_allowance);
+  robot.set_model(model, contacts, p.contact_allowance);
+  robot.free_model_at(current);
 
   // The hand opens for the pregrasp where the arm stands; where it would touch the model (at a
   // view pose, space not yet carved), the arm first backs out of it along the flange's axis.
@@ -345,6 +346,7 @@ ReachPlan ReachPlanner::plan(const Grasp& grasp, std::shared_ptr<const ModelObst
   robot.set_hand(plan.opening, plan.spread);
   const std::array<Eigen::Vector3d, 3> contacts{grasp.contacts[0].position, grasp.contacts[1].position, grasp.contacts[2].position};
   robot.set_model(std::move(model), contacts, p.contact_allowance);
+  robot.free_model_at(current);
   const JointPath path = plan_joint_path(plan.start_joints, plan.pregrasp_joints, s.arm.limits(), s.checker(robot),
                                          JointPathOptions{p.path_checks, p.planning_time, p.collision_step, p.seed});
   plan.figures.planning_s = path.planning_s;

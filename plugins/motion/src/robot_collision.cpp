@@ -95,13 +95,16 @@ struct ModelQuery {
   const Body* body = nullptr;
   const ModelObstacles::Impl* model = nullptr;
   const std::vector<bool>* allowed = nullptr;
+  const std::vector<bool>* freed = nullptr;
   std::size_t hit = 0;  // the box's index + 1
+  std::vector<bool>* touched = nullptr;  // when set: every box touched is marked, none stops the query
 };
 
 bool model_pair(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data) {
   auto& q = *static_cast<ModelQuery*>(data);
   const auto box = reinterpret_cast<std::uintptr_t>(a->getUserData() ? a->getUserData() : b->getUserData());
   if (box == 0) return false;
+  if ((*q.freed)[box - 1]) return false;
   if (q.body->finger && (*q.allowed)[box - 1]) return false;
   // The broad phase pairs boxes with a body's axis-aligned bounds, which for a long slanted link
   // hold hundreds of leaves it passes far from.
@@ -109,7 +112,8 @@ bool model_pair(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data) 
   if (!q.body->may_touch(leaf.center(), leaf.sizes().norm() / 2)) return false;
   if (!touch(*a, *b)) return false;
   q.hit = box;
-  return true;
+  if (q.touched) (*q.touched)[box - 1] = true;
+  return !q.touched;
 }
 
 }  // namespace
@@ -122,6 +126,7 @@ struct RobotCollision::Impl {
   fcl::CollisionObjectd table{std::make_shared<fcl::Halfspaced>(Eigen::Vector3d::UnitZ(), 0.0)};
   std::shared_ptr<const ModelObstacles> model;
   std::vector<bool> allowed;  // per model box: a finger may touch it
+  std::vector<bool> freed;    // per model box: the arm stood in it, so it is empty (free_model_at)
   bool check_model = true;
 
   void place(Body& b, const Eigen::Isometry3d& world_from_shape) {
@@ -134,7 +139,7 @@ struct RobotCollision::Impl {
   std::string world_contact(const Body& b) {
     if (b.object->getAABB().min_.z() < 0 && touch(*b.object, table)) return b.name + " touches the table";
     if (!model || !check_model || model->size() == 0) return {};
-    ModelQuery q{&b, model->impl_.get(), &allowed, 0};
+    ModelQuery q{&b, model->impl_.get(), &allowed, &freed, 0};
     model->impl_->tree.collide(b.object.get(), &q, model_pair);
     if (q.hit == 0) return {};
     return b.name + " touches the model at " + text::point(model->box(q.hit - 1).center());
@@ -208,12 +213,28 @@ void RobotCollision::set_model(std::shared_ptr<const ModelObstacles> model, std:
   auto& s = *impl_;
   s.model = std::move(model);
   s.allowed.assign(s.model ? s.model->size() : 0, false);
+  s.freed.assign(s.allowed.size(), false);
   for (std::size_t i = 0; i < s.allowed.size(); ++i)
     for (const Eigen::Vector3d& c : contacts)
       if (s.model->box(i).exteriorDistance(c) <= radius) s.allowed[i] = true;
 }
 
 void RobotCollision::check_model(bool on) { impl_->check_model = on; }
+
+void RobotCollision::free_model_at(const Eigen::VectorXd& joints) {
+  auto& s = *impl_;
+  if (!s.model || s.model->size() == 0) return;
+  const std::vector<Eigen::Isometry3d> links = s.arm->link_poses(joints);
+  for (Body& b : s.bodies) {
+    if (b.hand || b.joints_before == 0) continue;  // the hand's opening is not known; the base stands on the table
+    s.place(b, links[b.frame] * b.frame_from_shape);
+    std::vector<bool> touched(s.freed.size(), false);
+    ModelQuery q{&b, s.model->impl_.get(), &s.allowed, &s.freed, 0, &touched};
+    s.model->impl_->tree.collide(b.object.get(), &q, model_pair);
+    for (std::size_t i = 0; i < touched.size(); ++i)
+      if (touched[i]) s.freed[i] = true;
+  }
+}
 
 std::string RobotCollision::collision(const Eigen::VectorXd& joints) {
   auto& s = *impl_;

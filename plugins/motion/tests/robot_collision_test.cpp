@@ -124,3 +124,26 @@ TEST(RobotCollision, TheModelIsAnObstacleSaveWhereTheFingersAreAboutToTouchTheOb
   robot.check_model(false);
   EXPECT_EQ(robot.hand_collision(on_top), "thumb touches the table");
 }
+
+// The arm stands in a corner of the model (space no view carved): there is nothing of the object
+// there. free_model_at frees the boxes the arm's links touch where it stands, and no other: the box
+// where the upper arm would be with the arm turned stays an obstacle.
+TEST(RobotCollision, WhereTheArmStandsTheModelIsFree) {
+  const Eigen::VectorXd q = test::home();
+  Eigen::VectorXd turned = q;
+  turned(0) += 0.6;  // the shoulder turned: the upper arm elsewhere
+  const Eigen::Vector3d here = flange_arm().link_poses(q)[2] * Eigen::Vector3d(0, 0, 0.2125);  // the upper arm's middle
+  const Eigen::Vector3d there = flange_arm().link_poses(turned)[2] * Eigen::Vector3d(0, 0, 0.2125);
+  auto cube = [](const Eigen::Vector3d& c) { return fba::grasp::test::box_sdf(c, Eigen::Vector3d::Constant(0.04)); };
+  const auto two = [&](const Eigen::Vector3d& p) { return std::min(cube(here)(p), cube(there)(p)); };
+  const Eigen::AlignedBox3d room(Eigen::Vector3d(-0.8, -0.8, -0.02), Eigen::Vector3d(0.8, 0.8, 1.58));  // a cube: the octree's root
+  const auto model = std::make_shared<ModelObstacles>(fba::grasp::test::voxelise(two, room, 6));
+  RobotCollision robot(flange_arm(), ReachParams{}.flange_from_palm);
+  robot.set_model(model);
+  EXPECT_EQ(robot.collision(q).rfind("upper_arm_link touches the model at (", 0), 0u) << robot.collision(q);
+  robot.free_model_at(q);
+  EXPECT_EQ(robot.collision(q), "");
+  EXPECT_EQ(robot.collision(turned).rfind("upper_arm_link touches the model at (", 0), 0u) << robot.collision(turned);
+  robot.set_model(model);  // a new model: nothing freed
+  EXPECT_EQ(robot.collision(q).rfind("upper_arm_link touches the model at (", 0), 0u) << robot.collision(q);
+}
