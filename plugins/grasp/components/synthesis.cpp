@@ -265,7 +265,7 @@ class GraspSynthesisFilter final : public fba::Component {
     if (ctx(kJointState).connected()) {
       const fba::arm::RobotDescription robot = fba::arm::RobotParameters::read(ctx);
       // Whether the arm reaches a candidate, not yet how: the grasp alone (its pregrasp, approach and
-      // lift), from where the arm stands; whether it can start from there, for the one selected.
+      // lift), from where the arm stands, the first IK solution enough.
       fba::motion::ReachParams quick;
       quick.first_solution = true;
       quick.check_start = false;
@@ -773,8 +773,12 @@ class GraspSynthesisFilter final : public fba::Component {
                        [[maybe_unused]] const Reach& reach) {
 #if FBA_GRASP_REACH
     constexpr std::size_t kSweptCandidates = 3, kSweptKept = 6;
-    for (std::size_t k = 0; k < reach.model_blocked.size() && k < kSweptCandidates; ++k)
-      swept_.push_back(hand_sweep(r.candidates[reach.model_blocked[k]].grasp));
+    for (std::size_t k = 0; k < reach.model_blocked.size() && k < kSweptCandidates; ++k) {
+      const Eigen::AlignedBox3d box = hand_sweep(r.candidates[reach.model_blocked[k]].grasp);
+      // The same candidate blocked again on a refined model: asked for once.
+      if (std::none_of(swept_.begin(), swept_.end(), [&](const Eigen::AlignedBox3d& b) { return b.isApprox(box); }))
+        swept_.push_back(box);
+    }
     if (swept_.size() > kSweptKept) swept_.erase(swept_.begin(), swept_.end() - kSweptKept);
     roi.boxes.insert(roi.boxes.end(), swept_.begin(), swept_.end());
 #endif
