@@ -124,7 +124,7 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
         if (const auto p = payload_json(e); p.is_object()) row.detail = p;
     }
   row.views = model_views;
-  if (row.resolved == "contacts") row.reason += (row.reason.empty() ? "" : "; ") + std::string("selected on its contacts alone after the last view");
+  if (row.resolved == "contacts") row.reason += (row.reason.empty() ? "" : "; ") + std::string("selected on its contacts alone, the surface around them not all resolved");
   try {
     if (const auto g = summary_grasp(s, summary.string())) {
       row.selected = true;

@@ -141,6 +141,10 @@ class GraspSynthesisFilter final : public fba::Component {
       "max_views", 12,
       "the last view: a model of this many views with no reliable candidate on resolved surface selects one whose contacts are "
       "resolved (the surface around them need not be), else gives up (grasp_synthesis_failed)").range(1, 10000);
+  static constexpr auto kContactsViews = fba::Param<int>(
+      "contacts_views", 0,
+      "from a model of this many views on, a reliable candidate whose contacts are resolved is selected though the surface around "
+      "them is not all resolved (as at max_views); 0: only at max_views").range(0, 10000);
   static constexpr auto kStabilityShare = fba::Param<double>(
       "stability_share", 0.5,
       "before the last view, a reliable candidate on resolved surface is selected only when its epsilon on the model is at least "
@@ -224,7 +228,7 @@ class GraspSynthesisFilter final : public fba::Component {
 #endif
     );
     spec.add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -241,7 +245,7 @@ class GraspSynthesisFilter final : public fba::Component {
   }
 
   explicit GraspSynthesisFilter(fba::Context& ctx)
-      : ctx_(ctx), stages_(ctx), threshold_(ctx(kThreshold)), max_views_(ctx(kMaxViews)), stability_share_(ctx(kStabilityShare)),
+      : ctx_(ctx), stages_(ctx), threshold_(ctx(kThreshold)), max_views_(ctx(kMaxViews)), contacts_views_(ctx(kContactsViews)), stability_share_(ctx(kStabilityShare)),
         radius_(ctx(kNeighbourRadius)), rim_deg_(ctx(kRimDeg)), rim_separation_deg_(ctx(kRimSeparationDeg)) {
     params_.hand = {ctx(kFingerWidth), ctx(kApertureMin), ctx(kApertureMax), ctx(kSpreadMin), ctx(kSpreadMax)};
     params_.weight_symmetry = ctx(kWeightSymmetry);
@@ -349,6 +353,7 @@ class GraspSynthesisFilter final : public fba::Component {
     if (reach.active && !r.candidates.empty() && !first_reachable) say_unreachable(reach, views, r.candidates.size());
     const double best_epsilon = first_reachable ? r.candidates[*first_reachable].model_epsilon : 0.0;
     if (select_on_resolved_surface(r, reach, views, best_epsilon)) return;
+    if (contacts_views_ > 0 && views >= contacts_views_ && views < max_views_ && select_on_resolved_contacts(r, reach, views)) return;
     if (views >= max_views_) return settle_at_last_view(r, reach, views, first_reachable.has_value(), best);
 
     // One request per view: the carver's refinement on it brings a new model of the same views,
@@ -628,6 +633,22 @@ class GraspSynthesisFilter final : public fba::Component {
     return false;
   }
 
+  // Selects the best reliable candidate the arm reaches whose contacts are resolved (pinned by two
+  // views, with rim_deg), the surface around them not all resolved. Returns whether it selected one.
+  bool select_on_resolved_contacts(const fba::grasp::SynthesisResult& r, Reach& reach, int views) {
+    for (std::size_t i = 0; i < r.candidates.size(); ++i)
+      if (const auto& c = r.candidates[i];
+          !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i) && reach.plannable(i)) {
+        ctx_.log().info("selected after {} views, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
+                        "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
+                        views, c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
+                        c.model_epsilon);
+        select(c.grasp, c.model_epsilon, views, "contacts");
+        return true;
+      }
+    return false;
+  }
+
   // The last view, and no candidate selected on resolved surface: settle for a reliable candidate
   // whose contacts are resolved (pinned by two views, with rim_deg), though the surface around them
   // is not all resolved yet: on thin, curved objects such as the banana two rims cross on little
@@ -635,15 +656,7 @@ class GraspSynthesisFilter final : public fba::Component {
   // what held the candidates back.
   void settle_at_last_view(const fba::grasp::SynthesisResult& r, Reach& reach, int views, bool any_reachable,
                            const fba::grasp::GraspCandidate* best) {
-    for (std::size_t i = 0; i < r.candidates.size(); ++i)
-      if (const auto& c = r.candidates[i];
-          !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i) && reach.plannable(i)) {
-        ctx_.log().info("selected after the last view, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
-                        "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
-                        c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
-                        c.model_epsilon);
-        return select(c.grasp, c.model_epsilon, views, "contacts");
-      }
+    if (select_on_resolved_contacts(r, reach, views)) return;
     if (reach.active && !r.candidates.empty() && !any_reachable)
       return fail("no grasp the arm can reach after " + std::to_string(views) + " views: none of the " +
                   std::to_string(r.candidates.size()) + " candidates is reachable by the arm; passed over: " + reach.passed.text() +
@@ -844,6 +857,7 @@ class GraspSynthesisFilter final : public fba::Component {
   fba::grasp::SynthesisParams params_;
   const double threshold_;
   const int max_views_;
+  const int contacts_views_;
   const double stability_share_;
   const double radius_;
   const double rim_deg_;
