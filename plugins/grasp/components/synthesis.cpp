@@ -407,6 +407,7 @@ class GraspSynthesisFilter final : public fba::Component {
       bool ok = true;
       bool costly = false;  // it needed inverse kinematics
       std::string refusal, why;
+      bool model = false;  // the carved model refused it (ReachPlan::model_blocked)
     };
     bool active = false;
     PassedOver passed;
@@ -438,7 +439,7 @@ class GraspSynthesisFilter final : public fba::Component {
       costly += v.costly ? 1 : 0;
       state[i] = v.ok ? 1 : 0;
       if (!v.ok) passed.add(v.refusal, v.why);
-      if (!v.ok && v.why.find("the model") != std::string::npos) model_blocked.push_back(i);
+      if (!v.ok && v.model) model_blocked.push_back(i);
       return v.ok;
     }
     bool passed_over(std::size_t i) const { return active && state[i] == 0; }
@@ -505,7 +506,7 @@ class GraspSynthesisFilter final : public fba::Component {
         if (!joints) return {false, false, fba::motion::to_string(fba::motion::Refusal::Start), why};
         const fba::motion::ReachPlan plan =
             whole ? planner.plan(candidates[i].grasp, *obstacles, *joints) : planner.reachable(candidates[i].grasp, *obstacles, *joints);
-        return {plan.ok, plan.figures.ik_attempts > 0, fba::motion::to_string(plan.refusal), plan.why};
+        return {plan.ok, plan.figures.ik_attempts > 0, fba::motion::to_string(plan.refusal), plan.why, plan.model_blocked};
       };
     };
     reach.check = check_with(*reach_, false);

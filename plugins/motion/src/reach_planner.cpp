@@ -275,6 +275,7 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
     if (hit.empty()) continue;
     const bool table = hit.find("the table") != std::string::npos;
     const bool pregrasp = std::string(name) == "pregrasp";
+    plan.model_blocked = robot.model_hit();
     return refuse(std::move(plan), table ? Refusal::Table : pregrasp ? Refusal::Collision : Refusal::Approach,
                   std::string("the ") + name + " puts " + into(hit));
   }
@@ -289,9 +290,10 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
   };
   std::vector<Lines> accepted;
   Refusal first = Refusal::None;  // why the first solution refused was
+  bool first_model = false;       // and whether the model refused it
   auto lines = [&](const Eigen::VectorXd& q) {
     auto no = [&](Refusal r, std::string why) {
-      if (first == Refusal::None) first = r;
+      if (first == Refusal::None) first = r, first_model = robot.model_hit();
       return why;
     };
     if (p.first_solution && !accepted.empty()) return std::string("one solution is enough");
@@ -317,9 +319,11 @@ ReachPlan ReachPlanner::reachable(const Grasp& grasp, std::shared_ptr<const Mode
   if (!pregrasp.ok) {
     const std::string refused = "every solution found is refused: ";  // arm::ArmModel::inverse's words for `accept`
     const std::string at = text::point(plan.pregrasp_palm.translation()) + ", approach " + text::point(approach);
-    if (pregrasp.why.rfind(refused, 0) == 0)
+    if (pregrasp.why.rfind(refused, 0) == 0) {
+      plan.model_blocked = first_model;
       return refuse(std::move(plan), first,
                     "every IK solution for the pregrasp at " + at + " fails, the first: " + pregrasp.why.substr(refused.size()));
+    }
     return refuse(std::move(plan), Refusal::Ik, "no IK solution within the joint limits for the pregrasp at " + at + ": " + pregrasp.why);
   }
   for (Lines& l : accepted)

@@ -128,6 +128,7 @@ struct RobotCollision::Impl {
   std::vector<bool> allowed;  // per model box: a finger may touch it
   std::vector<bool> freed;    // per model box: the arm stood in it, so it is empty (free_model_at)
   bool check_model = true;
+  bool model_hit = false;  // the last check's contact was with the model
 
   void place(Body& b, const Eigen::Isometry3d& world_from_shape) {
     b.object->setTransform(world_from_shape);
@@ -142,6 +143,7 @@ struct RobotCollision::Impl {
     ModelQuery q{&b, model->impl_.get(), &allowed, &freed, 0};
     model->impl_->tree.collide(b.object.get(), &q, model_pair);
     if (q.hit == 0) return {};
+    model_hit = true;
     return b.name + " touches the model at " + text::point(model->box(q.hit - 1).center());
   }
 };
@@ -238,6 +240,7 @@ void RobotCollision::free_model_at(const Eigen::VectorXd& joints) {
 
 std::string RobotCollision::collision(const Eigen::VectorXd& joints) {
   auto& s = *impl_;
+  s.model_hit = false;
   const std::vector<Eigen::Isometry3d> links = s.arm->link_poses(joints);
   for (Body& b : s.bodies) s.place(b, links[b.frame] * b.frame_from_shape);
   // Bodies that do not move stand on the table, where the arm's base is bolted.
@@ -255,6 +258,7 @@ std::string RobotCollision::collision(const Eigen::VectorXd& joints) {
 
 std::string RobotCollision::hand_collision(const Eigen::Isometry3d& world_from_palm) {
   auto& s = *impl_;
+  s.model_hit = false;
   for (Body& b : s.bodies) {
     if (!b.hand) continue;
     s.place(b, world_from_palm * b.palm_from_part);
@@ -262,5 +266,7 @@ std::string RobotCollision::hand_collision(const Eigen::Isometry3d& world_from_p
   }
   return {};
 }
+
+bool RobotCollision::model_hit() const { return impl_->model_hit; }
 
 }  // namespace fba::motion

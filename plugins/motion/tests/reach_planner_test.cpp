@@ -54,6 +54,7 @@ TEST(ReachPlanner, AGraspOnTheFarSideIsReachedRoundTheObjectOrRefusedWithItsReas
   EXPECT_EQ(refused.refusal, Refusal::Collision);
   EXPECT_EQ(refused.why.rfind("every IK solution for the pregrasp at (0.200, 0.000, 0.100), approach (-1.000, ", 0), 0u) << refused.why;
   EXPECT_NE(refused.why.find("palm touches forearm_link"), std::string::npos) << refused.why;
+  EXPECT_FALSE(refused.model_blocked);  // the arm itself: no view clears it
 
   const fba::Grasp over = box_grasp(kTallBox, Eigen::Vector3d::UnitY(), Eigen::Vector3d(-1, 0, -1), 0.08);
   const ReachPlan reached = planner().plan(over, model, home());
@@ -67,6 +68,7 @@ TEST(ReachPlanner, AGraspWhoseHandWouldReachIntoTheTableIsRefused) {
   const ReachPlan side = planner().plan(box_grasp(low, Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitX(), 0.015), box_model(low), home());
   EXPECT_EQ(side.refusal, Refusal::Table);
   EXPECT_EQ(side.why, "the pregrasp puts the palm into the table");
+  EXPECT_FALSE(side.model_blocked);
   // From above at 1 cm up, the fingers reach 2.5 cm past their contacts.
   const ReachPlan deep =
       planner().plan(box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.01), box_model(kBox), home());
@@ -106,6 +108,7 @@ TEST(ReachPlanner, SpaceNotYetCarvedIsAnObstacleUntilItIsCarved) {
   EXPECT_FALSE(refused.ok);
   EXPECT_EQ(refused.refusal, Refusal::Collision);
   EXPECT_EQ(refused.why.rfind("the pregrasp puts the thumb into the model at (", 0), 0u) << refused.why;
+  EXPECT_TRUE(refused.model_blocked);  // what synthesis asks views for (the hand's way in)
   const fba::Octree after = box_model(kBox);
   expect_a_sound_plan(planner(), planner().plan(grasp, after, ready()), grasp, after, ready());
 }

@@ -109,6 +109,9 @@ struct ReachPlan {
   bool ok = false;
   Refusal refusal = Refusal::None;
   std::string why;  // when !ok
+  // When !ok: the refusal is the hand or the arm meeting the carved model (occupied or not yet
+  // carved space), which more views may clear, rather than the table, the arm or its reach.
+  bool model_blocked = false;
 
   // The poses (world) and joint positions along the plan.
   Eigen::Isometry3d pregrasp_palm = Eigen::Isometry3d::Identity();  // at the standoff

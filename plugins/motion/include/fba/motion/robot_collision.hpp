@@ -51,6 +51,9 @@ class RobotCollision {
   std::string collision(const Eigen::VectorXd& joints);
   // The same for the hand alone with the palm at world_from_palm (no arm): the table and the model.
   std::string hand_collision(const Eigen::Isometry3d& world_from_palm);
+  // Whether the last collision() or hand_collision() that found a contact found it with the model
+  // (space the views carved or have not carved yet), rather than the table or the arm itself.
+  bool model_hit() const;
 
   const arm::ArmModel& arm() const;
   const Eigen::Isometry3d& flange_from_palm() const;
