@@ -13,6 +13,7 @@
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -93,6 +94,12 @@ class ExplorationPlanner final : public fba::Component {
       fba::Param<double>("min_gain", 0.01, "no_view when no view reaches this gain (points grazed, else share of the uncertain nodes seen)").range(0, 1);
   static constexpr auto kMaxRays =
       fba::Param<int>("max_rays", 4096, "at most this many uncertain nodes get a ray per candidate (an even stride)").range(1, 100000000);
+  static constexpr auto kNextView = fba::Param<std::string>(
+      "next_view", "best",
+      "best: the candidate of the highest score; random: one of the candidates not yet taken, drawn from seed (the baseline the "
+      "choice is measured against: docs/evaluating-grasps.md)")
+      .choices({"best", "random"});
+  static constexpr auto kSeed = fba::Param<int>("seed", 1, "next_view random: the draws' seed, the same views on every run").range(0, 2147483647);
   static constexpr fba::Param<bool> kExcludeVisited{"exclude_visited", true, "a candidate already requested is not chosen again"};
   static constexpr fba::EventOut kViewChosen{
       "view_chosen", "a target was emitted; payload (JSON): view, pose, score, gain, seen, targets, by_points (chosen by grazing the "
@@ -105,7 +112,7 @@ class ExplorationPlanner final : public fba::Component {
                                        "contacts in a new direction, else the one that sees most uncertain model nodes in its regions; "
                                        "visibility-aware, less the cost of moving.")
         .add(kOctree, kRegions, kCurrent, kStart, kTarget, kViews, kCount, kDistance, kMinElevation, kMaxElevation, kCentre,
-             kPosesFrom, kGoodOnly, kInitialViews, kInitialLayout, kMovementWeight, kHalfFov, kMinGain, kMaxRays, kExcludeVisited, kViewChosen,
+             kPosesFrom, kGoodOnly, kInitialViews, kInitialLayout, kMovementWeight, kHalfFov, kMinGain, kMaxRays, kNextView, kSeed, kExcludeVisited, kViewChosen,
              kNoView)
         .add(kMinElevation <= kMaxElevation)
         .check([](const fba::ParamValues& p) {
@@ -122,7 +129,9 @@ class ExplorationPlanner final : public fba::Component {
     return spec;
   }
 
-  explicit ExplorationPlanner(fba::Context& ctx) : ctx_(ctx), initial_views_(ctx(kInitialViews)), exclude_visited_(ctx(kExcludeVisited)) {
+  explicit ExplorationPlanner(fba::Context& ctx)
+      : ctx_(ctx), initial_views_(ctx(kInitialViews)), exclude_visited_(ctx(kExcludeVisited)), random_(ctx(kNextView) == "random"),
+        draws_(static_cast<std::uint32_t>(ctx(kSeed))) {
     params_.movement_weight = ctx(kMovementWeight);
     params_.half_fov_deg = ctx(kHalfFov);
     params_.min_gain = ctx(kMinGain);
@@ -242,6 +251,7 @@ class ExplorationPlanner final : public fba::Component {
   void plan(const fba::Octree& model, const fba::RegionsOfInterest& regions) {
     if (candidates_.empty()) make_candidates(model.bounds.center());
     visited_.resize(candidates_.size(), false);
+    if (random_) return plan_at_random();
     const std::optional<Eigen::Isometry3d> current = current_ ? current_ : last_target_;
     const auto choice = fba::grasp::choose_view(model, regions, candidates_, current,
                                                 exclude_visited_ ? visited_ : std::vector<bool>{}, params_, taken_);
@@ -267,10 +277,30 @@ class ExplorationPlanner final : public fba::Component {
     request(s.index);
   }
 
+  // The baseline: any view not yet taken, whatever the model and the request say.
+  void plan_at_random() {
+    std::vector<std::size_t> left;
+    for (std::size_t i = 0; i < candidates_.size(); ++i)
+      if (!visited_[i]) left.push_back(i);
+    if (left.empty()) {
+      const std::string reason = "every one of the " + std::to_string(candidates_.size()) + " candidate views is taken";
+      ctx_.log().info("no view: {}", reason);
+      ctx_.emit(kNoView, nlohmann::json{{"reason", reason}, {"views_requested", requested_}}.dump());
+      return;
+    }
+    const std::size_t view = left[std::uniform_int_distribution<std::size_t>(0, left.size() - 1)(draws_)];
+    const std::string reason = "view " + std::to_string(view) + " drawn at random of the " + std::to_string(left.size()) + " not taken";
+    ctx_.log().info("{}", reason);
+    ctx_.emit(kViewChosen, nlohmann::json{{"view", view}, {"pose", pose_json(candidates_[view])}, {"reason", reason}}.dump());
+    request(view);
+  }
+
   fba::Context& ctx_;
   fba::grasp::ExplorationParams params_;
   const int initial_views_;
   const bool exclude_visited_;
+  const bool random_;     // next_view: random
+  std::mt19937 draws_;    // its draws, from seed
   std::vector<Eigen::Isometry3d> candidates_;  // world_from_camera
   std::vector<bool> visited_;                  // per candidate: already requested
   std::vector<Eigen::Vector3d> taken_;         // the requested views' camera centres, in order

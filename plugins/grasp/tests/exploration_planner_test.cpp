@@ -104,6 +104,31 @@ TEST(ExplorationPlanner, ARequestGetsTheViewThatSeesTheRegion) {
   EXPECT_NE(j.at("reason").get<std::string>().find("sees 16 of the 16"), std::string::npos) << chosen->payload;
 }
 
+// The baseline: each request gets a view not yet taken, whatever it sees, the same ones for the same
+// seed; once all are taken, no_view says so.
+TEST(ExplorationPlanner, RandomNextViewsTakeEachCandidateOnceInTheSeedsOrder) {
+  auto drawn = [](int seed) {
+    ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8({{"next_view", std::string("random")}, {"seed", seed}}));
+    std::vector<int> azimuths;
+    for (int k = 0; k < 9; ++k) {
+      h.push<fba::Octree>("octree", box_model(k + 1));
+      h.push<fba::RegionsOfInterest>("regions", plus_x_face());
+      h.run();
+    }
+    for (const auto& t : h.values<fba::Pose>("target")) azimuths.push_back(azimuth_deg(t));
+    const auto none = find_event(h.events(), "no_view");
+    EXPECT_TRUE(none.has_value());
+    if (none) EXPECT_NE(none->payload.find("every one of the 8 candidate views is taken"), std::string::npos) << none->payload;
+    return azimuths;
+  };
+  const std::vector<int> a = drawn(1);
+  ASSERT_EQ(a.size(), 8u);
+  EXPECT_EQ(std::set<int>(a.begin(), a.end()).size(), 8u);  // each view once
+  EXPECT_EQ(drawn(1), a);
+  EXPECT_NE(drawn(2), a);
+  EXPECT_NE(a, (std::vector<int>{0, 45, 90, 135, 180, 225, 270, 315}));  // not simply in order
+}
+
 TEST(ExplorationPlanner, ARequestWaitsUntilEveryRequestedViewIsInTheModel) {
   ComponentHarness h(built_plugins(), "grasp.exploration_planner", ring8(), {"start"});
   h.push<std::int64_t>("start", 0);
