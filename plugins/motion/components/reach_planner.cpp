@@ -21,6 +21,7 @@
 #include <fba/types/hand_command.hpp>
 #include <fba/types/joint_state.hpp>
 #include <fba/types/joint_trajectory.hpp>
+#include <fba/types/joint_trajectory_json.hpp>
 #include <fba/types/octree.hpp>
 
 #include "fba/motion/reach_parameters.hpp"
@@ -47,14 +48,6 @@ nlohmann::json pose_json(const Eigen::Isometry3d& t) {
 // state from a source that does not measure them, taken as still).
 bool at_rest(const fba::JointState& s) {
   return std::all_of(s.velocities.begin(), s.velocities.end(), [](double v) { return std::abs(v) < 1e-3; });
-}
-
-// The trajectory as summary.json carries it: the joints' names, and each waypoint's time and
-// positions (velocities follow from them).
-nlohmann::json trajectory_json(const fba::JointTrajectory& t) {
-  nlohmann::json points = nlohmann::json::array();
-  for (const auto& p : t.points) points.push_back({{"t", p.time}, {"positions", p.positions}});
-  return {{"names", t.names}, {"points", std::move(points)}};
 }
 
 class ReachPlannerFilter final : public fba::Component {
@@ -176,7 +169,7 @@ class ReachPlannerFilter final : public fba::Component {
     figures["pregrasp_joints"] = values(plan.pregrasp_joints);
     figures["opening_m"] = plan.opening;
     figures["spread_m"] = plan.spread;
-    figures["trajectory"] = trajectory_json(plan.trajectory);
+    figures["trajectory"] = fba::trajectory_json(plan.trajectory);
     if (!refused_.empty()) figures["refused"] = refused_;
     ctx_.report("reach", figures.dump());
     ctx_.log().info("reach planned: {:.2f} s of motion, path {:.2f} rad ({} waypoints{}) found in {:.3f} s",
