@@ -12,6 +12,7 @@
 #include <fba/component.hpp>
 #include <fba/types/grasp.hpp>
 #include <fba/types/grasp_execution.hpp>
+#include <fba/types/grasp_execution_json.hpp>
 #include <fba/types/hand_command.hpp>
 #include <fba/types/joint_trajectory.hpp>
 
@@ -23,15 +24,12 @@
 
 namespace {
 
+// The result as every hand reports it, with what only a simulation measures.
 nlohmann::json to_json(const fba::GraspExecution& e) {
-  nlohmann::json contacts = nlohmann::json::array();
-  for (const auto& c : e.contacts)
-    contacts.push_back({{"link", c.link},
-                        {"position", {c.position.x(), c.position.y(), c.position.z()}},
-                        {"normal", {c.normal.x(), c.normal.y(), c.normal.z()}},
-                        {"force", c.force}});
-  return {{"held", e.held},   {"slip_m", e.slip_m}, {"lift_height_m", e.lift_height_m},
-          {"hold_s", e.hold_s}, {"reason", e.reason}, {"contacts", std::move(contacts)}};
+  nlohmann::json out = fba::grasp_execution_json(e);
+  out["slip_m"] = e.slip_m;
+  out["lift_height_m"] = e.lift_height_m;
+  return out;
 }
 
 nlohmann::json to_json(const fba::sim_hand::ObjectPieces& p) {
