@@ -23,6 +23,7 @@
 #include <fba/types/joint_trajectory.hpp>
 #include <fba/types/joint_trajectory_json.hpp>
 #include <fba/types/octree.hpp>
+#include <fba/types/pose_json.hpp>
 
 #include "fba/motion/reach_parameters.hpp"
 #include "fba/motion/reach_planner.hpp"
@@ -37,12 +38,6 @@ using fba::motion::ReachPlan;
 using fba::motion::ReachPlanner;
 
 nlohmann::json values(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
-
-nlohmann::json pose_json(const Eigen::Isometry3d& t) {
-  const Eigen::Quaterniond q(t.linear());
-  const Eigen::Vector3d p = t.translation();
-  return {{"position", {p.x(), p.y(), p.z()}}, {"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
-}
 
 // Whether the arm stands still in `s`: every velocity it gives below 1e-3 rad/s (none given: a
 // state from a source that does not measure them, taken as still).
@@ -165,7 +160,7 @@ class ReachPlannerFilter final : public fba::Component {
     for (const auto& s : plan.steps) steps[s.name] = s.end_s - s.start_s;
     figures["steps_s"] = steps;
     figures["duration_s"] = plan.trajectory.points.back().time;
-    figures["pregrasp_palm"] = pose_json(plan.pregrasp_palm);
+    figures["pregrasp_palm"] = fba::pose_json(plan.pregrasp_palm);
     figures["pregrasp_joints"] = values(plan.pregrasp_joints);
     figures["opening_m"] = plan.opening;
     figures["spread_m"] = plan.spread;
