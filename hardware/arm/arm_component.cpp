@@ -5,17 +5,9 @@
 #include <set>
 #include <sstream>
 
+#include <fba/types/pose_json.hpp>
+
 namespace fba::arm {
-
-namespace {
-
-nlohmann::json pose_json(const Eigen::Isometry3d& t) {
-  const Eigen::Quaterniond q(t.linear());
-  const Eigen::Vector3d p = t.translation();
-  return {{"position", {p.x(), p.y(), p.z()}}, {"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
-}
-
-}  // namespace
 
 std::vector<double> values(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 

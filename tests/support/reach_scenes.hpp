@@ -31,6 +31,13 @@ using fba::test::workspace;
 
 inline std::string arm_urdf() { return fba::test::source_dir() + "/hardware/robots/wrist_camera_arm.urdf"; }
 
+// The project's arm's planner with the default parameters, built once per test program: its
+// collision models take long to build.
+inline const ReachPlanner& planner() {
+  static const ReachPlanner p(arm_urdf());
+  return p;
+}
+
 // sim.arm's initial joints: the camera 0.35 m from the origin, 60 degrees up on the arm's side.
 inline Eigen::VectorXd home() {
   Eigen::VectorXd q(6);

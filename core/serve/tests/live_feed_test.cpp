@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <string>
 #include <thread>
@@ -41,38 +42,58 @@ std::string int_as_pose(const fba::Packet& p) {
   return R"({"kind":"pose","position":[)" + std::to_string(p.get<std::int64_t>()) + R"(,0,0],"rotation":[1,0,0,0]})";
 }
 
-TEST(LiveFeed, ARunningTaskReachesAPageAsTaskStatsViewsEventsAndTheEnd) {
-  fba::register_view("fba.Int", int_as_pose);
-  TempDir dir;
-  const fba::TaskConfig config = fba::load_task_text(kChain, "fed.yaml", dir.path(), built_plugins());
-  fba::serve::RunRecord record;
-  fba::serve::LiveFeed feed(record, config, "feed-run", dir.path());
+// What a page connected to a run's live feed was sent: every message, in order.
+struct PageRun {
+  fba::RunResult result;
+  std::vector<json> messages;
+  std::vector<std::string> watched;  // the ports the feed watched
+};
+
+// Runs `config` with its live feed published to a server, sampled every `period`, and a page
+// connected to the server from before the start to the end; `record` keeps the run (report.html).
+// The set-up every live feed test shares.
+PageRun run_with_a_page(const fba::TaskConfig& config, const std::string& run_id, const std::filesystem::path& dir,
+                        std::chrono::milliseconds period, fba::serve::RunRecord& record) {
+  PageRun run;
+  fba::serve::LiveFeed feed(record, config, run_id, dir);
   fba::serve::LiveServer server({}, record);
   feed.publish_to(&server);
   const LiveUrl url = parse_live_url(server.url());
   LiveSocket page(url);
   beast::error_code ec;
   page.handshake(url.origin(), url.token, ec);
-  ASSERT_FALSE(ec) << ec.message();
-  std::vector<json> messages;
+  if (ec) {
+    ADD_FAILURE() << "the page did not connect: " << ec.message();
+    return run;
+  }
   std::thread reader([&] {
     beast::error_code e;
-    for (std::string text = page.read(e); !e; text = page.read(e)) messages.push_back(json::parse(text));
+    for (std::string text = page.read(e); !e; text = page.read(e)) run.messages.push_back(json::parse(text));
   });
-
   fba::Task task(config);
   feed.watch(task, config);
-  EXPECT_EQ(feed.watched(), (std::vector<std::string>{"src.out", "pass.out"}));  // in the task's order
+  run.watched = feed.watched();
   fba_run::Monitor monitor([&task] { return task.snapshot(); });
   monitor.watch([&feed](const fba::RunResult& now, const fba::RunResult* previous) { feed.sample(now, previous); });
-  monitor.start(std::chrono::milliseconds(1));
-  const fba::RunResult result = task.run();
-  monitor.finish(result);
-  feed.end(result, fba::summary_json(result, config));
+  monitor.start(period);
+  run.result = task.run();
+  monitor.finish(run.result);
+  feed.end(run.result, fba::summary_json(run.result, config));
   server.finish(kHangLimit);
   reader.join();
-  fba::register_view("fba.Int", nullptr);
+  return run;
+}
 
+TEST(LiveFeed, ARunningTaskReachesAPageAsTaskStatsViewsEventsAndTheEnd) {
+  fba::register_view("fba.Int", int_as_pose);
+  TempDir dir;
+  const fba::TaskConfig config = fba::load_task_text(kChain, "fed.yaml", dir.path(), built_plugins());
+  fba::serve::RunRecord record;
+  const PageRun run = run_with_a_page(config, "feed-run", dir.path(), std::chrono::milliseconds(1), record);
+  fba::register_view("fba.Int", nullptr);
+  EXPECT_EQ(run.watched, (std::vector<std::string>{"src.out", "pass.out"}));  // in the task's order
+
+  const std::vector<json>& messages = run.messages;
   ASSERT_GE(messages.size(), 4u);
   EXPECT_EQ(messages.front()["type"], "task");
   EXPECT_EQ(messages.front()["run_id"], "feed-run");
@@ -120,35 +141,13 @@ on:
 )";
   const fba::TaskConfig config = fba::load_task_text(text, "burst.yaml", dir.path(), built_plugins());
   fba::serve::RunRecord record;
-  fba::serve::LiveFeed feed(record, config, "burst-run", dir.path());
-  fba::serve::LiveServer server({}, record);
-  feed.publish_to(&server);
-  const LiveUrl url = parse_live_url(server.url());
-  LiveSocket page(url);
-  beast::error_code ec;
-  page.handshake(url.origin(), url.token, ec);
-  ASSERT_FALSE(ec) << ec.message();
-  std::vector<json> messages;
-  std::thread reader([&] {
-    beast::error_code e;
-    for (std::string t = page.read(e); !e; t = page.read(e)) messages.push_back(json::parse(t));
-  });
-
-  fba::Task task(config);
-  feed.watch(task, config);
-  fba_run::Monitor monitor([&task] { return task.snapshot(); });
-  monitor.watch([&feed](const fba::RunResult& now, const fba::RunResult* previous) { feed.sample(now, previous); });
-  monitor.start(std::chrono::milliseconds(100));  // the live view's period: the burst is over long before
-  const fba::RunResult result = task.run();
-  monitor.finish(result);
-  feed.end(result, fba::summary_json(result, config));
-  server.finish(kHangLimit);
-  reader.join();
+  // The live view's period: the burst is over long before.
+  const PageRun run = run_with_a_page(config, "burst-run", dir.path(), std::chrono::milliseconds(100), record);
   fba::register_view("fba.Int", nullptr);
-  ASSERT_EQ(result.outcome, fba::Outcome::Success) << result.reason;
+  ASSERT_EQ(run.result.outcome, fba::Outcome::Success) << run.result.reason;
 
   std::vector<std::int64_t> seen;
-  for (const json& m : messages)
+  for (const json& m : run.messages)
     if (m["type"] == "view" && m["port"] == "src.out") seen.push_back(m["seq"]);
   std::vector<std::int64_t> every(kCount);
   for (int i = 0; i < kCount; ++i) every[i] = i;

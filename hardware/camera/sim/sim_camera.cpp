@@ -16,7 +16,7 @@
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/renderer.hpp"
 #include "fba/geometry/viewpoints.hpp"
-#include "object_placement.hpp"
+#include "object_placement_params.hpp"
 
 namespace {
 
@@ -28,14 +28,11 @@ class SimCamera final : public fba::Component {
   static constexpr fba::Out<fba::Frame> kFrame{"frame", "the rendered image with its intrinsics and pose"};
   static constexpr fba::Param<std::filesystem::path> kMesh{
       "mesh", fba::required, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up"};
-  // The object's placement, with the same names and meanings as sim.hand's, so that a task gives
-  // both the same values and the camera renders the object the hand grasps.
-  static constexpr auto kObjectX = fba::Param<double>("object_x", 0.0, "the object's position on the table, metres").range(-1, 1);
-  static constexpr auto kObjectY = fba::Param<double>("object_y", 0.0, "the object's position on the table, metres").range(-1, 1);
-  static constexpr auto kObjectYaw = fba::Param<double>("object_yaw", 0.0, "the object's turn about z, degrees").range(-360, 360);
-  static constexpr auto kObjectRest = fba::Param<std::string>(
-      "object_rest", "upright", "how the object lies on the table: as the mesh stands, or on its side (turned 90 deg about the mesh's x)")
-      .choices({"upright", "side"});
+  // The object's placement, the same parameters as sim.hand's (object_placement_params.hpp).
+  static constexpr auto kObjectX = fba::sim_hand::kObjectX;
+  static constexpr auto kObjectY = fba::sim_hand::kObjectY;
+  static constexpr auto kObjectYaw = fba::sim_hand::kObjectYaw;
+  static constexpr auto kObjectRest = fba::sim_hand::kObjectRest;
   static constexpr auto kWorld =
       fba::Param<std::string>("world", "mesh",
                               "the world the object is rendered in: 'mesh', the mesh file's own coordinates (turned and moved by "
@@ -84,7 +81,7 @@ class SimCamera final : public fba::Component {
   explicit SimCamera(fba::Context& ctx) : ctx_(ctx), mesh_name_(mesh_name(ctx(kMesh))) {
     auto loaded = fba::geometry::load_mesh_with_warnings(ctx(kMesh));
     for (const auto& w : loaded.warnings) ctx.log().info("{}", w);
-    const fba::sim_hand::ObjectPlacement placement{ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw) * kDegree, ctx(kObjectRest)};
+    const fba::sim_hand::ObjectPlacement placement = fba::sim_hand::object_placement(ctx);
     double raise = 0;
     mesh_ = fba::sim_hand::place_in_mesh_frame(loaded.mesh, placement, raise);
     if (ctx(kWorld) == "table")

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fba/component.hpp>
+#include <fba/types/grasp_execution_json.hpp>
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -448,17 +449,9 @@ class Robotiq3f final : public fba::Component {
   }
 
   static nlohmann::json to_json(const fba::GraspExecution& e, const nlohmann::json& fingers) {
-    nlohmann::json contacts = nlohmann::json::array();
-    for (const auto& c : e.contacts)
-      contacts.push_back({{"link", c.link},
-                          {"position", {c.position.x(), c.position.y(), c.position.z()}},
-                          {"normal", {c.normal.x(), c.normal.y(), c.normal.z()}},
-                          {"force", c.force}});
-    return {{"held", e.held},
-            {"hold_s", e.hold_s},
-            {"reason", e.reason},
-            {"contacts", std::move(contacts)},
-            {"fingers", fingers}};
+    nlohmann::json out = fba::grasp_execution_json(e);
+    out["fingers"] = fingers;
+    return out;
   }
 
   fba::Context& ctx_;

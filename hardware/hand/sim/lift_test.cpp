@@ -226,6 +226,7 @@ struct LiftTest::Impl {
   long steps = 0;
   std::atomic<bool> stop{false};
   struct Stopped {};  // thrown out of a step once stop is set
+  struct Run;
 
   ~Impl() {
     if (d) mj_deleteData(d);
@@ -313,6 +314,42 @@ struct LiftTest::Impl {
 
   // The slide travel at which a pad's inner surface is half_opening from the palm's centre.
   double travel_for(double half_opening) const { return std::clamp(knuckle_x - pad_radius - half_opening, 0.0, travel); }
+
+  // The fingers' spread an open command sets: its mode's, or in basic mode its own.
+  double spread_for(const HandCommand& c) const {
+    switch (c.mode) {
+      case HandCommand::Mode::Pinch: return spread_min;
+      case HandCommand::Mode::Wide:
+      case HandCommand::Mode::Scissor: return spread_max;
+      case HandCommand::Mode::Basic: break;
+    }
+    return c.spread;
+  }
+
+  // The trajectory's columns of the arm's joints, in the arm's order. Throws std::invalid_argument
+  // for a trajectory without waypoints or without one of the arm's joints, with waypoints of
+  // another size, or with times that do not increase.
+  std::vector<int> arm_columns(const JointTrajectory& trajectory) const {
+    if (trajectory.points.empty()) throw std::invalid_argument("lift test: the trajectory has no waypoint");
+    std::vector<int> column;
+    for (const std::string& joint : arm_names) {
+      const auto it = std::find(trajectory.names.begin(), trajectory.names.end(), joint);
+      if (it == trajectory.names.end())
+        throw std::invalid_argument("lift test: the trajectory has no joint '" + joint + "' of the arm's");
+      column.push_back(static_cast<int>(it - trajectory.names.begin()));
+    }
+    for (std::size_t i = 0; i < trajectory.points.size(); ++i) {
+      const auto& pt = trajectory.points[i];
+      if (pt.positions.size() != trajectory.names.size() || (!pt.velocities.empty() && pt.velocities.size() != trajectory.names.size()))
+        throw std::invalid_argument("lift test: waypoint " + std::to_string(i) + " has " + std::to_string(pt.positions.size()) +
+                                    " positions and " + std::to_string(pt.velocities.size()) + " velocities for " +
+                                    std::to_string(trajectory.names.size()) + " joints");
+      if (i > 0 && !(pt.time > trajectory.points[i - 1].time))
+        throw std::invalid_argument("lift test: the trajectory's times must increase; waypoint " + std::to_string(i) + " is at " +
+                                    std::to_string(pt.time) + " s after " + std::to_string(trajectory.points[i - 1].time) + " s");
+    }
+    return column;
+  }
 
   // The arm at q, still; the hand open by `open_travel` with the fingers `spread` apart. No time passes.
   void pose(const Eigen::VectorXd& q, double open_travel, double spread) {
@@ -520,94 +557,103 @@ GraspExecution LiftTest::execute(const JointTrajectory& trajectory, const std::v
   }
 }
 
-GraspExecution LiftTest::run_steps(const JointTrajectory& trajectory, const std::vector<HandCommand>& commands, const Grasp* planned) {
-  auto& s = *impl_;
-  mjModel* m = s.m;
-  mjData* d = s.d;
-  const auto& p = s.params;
-  const double dt = m->opt.timestep;
-  GraspExecution result;
-
-  // The trajectory's columns of the arm's joints, in the arm's order.
-  if (trajectory.points.empty()) throw std::invalid_argument("lift test: the trajectory has no waypoint");
-  std::vector<int> column;
-  for (const std::string& joint : s.arm_names) {
-    const auto it = std::find(trajectory.names.begin(), trajectory.names.end(), joint);
-    if (it == trajectory.names.end())
-      throw std::invalid_argument("lift test: the trajectory has no joint '" + joint + "' of the arm's");
-    column.push_back(static_cast<int>(it - trajectory.names.begin()));
-  }
-  for (std::size_t i = 0; i < trajectory.points.size(); ++i) {
-    const auto& pt = trajectory.points[i];
-    if (pt.positions.size() != trajectory.names.size() || (!pt.velocities.empty() && pt.velocities.size() != trajectory.names.size()))
-      throw std::invalid_argument("lift test: waypoint " + std::to_string(i) + " has " + std::to_string(pt.positions.size()) +
-                                  " positions and " + std::to_string(pt.velocities.size()) + " velocities for " +
-                                  std::to_string(trajectory.names.size()) + " joints");
-    if (i > 0 && !(pt.time > trajectory.points[i - 1].time))
-      throw std::invalid_argument("lift test: the trajectory's times must increase; waypoint " + std::to_string(i) + " is at " +
-                                  std::to_string(pt.time) + " s after " + std::to_string(trajectory.points[i - 1].time) + " s");
-  }
-  Reference reference(trajectory, column);
-  std::vector<HandCommand> schedule = commands;
-  std::stable_sort(schedule.begin(), schedule.end(), [](const HandCommand& a, const HandCommand& b) { return a.time < b.time; });
-  double close_time = INFINITY;
-  for (const auto& c : schedule)
-    if (c.action == HandCommand::Action::Close) {
-      close_time = c.time;
-      break;
-    }
-  const Phases phases = phases_after(reference, close_time);
-  // A release before the hold's end ends the verdict there.
-  double end = std::isfinite(close_time) ? phases.hold_end : reference.end();
-  for (const auto& c : schedule)
-    if (c.action == HandCommand::Action::Open && c.time > close_time) end = std::min(end, c.time);
-
+// One execution of a reach plan in the world: the arm's reference, the hand's commands and state,
+// and the stages from the set-up to the verdict, which `result` gathers.
+struct LiftTest::Impl::Run {
+  Impl& s;
+  Reference reference;
+  std::vector<HandCommand> schedule;  // the hand's commands in time order
+  double close_time = INFINITY;       // the first close's time on the trajectory
+  Phases phases;
+  double end = 0;  // where the verdict ends on the trajectory
   // The hand's state: open by open_travel with the fingers `spread` apart, or closing with `force`.
   bool closing = false;
   HandCommand::Mode mode = HandCommand::Mode::Basic;
-  double open_travel = 0, spread = s.spread_min, force = p.finger_force;
-  if (!schedule.empty() && schedule.front().action == HandCommand::Action::Open && schedule.front().time <= 0) {
-    open_travel = s.travel_for(schedule.front().opening / 2);
-    spread = schedule.front().spread;
-  }
-  auto spread_for = [&](const HandCommand& c) {
-    switch (c.mode) {
-      case HandCommand::Mode::Pinch: return s.spread_min;
-      case HandCommand::Mode::Wide:
-      case HandCommand::Mode::Scissor: return s.spread_max;
-      case HandCommand::Mode::Basic: break;
-    }
-    return c.spread;
-  };
-
-  s.steps = 0;
-  mj_resetData(m, d);
-  for (int g = 0; g < m->ngeom; ++g) m->geom_friction[3 * g] = p.friction;
-  Eigen::VectorXd q_ref, v_ref, a_ref;
-  reference.sample(0, q_ref, v_ref, a_ref);
-  s.pose(q_ref, open_travel, spread);
-
+  double open_travel = 0, spread = 0, force = 0;
   double t0 = 0;  // the trajectory's start on the simulation's clock
   std::size_t next_command = 0;
-  const int nv = m->nv;
-  std::vector<mjtNum> acc(static_cast<std::size_t>(nv), 0), torque(static_cast<std::size_t>(nv), 0);
-  auto step = [&](bool follow) {
-    mj_step1(m, d);
-    const double t = d->time - t0;
-    if (follow) reference.sample(t, q_ref, v_ref, a_ref);
-    for (; follow && next_command < schedule.size() && schedule[next_command].time <= t + 1e-9; ++next_command) {
+  Eigen::VectorXd q_ref, v_ref, a_ref;
+  std::vector<mjtNum> acc, torque;  // the arm's computed torque, per degree of freedom
+  Eigen::Vector3d start;            // the object's centre, settled on the table
+  bool lost = false;                // the object went out of the hand, or the simulation went wrong
+  GraspExecution result;
+
+  // Reads the plan: the close's time, the stretches after it, the verdict's end, and the hand's
+  // state before the trajectory starts (a first open at time 0 sets it).
+  Run(Impl& impl, const JointTrajectory& trajectory, const std::vector<HandCommand>& commands)
+      : s(impl),
+        reference(trajectory, impl.arm_columns(trajectory)),
+        schedule(commands),
+        spread(impl.spread_min),
+        force(impl.params.finger_force),
+        acc(static_cast<std::size_t>(impl.m->nv), 0),
+        torque(static_cast<std::size_t>(impl.m->nv), 0) {
+    std::stable_sort(schedule.begin(), schedule.end(), [](const HandCommand& a, const HandCommand& b) { return a.time < b.time; });
+    for (const auto& c : schedule)
+      if (c.action == HandCommand::Action::Close) {
+        close_time = c.time;
+        break;
+      }
+    phases = phases_after(reference, close_time);
+    // A release before the hold's end ends the verdict there.
+    end = std::isfinite(close_time) ? phases.hold_end : reference.end();
+    for (const auto& c : schedule)
+      if (c.action == HandCommand::Action::Open && c.time > close_time) end = std::min(end, c.time);
+    if (!schedule.empty() && schedule.front().action == HandCommand::Action::Open && schedule.front().time <= 0) {
+      open_travel = s.travel_for(schedule.front().opening / 2);
+      spread = schedule.front().spread;
+    }
+  }
+
+  // The world at the trajectory's start, so that every run begins alike: the robot posed at the
+  // first waypoint, then the object settled on the table while the arm holds still.
+  void set_up() {
+    s.steps = 0;
+    mj_resetData(s.m, s.d);
+    for (int g = 0; g < s.m->ngeom; ++g) s.m->geom_friction[3 * g] = s.params.friction;
+    reference.sample(0, q_ref, v_ref, a_ref);
+    s.pose(q_ref, open_travel, spread);
+    for (int i = 0; i < static_cast<int>(kSettle_s / s.m->opt.timestep); ++i) step(false);
+    start = s.object_centre();
+    t0 = s.d->time;
+  }
+
+  // One physics step: following the trajectory, the reference and the commands due now; then the
+  // arm's and the hand's controls. A stop ends the run here.
+  void step(bool follow) {
+    mj_step1(s.m, s.d);
+    if (follow) {
+      const double t = s.d->time - t0;
+      reference.sample(t, q_ref, v_ref, a_ref);
+      take_commands(t);
+    }
+    drive_arm();
+    drive_hand();
+    if (s.stop.load()) throw Stopped{};
+    mj_step2(s.m, s.d);
+    ++s.steps;
+  }
+
+  // The hand's commands whose time on the trajectory has come, in order, into the hand's state.
+  void take_commands(double t) {
+    for (; next_command < schedule.size() && schedule[next_command].time <= t + 1e-9; ++next_command) {
       const HandCommand& c = schedule[next_command];
       mode = c.mode;
       if (c.action == HandCommand::Action::Open) {
         closing = false;
         open_travel = s.travel_for(c.opening / 2);
-        spread = spread_for(c);
+        spread = s.spread_for(c);
       } else {
         closing = true;
-        force = c.force > 0 ? c.force : p.finger_force;
+        force = c.force > 0 ? c.force : s.params.finger_force;
       }
     }
-    // The arm: computed torque within the effort limits.
+  }
+
+  // The arm follows the reference: computed torque within the effort limits.
+  void drive_arm() {
+    mjModel* m = s.m;
+    mjData* d = s.d;
     std::fill(acc.begin(), acc.end(), 0.0);
     for (std::size_t i = 0; i < s.arm_dof.size(); ++i) {
       const auto k = static_cast<Eigen::Index>(i);
@@ -620,8 +666,13 @@ GraspExecution LiftTest::run_steps(const JointTrajectory& trajectory, const std:
       const int dof = s.arm_dof[i];
       d->ctrl[s.arm_actuator[i]] = std::clamp(torque[static_cast<std::size_t>(dof)] + d->qfrc_bias[dof], -s.arm_effort[i], s.arm_effort[i]);
     }
-    // The hand: the closing slides hold the opening or push with the force; in scissor mode the
-    // thumb stays open and the two fingers close on each other with it.
+  }
+
+  // The hand in its state: the closing slides hold the opening or push with the force; in scissor
+  // mode the thumb stays open and the two fingers close on each other with it.
+  void drive_hand() {
+    mjModel* m = s.m;
+    mjData* d = s.d;
     const bool scissor = mode == HandCommand::Mode::Scissor;
     for (std::size_t f = 0; f < 3; ++f) {
       const auto& finger = s.fingers[f];
@@ -636,59 +687,62 @@ GraspExecution LiftTest::run_steps(const JointTrajectory& trajectory, const std:
         m->actuator_forcerange[2 * finger.spread_actuator] = -(closing && scissor ? force : s.spread_force);
       }
     }
-    if (s.stop.load()) throw Impl::Stopped{};
-    mj_step2(m, d);
-    ++s.steps;
-  };
-  auto when = [&] { return seconds(d->time - t0); };
+  }
 
-  // Let the object settle on the table first, the arm holding its start.
-  for (int i = 0; i < static_cast<int>(kSettle_s / dt); ++i) step(false);
-  const Eigen::Vector3d start = s.object_centre();
-  t0 = d->time;
-
-  // Until the fingers close: any contact of the robot with the table or the object is a collision.
-  auto run_until = [&](double until, const std::function<bool()>& each) {
-    while (d->time - t0 < until - 1e-9) {
+  // Follows the trajectory until `until` on it, calling `each` after every step: false from it
+  // ends the stretch early (and run_until returns false).
+  bool run_until(double until, const std::function<bool()>& each) {
+    while (s.d->time - t0 < until - 1e-9) {
       step(true);
       if (!each()) return false;
     }
     return true;
-  };
-  std::string hit;
-  const bool clear = run_until(std::min(close_time, end), [&] {
-    hit = s.robot_collision();
-    return hit.empty();
-  });
-  if (!clear) {
-    result.reason = "collision before the fingers closed, at " + when() + " on the trajectory: " + hit;
-    return result;
   }
-  if (!std::isfinite(close_time)) {
-    result.reason = "the hand was not told to close";
-    return result;
+
+  std::string when() const { return seconds(s.d->time - t0); }
+
+  // The way in: until the fingers close, any contact of the robot with the table or the object is
+  // a collision, and the test's failure.
+  bool clear_until_close() {
+    std::string hit;
+    const bool clear = run_until(std::min(close_time, end), [&] {
+      hit = s.robot_collision();
+      return hit.empty();
+    });
+    if (!clear) result.reason = "collision before the fingers closed, at " + when() + " on the trajectory: " + hit;
+    return clear;
   }
-  // The fingers close while the arm waits; the contacts when the lift begins.
-  run_until(std::min(phases.lift_start, end), [] { return true; });
-  if (s.unstable()) {
-    result.reason = "the simulation became unstable at " + when();
-    return result;
+
+  // The fingers close while the arm waits; the hand's contacts with the object when the lift
+  // begins are the grasp it took.
+  bool close() {
+    if (!std::isfinite(close_time)) {
+      result.reason = "the hand was not told to close";
+      return false;
+    }
+    run_until(std::min(phases.lift_start, end), [] { return true; });
+    if (s.unstable()) {
+      result.reason = "the simulation became unstable at " + when();
+      return false;
+    }
+    result.contacts = s.object_contacts();
+    if (result.contacts.empty()) {
+      result.reason = "no contact with the object after closing the fingers (" + when() + ")";
+      return false;
+    }
+    return true;
   }
-  result.contacts = s.object_contacts();
-  if (result.contacts.empty()) {
-    result.reason = "no contact with the object after closing the fingers (" + when() + ")";
-    return result;
-  }
-  // The hand must have taken the planned grasp, not another one (a wide-open hand can close around
+
+  // Whether the hand took the planned grasp, not another one (a wide-open hand can close around
   // the whole object). Where along its length a finger touches does not matter, so the distance is
   // measured across the approach.
-  if (planned) {
-    const Eigen::Vector3d a = planned->approach.normalized();
-    const Eigen::Vector3d thumb = planned->contacts[0].position;
-    const Eigen::Vector3d mid = (planned->contacts[1].position + planned->contacts[2].position) / 2;
+  bool took(const Grasp& planned) {
+    const Eigen::Vector3d a = planned.approach.normalized();
+    const Eigen::Vector3d thumb = planned.contacts[0].position;
+    const Eigen::Vector3d mid = (planned.contacts[1].position + planned.contacts[2].position) / 2;
     const Eigen::Vector3d y = a.cross(((mid - thumb) - a * a.dot(mid - thumb)).normalized());
     // finger_a is on the palm's +y side.
-    std::array<Eigen::Vector3d, 3> at = {thumb, planned->contacts[1].position, planned->contacts[2].position};
+    std::array<Eigen::Vector3d, 3> at = {thumb, planned.contacts[1].position, planned.contacts[2].position};
     if ((at[1] - mid).dot(y) < (at[2] - mid).dot(y)) std::swap(at[1], at[2]);
     for (std::size_t f = 0; f < 3; ++f) {
       double nearest = INFINITY;
@@ -697,46 +751,54 @@ GraspExecution LiftTest::run_steps(const JointTrajectory& trajectory, const std:
         const Eigen::Vector3d off = c.position - at[f];
         nearest = std::min(nearest, (off - a * a.dot(off)).norm());
       }
-      if (nearest > p.contact_tolerance) {
+      if (nearest > s.params.contact_tolerance) {
         result.reason = std::isinf(nearest) ? s.fingers[f].name + " did not touch the object"
                                             : fmt::format("{} touched the object {:.3f} m (across the approach) from its planned "
                                                           "contact, more than the {:.3f} m allowed: not the planned grasp",
-                                                          s.fingers[f].name, nearest, p.contact_tolerance);
-        return result;
+                                                          s.fingers[f].name, nearest, s.params.contact_tolerance);
+        return false;
       }
     }
+    return true;
   }
 
-  // The lift, then the hold; the object is out of the hand once it moved drop_distance relative
-  // to the palm since the fingers closed.
-  const Eigen::Vector3d grasped = s.in_palm(s.object_centre());
-  const double palm_start = s.body_pose(s.palm_body).translation().z();
-  auto moved = [&] { return (s.in_palm(s.object_centre()) - grasped).norm(); };
-  bool lost = false;
-  auto watch = [&](const char* phase) {
-    return [&, phase] {
-      if (s.unstable()) {
-        result.reason = "the simulation became unstable at " + when();
-        return !(lost = true);
-      }
-      if (moved() <= p.drop_distance) return true;
-      result.reason = fmt::format("dropped at {} while {} (moved {:.3f} m in the hand)", when(), phase, moved());
+  // Whether the object is still in the hand while it does `phase`: moved no more than the drop
+  // distance relative to the palm since `grasped`; else the reason, and the object is lost.
+  bool in_hand(const char* phase, const Eigen::Vector3d& grasped) {
+    auto moved = [&] { return (s.in_palm(s.object_centre()) - grasped).norm(); };
+    if (s.unstable()) {
+      result.reason = "the simulation became unstable at " + when();
       return !(lost = true);
-    };
-  };
-  run_until(std::min(phases.lift_end, end), watch("lifting"));
-  const Eigen::Vector3d hold_start = s.in_palm(s.object_centre());
-  const double held_from = d->time;
-  if (!lost) run_until(end, watch("holding"));
-  result.hold_s = std::max(0.0, d->time - held_from - (lost ? dt : 0.0));
-  result.slip_m = (s.in_palm(s.object_centre()) - hold_start).norm();
-  result.lift_height_m = s.object_centre().z() - start.z();
-  const double palm_rise = s.body_pose(s.palm_body).translation().z() - palm_start;
-  result.held = !lost && palm_rise > 1e-3 && result.lift_height_m >= palm_rise / 2;
-  if (!lost && !result.held)
-    result.reason = palm_rise > 1e-3 ? fmt::format("the object rose only {:.3f} m of the hand's {:.3f} m", result.lift_height_m, palm_rise)
-                                     : "the arm did not lift the hand after closing";
-  return result;
+    }
+    if (moved() <= s.params.drop_distance) return true;
+    result.reason = fmt::format("dropped at {} while {} (moved {:.3f} m in the hand)", when(), phase, moved());
+    return !(lost = true);
+  }
+
+  // The verdict: the lift, then the hold; held when the object stayed in the hand and rose with it.
+  void lift_and_hold() {
+    const Eigen::Vector3d grasped = s.in_palm(s.object_centre());
+    const double palm_start = s.body_pose(s.palm_body).translation().z();
+    run_until(std::min(phases.lift_end, end), [&] { return in_hand("lifting", grasped); });
+    const Eigen::Vector3d hold_start = s.in_palm(s.object_centre());
+    const double held_from = s.d->time;
+    if (!lost) run_until(end, [&] { return in_hand("holding", grasped); });
+    result.hold_s = std::max(0.0, s.d->time - held_from - (lost ? s.m->opt.timestep : 0.0));
+    result.slip_m = (s.in_palm(s.object_centre()) - hold_start).norm();
+    result.lift_height_m = s.object_centre().z() - start.z();
+    const double palm_rise = s.body_pose(s.palm_body).translation().z() - palm_start;
+    result.held = !lost && palm_rise > 1e-3 && result.lift_height_m >= palm_rise / 2;
+    if (!lost && !result.held)
+      result.reason = palm_rise > 1e-3 ? fmt::format("the object rose only {:.3f} m of the hand's {:.3f} m", result.lift_height_m, palm_rise)
+                                       : "the arm did not lift the hand after closing";
+  }
+};
+
+GraspExecution LiftTest::run_steps(const JointTrajectory& trajectory, const std::vector<HandCommand>& commands, const Grasp* planned) {
+  Impl::Run run(*impl_, trajectory, commands);
+  run.set_up();
+  if (run.clear_until_close() && run.close() && (!planned || run.took(*planned))) run.lift_and_hold();
+  return run.result;
 }
 
 }  // namespace fba::sim_hand

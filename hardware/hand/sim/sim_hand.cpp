@@ -12,27 +12,24 @@
 #include <fba/component.hpp>
 #include <fba/types/grasp.hpp>
 #include <fba/types/grasp_execution.hpp>
+#include <fba/types/grasp_execution_json.hpp>
 #include <fba/types/hand_command.hpp>
 #include <fba/types/joint_trajectory.hpp>
 
 #include "fba/geometry/mesh_io.hpp"
 #include "hand_ports.hpp"
 #include "lift_test.hpp"
+#include "object_placement_params.hpp"
 #include "robot_parameters.hpp"
 
 namespace {
 
-constexpr double kDegree = M_PI / 180.0;
-
+// The result as every hand reports it, with what only a simulation measures.
 nlohmann::json to_json(const fba::GraspExecution& e) {
-  nlohmann::json contacts = nlohmann::json::array();
-  for (const auto& c : e.contacts)
-    contacts.push_back({{"link", c.link},
-                        {"position", {c.position.x(), c.position.y(), c.position.z()}},
-                        {"normal", {c.normal.x(), c.normal.y(), c.normal.z()}},
-                        {"force", c.force}});
-  return {{"held", e.held},   {"slip_m", e.slip_m}, {"lift_height_m", e.lift_height_m},
-          {"hold_s", e.hold_s}, {"reason", e.reason}, {"contacts", std::move(contacts)}};
+  nlohmann::json out = fba::grasp_execution_json(e);
+  out["slip_m"] = e.slip_m;
+  out["lift_height_m"] = e.lift_height_m;
+  return out;
 }
 
 nlohmann::json to_json(const fba::sim_hand::ObjectPieces& p) {
@@ -52,12 +49,11 @@ class SimHand final : public fba::Component {
   static constexpr auto kTrajectory = fba::hand::kTrajectory;
   static constexpr fba::Param<std::filesystem::path> kMesh{
       "mesh", fba::required, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up; it rests on the table at z = 0"};
-  static constexpr auto kObjectX = fba::Param<double>("object_x", 0.0, "the object's position on the table, metres").range(-1, 1);
-  static constexpr auto kObjectY = fba::Param<double>("object_y", 0.0, "the object's position on the table, metres").range(-1, 1);
-  static constexpr auto kObjectYaw = fba::Param<double>("object_yaw", 0.0, "the object's turn about z, degrees").range(-360, 360);
-  static constexpr auto kObjectRest = fba::Param<std::string>(
-      "object_rest", "upright", "how the object lies on the table: as the mesh stands, or on its side (turned 90 deg about the mesh's x)")
-      .choices({"upright", "side"});
+  // The object's placement, the same parameters as sim.camera's (object_placement_params.hpp).
+  static constexpr auto kObjectX = fba::sim_hand::kObjectX;
+  static constexpr auto kObjectY = fba::sim_hand::kObjectY;
+  static constexpr auto kObjectYaw = fba::sim_hand::kObjectYaw;
+  static constexpr auto kObjectRest = fba::sim_hand::kObjectRest;
   static constexpr auto kMass = fba::Param<double>("mass", 0.3, "the object's mass, kg").range(0.001, 10);
   static constexpr auto kFriction = fba::Param<double>("friction", 0.5, "sliding friction of object, table and fingers").range(0.01, 2);
   static constexpr auto kLiftHeight = fba::Param<double>("lift_height", 0.1, "how far the hand lifts the object, metres").range(0.001, 1);
@@ -167,14 +163,11 @@ class SimHand final : public fba::Component {
     ctx_(kResult).emit(std::move(result));
   }
 
-  static fba::sim_hand::ObjectPlacement placement(fba::Context& ctx) {
-    return {ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw) * kDegree, ctx(kObjectRest)};
-  }
   // table_shift: how far the placed mesh is raised to rest on the table.
   static fba::sim_hand::LiftTest make_test(fba::Context& ctx, double& table_shift) {
     auto loaded = fba::geometry::load_mesh_with_warnings(ctx(kMesh));
     for (const auto& w : loaded.warnings) ctx.log().info("{}", w);
-    fba::sim_hand::place_in_mesh_frame(loaded.mesh, placement(ctx), table_shift);
+    fba::sim_hand::place_in_mesh_frame(loaded.mesh, fba::sim_hand::object_placement(ctx), table_shift);
     fba::sim_hand::LiftTestParams p;
     p.mass = ctx(kMass);
     p.friction = ctx(kFriction);
@@ -188,7 +181,7 @@ class SimHand final : public fba::Component {
     fba::sim_hand::RobotSetup robot;
     robot.urdf = described.urdf;
     robot.urdf_name = described.name;
-    return fba::sim_hand::LiftTest(loaded.mesh, placement(ctx), p, robot);
+    return fba::sim_hand::LiftTest(loaded.mesh, fba::sim_hand::object_placement(ctx), p, robot);
   }
 
   fba::Context& ctx_;

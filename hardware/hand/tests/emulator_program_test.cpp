@@ -44,6 +44,16 @@ fba::testing::Params params(const std::string& device) {
   return {{"device", device}, {"response_timeout", 2.0}, {"retries", 1}, {"poll_period", 0.01}, {"hold_time", 0.2}};
 }
 
+// Takes a grasp of the emulator's object and expects it held: the driver works on the emulator's line.
+void expect_held(ComponentHarness& h) {
+  h.push("grasp", grasp());
+  ASSERT_EQ(h.run(), 1);
+  ASSERT_EQ(h.failure(), "");
+  const auto results = h.values<fba::GraspExecution>("result");
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_TRUE(results[0].held) << results[0].reason;
+}
+
 }  // namespace
 
 TEST(Robotiq3fEmulatorProgram, DriverOnItsLinkHoldsTheObjectAndTheProgramEndsOnSigterm) {
@@ -53,12 +63,7 @@ TEST(Robotiq3fEmulatorProgram, DriverOnItsLinkHoldsTheObjectAndTheProgramEndsOnS
   ASSERT_NE(emulator.read_until("(link " + link + ")").find("Modbus RTU slave 9 on /dev/pts/"), std::string::npos);
   {
     ComponentHarness h(fba::test::built_plugins(), "hw.robotiq_3f", params(link));
-    h.push("grasp", grasp());
-    ASSERT_EQ(h.run(), 1);
-    ASSERT_EQ(h.failure(), "");
-    const auto results = h.values<fba::GraspExecution>("result");
-    ASSERT_EQ(results.size(), 1u);
-    EXPECT_TRUE(results[0].held) << results[0].reason;
+    expect_held(h);
   }
   EXPECT_EQ(emulator.wait(SIGTERM), 0);
   EXPECT_NE(emulator.read_until("stopped").find("Robotiq 3-Finger emulator: stopped"), std::string::npos);
@@ -112,12 +117,7 @@ TEST(Robotiq3fEmulatorProgram, TheDriverStartsItsEmulatorWhenTheDeviceIsNotThere
     p["emulator"] = std::string("fba-robotiq-3f-emulator --activation-s 0.05 --stall-aperture 0.07");
     ComponentHarness h(fba::test::built_plugins(), "hw.robotiq_3f", p);
     EXPECT_TRUE(std::filesystem::is_symlink(link));
-    h.push("grasp", grasp());
-    ASSERT_EQ(h.run(), 1);
-    ASSERT_EQ(h.failure(), "");
-    const auto results = h.values<fba::GraspExecution>("result");
-    ASSERT_EQ(results.size(), 1u);
-    EXPECT_TRUE(results[0].held) << results[0].reason;
+    expect_held(h);
   }
   pthread_sigmask(SIG_SETMASK, &before, nullptr);
   // Ended by its SIGTERM (not the SIGKILL 5 s later): it removed its link on the way out.

@@ -42,6 +42,12 @@ fba::testing::Params params(const std::string& device, fba::testing::Params more
   return p;
 }
 
+// hw.robotiq_3f on `hand`'s line with the tests' parameters and `more`, the inputs `optional`
+// connected: every test's driver, so that each reads as what it checks.
+ComponentHarness driver(EmulatedHand& hand, fba::testing::Params more = {}, const std::vector<std::string>& optional = {}) {
+  return ComponentHarness(built_plugins(), "hw.robotiq_3f", params(hand.device(), std::move(more)), optional);
+}
+
 // A grasp of the emulator's default object (0.06 m across, centred): 0.1 m open, fingers 0.03 m apart.
 fba::Grasp grasp(double aperture = 0.1, double spread = 0.03) {
   fba::Grasp g;
@@ -58,6 +64,23 @@ std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::
   for (const auto& e : events)
     if (e.name == name) out.push_back(e);
   return out;
+}
+
+// Takes the grasp `g` to its end and gives its one result; the test fails, with a default result,
+// when the run processes other than one sample or gives other than one result.
+fba::GraspExecution result_of(ComponentHarness& h, const fba::Grasp& g) {
+  h.push("grasp", g);
+  EXPECT_EQ(h.run(), 1);
+  const auto results = h.values<fba::GraspExecution>("result");
+  EXPECT_EQ(results.size(), 1u);
+  return results.size() == 1 ? results[0] : fba::GraspExecution{};
+}
+
+// Takes the grasp `g` and gives the driver's failure ("" for none): for the faults, which end it.
+std::string failure_of(ComponentHarness& h, const fba::Grasp& g) {
+  h.push("grasp", g);
+  h.run();
+  return h.failure();
 }
 
 // Runs `action` once the emulator's state satisfies `when` (polled), from a thread of its own.
@@ -104,7 +127,7 @@ TEST(Robotiq3fSpec, PortsAndEventsAreSimHands) {
 
 TEST(Robotiq3f, ActivatesWhenTheTaskStarts) {
   EmulatedHand hand;
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
+  auto h = driver(hand);
   const auto s = hand.emulator().state();
   EXPECT_TRUE(s.activated);
   EXPECT_EQ(s.imc, 3);
@@ -113,17 +136,14 @@ TEST(Robotiq3f, ActivatesWhenTheTaskStarts) {
 
 TEST(Robotiq3f, GraspThatTouchesTheObjectWithEveryFingerIsHeld) {
   EmulatedHand hand;
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
-  h.push("grasp", grasp());
-  ASSERT_EQ(h.run(), 1);
+  auto h = driver(hand);
+  const auto result = result_of(h, grasp());
   ASSERT_EQ(h.failure(), "");
-  const auto results = h.values<fba::GraspExecution>("result");
-  ASSERT_EQ(results.size(), 1u);
-  EXPECT_TRUE(results[0].held) << results[0].reason;
-  ASSERT_EQ(results[0].contacts.size(), 3u);
-  EXPECT_EQ(results[0].contacts[0].link, "finger_a");
-  EXPECT_EQ(results[0].contacts[0].position, grasp().contacts[0].position);
-  EXPECT_GE(results[0].hold_s, 0.2);
+  EXPECT_TRUE(result.held) << result.reason;
+  ASSERT_EQ(result.contacts.size(), 3u);
+  EXPECT_EQ(result.contacts[0].link, "finger_a");
+  EXPECT_EQ(result.contacts[0].position, grasp().contacts[0].position);
+  EXPECT_GE(result.hold_s, 0.2);
   ASSERT_EQ(named(h.events(), "held").size(), 1u);
   const auto payload = nlohmann::json::parse(named(h.events(), "held")[0].payload);
   EXPECT_EQ(payload["fingers"][0]["object"], "stopped by contact while closing");
@@ -139,50 +159,41 @@ TEST(Robotiq3f, GraspWithNothingBetweenTheFingersIsNotHeldAndSaysWhy) {
   auto options = EmulatedHand::quick();
   options.object = false;
   EmulatedHand hand(options);
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
-  h.push("grasp", grasp());
-  ASSERT_EQ(h.run(), 1);
+  auto h = driver(hand);
+  const auto result = result_of(h, grasp());
   ASSERT_EQ(h.failure(), "");
-  const auto results = h.values<fba::GraspExecution>("result");
-  ASSERT_EQ(results.size(), 1u);
-  EXPECT_FALSE(results[0].held);
-  EXPECT_NE(results[0].reason.find("no contact: the fingers closed without touching anything"), std::string::npos)
-      << results[0].reason;
-  EXPECT_TRUE(results[0].contacts.empty());
+  EXPECT_FALSE(result.held);
+  EXPECT_NE(result.reason.find("no contact: the fingers closed without touching anything"), std::string::npos)
+      << result.reason;
+  EXPECT_TRUE(result.contacts.empty());
   EXPECT_EQ(named(h.events(), "dropped").size(), 1u);
 }
 
 TEST(Robotiq3f, SpreadWiderThanTheObjectMissesWithFingersBAndC) {
   EmulatedHand hand;
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
-  h.push("grasp", grasp(0.1, 0.1));  // B and C 0.1 m apart pass beside a 0.06 m object
-  ASSERT_EQ(h.run(), 1);
-  const auto results = h.values<fba::GraspExecution>("result");
-  ASSERT_EQ(results.size(), 1u);
-  EXPECT_FALSE(results[0].held);
-  EXPECT_NE(results[0].reason.find("no contact on B, C"), std::string::npos) << results[0].reason;
-  ASSERT_EQ(results[0].contacts.size(), 1u);
-  EXPECT_EQ(results[0].contacts[0].link, "finger_a");
+  auto h = driver(hand);
+  const auto result = result_of(h, grasp(0.1, 0.1));  // B and C 0.1 m apart pass beside a 0.06 m object
+  EXPECT_FALSE(result.held);
+  EXPECT_NE(result.reason.find("no contact on B, C"), std::string::npos) << result.reason;
+  ASSERT_EQ(result.contacts.size(), 1u);
+  EXPECT_EQ(result.contacts[0].link, "finger_a");
 }
 
 TEST(Robotiq3f, AnObjectLongAlongTheSpreadMeetsFingersBAndCWhereARoundOneDoesNot) {
   Robotiq3fOptions options = EmulatedHand::quick();
   options.object_length = 0.19;  // a bottle held across, B and C along its height
   EmulatedHand hand(options);
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
-  h.push("grasp", grasp(0.1, 0.1));  // the spread that passes beside the 0.06 m cylinder above
-  ASSERT_EQ(h.run(), 1);
+  auto h = driver(hand);
+  const auto result = result_of(h, grasp(0.1, 0.1));  // the spread that passes beside the 0.06 m cylinder above
   ASSERT_EQ(h.failure(), "");
-  const auto results = h.values<fba::GraspExecution>("result");
-  ASSERT_EQ(results.size(), 1u);
-  EXPECT_TRUE(results[0].held) << results[0].reason;
-  EXPECT_EQ(results[0].contacts.size(), 3u);
+  EXPECT_TRUE(result.held) << result.reason;
+  EXPECT_EQ(result.contacts.size(), 3u);
 }
 
 TEST(Robotiq3f, ObjectSlippingOutDuringTheHoldIsDropped) {
   EmulatedHand hand;
   // A long hold: the object slips out during it however slowly this machine runs.
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
+  auto h = driver(hand, {{"hold_time", 60.0}});
   // The object slips out once the driver holds: two status answers after every finger touched, the
   // first of which ended the close, so the second was the hold's.
   std::uint64_t touched_at = 0;
@@ -194,32 +205,26 @@ TEST(Robotiq3f, ObjectSlippingOutDuringTheHoldIsDropped) {
         return touched_at != 0 && s.requests >= touched_at + 2;
       },
       [&] { hand.emulator().remove_object(); });
-  h.push("grasp", grasp());
-  ASSERT_EQ(h.run(), 1);
-  const auto results = h.values<fba::GraspExecution>("result");
-  ASSERT_EQ(results.size(), 1u);
-  EXPECT_FALSE(results[0].held);
-  EXPECT_NE(results[0].reason.find("dropped: finger"), std::string::npos) << results[0].reason;
-  EXPECT_NE(results[0].reason.find("lost its contact"), std::string::npos) << results[0].reason;
+  const auto result = result_of(h, grasp());
+  EXPECT_FALSE(result.held);
+  EXPECT_NE(result.reason.find("dropped: finger"), std::string::npos) << result.reason;
+  EXPECT_NE(result.reason.find("lost its contact"), std::string::npos) << result.reason;
   EXPECT_EQ(named(h.events(), "dropped").size(), 1u);
 }
 
 TEST(Robotiq3f, ScissorModePinchesBetweenFingersBAndC) {
   EmulatedHand hand;
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"mode", std::string("scissor")}}));
+  auto h = driver(hand, {{"mode", std::string("scissor")}});
   EXPECT_EQ(hand.emulator().state().mode, 3);
-  h.push("grasp", grasp());
-  ASSERT_EQ(h.run(), 1);
-  const auto results = h.values<fba::GraspExecution>("result");
-  ASSERT_EQ(results.size(), 1u);
-  EXPECT_TRUE(results[0].held) << results[0].reason;
-  ASSERT_EQ(results[0].contacts.size(), 1u);
-  EXPECT_EQ(results[0].contacts[0].link, "scissor");
+  const auto result = result_of(h, grasp());
+  EXPECT_TRUE(result.held) << result.reason;
+  ASSERT_EQ(result.contacts.size(), 1u);
+  EXPECT_EQ(result.contacts[0].link, "scissor");
 }
 
 TEST(Robotiq3f, SafeStateStopsThenOpens) {
   EmulatedHand hand;
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
+  auto h = driver(hand);
   h.push("grasp", grasp());
   ASSERT_EQ(h.run(), 1);
   h.safe_state();
@@ -238,8 +243,7 @@ TEST(Robotiq3f, SafeStateStopsAndOpensTheHandWhileAGraspIsStillClosing) {
   auto options = EmulatedHand::quick();
   options.speed_scale = 0.01;  // a close of most of a minute
   EmulatedHand hand(options);
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f",
-                     params(hand.device(), {{"motion_timeout", 120.0}, {"safe_state_timeout", 60.0}}));
+  auto h = driver(hand, {{"motion_timeout", 120.0}, {"safe_state_timeout", 60.0}});
   h.push("grasp", grasp(0.155));  // fully open already: the pregrasp does not move the fingers
   std::atomic<bool> returned{false};
   std::jthread grasping([&] {
@@ -278,11 +282,9 @@ TEST(Robotiq3f, SafeStateStopsAndOpensTheHandWhileAGraspIsStillClosing) {
 TEST(Robotiq3fFaults, GripperThatStopsAnsweringIsATimeoutNamingTheDevice) {
   EmulatedHand hand;
   // A long hold: the fault comes before the grasp could end, however slowly this machine runs.
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
+  auto h = driver(hand, {{"hold_time", 60.0}});
   When silence(hand.emulator(), closing, [&] { hand.emulator().silence(); });
-  h.push("grasp", grasp());
-  h.run();
-  const std::string failure = h.failure();
+  const std::string failure = failure_of(h, grasp());
   EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
   EXPECT_NE(failure.find("no answer within 2 s (Modbus timeout"), std::string::npos) << failure;
   EXPECT_NE(failure.find("2 tries"), std::string::npos) << failure;
@@ -299,11 +301,9 @@ TEST(Robotiq3fFaults, GripperThatStopsAnsweringIsATimeoutNamingTheDevice) {
 TEST(Robotiq3fFaults, LineThatDisappearsMidMotionIsReportedAtOnce) {
   EmulatedHand hand;
   // A long hold: the fault comes before the grasp could end, however slowly this machine runs.
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
+  auto h = driver(hand, {{"hold_time", 60.0}});
   When pull(hand.emulator(), closing, [&] { hand.emulator().disconnect(); });
-  h.push("grasp", grasp());
-  h.run();
-  const std::string failure = h.failure();
+  const std::string failure = failure_of(h, grasp());
   EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
   EXPECT_NE(failure.find("the serial line is gone"), std::string::npos) << failure;
   try {
@@ -316,11 +316,9 @@ TEST(Robotiq3fFaults, LineThatDisappearsMidMotionIsReportedAtOnce) {
 
 TEST(Robotiq3fFaults, AnswersWithBadCrcsFailTheGraspThenTheSafeStateIsReached) {
   EmulatedHand hand;
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
+  auto h = driver(hand);
   hand.emulator().corrupt_replies(-1);
-  h.push("grasp", grasp());
-  h.run();
-  const std::string failure = h.failure();
+  const std::string failure = failure_of(h, grasp());
   EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
   EXPECT_NE(failure.find("CRC was wrong"), std::string::npos) << failure;
   hand.emulator().corrupt_replies(0);  // the noise stops: the hand stops and opens
@@ -332,24 +330,19 @@ TEST(Robotiq3fFaults, AnswersWithBadCrcsFailTheGraspThenTheSafeStateIsReached) {
 
 TEST(Robotiq3fFaults, OneBurstOfGarbageIsRetriedAndTheGraspHolds) {
   EmulatedHand hand;
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
+  auto h = driver(hand);
   hand.emulator().inject_garbage();
-  h.push("grasp", grasp());
-  ASSERT_EQ(h.run(), 1);
+  const auto result = result_of(h, grasp());
   ASSERT_EQ(h.failure(), "");
-  const auto results = h.values<fba::GraspExecution>("result");
-  ASSERT_EQ(results.size(), 1u);
-  EXPECT_TRUE(results[0].held) << results[0].reason;
+  EXPECT_TRUE(result.held) << result.reason;
 }
 
 TEST(Robotiq3fFaults, FaultCodeFromTheGripperNamesTheFaultAndTheHandStops) {
   EmulatedHand hand;
   // A long hold: the fault comes before the grasp could end, however slowly this machine runs.
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"hold_time", 60.0}}));
+  auto h = driver(hand, {{"hold_time", 60.0}});
   When fault(hand.emulator(), closing, [&] { hand.emulator().inject_fault(0x0D); });
-  h.push("grasp", grasp());
-  h.run();
-  const std::string failure = h.failure();
+  const std::string failure = failure_of(h, grasp());
   EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
   EXPECT_NE(failure.find("fault 0x0D activation fault"), std::string::npos) << failure;
   h.safe_state();  // a fault that needs a reset: stopped, not opened
@@ -363,11 +356,9 @@ TEST(Robotiq3fFaults, GraspOutsideTheHandsRangeIsRefusedBeforeAnythingIsSent) {
            {grasp(0.1, 0.2), "spread must be in [0, 0.12 m]"},
            {grasp(std::numeric_limits<double>::quiet_NaN(), 0.03), "aperture must be in"},
            {grasp(0.1, -0.01), "spread must be in"}}) {
-    ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()));
+    auto h = driver(hand);
     const auto before = hand.emulator().state().requests;
-    h.push("grasp", bad);
-    h.run();
-    const std::string failure = h.failure();
+    const std::string failure = failure_of(h, bad);
     EXPECT_NE(failure.find(hand.device()), std::string::npos) << failure;
     EXPECT_NE(failure.find("refused before sending"), std::string::npos) << failure;
     EXPECT_NE(failure.find(why), std::string::npos) << failure;
@@ -380,7 +371,7 @@ TEST(Robotiq3fFaults, GraspOutsideTheHandsRangeIsRefusedBeforeAnythingIsSent) {
 TEST(Robotiq3fFaults, GripperOnAnotherSlaveIdFailsTheStartNamingTheDevice) {
   EmulatedHand hand;
   try {
-    ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), {{"slave_id", 10}}));
+    auto h = driver(hand, {{"slave_id", 10}});
     FAIL() << "started without a gripper on slave 10";
   } catch (const fba::ConstructionError& e) {
     EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
@@ -410,7 +401,7 @@ TEST(Robotiq3fFaults, MissingSerialLineFailsTheStartNamingIt) {
 TEST(Robotiq3fFaults, AGripperThatNeverActivatesReportsAFaultOrAnswersGarbledIsResetAndADeviceError) {
   auto start_failure = [](EmulatedHand& hand, fba::testing::Params more = {}) {
     try {
-      ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device(), std::move(more)));
+      auto h = driver(hand, std::move(more));
     } catch (const fba::ConstructionError& e) {
       EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
       EXPECT_NE(std::string(e.what()).find("could not start its device: Robotiq 3-Finger gripper on " + hand.device()),
@@ -508,7 +499,7 @@ Robotiq3fOptions stalling() {
 // onto the gripper's 15..60 N, and the close ends held with every finger stalled on the object.
 TEST(Robotiq3fCommands, RunInOrderAtTheirTimesOnTheTrajectoryAndACloseEndsHeld) {
   EmulatedHand hand(stalling());
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands", "trajectory"});
+  auto h = driver(hand, {}, {"commands", "trajectory"});
   const auto before = hand.emulator().commands().size();
   h.push("trajectory", trajectory_of(3.0));
   h.push("commands", command(Action::Open, 0.0));
@@ -554,7 +545,7 @@ TEST(Robotiq3fCommands, RunInOrderAtTheirTimesOnTheTrajectoryAndACloseEndsHeld) 
 // and a stop ends the wait at once with nothing sent.
 TEST(Robotiq3fCommands, ACommandWaitsForItsTimeAndAStopEndsTheWaitWithNothingSent) {
   EmulatedHand hand(stalling());
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands", "trajectory"});
+  auto h = driver(hand, {}, {"commands", "trajectory"});
   h.push("trajectory", trajectory_of(1000.0));
   h.push("commands", command(Action::Close, 900.0));
   const auto before = hand.emulator().commands().size();
@@ -576,7 +567,7 @@ TEST(Robotiq3fCommands, ACommandWaitsForItsTimeAndAStopEndsTheWaitWithNothingSen
 
 TEST(Robotiq3fCommands, AModeCommandChangesTheGripperModeAndAWeakCloseUsesItsLeastForce) {
   EmulatedHand hand(stalling());
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands"});
+  auto h = driver(hand, {}, {"commands"});
   h.push("commands", command(Action::Open, 0.0, 0, fba::HandCommand::Mode::Pinch));
   h.push("commands", command(Action::Close, 0.5, 10, fba::HandCommand::Mode::Pinch));  // no trajectory: as they come
   h.run();
@@ -591,7 +582,7 @@ TEST(Robotiq3fCommands, AModeCommandChangesTheGripperModeAndAWeakCloseUsesItsLea
 TEST(Robotiq3fCommands, ACommandTheHandCannotMakeOrBeforeItsTrajectoryFailsNamingTheDeviceWithNothingSent) {
   EmulatedHand hand(stalling());
   {
-    ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands", "trajectory"});
+    auto h = driver(hand, {}, {"commands", "trajectory"});
     const auto before = hand.emulator().state().requests;
     h.push("commands", command(Action::Open, 0.0));
     h.run();
@@ -600,7 +591,7 @@ TEST(Robotiq3fCommands, ACommandTheHandCannotMakeOrBeforeItsTrajectoryFailsNamin
     EXPECT_EQ(hand.emulator().state().requests, before);
   }
   {
-    ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands"});
+    auto h = driver(hand, {}, {"commands"});
     const auto before = hand.emulator().state().requests;
     auto wide = command(Action::Open, 0.0);
     wide.opening = 0.2;
@@ -618,7 +609,7 @@ TEST(Robotiq3fCommands, ACommandTheHandCannotMakeOrBeforeItsTrajectoryFailsNamin
 // a close reports.
 TEST(Robotiq3fCommands, AGraspAloneMovesNothingWhenCommandsDriveTheHand) {
   EmulatedHand hand(stalling());
-  ComponentHarness h(built_plugins(), "hw.robotiq_3f", params(hand.device()), {"commands"});
+  auto h = driver(hand, {}, {"commands"});
   const auto before = hand.emulator().commands().size();
   h.push("grasp", grasp());
   h.run();

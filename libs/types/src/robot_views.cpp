@@ -1,10 +1,10 @@
 // The views of the robot types: a pose, a joint state, a trajectory, a grasp, regions of interest.
 // World frame, metres, radians, as the types hold them.
-#include <algorithm>
 
 #include "fba/types/grasp.hpp"
 #include "fba/types/joint_state.hpp"
 #include "fba/types/joint_trajectory.hpp"
+#include "fba/types/joint_trajectory_json.hpp"
 #include "fba/types/pose.hpp"
 #include "fba/types/regions_of_interest.hpp"
 #include "view_json.hpp"
@@ -78,19 +78,9 @@ std::string joint_state_view(const Packet& p) {
 std::string trajectory_view(const Packet& p) {
   return guarded([&] {
     const JointTrajectory& t = p.get<JointTrajectory>();
-    const std::size_t n = t.points.size();
-    const std::size_t shown = std::min(n, kMaxTrajectoryPoints);
-    json points = json::array();
-    for (std::size_t i = 0; i < shown; ++i) {
-      // Evenly spaced over the whole trajectory, the first and the last included.
-      const std::size_t k = shown < 2 ? i : i * (n - 1) / (shown - 1);
-      points.push_back({{"t", number(t.points[k].time, kUnit)}, {"positions", numbers(t.points[k].positions, kUnit)}});
-    }
-    json v = {{"kind", "trajectory"}, {"names", t.names}, {"points", std::move(points)}, {"stamp", number(t.stamp, kUnit)}};
-    if (shown < n) {
-      v["truncated"] = true;
-      v["point_count"] = n;
-    }
+    json v = trajectory_json(t, kMaxTrajectoryPoints, kUnit);
+    v["kind"] = "trajectory";
+    v["stamp"] = number(t.stamp, kUnit);
     return dump(v);
   });
 }

@@ -25,6 +25,7 @@
 #include <fba/thread_pool.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/pose.hpp>
+#include <fba/types/pose_json.hpp>
 #include <fba/types/regions_of_interest.hpp>
 #include <fba/vision/image_set.hpp>
 
@@ -38,12 +39,6 @@
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180;
-
-nlohmann::json pose_json(const Eigen::Isometry3d& world_from_camera) {
-  const Eigen::Vector3d t = world_from_camera.translation();
-  const Eigen::Quaterniond q(world_from_camera.linear());
-  return {{"position", {t.x(), t.y(), t.z()}}, {"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
-}
 
 class ExplorationPlanner final : public fba::Component {
  public:
@@ -263,7 +258,7 @@ class ExplorationPlanner final : public fba::Component {
     const auto& s = choice.scores[*choice.best];
     ctx_.log().info("{}", choice.reason);
     ctx_.emit(kViewChosen, nlohmann::json{{"view", s.index},
-                                          {"pose", pose_json(candidates_[s.index])},
+                                          {"pose", fba::pose_json(candidates_[s.index])},
                                           {"score", s.score},
                                           {"gain", s.gain},
                                           {"seen", s.seen},

@@ -21,7 +21,9 @@
 #include <fba/types/hand_command.hpp>
 #include <fba/types/joint_state.hpp>
 #include <fba/types/joint_trajectory.hpp>
+#include <fba/types/joint_trajectory_json.hpp>
 #include <fba/types/octree.hpp>
+#include <fba/types/pose_json.hpp>
 
 #include "fba/motion/reach_parameters.hpp"
 #include "fba/motion/reach_planner.hpp"
@@ -37,24 +39,10 @@ using fba::motion::ReachPlanner;
 
 nlohmann::json values(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
 
-nlohmann::json pose_json(const Eigen::Isometry3d& t) {
-  const Eigen::Quaterniond q(t.linear());
-  const Eigen::Vector3d p = t.translation();
-  return {{"position", {p.x(), p.y(), p.z()}}, {"quaternion_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
-}
-
 // Whether the arm stands still in `s`: every velocity it gives below 1e-3 rad/s (none given: a
 // state from a source that does not measure them, taken as still).
 bool at_rest(const fba::JointState& s) {
   return std::all_of(s.velocities.begin(), s.velocities.end(), [](double v) { return std::abs(v) < 1e-3; });
-}
-
-// The trajectory as summary.json carries it: the joints' names, and each waypoint's time and
-// positions (velocities follow from them).
-nlohmann::json trajectory_json(const fba::JointTrajectory& t) {
-  nlohmann::json points = nlohmann::json::array();
-  for (const auto& p : t.points) points.push_back({{"t", p.time}, {"positions", p.positions}});
-  return {{"names", t.names}, {"points", std::move(points)}};
 }
 
 class ReachPlannerFilter final : public fba::Component {
@@ -172,11 +160,11 @@ class ReachPlannerFilter final : public fba::Component {
     for (const auto& s : plan.steps) steps[s.name] = s.end_s - s.start_s;
     figures["steps_s"] = steps;
     figures["duration_s"] = plan.trajectory.points.back().time;
-    figures["pregrasp_palm"] = pose_json(plan.pregrasp_palm);
+    figures["pregrasp_palm"] = fba::pose_json(plan.pregrasp_palm);
     figures["pregrasp_joints"] = values(plan.pregrasp_joints);
     figures["opening_m"] = plan.opening;
     figures["spread_m"] = plan.spread;
-    figures["trajectory"] = trajectory_json(plan.trajectory);
+    figures["trajectory"] = fba::trajectory_json(plan.trajectory);
     if (!refused_.empty()) figures["refused"] = refused_;
     ctx_.report("reach", figures.dump());
     ctx_.log().info("reach planned: {:.2f} s of motion, path {:.2f} rad ({} waypoints{}) found in {:.3f} s",

@@ -10,15 +10,6 @@
 using namespace fba::motion;
 using namespace fba::motion::test;
 
-namespace {
-
-const ReachPlanner& planner() {
-  static const ReachPlanner p(arm_urdf());
-  return p;
-}
-
-}  // namespace
-
 TEST(ReachPlanner, ABoxBeforeTheArmIsTakenFromAboveOnACollisionFreeTimedTrajectory) {
   const fba::Octree model = box_model(kBox);
   const fba::Grasp grasp = box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07);

@@ -23,11 +23,6 @@ using namespace fba::motion::test;
 
 namespace {
 
-const ReachPlanner& planner() {
-  static const ReachPlanner p(arm_urdf());
-  return p;
-}
-
 // The box before the arm, taken from above, planned from sim.arm's first pose.
 struct Scene {
   fba::Octree model = box_model(kBox);
