@@ -286,7 +286,7 @@ class ExplorationPlanner final : public fba::Component {
     const std::size_t view = left[std::uniform_int_distribution<std::size_t>(0, left.size() - 1)(draws_)];
     const std::string reason = "view " + std::to_string(view) + " drawn at random of the " + std::to_string(left.size()) + " not taken";
     ctx_.log().info("{}", reason);
-    ctx_.emit(kViewChosen, nlohmann::json{{"view", view}, {"pose", pose_json(candidates_[view])}, {"reason", reason}}.dump());
+    ctx_.emit(kViewChosen, nlohmann::json{{"view", view}, {"pose", fba::pose_json(candidates_[view])}, {"reason", reason}}.dump());
     request(view);
   }
 
