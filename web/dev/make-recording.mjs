@@ -118,9 +118,11 @@ for (let k = 0; k < 12; k++) {
   candidates.push({ contacts: [c1, c2, [c2[0], c2[1], 0.12]], normals: [[-Math.cos(a), -Math.sin(a), 0], [Math.cos(a), Math.sin(a), 0], [Math.cos(a), Math.sin(a), 0]],
     approach: [0, 0, -1], score: 0.02 + 0.003 * k, palm: null });
 }
-const selected = { ...candidates[11], palm: { position: [0, 0, 0.2], rotation: [1, 0, 0, 0] } };
+candidates.reverse();  // best first
+candidates[0].palm = { position: [0, 0, 0.2], rotation: [1, 0, 0, 0] };
 t += 0.3;
-out.push({ type: 'view', port: 'synthesis.grasps', data_type: 'Grasps', seq: 0, t, view: { kind: 'grasps', candidates, selected } });
+out.push({ type: 'view', port: 'synthesis.candidates', data_type: 'fba.GraspCandidates', seq: 4, t, view: { kind: 'grasps', candidates, selected: null, total: 40 } });
+out.push({ type: 'view', port: 'synthesis.grasp', data_type: 'fba.Grasp', seq: 0, t, view: { kind: 'grasps', candidates: [], selected: { ...candidates[0], palm: null } } });
 out.push({ type: 'event', index: 5, t, source: 'synthesis', name: 'selected', payload: { score: selected.score, views: 5 } });
 out.push({ type: 'event', index: 6, t: t + 1, source: 'hand', name: 'held', payload: {} });
 out.push({ type: 'end', outcome: 'success', exit_code: 0, reason: 'hand.held: stop_success', summary: {} });

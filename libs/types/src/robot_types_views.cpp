@@ -21,6 +21,7 @@ const bool robot_types_views_registered = [] {
   register_view(type_of<JointState>()->name, &joint_state_view);
   register_view(type_of<JointTrajectory>()->name, &trajectory_view);
   register_view(type_of<Grasp>()->name, &grasp_view);
+  register_view(type_of<GraspCandidates>()->name, &grasp_candidates_view);
   register_view(type_of<RegionsOfInterest>()->name, &regions_view);
   register_view(type_of<Octree>()->name, &model_view);
   return true;

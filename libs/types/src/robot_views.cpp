@@ -1,6 +1,7 @@
 // The views of the robot types: a pose, a joint state, a trajectory, a grasp, regions of interest.
 // World frame, metres, radians, as the types hold them.
 #include <algorithm>
+#include <optional>
 
 #include "fba/types/grasp.hpp"
 #include "fba/types/joint_state.hpp"
@@ -21,9 +22,9 @@ json numbers(const std::vector<double>& values, double scale) {
 }
 
 // GRASP of docs/live-view.md: contacts (thumb first) and their normals (unit, into the object),
-// the palm's approach (unit), the total score; the type carries no palm pose. Besides: each
-// score, the pregrasp and the views the model had.
-json grasp_json(const Grasp& g) {
+// the palm's approach (unit), the total score and the palm's pose when known. Besides: each score,
+// the pregrasp and the views the model had.
+json grasp_json(const Grasp& g, const std::optional<Eigen::Isometry3d>& palm = std::nullopt) {
   json contacts = json::array(), normals = json::array();
   for (const GraspContact& c : g.contacts) {
     contacts.push_back(xyz(c.position));
@@ -33,7 +34,7 @@ json grasp_json(const Grasp& g) {
           {"normals", std::move(normals)},
           {"approach", xyz(g.approach, kUnit)},
           {"score", number(g.scores.total, kUnit)},
-          {"palm", nullptr},
+          {"palm", palm ? views::pose(*palm) : json(nullptr)},
           {"scores",
            {{"symmetry", number(g.scores.symmetry, kUnit)},
             {"safety_margin", number(g.scores.safety_margin, kUnit)},
@@ -99,6 +100,25 @@ std::string grasp_view(const Packet& p) {
   return guarded([&] {
     const Grasp& g = p.get<Grasp>();
     return dump({{"kind", "grasps"}, {"candidates", json::array()}, {"selected", grasp_json(g)}, {"stamp", number(g.stamp, kUnit)}});
+  });
+}
+
+std::string grasp_candidates_view(const Packet& p) {
+  return guarded([&] {
+    const GraspCandidates& gc = p.get<GraspCandidates>();
+    json candidates = json::array();
+    for (const GraspCandidates::Candidate& c : gc.candidates) {
+      json g = grasp_json(c.grasp, c.palm);
+      g["reliable"] = c.reliable;
+      g["passed_over"] = c.passed_over;
+      candidates.push_back(std::move(g));
+    }
+    return dump({{"kind", "grasps"},
+                 {"candidates", std::move(candidates)},
+                 {"selected", nullptr},
+                 {"total", gc.total},
+                 {"views", gc.views},
+                 {"stamp", number(gc.stamp, kUnit)}});
   });
 }
 

@@ -25,6 +25,7 @@ namespace {
   fba::type_of<fba::RegionsOfInterest>();
   fba::type_of<fba::TriangleMesh>();
   fba::type_of<fba::Grasp>();
+  fba::type_of<fba::GraspCandidates>();
   fba::type_of<fba::JointState>();
   fba::type_of<fba::GraspExecution>();
   fba::type_of<fba::JointTrajectory>();

@@ -22,6 +22,7 @@ std::string pose_view(const Packet& p);           // fba.Pose: "pose"
 std::string joint_state_view(const Packet& p);    // fba.JointState: "joints"
 std::string trajectory_view(const Packet& p);     // fba.JointTrajectory: "trajectory"
 std::string grasp_view(const Packet& p);          // fba.Grasp: "grasps"
+std::string grasp_candidates_view(const Packet& p);  // fba.GraspCandidates: "grasps"
 std::string regions_view(const Packet& p);        // fba.RegionsOfInterest: "regions"
 std::string model_view(const Packet& p);          // fba.Octree: "model"
 std::string frame_view(const Packet& p);          // fba.Frame: "image", JPEG
