@@ -60,7 +60,8 @@ const connections = [
 ].map(([from, to, feedback]) => ({ from, to, policy: 'lossless', capacity: 16, feedback: !!feedback }));
 
 const out = [];
-out.push({ type: 'task', run_id: 'dev-recording', task: 'grasp', file: 'tasks/grasp.yaml', components, connections, robot: { urdf } });
+out.push({ type: 'task', run_id: 'dev-recording', task: 'grasp', file: 'tasks/grasp.yaml', components, connections });
+out.push({ type: 'view', port: 'arm.robot', data_type: 'fba.RobotDescription', seq: 0, t: 0, view: { kind: 'robot', urdf, name: 'wrist_camera_arm.urdf' } });
 
 // A bottle: a cylinder of radius 3.5 cm, 19 cm tall, carved at a 4 mm edge; a shell of uncarved
 // leaves on the far side; the leaves near the two contacts marked to refine.

@@ -6,8 +6,8 @@ import { el } from './dom.js';
 // The 3D scene in the world frame (z up, the table at z = 0): the octree model's occupied leaves as
 // one InstancedMesh of boxes coloured by height, the space not yet carved as translucent boxes, the
 // leaves synthesis asked to refine and its regions highlighted, the camera poses visited as numbered
-// frusta, the grasps, the reach trajectory as the path of the palm (the robot's URDF posed at each
-// waypoint), and the robot from the task's URDF. It renders only when something changed.
+// frusta, the grasps, the reach trajectory as the path of the palm (the robot posed at each
+// waypoint), and the robot the arm sends. It renders only when something changed.
 //
 // The grasps come from two grasp views: synthesis's candidates after each analysis (the best one
 // with its palm at the pregrasp), and the selected grasp once there is one.
@@ -192,6 +192,9 @@ export class SceneView {
     this.poseLists.clear();
     this.graspViews.clear();
     this.trajectory = null;
+    this.robot = null;
+    this.robotError = null;
+    this.joints = null;
     Object.assign(this.stats, { candidates: 0, candidatesFound: 0, selected: false, palm: false, trajectoryPort: null, trajectoryWaypoints: 0,
       trajectoryPathPoints: 0, trajectoryLink: null, trajectoryProblem: null });
     if (!this.renderer) return;
@@ -203,18 +206,7 @@ export class SceneView {
     this.setLeaves(this.occupied, [], true);
     this.setLeaves(this.uncarved, []);
     this.setLeaves(this.refine, []);
-    this.robot = null;
-    this.robotError = null;
     this.modelBox = null;
-    if (task.robot?.urdf) {
-      try {
-        this.robot = new UrdfRobot(task.robot.urdf);
-        this.layers.robot.add(this.robot.object);
-        this.stats.robotLinks = this.robot.linkCount;
-      } catch (e) {
-        this.robotError = `the robot's URDF could not be read: ${e.message}`;
-      }
-    }
     this.fitted = false;
     this.updateInfo();
     this.invalidate();
@@ -491,7 +483,31 @@ export class SceneView {
     return palm;
   }
 
+  // The robot as the arm reads it (its URDF with the measured transforms in place), posed by the
+  // newest joints, and the reach trajectory drawn with it.
+  setRobot(msg) {
+    if (this.renderer) {
+      disposeTree(this.layers.robot);
+      this.layers.robot.clear();
+    }
+    this.robot = null;
+    this.robotError = null;
+    this.stats.robotLinks = 0;
+    try {
+      this.robot = new UrdfRobot(msg.view.urdf);
+      if (this.renderer) this.layers.robot.add(this.robot.object);
+      this.stats.robotLinks = this.robot.linkCount;
+      if (this.joints) this.robot.setJoints(this.joints.names, this.joints.positions);
+    } catch (e) {
+      this.robotError = `the robot's URDF could not be read: ${e.message}`;
+    }
+    this.drawTrajectory();
+    this.updateInfo();
+    this.invalidate();
+  }
+
   setJoints(msg) {
+    this.joints = msg.view;
     if (!this.robot) return;
     this.robot.setJoints(msg.view.names, msg.view.positions);
     this.invalidate();

@@ -1,7 +1,7 @@
 // The grasp task's run watched live, then its report opened from disk: fba-run tasks/grasp.yaml
 // --serve 0 --serve-keep --output-dir D in Debian's Chromium. Live, the model renders as one box per
 // occupied leaf of the newest model message, every camera pose visited is there in order, the
-// reach trajectory is drawn as the palm's path, and the grasp views hold
+// reach trajectory is drawn as the palm's path by the robot the arm sent, and the grasp views hold
 // the candidates synthesis found (the first few) and the palm at the pregrasp the planner chose;
 // after the run fba-run keeps serving it (a page opened then is sent the whole run) until SIGTERM,
 // and exits with the run's status; D/report.html opens from file:// with no server and shows the
@@ -65,6 +65,7 @@ function expectTheRunDrawn(where, s, summary) {
   const palm = summary.components.reach.results.reach.pregrasp_palm.position;
   const palmOff = s.model.palm ? Math.hypot(...s.model.palm.position.map((x, i) => x - palm[i])) : Infinity;
   expect(palmOff < 1e-4, `${where}: the palm is drawn at ${JSON.stringify(s.model.palm?.position)}, the planner's pregrasp at ${JSON.stringify(palm)}`);
+  expect(s.model.robotLinks > 0, `${where}: no robot drawn`);
 
   // The reach trajectory: the palm's path, a point per waypoint, posed by the page's URDF as the
   // planner's kinematics pose it (the palm at the pregrasp joints where the planner said).

@@ -46,7 +46,7 @@ TEST(LiveFeed, ARunningTaskReachesAPageAsTaskStatsViewsEventsAndTheEnd) {
   TempDir dir;
   const fba::TaskConfig config = fba::load_task_text(kChain, "fed.yaml", dir.path(), built_plugins());
   fba::serve::RunRecord record;
-  fba::serve::LiveFeed feed(record, config, "feed-run", dir.path());
+  fba::serve::LiveFeed feed(record, config, "feed-run");
   fba::serve::LiveServer server({}, record);
   feed.publish_to(&server);
   const LiveUrl url = parse_live_url(server.url());
@@ -120,7 +120,7 @@ on:
 )";
   const fba::TaskConfig config = fba::load_task_text(text, "burst.yaml", dir.path(), built_plugins());
   fba::serve::RunRecord record;
-  fba::serve::LiveFeed feed(record, config, "burst-run", dir.path());
+  fba::serve::LiveFeed feed(record, config, "burst-run");
   fba::serve::LiveServer server({}, record);
   feed.publish_to(&server);
   const LiveUrl url = parse_live_url(server.url());

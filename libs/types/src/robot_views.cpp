@@ -8,6 +8,7 @@
 #include "fba/types/joint_trajectory.hpp"
 #include "fba/types/pose.hpp"
 #include "fba/types/regions_of_interest.hpp"
+#include "fba/types/robot_description.hpp"
 #include "view_json.hpp"
 #include "views.hpp"
 
@@ -136,6 +137,13 @@ std::string regions_view(const Packet& p) {
     for (const auto& s : r.points)
       points.push_back({{"position", xyz(s.position)}, {"normal", xyz(s.normal, kUnit)}, {"group", s.group}});
     return dump({{"kind", "regions"}, {"boxes", std::move(boxes)}, {"points", std::move(points)}, {"model_views", r.model_views}});
+  });
+}
+
+std::string robot_view(const Packet& p) {
+  return guarded([&] {
+    const RobotDescription& r = p.get<RobotDescription>();
+    return dump({{"kind", "robot"}, {"urdf", r.urdf}, {"name", r.name}});
   });
 }
 

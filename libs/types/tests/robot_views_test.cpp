@@ -9,6 +9,7 @@
 #include <fba/types/joint_trajectory.hpp>
 #include <fba/types/pose.hpp>
 #include <fba/types/regions_of_interest.hpp>
+#include <fba/types/robot_description.hpp>
 
 #include "view_checks.hpp"
 
@@ -145,6 +146,16 @@ TEST(GraspCandidatesView, HoldsEachCandidateInOrderAndTheBestOnesPalm) {
   const Eigen::Quaterniond q(p["rotation"][0].get<double>(), p["rotation"][1].get<double>(), p["rotation"][2].get<double>(),
                              p["rotation"][3].get<double>());
   EXPECT_LT(Eigen::AngleAxisd(q.normalized().toRotationMatrix().transpose() * palm.linear()).angle(), 1e-5);
+}
+
+TEST(RobotView, HoldsTheUrdfAsGivenAndItsName) {
+  fba::RobotDescription r;
+  r.urdf = "<robot name=\"arm\"><link name=\"base_link\"/></robot>\n";
+  r.name = "arm.urdf (with the parameters base_pose)";
+  const json v = view_of(r);
+  ASSERT_EQ(v["kind"], "robot");
+  EXPECT_EQ(v["urdf"], r.urdf);
+  EXPECT_EQ(v["name"], r.name);
 }
 
 TEST(RegionsView, HoldsEachBoxAsMinThenMaxAndSkipsEmptyOnes) {

@@ -1,5 +1,5 @@
 // The live views (fba/view.hpp) of the types that need only Eigen (Pose, JointState,
-// JointTrajectory, Grasp, GraspCandidates, RegionsOfInterest, Octree), registered
+// JointTrajectory, Grasp, GraspCandidates, RegionsOfInterest, RobotDescription, Octree), registered
 // when their library, libfba_robot_types, loads.
 //
 // Each of those types' headers includes this one, so that whatever uses the type loads the library
