@@ -64,7 +64,7 @@ out.push({ type: 'task', run_id: 'dev-recording', task: 'grasp', file: 'tasks/gr
 out.push({ type: 'view', port: 'arm.robot', data_type: 'fba.RobotDescription', seq: 0, t: 0, view: { kind: 'robot', urdf, name: 'wrist_camera_arm.urdf' } });
 
 // A bottle: a cylinder of radius 3.5 cm, 19 cm tall, carved at a 4 mm edge; a shell of uncarved
-// leaves on the far side; the leaves near the two contacts marked to refine.
+// leaves on the far side; the leaves near the two contacts refined for grasping.
 const edge = 0.26 / 64;
 const occupied = [], uncarved = [], refine = [];
 for (let x = -0.06; x < 0.06; x += edge) for (let y = -0.06; y < 0.06; y += edge) for (let z = edge / 2; z < 0.19; z += edge) {

@@ -5,7 +5,8 @@ import { el } from './dom.js';
 
 // The 3D scene in the world frame (z up, the table at z = 0): the octree model's occupied leaves as
 // one InstancedMesh of boxes coloured by height, the space not yet carved as translucent boxes, the
-// leaves synthesis asked to refine and its regions highlighted, the camera poses visited as numbered
+// leaves refined for grasping (a grasp criterion split their parent: synthesis's regions, a
+// graspable contour) and synthesis's regions highlighted, the camera poses visited as numbered
 // frusta, the grasps, the reach trajectory as the path of the palm (the robot posed at each
 // waypoint), and the robot the arm sends. It renders only when something changed.
 //
@@ -31,7 +32,7 @@ const POSE_COLORS = [0x2bb673, 0x4cc9f0, 0xf4a261, 0xb388eb];
 export const LAYERS = [
   ['occupied', 'occupied leaves', '#c99a4a'],
   ['uncarved', 'not yet carved', '#8fa8c8'],
-  ['refine', 'to refine', '#ff3d9a'],
+  ['refine', 'refined for grasping', '#ff3d9a'],
   ['views', 'camera views, in order', '#2bb673'],
   ['candidates', 'candidate grasps', '#7fb8d8'],
   ['selected', 'selected grasp', '#e74c3c'],
@@ -535,7 +536,7 @@ export class SceneView {
     const s = this.stats;
     const lines = [];
     if (s.modelPort) lines.push(`${s.modelPort} #${s.modelSeq ?? '?'}: ${s.occupiedInstances.toLocaleString()} occupied, ` +
-      `${s.uncarvedInstances.toLocaleString()} not carved, ${s.refineInstances.toLocaleString()} to refine` +
+      `${s.uncarvedInstances.toLocaleString()} not carved, ${s.refineInstances.toLocaleString()} refined for grasping` +
       (s.regions ? `, ${s.regions} regions` : ''));
     const posePorts = [...this.poseLists.entries()];
     if (posePorts.length) lines.push(posePorts.map(([port, list], k) => el('span', {},
