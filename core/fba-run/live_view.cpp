@@ -37,7 +37,7 @@ LiveView::LiveView(const Options& o, const fba::TaskConfig& config) : config_(co
                 << " is missing); install npm and run tools/dev.sh again, or set FBA_WEB_DIR to a built page\n";
   }
   if (!o.serve && report_.empty()) return;  // nobody to show the run to: nothing sampled
-  feed_.emplace(record_, config, state().run_id, fba::serve::share_dir() / "robots");
+  feed_.emplace(record_, config, state().run_id);
   if (!o.serve) return;
   fba::serve::ServerOptions options;
   options.address = *o.serve;

@@ -7,9 +7,8 @@
 
 namespace fba::serve {
 
-LiveFeed::LiveFeed(RunRecord& record, const TaskConfig& task, const std::string& run_id, const std::filesystem::path& robots_dir)
-    : record_(record) {
-  publish(LiveMessage::Task, task_message(task, run_id, robot_urdf(task, robots_dir)));
+LiveFeed::LiveFeed(RunRecord& record, const TaskConfig& task, const std::string& run_id) : record_(record) {
+  publish(LiveMessage::Task, task_message(task, run_id));
 }
 
 void LiveFeed::watch(Task& task, const TaskConfig& config) {

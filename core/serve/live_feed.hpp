@@ -4,7 +4,6 @@
 #pragma once
 
 #include <cstddef>
-#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,8 +17,8 @@ namespace fba::serve {
 
 class LiveFeed {
  public:
-  // Adds the task message (with the robot's URDF from `robots_dir`, see robot_urdf).
-  LiveFeed(RunRecord& record, const TaskConfig& task, const std::string& run_id, const std::filesystem::path& robots_dir);
+  // Adds the task message.
+  LiveFeed(RunRecord& record, const TaskConfig& task, const std::string& run_id);
 
   // Each message from now on also goes to `server` (null: none).
   void publish_to(LiveServer* server) { server_ = server; }

@@ -2,9 +2,7 @@
 // summary are spliced in as text: they are already JSON, and an image's view is large.
 #include "live_messages.hpp"
 
-#include <fstream>
 #include <map>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -13,9 +11,6 @@ namespace fba::serve {
 using nlohmann::json;
 
 namespace {
-
-// A URDF is tens of kilobytes; a file far larger is not one, and would swell every message.
-constexpr std::uintmax_t kMaxUrdfBytes = 8u << 20;
 
 // `j`'s text with `"key":text` added last (j is an object).
 std::string with_raw(const json& j, const std::string& key, const std::string& text) {
@@ -40,7 +35,7 @@ double rate(std::uint64_t now, std::uint64_t before, double dt) { return dt > 0 
 
 }  // namespace
 
-std::string task_message(const TaskConfig& task, const std::string& run_id, const std::string& robot) {
+std::string task_message(const TaskConfig& task, const std::string& run_id) {
   json j{{"type", "task"}, {"run_id", run_id}, {"task", task.name}, {"file", task.file.string()}};
   json components = json::array();
   for (const auto& c : task.components) {
@@ -55,7 +50,6 @@ std::string task_message(const TaskConfig& task, const std::string& run_id, cons
     connections.push_back({{"from", c.from + "." + c.from_port}, {"to", c.to + "." + c.to_port}, {"policy", to_string(c.policy)},
                            {"capacity", c.capacity}, {"feedback", c.feedback}});
   j["connections"] = connections;
-  j["robot"] = robot.empty() ? json(nullptr) : json{{"urdf", robot}};
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
@@ -103,23 +97,6 @@ std::string view_message(const std::string& port, const std::string& data_type, 
 std::string end_message(const RunResult& result, const std::string& summary) {
   const json j{{"type", "end"}, {"outcome", to_string(result.outcome)}, {"exit_code", result.exit_code()}, {"reason", result.reason}};
   return with_raw(j, "summary", summary);
-}
-
-std::string robot_urdf(const TaskConfig& task, const std::filesystem::path& robots_dir) {
-  for (const auto& c : task.components) {
-    const ParamSpec* p = c.type->spec.find_param("urdf");
-    if (!p || p->type != ParamType::Path) continue;
-    const auto value = c.params.find("urdf");
-    const std::string* named = value == c.params.end() ? nullptr : std::get_if<std::string>(&value->second);
-    const std::filesystem::path file = named && !named->empty() ? std::filesystem::path(*named) : robots_dir / "wrist_camera_arm.urdf";
-    std::error_code ec;
-    if (std::filesystem::file_size(file, ec) > kMaxUrdfBytes || ec) return {};
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return in ? text.str() : std::string();
-  }
-  return {};
 }
 
 }  // namespace fba::serve

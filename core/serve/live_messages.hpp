@@ -3,16 +3,14 @@
 #pragma once
 
 #include <cstddef>
-#include <filesystem>
 #include <string>
 
 #include "fba/task.hpp"
 
 namespace fba::serve {
 
-// {"type":"task"}: the graph as loaded, with each port's type and each component's doc, and the
-// robot's URDF text (`robot_urdf`; empty: "robot": null).
-std::string task_message(const TaskConfig& task, const std::string& run_id, const std::string& robot_urdf);
+// {"type":"task"}: the graph as loaded, with each port's type and each component's doc.
+std::string task_message(const TaskConfig& task, const std::string& run_id);
 
 // {"type":"stats"}: counts as they stand, rates since `previous` (since the start without one).
 std::string stats_message(const RunResult& now, const RunResult* previous);
@@ -26,10 +24,5 @@ std::string view_message(const std::string& port, const std::string& data_type, 
 
 // {"type":"end"}: the outcome and summary.json's text (`summary`, put in as it is).
 std::string end_message(const RunResult& result, const std::string& summary);
-
-// The robot the task drives: the URDF named by the first component with a `urdf` path parameter,
-// or, when that parameter is empty (the component's own default), the project's robot in
-// `robots_dir`. Empty when no component has one or the file cannot be read.
-std::string robot_urdf(const TaskConfig& task, const std::filesystem::path& robots_dir);
 
 }  // namespace fba::serve

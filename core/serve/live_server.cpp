@@ -122,10 +122,15 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   }
 
   // The page sends nothing that matters ({"type":"ping"}); reading keeps the connection's control
-  // frames going and finds a message over the cap, which ends the connection.
+  // frames going and finds a message over the cap, which ends the connection. A close this side
+  // began ends the read before the close's teardown is done: then the close says when the client
+  // is gone, since a server stopped before the teardown leaves the page waiting on an open socket.
   void read() {
     ws_.async_read(in_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
-      if (ec) return self->server_.remove(self);
+      if (ec) {
+        if (!self->closing_) self->server_.remove(self);
+        return;
+      }
       self->in_.consume(self->in_.size());
       self->read();
     });

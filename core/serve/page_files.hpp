@@ -34,7 +34,7 @@ class PageFiles {
 };
 
 // share/fba beside the program's bin folder (the build tree and an installation alike): the page
-// in web/, the robots' URDFs in robots/.
+// in web/.
 std::filesystem::path share_dir();
 // Where the built page is: FBA_WEB_DIR when set, else share_dir()/web.
 std::filesystem::path find_web_dir();

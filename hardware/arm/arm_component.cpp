@@ -167,6 +167,10 @@ void ArmComponent::publish_state(std::vector<double> positions, std::vector<doub
 }
 
 void ArmComponent::publish_initial(const Eigen::VectorXd& q, std::vector<double> velocities, std::int64_t stamp_ns) {
+  if (!robot_published_) {  // whatever publish_initial says: it is not a state
+    robot_published_ = true;
+    ctx_(kRobot).emit(robot_, stamp_ns);
+  }
   if (!publish_initial_) return;
   publish_initial_ = false;
   publish_state(values(q), std::move(velocities), stamp_ns);

@@ -96,7 +96,7 @@ class ArmComponent : public fba::Component, public ArmPorts {
                       nlohmann::json& target) const;
 
   void publish_state(std::vector<double> positions, std::vector<double> velocities, std::int64_t stamp_ns);
-  // Once, at the first tick (unless publish_initial is off): the joints and the camera pose.
+  // At the first tick: the robot, and (unless publish_initial is off) the joints and the camera pose.
   void publish_initial(const Eigen::VectorXd& q, std::vector<double> velocities, std::int64_t stamp_ns);
   // Where a motion ended: the camera pose, and 'arrived' with it and the joints.
   void arrive(const Eigen::VectorXd& q, std::int64_t stamp_ns);
@@ -127,6 +127,7 @@ class ArmComponent : public fba::Component, public ArmPorts {
   std::string joint_goal(const fba::JointState& js, const Eigen::VectorXd& from, Eigen::VectorXd& goal) const;
 
   bool publish_initial_;
+  bool robot_published_ = false;
 };
 
 // The vector's values as a std::vector, for JointState and JSON.

@@ -7,6 +7,7 @@
 #include <fba/types/joint_state.hpp>
 #include <fba/types/joint_trajectory.hpp>
 #include <fba/types/pose.hpp>
+#include <fba/types/robot_description.hpp>
 
 namespace fba::arm {
 
@@ -25,6 +26,9 @@ struct ArmPorts {
   static constexpr fba::Out<fba::Pose> kCameraPose{
       "camera_pose",
       "the camera's pose where each motion ends (and where the arm starts): wire it to the camera's pose"};
+  static constexpr fba::Out<fba::RobotDescription> kRobot{
+      "robot", "the robot this arm moves, once, at the first tick: its URDF with the measured transforms in place (base_pose, "
+      "flange_to_palm, flange_to_camera), which a live view draws"};
   static constexpr fba::EventOut kArrived{
       "arrived", "a motion or a trajectory ended; payload: the camera pose and the joints, JSON"};
   static constexpr fba::EventOut kUnreachable{

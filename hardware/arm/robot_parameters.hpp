@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <fba/component.hpp>
+#include <fba/types/robot_description.hpp>
 
 #include "arm_model.hpp"
 
@@ -22,11 +23,8 @@ namespace fba::arm {
 std::filesystem::path default_urdf();
 
 // The robot's URDF text with the measured origins in place, and what to call it in messages (the
-// file, and which of its origins the parameters replaced).
-struct RobotDescription {
-  std::string urdf;
-  std::string name;
-};
+// file, and which of its origins the parameters replaced): the data type the arm publishes.
+using RobotDescription = fba::RobotDescription;
 
 struct RobotParameters {
   static constexpr fba::Param<std::filesystem::path> kUrdf{

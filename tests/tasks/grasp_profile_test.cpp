@@ -1,19 +1,28 @@
 // tasks/grasp.yaml: the grasp loop with its arm, camera and hand as device slots, bound by a profile
-// (tasks/profiles/sim.yaml), and the robot's measured transforms, its parameters under every profile.
+// (tasks/profiles/sim.yaml), and the robot's measured transforms, its parameters under every profile
+// and the robot the live view is sent.
+#include <signal.h>
+
 #include <gtest/gtest.h>
 
 #include <map>
+#include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include <fba/registry.hpp>
 #include <fba/task.hpp>
 
 #include "support/built_plugins.hpp"
+#include "support/child_process.hpp"
 #include "support/fba_run.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
+#include "support/live_client.hpp"
 
 namespace {
 
@@ -97,6 +106,51 @@ TEST(GraspTask, TheRobotsMeasuredTransformsSetOnceReachEveryComponentThatReadsTh
     }
     EXPECT_EQ(found, expected) << name;
   }
+}
+
+namespace {
+
+// The origin of the URDF's joint `joint`: its xyz and rpy, six numbers (empty when it has none).
+std::vector<double> joint_origin(const std::string& urdf, const std::string& joint) {
+  const std::regex origin("<joint name=\"" + joint + "\"[\\s\\S]*?<origin xyz=\"([^\"]*)\" rpy=\"([^\"]*)\"");
+  std::smatch m;
+  if (!std::regex_search(urdf, m, origin)) return {};
+  std::istringstream numbers(m[1].str() + " " + m[2].str());
+  std::vector<double> v;
+  for (double x; numbers >> x;) v.push_back(x);
+  return v;
+}
+
+}  // namespace
+
+// The robot a live view draws is the one the components use: the arm sends it as a view, its URDF
+// with the measured transforms in place, so a base set on the task is where the page puts the base.
+TEST(GraspTask, TheLiveViewIsSentTheRobotWithItsMeasuredBase) {
+  using namespace fba::test;
+  const std::vector<double> base{0.12, -0.34, 0.05, 0, 0, 0.5};
+  Child child(fba_run_command({kGrasp, "--set", "robot.base_pose=[0.12,-0.34,0.05,0,0,0.5]", "--serve", "0"}));
+  const std::string prefix = "fba-run: live view at ";
+  const std::string line = child.read_line_with(prefix, kHangLimit);
+  ASSERT_EQ(line.rfind(prefix, 0), 0u) << child.read_until(prefix, {});
+  const LiveUrl url = parse_live_url(line.substr(prefix.size()));
+  LiveSocket socket(url);
+  beast::error_code ec;
+  socket.handshake(url.origin(), url.token, ec);
+  ASSERT_FALSE(ec) << ec.message();
+  nlohmann::json robot;
+  while (robot.is_null()) {
+    const std::string text = socket.read(ec);
+    ASSERT_FALSE(ec) << "the stream ended without the arm's robot: " << ec.message();
+    const nlohmann::json m = nlohmann::json::parse(text);
+    ASSERT_FALSE(m["type"] == "task" && m.contains("robot")) << "the task message carries no robot of its own";
+    if (m["type"] == "view" && m["port"] == "arm.robot") robot = m["view"];
+  }
+  child.wait(SIGINT, kHangLimit);
+  ASSERT_EQ(robot["kind"], "robot");
+  const std::vector<double> origin = joint_origin(robot["urdf"].get<std::string>(), "world_to_base");
+  ASSERT_EQ(origin.size(), 6u) << robot["urdf"];
+  for (std::size_t i = 0; i < 6; ++i) EXPECT_NEAR(origin[i], base[i], 1e-12) << i;
+  EXPECT_NE(robot["name"].get<std::string>().find("base_pose"), std::string::npos) << robot["name"];
 }
 
 // A measured transform of five numbers, set on the task: the task does not load, and each place

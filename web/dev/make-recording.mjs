@@ -60,10 +60,11 @@ const connections = [
 ].map(([from, to, feedback]) => ({ from, to, policy: 'lossless', capacity: 16, feedback: !!feedback }));
 
 const out = [];
-out.push({ type: 'task', run_id: 'dev-recording', task: 'grasp', file: 'tasks/grasp.yaml', components, connections, robot: { urdf } });
+out.push({ type: 'task', run_id: 'dev-recording', task: 'grasp', file: 'tasks/grasp.yaml', components, connections });
+out.push({ type: 'view', port: 'arm.robot', data_type: 'fba.RobotDescription', seq: 0, t: 0, view: { kind: 'robot', urdf, name: 'wrist_camera_arm.urdf' } });
 
 // A bottle: a cylinder of radius 3.5 cm, 19 cm tall, carved at a 4 mm edge; a shell of uncarved
-// leaves on the far side; the leaves near the two contacts marked to refine.
+// leaves on the far side; the leaves near the two contacts refined for grasping.
 const edge = 0.26 / 64;
 const occupied = [], uncarved = [], refine = [];
 for (let x = -0.06; x < 0.06; x += edge) for (let y = -0.06; y < 0.06; y += edge) for (let z = edge / 2; z < 0.19; z += edge) {
@@ -118,9 +119,11 @@ for (let k = 0; k < 12; k++) {
   candidates.push({ contacts: [c1, c2, [c2[0], c2[1], 0.12]], normals: [[-Math.cos(a), -Math.sin(a), 0], [Math.cos(a), Math.sin(a), 0], [Math.cos(a), Math.sin(a), 0]],
     approach: [0, 0, -1], score: 0.02 + 0.003 * k, palm: null });
 }
-const selected = { ...candidates[11], palm: { position: [0, 0, 0.2], rotation: [1, 0, 0, 0] } };
+candidates.reverse();  // best first
+candidates[0].palm = { position: [0, 0, 0.2], rotation: [1, 0, 0, 0] };
 t += 0.3;
-out.push({ type: 'view', port: 'synthesis.grasps', data_type: 'Grasps', seq: 0, t, view: { kind: 'grasps', candidates, selected } });
+out.push({ type: 'view', port: 'synthesis.candidates', data_type: 'fba.GraspCandidates', seq: 4, t, view: { kind: 'grasps', candidates, selected: null, total: 40 } });
+out.push({ type: 'view', port: 'synthesis.grasp', data_type: 'fba.Grasp', seq: 0, t, view: { kind: 'grasps', candidates: [], selected: { ...candidates[0], palm: null } } });
 out.push({ type: 'event', index: 5, t, source: 'synthesis', name: 'selected', payload: { score: selected.score, views: 5 } });
 out.push({ type: 'event', index: 6, t: t + 1, source: 'hand', name: 'held', payload: {} });
 out.push({ type: 'end', outcome: 'success', exit_code: 0, reason: 'hand.held: stop_success', summary: {} });

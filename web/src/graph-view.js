@@ -1,4 +1,3 @@
-import ELK from 'elkjs/lib/elk.bundled.js';
 import { formatCount, formatRate, svg, el } from './dom.js';
 import { rankLayout } from './rank-layout.js';
 
@@ -13,7 +12,16 @@ const CHAR = 6.6;     // an estimate of a label's character width, for sizing no
 // Above this many components the graph is laid out by rank (rank-layout.js), not by ELK.
 export const ELK_MAX_COMPONENTS = 150;
 
-const elk = new ELK();
+// ELK, loaded and set up when the first graph is laid out, not when the page starts: its set-up is
+// long, and the live stream and the first drawing should not wait for it.
+let elk = null;
+async function elkLayout(graph) {
+  if (!elk) {
+    const { default: ELK } = await import('elkjs/lib/elk.bundled.js');
+    elk ??= new ELK();
+  }
+  return elk.layout(graph);
+}
 
 // "comp.port" -> [component, port]: the longest component name that prefixes it, since a name
 // inside a composite may itself hold dots. `names` is a Set.
@@ -73,7 +81,7 @@ export class GraphView {
     const start = performance.now();
     let laid;
     try {
-      laid = await elk.layout(graph);
+      laid = await elkLayout(graph);
     } catch (e) {
       this.caption.textContent = `laid out by rank: ELK failed (${e.message ?? e})`;
       return;

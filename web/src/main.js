@@ -110,6 +110,7 @@ state.on('view', (msg) => {
     case 'grasps': scene.setGrasps(msg); break;
     case 'regions': scene.setRegions(msg); break;
     case 'joints': scene.setJoints(msg); break;
+    case 'robot': scene.setRobot(msg); break;
     case 'trajectory': scene.setTrajectory(msg); break;
   }
 });

@@ -64,6 +64,9 @@ function checkView(problems, where, v) {
       need(problems, where, isNumberArray(v.positions) && Array.isArray(v.names) && v.positions.length === v.names.length,
         '"positions" must be numbers, one per name');
       break;
+    case 'robot':
+      need(problems, where, isString(v.urdf), '"urdf" must be the URDF\'s text');
+      break;
     case 'trajectory':
       need(problems, where, Array.isArray(v.names) && Array.isArray(v.points) &&
         v.points.every((p) => isObject(p) && isNumberArray(p.positions, v.names.length)), '"points" must each have "positions", one per name');
@@ -94,8 +97,6 @@ export function check(msg) {
         need(problems, `${where} component ${c?.name}`, Array.isArray(c?.inputs) && Array.isArray(c?.outputs), '"inputs" and "outputs" must be lists'));
       need(problems, where, Array.isArray(msg.connections) && msg.connections.every((c) => isObject(c) && isString(c.from) && isString(c.to)),
         '"connections" must be a list of {from, to}');
-      need(problems, where, msg.robot === undefined || msg.robot === null || (isObject(msg.robot) && isString(msg.robot.urdf)),
-        '"robot" must be null or {"urdf": text}');
       break;
     case 'stats':
       need(problems, where, isNumber(msg.t), '"t" must be a number');

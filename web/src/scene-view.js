@@ -5,14 +5,13 @@ import { el } from './dom.js';
 
 // The 3D scene in the world frame (z up, the table at z = 0): the octree model's occupied leaves as
 // one InstancedMesh of boxes coloured by height, the space not yet carved as translucent boxes, the
-// leaves synthesis asked to refine and its regions highlighted, the camera poses visited as numbered
-// frusta, the grasps, the reach trajectory as the path of the palm (the robot's URDF posed at each
-// waypoint), and the robot from the task's URDF. It renders only when something changed.
+// leaves refined for grasping (a grasp criterion split their parent: synthesis's regions, a
+// graspable contour) and synthesis's regions highlighted, the camera poses visited as numbered
+// frusta, the grasps, the reach trajectory as the path of the palm (the robot posed at each
+// waypoint), and the robot the arm sends. It renders only when something changed.
 //
-// The grasp views (fba.Grasp) hold the selected grasp only: the candidates it was chosen from and
-// the palm's pose are what synthesis and the reach planner report (summary.json's results
-// synthesis.candidates and reach.pregrasp_palm), which the end message carries; the page adds them
-// then (setRunEnd).
+// The grasps come from two grasp views: synthesis's candidates after each analysis (the best one
+// with its palm at the pregrasp), and the selected grasp once there is one.
 
 const COLORS = {
   low: new THREE.Color(0x2f6db5),
@@ -33,7 +32,7 @@ const POSE_COLORS = [0x2bb673, 0x4cc9f0, 0xf4a261, 0xb388eb];
 export const LAYERS = [
   ['occupied', 'occupied leaves', '#c99a4a'],
   ['uncarved', 'not yet carved', '#8fa8c8'],
-  ['refine', 'to refine', '#ff3d9a'],
+  ['refine', 'refined for grasping', '#ff3d9a'],
   ['views', 'camera views, in order', '#2bb673'],
   ['candidates', 'candidate grasps', '#7fb8d8'],
   ['selected', 'selected grasp', '#e74c3c'],
@@ -98,11 +97,10 @@ export class SceneView {
     this.message = el('div', { class: 'panel-message' }, 'no 3D data yet: models, camera views and grasps appear here when the task sends them');
     container.append(this.legend, this.info, this.message);
     this.stats = { occupiedInstances: 0, occupiedInMessage: 0, uncarvedInstances: 0, refineInstances: 0, poses: 0,
-      candidates: 0, selected: false, palm: false, robotLinks: 0, modelPort: null, modelSeq: null,
+      candidates: 0, candidatesFound: 0, selected: false, palm: false, robotLinks: 0, modelPort: null, modelSeq: null,
       trajectoryPort: null, trajectoryWaypoints: 0, trajectoryPathPoints: 0, trajectoryLink: null, trajectoryProblem: null };
     this.poseLists = new Map();
-    this.graspView = null;
-    this.reported = { candidates: null, palm: null };
+    this.graspViews = new Map();  // port -> its newest grasps view
     try {
       this.renderer = new THREE.WebGLRenderer({ antialias: true });
     } catch (e) {
@@ -193,10 +191,12 @@ export class SceneView {
   setTask(task) {
     this.stats.robotLinks = 0;
     this.poseLists.clear();
-    this.graspView = null;
-    this.reported = { candidates: null, palm: null };
+    this.graspViews.clear();
     this.trajectory = null;
-    Object.assign(this.stats, { candidates: 0, selected: false, palm: false, trajectoryPort: null, trajectoryWaypoints: 0,
+    this.robot = null;
+    this.robotError = null;
+    this.joints = null;
+    Object.assign(this.stats, { candidates: 0, candidatesFound: 0, selected: false, palm: false, trajectoryPort: null, trajectoryWaypoints: 0,
       trajectoryPathPoints: 0, trajectoryLink: null, trajectoryProblem: null });
     if (!this.renderer) return;
     for (const key of ['views', 'candidates', 'selected', 'trajectory', 'robot']) {
@@ -207,18 +207,7 @@ export class SceneView {
     this.setLeaves(this.occupied, [], true);
     this.setLeaves(this.uncarved, []);
     this.setLeaves(this.refine, []);
-    this.robot = null;
-    this.robotError = null;
     this.modelBox = null;
-    if (task.robot?.urdf) {
-      try {
-        this.robot = new UrdfRobot(task.robot.urdf);
-        this.layers.robot.add(this.robot.object);
-        this.stats.robotLinks = this.robot.linkCount;
-      } catch (e) {
-        this.robotError = `the robot's URDF could not be read: ${e.message}`;
-      }
-    }
     this.fitted = false;
     this.updateInfo();
     this.invalidate();
@@ -339,19 +328,21 @@ export class SceneView {
   }
 
   setGrasps(msg) {
-    this.graspView = msg.view;
+    this.graspViews.set(msg.port, msg.view);
     this.renderGrasps();
   }
 
-  // The grasps drawn: the view's candidates, or those synthesis reported; its selected grasp, with
-  // the palm the reach planner reported when the view has none.
+  // The grasps drawn: the candidates of the newest analysis, the selected grasp, and the palm of
+  // the best candidate (the selected one, once there is one) at the pregrasp.
   renderGrasps() {
-    const v = this.graspView ?? { candidates: [], selected: null };
-    const candidates = v.candidates.length ? v.candidates : (this.reported.candidates ?? []);
-    const selected = v.selected ? { ...v.selected, palm: v.selected.palm ?? this.reported.palm } : null;
+    const views = [...this.graspViews.values()];
+    const candidates = views.flatMap((v) => v.candidates);
+    const selected = views.find((v) => v.selected)?.selected ?? null;
+    const palm = selected?.palm ?? candidates.find((g) => g.palm)?.palm ?? null;
     this.stats.candidates = candidates.length;
+    this.stats.candidatesFound = views.reduce((n, v) => n + (v.total ?? v.candidates.length), 0);
     this.stats.selected = !!selected;
-    this.stats.palm = !!selected?.palm;
+    this.stats.palm = palm;
     this.selectedGrasp = selected;
     if (!this.renderer) return;
     for (const key of ['candidates', 'selected']) {
@@ -394,27 +385,18 @@ export class SceneView {
       }
     }
     if (selected) this.layers.selected.add(this.graspObject(selected));
+    if (palm) this.layers[selected ? 'selected' : 'candidates'].add(this.palmObject(palm));
     this.updateInfo();
     this.invalidate();
   }
 
-  // The run is over: what the grasp views do not carry, from the summary's results (see the top).
+  // The run is over: a reach trajectory whose view never came (the run ended before the next
+  // update) is drawn from the summary's results.
   setRunEnd(summary) {
-    const results = Object.values(summary?.components ?? {}).map((c) => c?.results ?? {});
-    const found = (pick) => results.map(pick).find((x) => x !== undefined && x !== null);
-    const candidates = found((r) => (Array.isArray(r.candidates?.grasps) ? r.candidates.grasps : undefined));
-    const reach = found((r) => (r.reach?.pregrasp_palm || r.reach?.trajectory ? r.reach : undefined));
-    this.reported.candidates = candidates?.filter((g) => Array.isArray(g?.contacts) && g.contacts.every((p) => Array.isArray(p) && p.length === 3)) ?? null;
-    const palm = reach?.pregrasp_palm;
-    if (palm && Array.isArray(palm.position) && palm.position.length === 3 && Array.isArray(palm.quaternion_wxyz) && palm.quaternion_wxyz.length === 4) {
-      this.reported.palm = { position: palm.position, rotation: palm.quaternion_wxyz, at: 'pregrasp' };
-    }
-    this.reach = reach ?? null;
-    // A run whose trajectory view never came (ended before the next update) draws the summary's.
+    const reach = Object.values(summary?.components ?? {}).map((c) => c?.results?.reach).find((r) => r?.trajectory);
     if (!this.trajectory && Array.isArray(reach?.trajectory?.names) && Array.isArray(reach?.trajectory?.points)) {
       this.setTrajectory({ port: 'summary: reach', view: { kind: 'trajectory', ...reach.trajectory } });
     }
-    if (this.graspView || this.reported.candidates?.length) this.renderGrasps();
   }
 
   // A joint trajectory (the reach planner's): the path of the link it carries, the robot's URDF
@@ -488,19 +470,45 @@ export class SceneView {
       const dir = new THREE.Vector3(...g.approach).normalize();
       group.add(new THREE.ArrowHelper(dir, centre.clone().addScaledVector(dir, -0.1), 0.1, COLORS.approach, 0.018, 0.01));
     }
-    if (g.palm) {
-      const palm = new THREE.Group();
-      palm.position.set(...g.palm.position);
-      palm.quaternion.copy(quaternion(g.palm.rotation));
-      const plate = new THREE.Mesh(new THREE.BoxGeometry(0.09, 0.06, 0.01),
-        new THREE.MeshStandardMaterial({ color: COLORS.palm, transparent: true, opacity: 0.5 }));
-      palm.add(plate, new THREE.AxesHelper(0.04));
-      group.add(palm);
-    }
     return group;
   }
 
+  // The palm at a pose: a plate with its axes (z along the approach).
+  palmObject(pose) {
+    const palm = new THREE.Group();
+    palm.position.set(...pose.position);
+    palm.quaternion.copy(quaternion(pose.rotation));
+    const plate = new THREE.Mesh(new THREE.BoxGeometry(0.09, 0.06, 0.01),
+      new THREE.MeshStandardMaterial({ color: COLORS.palm, transparent: true, opacity: 0.5 }));
+    palm.add(plate, new THREE.AxesHelper(0.04));
+    return palm;
+  }
+
+  // The robot as the arm reads it (its URDF with the measured transforms in place), posed by the
+  // newest joints, and the reach trajectory drawn with it.
+  setRobot(msg) {
+    if (this.renderer) {
+      disposeTree(this.layers.robot);
+      this.layers.robot.clear();
+    }
+    this.robot = null;
+    this.robotError = null;
+    this.stats.robotLinks = 0;
+    try {
+      this.robot = new UrdfRobot(msg.view.urdf);
+      if (this.renderer) this.layers.robot.add(this.robot.object);
+      this.stats.robotLinks = this.robot.linkCount;
+      if (this.joints) this.robot.setJoints(this.joints.names, this.joints.positions);
+    } catch (e) {
+      this.robotError = `the robot's URDF could not be read: ${e.message}`;
+    }
+    this.drawTrajectory();
+    this.updateInfo();
+    this.invalidate();
+  }
+
   setJoints(msg) {
+    this.joints = msg.view;
     if (!this.robot) return;
     this.robot.setJoints(msg.view.names, msg.view.positions);
     this.invalidate();
@@ -528,15 +536,16 @@ export class SceneView {
     const s = this.stats;
     const lines = [];
     if (s.modelPort) lines.push(`${s.modelPort} #${s.modelSeq ?? '?'}: ${s.occupiedInstances.toLocaleString()} occupied, ` +
-      `${s.uncarvedInstances.toLocaleString()} not carved, ${s.refineInstances.toLocaleString()} to refine` +
+      `${s.uncarvedInstances.toLocaleString()} not carved, ${s.refineInstances.toLocaleString()} refined for grasping` +
       (s.regions ? `, ${s.regions} regions` : ''));
     const posePorts = [...this.poseLists.entries()];
     if (posePorts.length) lines.push(posePorts.map(([port, list], k) => el('span', {},
       el('span', { class: 'swatch', style: `background:#${new THREE.Color(POSE_COLORS[k % POSE_COLORS.length]).getHexString()}` }),
       ` ${port}: ${list.length} pose${list.length === 1 ? '' : 's'}  `)));
     if (s.candidates || s.selected) lines.push(`${s.candidates} candidate grasp${s.candidates === 1 ? '' : 's'}` +
+      (s.candidatesFound > s.candidates ? ` of ${s.candidatesFound}` : '') +
       (this.selectedGrasp ? `, selected: score ${this.selectedGrasp.score?.toFixed?.(4) ?? '?'}` : ', none selected') +
-      (this.selectedGrasp?.palm?.at === 'pregrasp' ? ' (palm at the pregrasp)' : ''));
+      (s.palm ? `, the ${this.selectedGrasp ? 'selected' : 'best'} one's palm at the pregrasp` : ''));
     if (s.trajectoryPort) lines.push(`${s.trajectoryPort}: ${s.trajectoryWaypoints} waypoints` +
       (s.trajectoryLink ? `, the ${s.trajectoryLink}'s path drawn` : `, not drawn: ${s.trajectoryProblem}`));
     if (this.robot) lines.push(`robot ${this.robot.name}: ${s.robotLinks} links`);

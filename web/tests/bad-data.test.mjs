@@ -14,7 +14,7 @@ const template = fs.readFileSync(path.join(process.argv[i + 1], 'report.html'), 
 const WAIT = { timeout: 600_000, polling: 100 };
 
 const task = {
-  type: 'task', run_id: 'r', task: 'bad_data', file: 'bad.yaml', robot: null,
+  type: 'task', run_id: 'r', task: 'bad_data', file: 'bad.yaml',
   components: [
     { name: 'a', type: 'examples.counter', kind: 'sensor', doc: '', inputs: [], outputs: [{ name: 'out', type: 'int' }] },
     { name: 'b', type: 'examples.sink', kind: 'actuator', doc: '', inputs: [{ name: 'in', type: 'int' }], outputs: [] },

@@ -1,10 +1,11 @@
 // The grasp task's run watched live, then its report opened from disk: fba-run tasks/grasp.yaml
 // --serve 0 --serve-keep --output-dir D in Debian's Chromium. Live, the model renders as one box per
 // occupied leaf of the newest model message, every camera pose visited is there in order, the
-// reach trajectory is drawn as the palm's path and the grasp view holds the candidates synthesis
-// reported and the palm; after the run fba-run keeps serving it (a page opened then is sent the
-// whole run) until SIGTERM, and exits with the run's status; D/report.html opens from file:// with
-// no server and shows the same. Conditions are waited for, never a time.
+// reach trajectory is drawn as the palm's path by the robot the arm sent, and the grasp views hold
+// the candidates synthesis found (the first few) and the palm at the pregrasp the planner chose;
+// after the run fba-run keeps serving it (a page opened then is sent the whole run) until SIGTERM,
+// and exits with the run's status; D/report.html opens from file:// with no server and shows the
+// same. Conditions are waited for, never a time.
 import fs from 'node:fs';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
@@ -54,12 +55,17 @@ function expectTheRunDrawn(where, s, summary) {
   }
   expect(s.poses['arm.camera_pose'].length >= 3, `${where}: ${s.poses['arm.camera_pose'].length} camera poses, fewer than the 3 initial views`);
 
-  // The grasp view: the selected grasp, the candidates synthesis reported and the palm the reach planner placed.
+  // The grasp views: the selected grasp, the first candidates of the analysis it was selected on
+  // (the summary has them all) and its palm at the pregrasp, where the reach planner put it.
   const candidates = summary.components.synthesis?.results?.candidates?.grasps;
   expect(Array.isArray(candidates) && candidates.length > 0, `${where}: the summary holds no candidates from synthesis`);
   expect(s.model.selected, `${where}: no selected grasp drawn`);
-  expect(s.model.candidates === candidates.length, `${where}: ${s.model.candidates} candidates drawn, synthesis reported ${candidates.length}`);
-  expect(s.model.palm, `${where}: the selected grasp is drawn without its palm`);
+  expect(s.model.candidatesFound === candidates.length && s.model.candidates > 0 && s.model.candidates <= candidates.length,
+    `${where}: ${s.model.candidates} candidates drawn of ${s.model.candidatesFound}, synthesis reported ${candidates.length}`);
+  const palm = summary.components.reach.results.reach.pregrasp_palm.position;
+  const palmOff = s.model.palm ? Math.hypot(...s.model.palm.position.map((x, i) => x - palm[i])) : Infinity;
+  expect(palmOff < 1e-4, `${where}: the palm is drawn at ${JSON.stringify(s.model.palm?.position)}, the planner's pregrasp at ${JSON.stringify(palm)}`);
+  expect(s.model.robotLinks > 0, `${where}: no robot drawn`);
 
   // The reach trajectory: the palm's path, a point per waypoint, posed by the page's URDF as the
   // planner's kinematics pose it (the palm at the pregrasp joints where the planner said).
@@ -87,6 +93,12 @@ run(async (cleanup) => {
   const url = await fba.url;
   const live = await browser.context.newPage();
   live.on('pageerror', (e) => pageErrors.push(`live: ${e.message}`));
+  // When the candidates came, on the run's clock: each analysis's while the run goes on.
+  const candidateTimes = [];
+  live.on('websocket', (ws) => ws.on('framereceived', ({ payload }) => {
+    const m = JSON.parse(payload);
+    if (m.type === 'view' && m.port === 'synthesis.candidates') candidateTimes.push(m.t.toFixed(2));
+  }));
   await live.goto(url);
 
   await step('live: the graph of the grasp task is drawn', async () => {
@@ -123,6 +135,7 @@ run(async (cleanup) => {
     console.log(`   poses: ${Object.entries(s.poses).map(([p, l]) => `${p} ${l.length}`).join(', ')}; ${s.model.candidates} candidates; ` +
       `the ${s.model.trajectoryLink}'s path: ${s.model.trajectoryPathPoints} points`);
     expectTheRunDrawn('live', s, end.summary);
+    console.log(`   the live page was sent candidates at t = ${candidateTimes.join(', ')} s; the run lasted ${end.summary.wall_time_s?.toFixed?.(2) ?? "?"} s`);
   });
 
   await step('live: a page opened after the end is sent the whole run', async () => {

@@ -5,7 +5,6 @@
 
 #include <chrono>
 #include <cstdint>
-#include <filesystem>
 #include <map>
 #include <string>
 #include <thread>
@@ -52,10 +51,9 @@ struct PageRun {
 // Runs `config` with its live feed published to a server, sampled every `period`, and a page
 // connected to the server from before the start to the end; `record` keeps the run (report.html).
 // The set-up every live feed test shares.
-PageRun run_with_a_page(const fba::TaskConfig& config, const std::string& run_id, const std::filesystem::path& dir,
-                        std::chrono::milliseconds period, fba::serve::RunRecord& record) {
+PageRun run_with_a_page(const fba::TaskConfig& config, const std::string& run_id, std::chrono::milliseconds period, fba::serve::RunRecord& record) {
   PageRun run;
-  fba::serve::LiveFeed feed(record, config, run_id, dir);
+  fba::serve::LiveFeed feed(record, config, run_id);
   fba::serve::LiveServer server({}, record);
   feed.publish_to(&server);
   const LiveUrl url = parse_live_url(server.url());
@@ -89,7 +87,7 @@ TEST(LiveFeed, ARunningTaskReachesAPageAsTaskStatsViewsEventsAndTheEnd) {
   TempDir dir;
   const fba::TaskConfig config = fba::load_task_text(kChain, "fed.yaml", dir.path(), built_plugins());
   fba::serve::RunRecord record;
-  const PageRun run = run_with_a_page(config, "feed-run", dir.path(), std::chrono::milliseconds(1), record);
+  const PageRun run = run_with_a_page(config, "feed-run", std::chrono::milliseconds(1), record);
   fba::register_view("fba.Int", nullptr);
   EXPECT_EQ(run.watched, (std::vector<std::string>{"src.out", "pass.out"}));  // in the task's order
 
@@ -142,7 +140,7 @@ on:
   const fba::TaskConfig config = fba::load_task_text(text, "burst.yaml", dir.path(), built_plugins());
   fba::serve::RunRecord record;
   // The live view's period: the burst is over long before.
-  const PageRun run = run_with_a_page(config, "burst-run", dir.path(), std::chrono::milliseconds(100), record);
+  const PageRun run = run_with_a_page(config, "burst-run", std::chrono::milliseconds(100), record);
   fba::register_view("fba.Int", nullptr);
   ASSERT_EQ(run.result.outcome, fba::Outcome::Success) << run.result.reason;
 

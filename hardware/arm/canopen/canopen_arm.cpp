@@ -111,7 +111,7 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
         "Real arm of CiA 402 drives on a CANopen bus (SLCAN or SocketCAN), one node per joint, "
         "kinematics and limits from a URDF (the twin of sim.arm): moves to camera poses or joint "
         "targets with synchronised profile position moves, quick-stops on any fault.");
-    spec.add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable, kDevice, kBitrate, kNodeIds,
+    spec.add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kRobot, kArrived, kUnreachable, kDevice, kBitrate, kNodeIds,
              kCountsPerRad, kZeroCounts);
     Robot::add(spec)
         .add(kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate, kPositionTolerance, kOrientationTolerance, kAttempts,

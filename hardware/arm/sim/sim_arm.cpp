@@ -42,7 +42,7 @@ class SimArm final : public fba::arm::ArmComponent {
     fba::Spec spec = fba::Spec::actuator("sim.arm",
                                          "Simulated 6-joint arm with a wrist camera (URDF, Orocos KDL): moves to camera poses or joint "
                                          "targets within the joint limits, in task time (the twin of hw.canopen_arm).");
-    spec.add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kArrived, kUnreachable);
+    spec.add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kRobot, kArrived, kUnreachable);
     Robot::add(spec).add(kBaseLink, kCameraLink, kInitial, kSpeed, kAcceleration, kRate, kPositionTolerance, kOrientationTolerance,
                          kAttempts, kPublishInitial, kCollisionCheck);
     return spec;

@@ -8,6 +8,7 @@
 #include "fba/types/octree.hpp"
 #include "fba/types/pose.hpp"
 #include "fba/types/regions_of_interest.hpp"
+#include "fba/types/robot_description.hpp"
 #include "fba/view.hpp"
 #include "views.hpp"
 
@@ -21,7 +22,9 @@ const bool robot_types_views_registered = [] {
   register_view(type_of<JointState>()->name, &joint_state_view);
   register_view(type_of<JointTrajectory>()->name, &trajectory_view);
   register_view(type_of<Grasp>()->name, &grasp_view);
+  register_view(type_of<GraspCandidates>()->name, &grasp_candidates_view);
   register_view(type_of<RegionsOfInterest>()->name, &regions_view);
+  register_view(type_of<RobotDescription>()->name, &robot_view);
   register_view(type_of<Octree>()->name, &model_view);
   return true;
 }();

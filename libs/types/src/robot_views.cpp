@@ -1,5 +1,7 @@
 // The views of the robot types: a pose, a joint state, a trajectory, a grasp, regions of interest.
 // World frame, metres, radians, as the types hold them.
+#include <algorithm>
+#include <optional>
 
 #include "fba/types/grasp.hpp"
 #include "fba/types/joint_state.hpp"
@@ -7,6 +9,7 @@
 #include "fba/types/joint_trajectory_json.hpp"
 #include "fba/types/pose.hpp"
 #include "fba/types/regions_of_interest.hpp"
+#include "fba/types/robot_description.hpp"
 #include "view_json.hpp"
 #include "views.hpp"
 
@@ -21,9 +24,9 @@ json numbers(const std::vector<double>& values, double scale) {
 }
 
 // GRASP of docs/live-view.md: contacts (thumb first) and their normals (unit, into the object),
-// the palm's approach (unit), the total score; the type carries no palm pose. Besides: each
-// score, the pregrasp and the views the model had.
-json grasp_json(const Grasp& g) {
+// the palm's approach (unit), the total score and the palm's pose when known. Besides: each score,
+// the pregrasp and the views the model had.
+json grasp_json(const Grasp& g, const std::optional<Eigen::Isometry3d>& palm = std::nullopt) {
   json contacts = json::array(), normals = json::array();
   for (const GraspContact& c : g.contacts) {
     contacts.push_back(xyz(c.position));
@@ -33,7 +36,7 @@ json grasp_json(const Grasp& g) {
           {"normals", std::move(normals)},
           {"approach", xyz(g.approach, kUnit)},
           {"score", number(g.scores.total, kUnit)},
-          {"palm", nullptr},
+          {"palm", palm ? views::pose(*palm) : json(nullptr)},
           {"scores",
            {{"symmetry", number(g.scores.symmetry, kUnit)},
             {"safety_margin", number(g.scores.safety_margin, kUnit)},
@@ -92,6 +95,25 @@ std::string grasp_view(const Packet& p) {
   });
 }
 
+std::string grasp_candidates_view(const Packet& p) {
+  return guarded([&] {
+    const GraspCandidates& gc = p.get<GraspCandidates>();
+    json candidates = json::array();
+    for (const GraspCandidates::Candidate& c : gc.candidates) {
+      json g = grasp_json(c.grasp, c.palm);
+      g["reliable"] = c.reliable;
+      g["passed_over"] = c.passed_over;
+      candidates.push_back(std::move(g));
+    }
+    return dump({{"kind", "grasps"},
+                 {"candidates", std::move(candidates)},
+                 {"selected", nullptr},
+                 {"total", gc.total},
+                 {"views", gc.views},
+                 {"stamp", number(gc.stamp, kUnit)}});
+  });
+}
+
 std::string regions_view(const Packet& p) {
   return guarded([&] {
     const RegionsOfInterest& r = p.get<RegionsOfInterest>();
@@ -106,6 +128,13 @@ std::string regions_view(const Packet& p) {
     for (const auto& s : r.points)
       points.push_back({{"position", xyz(s.position)}, {"normal", xyz(s.normal, kUnit)}, {"group", s.group}});
     return dump({{"kind", "regions"}, {"boxes", std::move(boxes)}, {"points", std::move(points)}, {"model_views", r.model_views}});
+  });
+}
+
+std::string robot_view(const Packet& p) {
+  return guarded([&] {
+    const RobotDescription& r = p.get<RobotDescription>();
+    return dump({{"kind", "robot"}, {"urdf", r.urdf}, {"name", r.name}});
   });
 }
 

@@ -14,6 +14,7 @@
 #include "fba/types/octree.hpp"
 #include "fba/types/pose.hpp"
 #include "fba/types/regions_of_interest.hpp"
+#include "fba/types/robot_description.hpp"
 #include "fba/types/silhouette.hpp"
 
 namespace {
@@ -25,10 +26,12 @@ namespace {
   fba::type_of<fba::RegionsOfInterest>();
   fba::type_of<fba::TriangleMesh>();
   fba::type_of<fba::Grasp>();
+  fba::type_of<fba::GraspCandidates>();
   fba::type_of<fba::JointState>();
   fba::type_of<fba::GraspExecution>();
   fba::type_of<fba::JointTrajectory>();
   fba::type_of<fba::HandCommand>();
+  fba::type_of<fba::RobotDescription>();
   return true;
 }();
 }  // namespace

@@ -22,7 +22,9 @@ std::string pose_view(const Packet& p);           // fba.Pose: "pose"
 std::string joint_state_view(const Packet& p);    // fba.JointState: "joints"
 std::string trajectory_view(const Packet& p);     // fba.JointTrajectory: "trajectory"
 std::string grasp_view(const Packet& p);          // fba.Grasp: "grasps"
+std::string grasp_candidates_view(const Packet& p);  // fba.GraspCandidates: "grasps"
 std::string regions_view(const Packet& p);        // fba.RegionsOfInterest: "regions"
+std::string robot_view(const Packet& p);          // fba.RobotDescription: "robot"
 std::string model_view(const Packet& p);          // fba.Octree: "model"
 std::string frame_view(const Packet& p);          // fba.Frame: "image", JPEG
 std::string silhouette_view(const Packet& p);     // fba.Silhouette: "image", the mask as PNG, with its contours

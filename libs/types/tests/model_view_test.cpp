@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <ctime>
 #include <memory>
+#include <set>
+#include <vector>
 
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/image_set.hpp"
@@ -73,6 +75,18 @@ void expect_boxes_in_the_model(const json& v, const fba::Octree& m) {
 
 std::size_t boxes(const json& v, const char* kind) { return v[kind].size() / 4; }
 
+// The boxes of `kind` that are not among the occupied ones (centre and edge alike).
+std::size_t outside_the_occupied(const json& v, const char* kind) {
+  const auto box = [&](const char* k, std::size_t i) {
+    return std::vector<double>{v[k][i].get<double>(), v[k][i + 1].get<double>(), v[k][i + 2].get<double>(), v[k][i + 3].get<double>()};
+  };
+  std::set<std::vector<double>> occupied;
+  for (std::size_t i = 0; i < v["occupied"].size(); i += 4) occupied.insert(box("occupied", i));
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < v[kind].size(); i += 4) n += !occupied.count(box(kind, i));
+  return n;
+}
+
 double thread_cpu_ms() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
@@ -116,6 +130,43 @@ TEST(ModelView, MarksTheLeavesRefinedWhereSynthesisAsked) {
     ASSERT_TRUE(near.contains(c)) << "refine box " << i / 4 << " far from the region: " << c.transpose();
   }
   expect_boxes_in_the_model(v, *model);
+}
+
+// What the page marks as refined is model: every refine box is an occupied one, as every uncarved
+// box is, on a carved model; and it follows the regions of the moment: once synthesis asks for
+// another region, no leaf is marked refined where only the first one was.
+TEST(ModelView, RefinedLeavesAreOccupiedOnesWhereTheRegionsOfTheMomentAsked) {
+  const auto set = fba::vision::ImageSet::load(fba::test::kDinoPar);
+  fba::vision::CarverParams p;
+  p.max_depth = 6;
+  p.occupancy_threshold = 0.7;
+  fba::vision::OctreeCarver carver(p);
+  carver.set_bounds(kDinoBox);
+  fba::RegionsOfInterest first, second;
+  first.boxes.emplace_back(Eigen::Vector3d(-0.03, 0.0, -0.03), Eigen::Vector3d(0.0, 0.03, 0.0));
+  second.boxes.emplace_back(Eigen::Vector3d(-0.06, 0.03, -0.03), Eigen::Vector3d(-0.035, 0.068, 0.0));
+  carver.set_regions_of_interest(first);
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    const auto r = fba::vision::extract_silhouette(std::make_shared<const fba::Frame>(set.load_frame(i)));
+    ASSERT_TRUE(r.ok()) << r.error;
+    carver.add_view(*r.silhouette);
+  }
+  const json before = view_of_model(carver.snapshot());
+  carver.set_regions_of_interest(second);
+  const json after = view_of_model(carver.snapshot());
+  for (const json* v : {&before, &after}) {
+    ASSERT_GT(boxes(*v, "refine"), 0u);
+    EXPECT_EQ(outside_the_occupied(*v, "refine"), 0u);
+    EXPECT_EQ(outside_the_occupied(*v, "uncarved"), 0u);
+  }
+  // A refined leaf's parent met a region: the leaf lies within a parent's edge of it.
+  const auto near = [](const json& v, std::size_t i, const Eigen::AlignedBox3d& region) {
+    const double h = v["refine"][i + 3].get<double>() / 2;
+    return Eigen::AlignedBox3d(region.min().array() - 4 * h, region.max().array() + 4 * h)
+        .contains(Eigen::Vector3d(v["refine"][i], v["refine"][i + 1], v["refine"][i + 2]));
+  };
+  for (std::size_t i = 0; i < after["refine"].size(); i += 4)
+    ASSERT_TRUE(near(after, i, second.boxes[0])) << "refine box " << i / 4 << " left from the first region";
 }
 
 TEST(ModelView, TellsRefinedUncarvedAndCarvedLeavesApart) {

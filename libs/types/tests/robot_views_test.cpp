@@ -9,6 +9,7 @@
 #include <fba/types/joint_trajectory.hpp>
 #include <fba/types/pose.hpp>
 #include <fba/types/regions_of_interest.hpp>
+#include <fba/types/robot_description.hpp>
 
 #include "view_checks.hpp"
 
@@ -108,6 +109,53 @@ TEST(GraspView, IsTheSelectedGraspWithItsContactsNormalsAndApproach) {
   EXPECT_EQ(s["score"], 0.8125);
   EXPECT_TRUE(s["palm"].is_null());
   EXPECT_EQ(s["views"], json::array({0, 3, 4}));
+}
+
+TEST(GraspCandidatesView, HoldsEachCandidateInOrderAndTheBestOnesPalm) {
+  fba::GraspCandidates gc;
+  for (int k = 0; k < 3; ++k) {
+    fba::GraspCandidates::Candidate c;
+    for (int i = 0; i < 3; ++i) c.grasp.contacts[static_cast<std::size_t>(i)].position = Eigen::Vector3d(0.01 * i, 0.02 * k, 0.15);
+    c.grasp.approach = Eigen::Vector3d(0, 0, -1);
+    c.grasp.scores.total = 0.5 - 0.125 * k;
+    c.reliable = k == 1;
+    c.passed_over = k == 0;
+    gc.candidates.push_back(c);
+  }
+  const Eigen::Isometry3d palm = Eigen::Translation3d(0.05, -0.02, 0.3) * Eigen::AngleAxisd(2.5, Eigen::Vector3d(1, 0, 0));
+  gc.candidates[1].palm = palm;
+  gc.total = 40;
+  gc.views = 4;
+  const json v = view_of(gc);
+  ASSERT_EQ(v["kind"], "grasps");
+  EXPECT_TRUE(v["selected"].is_null()) << "candidates, none selected";
+  EXPECT_EQ(v["total"], 40);
+  EXPECT_EQ(v["views"], 4);
+  ASSERT_EQ(v["candidates"].size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    const json& c = v["candidates"][k];
+    EXPECT_EQ(c["score"], gc.candidates[k].grasp.scores.total);
+    EXPECT_LT((vec(c["contacts"][2]) - gc.candidates[k].grasp.contacts[2].position).norm(), 1e-9);
+    EXPECT_EQ(c["reliable"], gc.candidates[k].reliable);
+    EXPECT_EQ(c["passed_over"], gc.candidates[k].passed_over);
+    EXPECT_EQ(c["palm"].is_null(), k != 1);
+  }
+  const json& p = v["candidates"][1]["palm"];
+  ASSERT_TRUE(numbers(p["position"], 3) && numbers(p["rotation"], 4)) << p;
+  EXPECT_LT((vec(p["position"]) - palm.translation()).norm(), 1e-5);
+  const Eigen::Quaterniond q(p["rotation"][0].get<double>(), p["rotation"][1].get<double>(), p["rotation"][2].get<double>(),
+                             p["rotation"][3].get<double>());
+  EXPECT_LT(Eigen::AngleAxisd(q.normalized().toRotationMatrix().transpose() * palm.linear()).angle(), 1e-5);
+}
+
+TEST(RobotView, HoldsTheUrdfAsGivenAndItsName) {
+  fba::RobotDescription r;
+  r.urdf = "<robot name=\"arm\"><link name=\"base_link\"/></robot>\n";
+  r.name = "arm.urdf (with the parameters base_pose)";
+  const json v = view_of(r);
+  ASSERT_EQ(v["kind"], "robot");
+  EXPECT_EQ(v["urdf"], r.urdf);
+  EXPECT_EQ(v["name"], r.name);
 }
 
 TEST(RegionsView, HoldsEachBoxAsMinThenMaxAndSkipsEmptyOnes) {

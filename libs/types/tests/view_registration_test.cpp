@@ -36,6 +36,6 @@ TEST(ViewRegistration, ComesWithThePluginsThatUseTheTypes) {
   EXPECT_NE(view_of_type("fba.Frame"), nullptr);
   EXPECT_NE(view_of_type("fba.Pose"), nullptr);
   registry.load_plugin(fba::test::plugin_dir() + "/fba-vision.so");
-  for (const char* type : {"fba.Silhouette", "fba.Octree", "fba.Grasp", "fba.RegionsOfInterest"})
+  for (const char* type : {"fba.Silhouette", "fba.Octree", "fba.Grasp", "fba.GraspCandidates", "fba.RegionsOfInterest"})
     EXPECT_NE(view_of_type(type), nullptr) << type;
 }

@@ -44,6 +44,7 @@
 #include <fba/types/joint_state.hpp>
 
 #include "fba/motion/hand_geometry.hpp"
+#include "fba/motion/hand_placement.hpp"
 #include "fba/motion/reach_parameters.hpp"
 #include "fba/motion/reach_planner.hpp"
 #include "motion_hand.hpp"
@@ -125,6 +126,8 @@ class GraspSynthesisFilter final : public fba::Component {
   static constexpr fba::Out<fba::Grasp> kGrasp{"grasp", "the selected grasp (once)"};
   static constexpr fba::Out<fba::RegionsOfInterest> kRegions{
       "regions", "boxes of the candidate regions the model has not resolved: where the carver should refine and the next view should look"};
+  static constexpr fba::Out<fba::GraspCandidates> kCandidates{
+      "candidates", "after each analysis, its first candidates best first and the best one's palm at the pregrasp: for a live view"};
   static constexpr auto kFingerWidth = fba::Param<double>("finger_width", 0.02, "metres; two fingers closer than this collide").range(1e-4, 1);
   static constexpr auto kApertureMin =
       fba::Param<double>("aperture_min", 0.02, "metres: least distance from the thumb's contact to the fingers' midpoint").range(0, 2);
@@ -227,7 +230,7 @@ class GraspSynthesisFilter final : public fba::Component {
                                        "missing), so it has no joint_state input and selects grasps the arm may not reach."
 #endif
     );
-    spec.add(kOctree, kSilhouette, kGrasp, kRegions, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
+    spec.add(kOctree, kSilhouette, kGrasp, kRegions, kCandidates, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
              kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
@@ -262,8 +265,8 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.parallel_for = ctx.thread_pool().as_parallel_for();
 #if FBA_GRASP_REACH
     // The table is checked on the robot's own hand, as reach planning poses it.
-    if (ctx(kRobotHand))
-      params_.robot_hand = fba::grasp::motion_hand(ctx(fba::motion::ReachParameters::kStandoff), fba::motion::ReachParams{}.clearance);
+    standoff_ = ctx(fba::motion::ReachParameters::kStandoff);
+    if (ctx(kRobotHand)) params_.robot_hand = fba::grasp::motion_hand(standoff_, fba::motion::ReachParams{}.clearance);
     // The arm's reach, when its joints are wired: the planner's check, with its parameters and the
     // robot's.
     if (ctx(kJointState).connected()) {
@@ -345,6 +348,7 @@ class GraspSynthesisFilter final : public fba::Component {
       ~ReportReach() {
         self.report_reach(reach, views);
         self.report_candidates(result.candidates, reach, views);
+        self.show_candidates(result.candidates, reach, views);
       }
     } report_reach_at_end{*this, r, reach, views};
     std::optional<std::size_t> first_reachable;
@@ -420,6 +424,7 @@ class GraspSynthesisFilter final : public fba::Component {
     std::function<Verdict(std::size_t)> check;  // thread-safe
     std::function<Verdict(std::size_t)> check_plan;  // the whole plan, from where the arm stands
     nlohmann::json start;  // for the candidate selected: whether the arm starts from where it stands
+    std::optional<std::size_t> selected;  // the candidate selected on this model
     fba::ParallelFor parallel_for;
     std::size_t batch = 1;
     spdlog::logger* log = nullptr;
@@ -551,8 +556,8 @@ class GraspSynthesisFilter final : public fba::Component {
   // up on), best total first, as the result "candidates": {"views", "grasps": [GRASP...]}, each
   // GRASP as docs/live-view.md has it (contacts, inward normals, approach, score) with its
   // model_epsilon, whether it is reliable (its surface resolved) and whether the arm's reach check
-  // passed it over. The live page and report.html draw them beside the selected grasp: the data
-  // type carries the selected grasp only. Called from a destructor: throws nothing.
+  // passed it over: for the summary's readers (a live view has the first few, show_candidates).
+  // Called from a destructor: throws nothing.
   void report_candidates(const std::vector<fba::grasp::GraspCandidate>& candidates, const Reach& reach, int views) noexcept {
     try {
       auto xyz = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
@@ -577,6 +582,40 @@ class GraspSynthesisFilter final : public fba::Component {
     } catch (const std::exception& e) {
       ctx_.log().error("could not report the candidates: {}", e.what());
     }
+  }
+
+  // The first candidates of the model analysed, on the output `candidates` for a live view: a few,
+  // so that the view stays small, with the best one's palm (the one selected, else the first not
+  // passed over). Called from a destructor: throws nothing.
+  void show_candidates(const std::vector<fba::grasp::GraspCandidate>& candidates, const Reach& reach, int views) noexcept {
+    constexpr std::size_t kShown = 24;
+    try {
+      std::optional<std::size_t> best = reach.selected;
+      for (std::size_t i = 0; i < candidates.size() && !best; ++i)
+        if (!reach.passed_over(i)) best = i;
+      fba::GraspCandidates shown;
+      shown.total = candidates.size();
+      shown.views = views;
+      shown.stamp = ctx_(kOctree).packet().header().stamp_ns * 1e-9;
+      for (std::size_t i = 0; i < candidates.size() && i < kShown; ++i)
+        shown.candidates.push_back({candidates[i].grasp, !candidates[i].uncertain, reach.passed_over(i),
+                                    i == best ? pregrasp_palm(candidates[i].grasp) : std::nullopt});
+      ctx_(kCandidates).emit(std::move(shown));
+    } catch (const std::exception& e) {
+      ctx_.log().error("could not show the candidates: {}", e.what());
+    }
+  }
+
+  // Where the palm stands at a grasp's pregrasp, as the reach planner places it (world_from_palm);
+  // none when the hand cannot take the grasp, or without the reach planner in the build.
+  std::optional<Eigen::Isometry3d> pregrasp_palm([[maybe_unused]] const fba::Grasp& g) const {
+#if FBA_GRASP_REACH
+    const fba::motion::HandPlacement hand = fba::motion::place_hand(g, fba::motion::ReachParams{}.clearance);
+    if (!hand.why.empty()) return std::nullopt;
+    return Eigen::Translation3d(-hand.world_from_palm.linear().col(2) * standoff_) * hand.world_from_palm;
+#else
+    return std::nullopt;
+#endif
   }
 
   static double total_of(const fba::grasp::GraspCandidate* c) { return c ? c->grasp.scores.total : 0.0; }
@@ -628,6 +667,7 @@ class GraspSynthesisFilter final : public fba::Component {
                       "({:.3f}, {:.3f}, {:.3f})",
                       c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                       c.model_epsilon, r.centre.x(), r.centre.y(), r.centre.z());
+      reach.selected = i;
       select(c.grasp, c.model_epsilon, views, "surface");
       return true;
     }
@@ -644,6 +684,7 @@ class GraspSynthesisFilter final : public fba::Component {
                         "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
                         views, c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
                         c.model_epsilon);
+        reach.selected = i;
         select(c.grasp, c.model_epsilon, views, "contacts");
         return true;
       }
@@ -875,6 +916,7 @@ class GraspSynthesisFilter final : public fba::Component {
 #if FBA_GRASP_REACH
   std::vector<Eigen::AlignedBox3d> swept_;  // the hand's way in for candidates the model blocked (hand_sweep)
   std::optional<fba::motion::ReachPlanner> reach_, reach_plan_;  // with joint_state connected: the grasp alone, and the whole plan
+  double standoff_ = 0;  // metres back along the approach from the grasp to the pregrasp (the reach planner's)
   int reach_checks_ = 0;
   bool told_no_joints_ = false;
 #endif

@@ -93,10 +93,12 @@ inline std::string numbers(const std::vector<double>& v) {
   return t + "]";
 }
 
-// What synthesis did with the scene: the grasps, the regions asked for, the events and results.
+// What synthesis did with the scene: the grasps, the regions asked for, the candidates shown, the
+// events and results.
 struct Outcome {
   fba::RunResult run;
   std::vector<fba::Grasp> grasps;
+  std::vector<fba::GraspCandidates> candidates;
   std::vector<fba::RegionsOfInterest> regions;
   std::vector<fba::Event> events(const std::string& name) const {
     std::vector<fba::Event> out;
@@ -132,10 +134,12 @@ inline Outcome synthesise(const std::vector<double>& boxes, const Eigen::VectorX
   fba::Task task(fba::load_task_text(yaml, "reach_scene.yaml", ".", reach_registry()), options);
   const auto& grasps = task.tap("synthesis.grasp");
   const auto& regions = task.tap("synthesis.regions");
+  const auto& candidates = task.tap("synthesis.candidates");
   Outcome out;
   out.run = task.run();
   for (const auto& p : grasps) out.grasps.push_back(p.get<fba::Grasp>());
   for (const auto& p : regions) out.regions.push_back(p.get<fba::RegionsOfInterest>());
+  for (const auto& p : candidates) out.candidates.push_back(p.get<fba::GraspCandidates>());
   return out;
 }
 

@@ -1,6 +1,7 @@
 // grasp.synthesis through the component harness, on voxelised models of known shapes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <set>
@@ -165,6 +166,36 @@ TEST(GraspSynthesisComponent, AnUnresolvedModelEmitsRegionsAndPlansAView) {
   h.run();
   EXPECT_EQ(h.values<fba::Grasp>("grasp").size(), 1u);
   EXPECT_EQ(h.stage(), "grasp_synthesis");
+}
+
+// After each analysis, before a grasp is selected too, synthesis shows its first candidates for a
+// live view, best first: a few of those it found, the one it then selects among them.
+TEST(GraspSynthesisComponent, EachAnalysisShowsItsFirstCandidates) {
+  ComponentHarness h(built_plugins(), "grasp.synthesis");
+  h.push<fba::Octree>("octree", cylinder(3, [](const Eigen::Vector3d&) { return 4; }));
+  h.run();
+  ASSERT_TRUE(h.values<fba::Grasp>("grasp").empty());
+  const auto planned = nlohmann::json::parse(named(h.events(), "planning_performed").at(0).payload);
+  auto shown = h.values<fba::GraspCandidates>("candidates");
+  ASSERT_EQ(shown.size(), 1u);
+  EXPECT_EQ(shown[0].views, 3);
+  EXPECT_EQ(shown[0].total, planned.at("candidates").get<std::size_t>());
+  EXPECT_FALSE(shown[0].candidates.empty());
+  EXPECT_LT(shown[0].candidates.size(), shown[0].total) << "a few of them";
+
+  h.push<fba::Octree>("octree", cylinder(4));
+  h.run();
+  const auto grasps = h.values<fba::Grasp>("grasp");
+  ASSERT_EQ(grasps.size(), 1u);
+  shown = h.values<fba::GraspCandidates>("candidates");
+  ASSERT_EQ(shown.size(), 2u);
+  EXPECT_EQ(shown[1].views, 4);
+  const auto same = [&](const fba::GraspCandidates::Candidate& c) {
+    for (std::size_t i = 0; i < 3; ++i)
+      if (c.grasp.contacts[i].position != grasps[0].contacts[i].position) return false;
+    return true;
+  };
+  EXPECT_TRUE(std::any_of(shown[1].candidates.begin(), shown[1].candidates.end(), same)) << "the selected grasp is among them";
 }
 
 // A model resolved only to depth 4 of 6: its partial leaves are unresolved, the full ones beside

@@ -291,3 +291,23 @@ TEST(GraspSynthesisReach, TheHandsWayInForACandidateTheModelBlocksIsAskedFor) {
   EXPECT_EQ(sweeps, 3);
   for (const auto& b : free.regions[0].boxes) EXPECT_FALSE(b.sizes().x() > 0.15 && b.sizes().y() > 0.15);
 }
+
+// After each analysis synthesis shows its first candidates for a live view, the best one with its
+// palm at the pregrasp: on the model a grasp is selected from, the selected grasp, its palm where
+// the reach planner puts it.
+TEST(GraspSynthesisReach, TheCandidatesShownHoldTheSelectedGraspWithItsPalmWhereThePlannerPutsIt) {
+  const std::vector<double> box = reach::standing({0.06, 0.06, 0.06});
+  const reach::Outcome out = reach::synthesise(box, home(), "table_z: [0.001]");
+  ASSERT_EQ(out.grasps.size(), 1u) << out.run.reason;
+  ASSERT_FALSE(out.candidates.empty());
+  const fba::GraspCandidates& last = out.candidates.back();
+  EXPECT_EQ(last.total, nlohmann::json::parse(out.result("candidates"))["grasps"].size());
+  std::vector<const fba::GraspCandidates::Candidate*> with_palm;
+  for (const auto& c : last.candidates)
+    if (c.palm) with_palm.push_back(&c);
+  ASSERT_EQ(with_palm.size(), 1u) << "the best one's palm only";
+  EXPECT_TRUE(same_contacts(with_palm[0]->grasp, out.grasps[0])) << "the best is the one selected";
+  const fba::motion::ReachPlan plan = reach_planner().plan(out.grasps[0], reach::box_model_of(box), home());
+  ASSERT_TRUE(plan.ok) << plan.why;
+  EXPECT_TRUE(with_palm[0]->palm->isApprox(plan.pregrasp_palm, 1e-9)) << with_palm[0]->palm->matrix() << "\n" << plan.pregrasp_palm.matrix();
+}

@@ -2,9 +2,11 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
+#include <optional>
 #include <vector>
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "fba/data_type.hpp"
 #include "fba/types/robot_types_views.hpp"
@@ -45,8 +47,29 @@ struct Grasp {
   double stamp = 0.0;      // seconds, on the producer's clock
 };
 
+// The candidates one analysis of grasp synthesis weighed, in the order it weighs them (reliable
+// first, the most stable on the model first), the first few of them: what a live view draws while
+// the search goes on.
+struct GraspCandidates {
+  struct Candidate {
+    Grasp grasp;
+    bool reliable = false;     // its contacts and the surface around them resolved
+    bool passed_over = false;  // the arm's reach check passed it over
+    // The palm at the pregrasp (world_from_palm), for the best candidate only: the one selected on
+    // this model, else the first the arm's reach check did not pass over.
+    std::optional<Eigen::Isometry3d> palm;
+  };
+  std::vector<Candidate> candidates;
+  std::size_t total = 0;  // candidates the analysis found, those left out here included
+  int views = 0;          // the views of the model analysed
+  double stamp = 0.0;     // seconds, on the producer's clock
+};
+
 }  // namespace fba
 
 FBA_DATA_TYPE(fba::Grasp, "fba.Grasp",
               "Three contacts (thumb first; world positions, inward normals), approach, pregrasp "
               "(spread, aperture), where on the fingers the contacts lie (pinch_depth) and the S1/S3/S4 scores with their total.");
+FBA_DATA_TYPE(fba::GraspCandidates, "fba.GraspCandidates",
+              "The first candidates of one grasp analysis, best first: each grasp, whether it is reliable and whether the arm's "
+              "reach check passed it over, and the best one's palm at the pregrasp.");

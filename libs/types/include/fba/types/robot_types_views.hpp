@@ -1,6 +1,6 @@
 // The live views (fba/view.hpp) of the types that need only Eigen (Pose, JointState,
-// JointTrajectory, Grasp, RegionsOfInterest, Octree), registered when their library,
-// libfba_robot_types, loads.
+// JointTrajectory, Grasp, GraspCandidates, RegionsOfInterest, RobotDescription, Octree), registered
+// when their library, libfba_robot_types, loads.
 //
 // Each of those types' headers includes this one, so that whatever uses the type loads the library
 // that shows it: the reference below keeps the library among a plugin's needed libraries, which the
