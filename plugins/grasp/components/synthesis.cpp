@@ -173,6 +173,10 @@ class GraspSynthesisFilter final : public fba::Component {
       "metres: a candidate is left out when the model stands more than this nearer an open finger than its contact (it would be "
       "touched first) or reaches behind the palm; the hand of the sim's lift test. 0: off (a grasp that is never executed)")
                                              .range(0, 1);
+  static constexpr auto kLevelTiltDeg = fba::Param<double>(
+      "level_tilt_deg", 0.0,
+      "degrees: the reliable candidates whose approach is within this angle of straight down rank before the steeper ones (most "
+      "stable first within each), since a tilted hand lets objects slip in the lift; 0: no preference").range(0, 180);
   static constexpr auto kNormalErrorDeg = fba::Param<double>(
       "normal_error_deg", 0.0,
       "degrees the model's normals may be off the object's: a candidate must stay force closure with each normal turned this far "
@@ -231,7 +235,7 @@ class GraspSynthesisFilter final : public fba::Component {
 #endif
     );
     spec.add(kOctree, kSilhouette, kGrasp, kRegions, kCandidates, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kLevelTiltDeg, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -257,6 +261,7 @@ class GraspSynthesisFilter final : public fba::Component {
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);
+    params_.level_tilt_deg = ctx(kLevelTiltDeg);
     ply_leaves_ = fba::vision::PlyLeavesParameter::read(ctx);
     edge_margin_ = ctx(kEdgeMarginMm) / 1000;
     params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first

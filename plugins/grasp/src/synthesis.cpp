@@ -79,6 +79,7 @@ void check_params(const SynthesisParams& p) {
   require(p.min_model_epsilon >= 0 && std::isfinite(p.min_model_epsilon),
           "min_model_epsilon must be finite and >= 0, found " + num(p.min_model_epsilon));
   require(!p.rank_total || std::isfinite(*p.rank_total), "rank_total is not finite");
+  require(p.level_tilt_deg >= 0 && p.level_tilt_deg <= 180, "level_tilt_deg must be within [0, 180], found " + num(p.level_tilt_deg));
   require(p.path_tolerance >= 0 && std::isfinite(p.path_tolerance), "path_tolerance must be finite and >= 0, found " + num(p.path_tolerance));
 }
 
@@ -688,11 +689,18 @@ void select_candidates(std::vector<GraspCandidate>& all, const std::vector<Surfa
 
 // The reliable candidates (total at least `reliable`) first, the most stable on the model first;
 // the rest in their order, by total.
-void rank_reliable_first(std::vector<GraspCandidate>& candidates, double reliable) {
+void rank_reliable_first(std::vector<GraspCandidate>& candidates, double reliable, const Eigen::Vector3d& preferred, double level_tilt_deg) {
+  const double level_cos = std::cos(level_tilt_deg * kDeg);
+  auto level = [&](const GraspCandidate& c) {
+    return level_tilt_deg <= 0 || c.grasp.approach.normalized().dot(preferred.normalized()) >= level_cos;
+  };
   std::stable_sort(candidates.begin(), candidates.end(), [&](const auto& a, const auto& b) {
     const bool ra = a.grasp.scores.total >= reliable, rb = b.grasp.scores.total >= reliable;
     if (ra != rb) return ra;
-    return ra && a.model_epsilon > b.model_epsilon;
+    if (!ra) return false;
+    const bool la = level(a), lb = level(b);
+    if (la != lb) return la;
+    return a.model_epsilon > b.model_epsilon;
   });
 }
 
@@ -717,7 +725,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   const CandidateSearch search(s, nb, region_of, result.boundary_distance, pool, result.centre, p);
   std::vector<GraspCandidate> all = search_candidates(search, thumbs, p.parallel_for, result);
   select_candidates(all, s, p, result);
-  if (p.rank_total) rank_reliable_first(result.candidates, *p.rank_total);
+  if (p.rank_total) rank_reliable_first(result.candidates, *p.rank_total, p.preferred_approach, p.level_tilt_deg);
   return result;
 }
 

@@ -419,6 +419,30 @@ TEST(GraspSynthesis, ReliableCandidatesComeMostStableFirst) {
   EXPECT_EQ(ranked.candidates.front().model_epsilon, best_reliable_epsilon);
 }
 
+// On a ball every tilt of the hand has candidates: with level_tilt_deg the reliable ones whose
+// approach is within that angle of straight down come first, most stable first within each.
+TEST(GraspSynthesis, LevelApproachesRankBeforeSteepOnesAmongTheReliable) {
+  auto samples = sphere(0.04, 1500);
+  estimate_curvature(samples, 0.006);
+  SynthesisParams p = params_for(0.003);
+  p.rank_total = 0;  // every candidate reliable: the ranking alone is checked
+  auto tilt_deg = [](const GraspCandidate& c) { return std::acos(std::clamp(-c.grasp.approach.normalized().z(), -1.0, 1.0)) * 180 / kPi; };
+  const SynthesisResult any = synthesise(samples, p);
+  ASSERT_GT(any.candidates.size(), 2u);
+  ASSERT_GT(tilt_deg(any.candidates.front()), 30) << "the most stable is steep: the preference has something to change";
+  p.level_tilt_deg = 30;
+  const SynthesisResult ranked = synthesise(samples, p);
+  ASSERT_EQ(ranked.candidates.size(), any.candidates.size());
+  bool level = true;
+  for (std::size_t i = 0; i < ranked.candidates.size(); ++i) {
+    const bool here = tilt_deg(ranked.candidates[i]) <= 30;
+    EXPECT_FALSE(here && !level) << "a level candidate after a steep one at " << i;
+    if (i > 0 && here == level) EXPECT_LE(ranked.candidates[i].model_epsilon, ranked.candidates[i - 1].model_epsilon) << i;
+    level = here;
+  }
+  EXPECT_LE(tilt_deg(ranked.candidates.front()), 30);
+}
+
 // The thumb at x = -0.03, the fingers at x = +0.03 (y = +-0.02), 5 cm above the table, from above.
 Grasp grasp_across_x(double z) {
   Grasp g;

@@ -126,6 +126,11 @@ struct SynthesisParams {
   double normal_error_deg = 0;
   double min_model_epsilon = 0;
   std::optional<double> rank_total;
+  // With rank_total: the reliable candidates whose approach lies within this angle (degrees) of
+  // preferred_approach rank before the steeper ones, most stable first within each. A hand
+  // tilted far from its lift's direction lets held objects slip more in the lift test
+  // (docs/grasp-loop.md, "The hand's tilt"). 0: no preference.
+  double level_tilt_deg = 0;
   // Candidates checked for force closure on the model, best total first, among those the hand can
   // take (path_tolerance, checked on every candidate in turn): each check is a 6-D hull.
   std::size_t max_checks = 400;
