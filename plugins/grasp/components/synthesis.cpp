@@ -174,7 +174,7 @@ class GraspSynthesisFilter final : public fba::Component {
       "touched first) or reaches behind the palm; the hand of the sim's lift test. 0: off (a grasp that is never executed)")
                                              .range(0, 1);
   static constexpr auto kLevelTiltDeg = fba::Param<double>(
-      "level_tilt_deg", 0.0,
+      "level_tilt_deg", 30.0,
       "degrees: the reliable candidates whose approach is within this angle of straight down rank before the steeper ones (most "
       "stable first within each), since a tilted hand lets objects slip in the lift; 0: no preference").range(0, 180);
   static constexpr auto kNormalErrorDeg = fba::Param<double>(
@@ -590,7 +590,7 @@ class GraspSynthesisFilter final : public fba::Component {
   }
 
   // The first candidates of the model analysed, on the output `candidates` for a live view: a few,
-  // so that the view stays small, with the best one's palm (the one selected, else the first not
+  // so that the view stays small, and the best one with its palm (the one selected, else the first not
   // passed over). Called from a destructor: throws nothing.
   void show_candidates(const std::vector<fba::grasp::GraspCandidate>& candidates, const Reach& reach, int views) noexcept {
     constexpr std::size_t kShown = 24;
@@ -602,9 +602,10 @@ class GraspSynthesisFilter final : public fba::Component {
       shown.total = candidates.size();
       shown.views = views;
       shown.stamp = ctx_(kOctree).packet().header().stamp_ns * 1e-9;
-      for (std::size_t i = 0; i < candidates.size() && i < kShown; ++i)
-        shown.candidates.push_back({candidates[i].grasp, !candidates[i].uncertain, reach.passed_over(i),
-                                    i == best ? pregrasp_palm(candidates[i].grasp) : std::nullopt});
+      for (std::size_t i = 0; i < candidates.size(); ++i)
+        if (i < kShown || i == best)  // the best with its palm, wherever it ranks
+          shown.candidates.push_back({candidates[i].grasp, !candidates[i].uncertain, reach.passed_over(i),
+                                      i == best ? pregrasp_palm(candidates[i].grasp) : std::nullopt});
       ctx_(kCandidates).emit(std::move(shown));
     } catch (const std::exception& e) {
       ctx_.log().error("could not show the candidates: {}", e.what());

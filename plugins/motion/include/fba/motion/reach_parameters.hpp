@@ -32,9 +32,9 @@ struct ReachParameters {
       fba::Param<double>("standoff", 0.05, "metres back along the approach where the path ends and the straight approach begins").range(0, 0.5);
   static constexpr auto kLiftHeight = fba::Param<double>("lift_height", 0.1, "metres, straight up").range(0, 0.5);
   static constexpr auto kContactAllowance = fba::Param<double>(
-      "contact_allowance", 0.01,
-      "metres around each contact where the fingers may touch the model (about to touch the object); wider lets fingers meet "
-      "the object on the way in (docs/results.md, \"The grasp loop in simulation\")")
+      "contact_allowance", 0.005,
+      "metres around each contact where the fingers may touch the model (about to touch the object: the model's voxel "
+      "staircase there); wider lets fingers meet the object on the way in (docs/results.md, \"The grasp loop in simulation\")")
       .range(0, 0.1);
   static constexpr auto kMaxBackout = fba::Param<double>(
       "max_backout", 0.2,

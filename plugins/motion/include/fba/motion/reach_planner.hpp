@@ -46,7 +46,7 @@ struct ReachParams {
   bool retreat = true;           // after the hold: put the object back, open, back out to the standoff
   // The fingers may touch the model within this distance of their contacts (the model is the
   // object's visual hull: near a contact the finger is about to touch the object).
-  double contact_allowance = 0.01;
+  double contact_allowance = 0.005;
   std::size_t path_checks = 20000;  // poses the path search may check: its deterministic bound
   double planning_time = 30;       // s: a guard on the path search's wall time
   std::uint32_t seed = 1;        // OMPL's random numbers (and the IK's random starts): the same plan every run
