@@ -39,6 +39,8 @@
 #include "fba/grasp/model_surface.hpp"
 #include "fba/grasp/synthesis.hpp"
 #include "grasp_pictures.hpp"
+#include "model_text.hpp"
+#include "reach_check.hpp"
 
 #if FBA_GRASP_REACH
 #include <fba/types/joint_state.hpp>
@@ -52,70 +54,7 @@
 
 namespace {
 
-std::string fixed(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f", v);
-  return buf;
-}
-
-std::string box_text(const Eigen::AlignedBox3d& b) {
-  return "[" + fixed(b.min().x()) + ", " + fixed(b.min().y()) + ", " + fixed(b.min().z()) + ", " + fixed(b.max().x()) + ", " +
-         fixed(b.max().y()) + ", " + fixed(b.max().z()) + "]";
-}
-
-// The faces of the model's root box that its occupied leaves touch, as "x = 0.130 and z = 0.240";
-// empty when none does.
-std::string bounds_reached(const fba::Octree& model) {
-  bool at[6] = {};  // -x, -y, -z, +x, +y, +z
-  model.for_each_occupied_leaf([&](const fba::OctreeCell& c) {
-    const int last = (1 << c.depth) - 1;
-    const int corner[3] = {c.x, c.y, c.z};
-    for (int a = 0; a < 3; ++a) {
-      at[a] |= corner[a] == 0;
-      at[a + 3] |= corner[a] == last;
-    }
-  });
-  std::vector<std::string> faces;
-  for (int f = 0; f < 6; ++f)
-    if (at[f]) faces.push_back(std::string(1, "xyz"[f % 3]) + " = " + fixed(f < 3 ? model.bounds.min()[f] : model.bounds.max()[f - 3]));
-  std::string text;
-  for (std::size_t i = 0; i < faces.size(); ++i) text += (i == 0 ? "" : i + 1 == faces.size() ? " and " : ", ") + faces[i];
-  return text;
-}
-
-// The candidates passed over because the arm cannot reach them, on one model: how many of each
-// refusal (motion::Refusal's names), with the first one's reason.
-struct PassedOver {
-  struct Kind {
-    int count = 0;
-    std::string example;
-  };
-  std::map<std::string, Kind> kinds;
-  std::size_t checked = 0;  // candidates checked
-  int total = 0;            // passed over
-  double seconds = 0;       // the checks' wall time, the model's obstacles included
-
-  void add(const std::string& kind, const std::string& why) {
-    Kind& k = kinds[kind];
-    if (k.count++ == 0) k.example = why;
-    ++total;
-  }
-  nlohmann::json json() const {
-    nlohmann::json j = nlohmann::json::object();
-    for (const auto& [name, k] : kinds) j[name] = {{"count", k.count}, {"example", k.example}};
-    return j;
-  }
-  // "2 (ik 1: no IK solution ...; approach 1: the straight approach fails: ...)"
-  std::string text() const {
-    std::string t = std::to_string(total) + " (";
-    bool first = true;
-    for (const auto& [name, k] : kinds) {
-      t += (first ? "" : "; ") + name + " " + std::to_string(k.count) + ", e.g. " + k.example;
-      first = false;
-    }
-    return t + ")";
-  }
-};
+using fba::grasp::fixed;
 
 class GraspSynthesisFilter final : public fba::Component {
  public:
@@ -322,7 +261,7 @@ class GraspSynthesisFilter final : public fba::Component {
     // The model's views are the first silhouettes (the carver takes them in arrival order).
     const std::span<const fba::grasp::SilhouetteRim> rims = std::span(rims_).first(std::min<std::size_t>(rims_.size(), std::size_t(views)));
     const fba::grasp::ModelSurface surface = fba::grasp::model_surface(model, {radius_, params_.table_z, params_.parallel_for});
-    if (const std::string why = empty_surface_reason(model, surface, views); !why.empty()) return fail(why);
+    if (const std::string why = fba::grasp::empty_surface_reason(model, surface, views, params_.table_z.value_or(0)); !why.empty()) return fail(why);
     fba::grasp::ModelSurface observed = surface;
     if (rim_deg_ > 0 && !rims.empty()) fba::grasp::mark_unobserved(observed.samples, rims, surface.finest_edge, rim_deg_, rim_separation_deg_);
     fba::grasp::SynthesisParams p = params_;
@@ -344,11 +283,11 @@ class GraspSynthesisFilter final : public fba::Component {
     // reachable candidate is the one the others are weighed against, and the one selected must be
     // reachable. Those passed over are reported (with the result, whatever it is) and asked no
     // views for.
-    Reach reach = reach_check(model, r.candidates);
+    fba::grasp::ReachCheck reach = reach_check(model, r.candidates);
     struct ReportReach {  // on every way out below: the checks made are known once the decision is
       GraspSynthesisFilter& self;
       const fba::grasp::SynthesisResult& result;
-      Reach& reach;
+      fba::grasp::ReachCheck& reach;
       int views;
       ~ReportReach() {
         self.report_reach(reach, views);
@@ -404,93 +343,9 @@ class GraspSynthesisFilter final : public fba::Component {
     stages_.go("exploration_movement");
   }
 
-  // Which candidates the arm reaches from where it stands: each checked when the selection first
-  // asks, and remembered; inactive (everything reachable) without the reach check or a joint state.
-  // The candidates after the one asked for are checked with it on the task's other threads (their
-  // verdicts count once asked for: the results do not depend on the threads). At most `budget`
-  // checks on a model get as far as inverse kinematics (the costly ones, tens of milliseconds each
-  // when the solver finds no solution); beyond them the rest are not checked, so not selected on
-  // this model, nor passed over.
-  struct Reach {
-    struct Verdict {
-      bool ok = true;
-      bool costly = false;  // it needed inverse kinematics
-      std::string refusal, why;
-      bool model = false;  // the carved model refused it (ReachPlan::model_blocked)
-    };
-    bool active = false;
-    PassedOver passed;
-    std::size_t budget = 0, costly = 0;
-    std::size_t unchecked = 0;       // candidates asked for once the budget was spent
-    std::vector<signed char> state;  // per candidate: -1 not asked yet, 0 passed over, 1 reachable, 2 not checked
-    std::vector<std::size_t> model_blocked;  // passed over, the robot in the model (occupied or not yet carved), in order
-    std::vector<std::optional<Verdict>> ahead;
-    std::function<void()> prepare;  // once, before the first check (the model's obstacles)
-    std::function<Verdict(std::size_t)> check;  // thread-safe
-    std::function<Verdict(std::size_t)> check_plan;  // the whole plan, from where the arm stands
-    nlohmann::json start;  // for the candidate selected: whether the arm starts from where it stands
-    std::optional<std::size_t> selected;  // the candidate selected on this model
-    fba::ParallelFor parallel_for;
-    std::size_t batch = 1;
-    spdlog::logger* log = nullptr;
 
-    bool reachable(std::size_t i) {
-      if (!active) return true;
-      if (state[i] >= 0) return state[i] == 1;
-      if (costly >= budget) {
-        state[i] = 2;
-        ++unchecked;
-        return false;
-      }
-      if (!ahead[i]) run(i);
-      const Verdict v = *ahead[i];
-      log->debug("candidate {}: {}{}{}", i, v.ok ? "reachable" : "passed over, " + v.refusal, v.ok ? "" : ": ", v.why);
-      ++passed.checked;
-      costly += v.costly ? 1 : 0;
-      state[i] = v.ok ? 1 : 0;
-      if (!v.ok) passed.add(v.refusal, v.why);
-      if (!v.ok && v.model) model_blocked.push_back(i);
-      return v.ok;
-    }
-    bool passed_over(std::size_t i) const { return active && state[i] == 0; }
-    // The whole plan for a candidate about to be selected (the path search is too costly for every
-    // candidate): one whose path the planner does not find is passed over like the others. The
-    // start (the arm's hand in the model where it stands, and no way to back out) is the same for
-    // every candidate, so no other would do better: the candidate is selected all the same, and said.
-    bool plannable(std::size_t i) {
-      if (!active || !check_plan) return true;
-      const Verdict v = check_plan(i);
-      if (v.ok || v.refusal == fba::motion::to_string(fba::motion::Refusal::Start)) {
-        start = v.ok ? nlohmann::json("clear") : nlohmann::json{{"refusal", v.refusal}, {"reason", v.why}};
-        if (!v.ok) log->warn("the arm cannot start the selected grasp's reach from where it stands ({}): {}", v.refusal, v.why);
-        return true;
-      }
-      log->debug("candidate {}: passed over at selection, {}: {}", i, v.refusal, v.why);
-      state[i] = 0;
-      passed.add(v.refusal, v.why);
-      return false;
-    }
-    std::string unchecked_text() const {
-      return unchecked == 0 ? "" : "; " + std::to_string(unchecked) + " not checked (reach_checks: " + std::to_string(budget) + ")";
-    }
-
-   private:
-    // Candidate i and the next ones not asked for yet, one per thread.
-    void run(std::size_t i) {
-      const auto start = std::chrono::steady_clock::now();
-      if (prepare) std::exchange(prepare, nullptr)();
-      std::vector<std::size_t> next{i};
-      for (std::size_t j = i + 1; j < state.size() && next.size() < batch; ++j)
-        if (state[j] < 0 && !ahead[j]) next.push_back(j);
-      auto one = [&](std::size_t k) { ahead[next[k]] = check(next[k]); };
-      if (parallel_for && next.size() > 1) parallel_for(next.size(), one);
-      else for (std::size_t k = 0; k < next.size(); ++k) one(k);
-      passed.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
-  };
-
-  Reach reach_check([[maybe_unused]] const fba::Octree& model, [[maybe_unused]] const std::vector<fba::grasp::GraspCandidate>& candidates) {
-    Reach reach;
+  fba::grasp::ReachCheck reach_check([[maybe_unused]] const fba::Octree& model, [[maybe_unused]] const std::vector<fba::grasp::GraspCandidate>& candidates) {
+    fba::grasp::ReachCheck reach;
 #if FBA_GRASP_REACH
     const fba::JointState* state = reach_ ? ctx_(kJointState).latest() : nullptr;
     if (reach_ && !state && !told_no_joints_) {
@@ -512,11 +367,12 @@ class GraspSynthesisFilter final : public fba::Component {
     auto obstacles = std::make_shared<std::shared_ptr<const fba::motion::ModelObstacles>>();
     reach.prepare = [&model, obstacles] { *obstacles = fba::motion::ReachPlanner::obstacles(model); };
     auto check_with = [&candidates, joints, why, obstacles](const fba::motion::ReachPlanner& planner, bool whole) {
-      return [&planner, &candidates, joints, why, obstacles, whole](std::size_t i) -> Reach::Verdict {
-        if (!joints) return {false, false, fba::motion::to_string(fba::motion::Refusal::Start), why};
+      return [&planner, &candidates, joints, why, obstacles, whole](std::size_t i) -> fba::grasp::ReachCheck::Verdict {
+        if (!joints) return {false, false, fba::motion::to_string(fba::motion::Refusal::Start), why, false, true};
         const fba::motion::ReachPlan plan =
             whole ? planner.plan(candidates[i].grasp, *obstacles, *joints) : planner.reachable(candidates[i].grasp, *obstacles, *joints);
-        return {plan.ok, plan.figures.ik_attempts > 0, fba::motion::to_string(plan.refusal), plan.why, plan.model_blocked};
+        return {plan.ok, plan.figures.ik_attempts > 0, fba::motion::to_string(plan.refusal), plan.why, plan.model_blocked,
+                plan.refusal == fba::motion::Refusal::Start};
       };
     };
     reach.check = check_with(*reach_, false);
@@ -525,7 +381,7 @@ class GraspSynthesisFilter final : public fba::Component {
     return reach;
   }
 
-  void say_unreachable([[maybe_unused]] const Reach& reach, [[maybe_unused]] int views, [[maybe_unused]] std::size_t candidates) {
+  void say_unreachable([[maybe_unused]] const fba::grasp::ReachCheck& reach, [[maybe_unused]] int views, [[maybe_unused]] std::size_t candidates) {
 #if FBA_GRASP_REACH
     ctx_.log().info("none of the {} candidates is reachable by the arm, passed over: {}{}", candidates,
                     reach.passed.text(), reach.unchecked_text());
@@ -541,7 +397,7 @@ class GraspSynthesisFilter final : public fba::Component {
 
   // The reach check's figures on the model analysed last (the one a grasp was selected on, or the
   // search gave up on), as the result "reach". Called from a destructor: throws nothing.
-  void report_reach(const Reach& reach, int views) noexcept {
+  void report_reach(const fba::grasp::ReachCheck& reach, int views) noexcept {
     if (!reach.active) return;
     try {
       ctx_.report("reach", nlohmann::json{{"views", views},
@@ -563,7 +419,7 @@ class GraspSynthesisFilter final : public fba::Component {
   // model_epsilon, whether it is reliable (its surface resolved) and whether the arm's reach check
   // passed it over: for the summary's readers (a live view has the first few, show_candidates).
   // Called from a destructor: throws nothing.
-  void report_candidates(const std::vector<fba::grasp::GraspCandidate>& candidates, const Reach& reach, int views) noexcept {
+  void report_candidates(const std::vector<fba::grasp::GraspCandidate>& candidates, const fba::grasp::ReachCheck& reach, int views) noexcept {
     try {
       auto xyz = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
       nlohmann::json grasps = nlohmann::json::array();
@@ -592,7 +448,7 @@ class GraspSynthesisFilter final : public fba::Component {
   // The first candidates of the model analysed, on the output `candidates` for a live view: a few,
   // so that the view stays small, and the best one with its palm (the one selected, else the first not
   // passed over). Called from a destructor: throws nothing.
-  void show_candidates(const std::vector<fba::grasp::GraspCandidate>& candidates, const Reach& reach, int views) noexcept {
+  void show_candidates(const std::vector<fba::grasp::GraspCandidate>& candidates, const fba::grasp::ReachCheck& reach, int views) noexcept {
     constexpr std::size_t kShown = 24;
     try {
       std::optional<std::size_t> best = reach.selected;
@@ -633,32 +489,11 @@ class GraspSynthesisFilter final : public fba::Component {
            ", S4 curvature " + fixed(c.grasp.scores.curvature) + ")";
   }
 
-  // Why the model gives no surface to grasp, "" when it gives one: no occupied leaf joined to the
-  // table, or no occupied leaf at all.
-  std::string empty_surface_reason(const fba::Octree& model, const fba::grasp::ModelSurface& surface, int views) const {
-    if (!surface.samples.empty()) return "";
-    if (surface.leaves > 0) {
-      const std::string table = "none of its " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
-                                " views is joined to the table at z = " + fixed(params_.table_z.value_or(0));
-      // An object outside the workspace is seen through it: the views' cones cross the root box
-      // and end on its faces, away from the table.
-      if (const std::string faces = bounds_reached(model); !faces.empty())
-        return "the carved model reaches the workspace's bounds at " + faces + " (the carver's root box " + box_text(model.bounds) +
-               "), and " + table + ": the object may be larger than or outside the workspace";
-      return "none of the model's " + std::to_string(surface.leaves) + " occupied leaves after " + std::to_string(views) +
-             " views is joined to the table at z = " + fixed(params_.table_z.value_or(0)) +
-             ": the object rests on it (check table_z, and the carver's bounds reach down to it)";
-    }
-    return "the model is empty after " + std::to_string(views) +
-           " views: no occupied leaf to grasp (no target in the silhouettes, or the object outside the workspace, the carver's "
-           "root box " + box_text(model.bounds) + ")";
-  }
-
   // Selects the best reliable candidate the arm reaches whose contacts and the surface around them
   // are resolved, in the candidates' order (best first); before the last view, only when it is at
   // least stability_share as stable as the best reachable candidate (`best_epsilon`), resolved or
   // not: views may still resolve that one. Returns whether it selected one.
-  bool select_on_resolved_surface(const fba::grasp::SynthesisResult& r, Reach& reach, int views, double best_epsilon) {
+  bool select_on_resolved_surface(const fba::grasp::SynthesisResult& r, fba::grasp::ReachCheck& reach, int views, double best_epsilon) {
     for (std::size_t i = 0; i < r.candidates.size(); ++i) {  // best first
       const auto& c = r.candidates[i];
       if (c.uncertain || c.grasp.scores.total < threshold_ || !reach.reachable(i)) continue;
@@ -682,7 +517,7 @@ class GraspSynthesisFilter final : public fba::Component {
 
   // Selects the best reliable candidate the arm reaches whose contacts are resolved (pinned by two
   // views, with rim_deg), the surface around them not all resolved. Returns whether it selected one.
-  bool select_on_resolved_contacts(const fba::grasp::SynthesisResult& r, Reach& reach, int views) {
+  bool select_on_resolved_contacts(const fba::grasp::SynthesisResult& r, fba::grasp::ReachCheck& reach, int views) {
     for (std::size_t i = 0; i < r.candidates.size(); ++i)
       if (const auto& c = r.candidates[i];
           !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i) && reach.plannable(i)) {
@@ -702,7 +537,7 @@ class GraspSynthesisFilter final : public fba::Component {
   // is not all resolved yet: on thin, curved objects such as the banana two rims cross on little
   // of the surface, and a whole neighbourhood is rarely pinned. Else the search gives up, saying
   // what held the candidates back.
-  void settle_at_last_view(const fba::grasp::SynthesisResult& r, Reach& reach, int views, bool any_reachable,
+  void settle_at_last_view(const fba::grasp::SynthesisResult& r, fba::grasp::ReachCheck& reach, int views, bool any_reachable,
                            const fba::grasp::GraspCandidate* best) {
     if (select_on_resolved_contacts(r, reach, views)) return;
     if (reach.active && !r.candidates.empty() && !any_reachable)
@@ -714,7 +549,7 @@ class GraspSynthesisFilter final : public fba::Component {
 
   // Why the last view gave no reliable grasp: what removed the candidates, or what held back the
   // best one on resolved surface (`best`: the best of all), and the candidates the arm cannot reach.
-  std::string no_reliable_grasp_reason(const fba::grasp::SynthesisResult& r, const Reach& reach, int views,
+  std::string no_reliable_grasp_reason(const fba::grasp::SynthesisResult& r, const fba::grasp::ReachCheck& reach, int views,
                                        const fba::grasp::GraspCandidate* best) const {
     const std::string passed = reach.passed.total > 0 ? "; passed over as out of the arm's reach: " + reach.passed.text() : "";
     std::string reason = "no reliable grasp after " + std::to_string(views) + " views: ";
@@ -751,7 +586,7 @@ class GraspSynthesisFilter final : public fba::Component {
   // candidate at all) the whole model: more views may still carve it to a size the hand takes.
   // The candidates the arm cannot reach are left out: views that resolve them would not help.
   // With rims (rim_deg), also the unpinned points the next view should graze.
-  fba::RegionsOfInterest regions_to_resolve(const fba::grasp::SynthesisResult& r, const Reach& reach,
+  fba::RegionsOfInterest regions_to_resolve(const fba::grasp::SynthesisResult& r, const fba::grasp::ReachCheck& reach,
                                             const fba::grasp::ModelSurface& surface,
                                             const std::vector<fba::grasp::SurfaceSample>& observed, bool rims, int views) const {
     std::vector<const fba::grasp::GraspCandidate*> kept;
@@ -831,7 +666,7 @@ class GraspSynthesisFilter final : public fba::Component {
   // asked to refine it, and carves what its views already show empty. Kept asked for on every
   // later model (the carver keeps detail only where the regions of the moment ask), the latest few.
   void ask_for_ways_in([[maybe_unused]] fba::RegionsOfInterest& roi, [[maybe_unused]] const fba::grasp::SynthesisResult& r,
-                       [[maybe_unused]] const Reach& reach) {
+                       [[maybe_unused]] const fba::grasp::ReachCheck& reach) {
 #if FBA_GRASP_REACH
     constexpr std::size_t kSweptCandidates = 3, kSweptKept = 6;
     for (std::size_t k = 0; k < reach.model_blocked.size() && k < kSweptCandidates; ++k) {
