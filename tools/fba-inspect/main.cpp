@@ -2,6 +2,7 @@
 // the plugins' manifests and runs no plugin code (only composites load the plugins they use).
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include <boost/program_options.hpp>
 #include <nlohmann/json.hpp>
@@ -91,9 +92,14 @@ void print_data_type(const fba::DataTypeRecord& d) {
   std::cout << "\n";
 }
 
-}  // namespace
+// The command line, or the exit status when it asks for nothing more (help, version, an error).
+struct Options {
+  std::vector<std::filesystem::path> plugin_dirs;
+  std::optional<std::string> type;  // none: list everything
+  bool as_json = false;
+};
 
-int main(int argc, char** argv) {
+std::optional<int> parse_options(int argc, char** argv, Options& options) {
   po::options_description visible("Usage: fba-inspect [options] [TYPE]\n\nLists the plugins, component types and data types "
                                   "found, or shows one component type's interface or one data type.\n\nOptions");
   std::vector<std::string> plugin_dirs;
@@ -119,98 +125,128 @@ int main(int argc, char** argv) {
     std::cout << "fba-inspect " FBA_VERSION "\n";
     return 0;
   }
-  const bool as_json = vm.count("json") > 0;
-  std::vector<std::filesystem::path> extra(plugin_dirs.begin(), plugin_dirs.end());
-  for (const auto& d : extra) {
+  options.as_json = vm.count("json") > 0;
+  if (vm.count("type")) options.type = vm["type"].as<std::string>();
+  options.plugin_dirs.assign(plugin_dirs.begin(), plugin_dirs.end());
+  for (const auto& d : options.plugin_dirs) {
     std::error_code ec;
     if (!std::filesystem::is_directory(d, ec)) {
       std::cerr << "fba-inspect: --plugin-path '" << d.string() << "' is not a folder\nTry 'fba-inspect --help'.\n";
       return kError;
     }
   }
-  fba::Registry registry;
-  const auto search = fba::plugin_search_path(extra);
-  const auto errors = registry.load_path(search);
-  for (const auto& e : errors) std::cerr << "fba-inspect: plugin " << e.file() << ": " << e.reason() << "\n";
-  const auto plugins = registry.plugins();
-  const auto data_types = registry.data_types();
-  auto origin_of = [&](const std::string& type) {
-    for (const auto& p : plugins)
-      for (const auto& t : p.types)
-        if (t == type) return p.file;
-    for (const auto* t : registry.types())
-      if (t->spec.type_name() == type) return t->origin;
-    return std::string();
-  };
+  return std::nullopt;
+}
 
-  if (vm.count("type")) {
-    const std::string name = vm["type"].as<std::string>();
-    for (const auto& d : data_types)
-      if (d.name == name) {
-        if (as_json) std::cout << data_type_json(d).dump(2) << "\n";
-        else print_data_type(d);
-        return 0;
-      }
-    if (registry.interface_json(name).empty()) {
-      std::cerr << "fba-inspect: no component type or data type '" << name << "'";
-      const auto near = registry.closest(name);
-      if (!near.empty()) {
-        std::cerr << "; did you mean";
-        for (const auto& n : near) std::cerr << " " << n;
-        std::cerr << "?";
-      }
-      std::cerr << "\n";
-      return kError;
+// The plugin file that provides a component type, or the origin of a built-in or composite one.
+std::string origin_of(const fba::Registry& registry, const std::vector<fba::PluginRecord>& plugins, const std::string& type) {
+  for (const auto& p : plugins)
+    for (const auto& t : p.types)
+      if (t == type) return p.file;
+  for (const auto* t : registry.types())
+    if (t->spec.type_name() == type) return t->origin;
+  return std::string();
+}
+
+// What the search path holds, read once after loading: listing a composite's interface loads
+// plugins, which must not change what is listed.
+struct Found {
+  std::vector<std::filesystem::path> search;
+  std::vector<fba::PluginError> errors;
+  std::vector<fba::PluginRecord> plugins;
+  std::vector<fba::DataTypeRecord> data_types;
+};
+
+// One component type or data type, by name; the exit status.
+int show_one(const fba::Registry& registry, const Found& found, const std::string& name, bool as_json) {
+  const auto& plugins = found.plugins;
+  for (const auto& d : found.data_types)
+    if (d.name == name) {
+      if (as_json) std::cout << data_type_json(d).dump(2) << "\n";
+      else print_data_type(d);
+      return 0;
     }
-    const json t = type_json(registry, name, origin_of(name));
-    if (as_json) std::cout << t.dump(2) << "\n";
-    else print_type(t);
-    for (const auto& p : plugins)
-      if (p.file == t["origin"] && !p.error.empty()) return kError;  // shown, but its plugin cannot be used
-    return 0;
+  if (registry.interface_json(name).empty()) {
+    std::cerr << "fba-inspect: no component type or data type '" << name << "'";
+    const auto near = registry.closest(name);
+    if (!near.empty()) {
+      std::cerr << "; did you mean";
+      for (const auto& n : near) std::cerr << " " << n;
+      std::cerr << "?";
+    }
+    std::cerr << "\n";
+    return kError;
   }
+  const json t = type_json(registry, name, origin_of(registry, plugins, name));
+  if (as_json) std::cout << t.dump(2) << "\n";
+  else print_type(t);
+  for (const auto& p : plugins)
+    if (p.file == t["origin"] && !p.error.empty()) return kError;  // shown, but its plugin cannot be used
+  return 0;
+}
 
+void list_json(const fba::Registry& registry, const Found& found) {
   const auto names = registry.type_names();
-  if (as_json) {
-    json j;
-    j["version"] = FBA_VERSION;
-    j["search_path"] = json::array();
-    for (const auto& d : search) j["search_path"].push_back(d.string());
-    j["plugins"] = json::array();
-    for (const auto& p : plugins) {
-      json pj{{"file", p.file}, {"name", p.name}, {"fba_version", p.version}, {"types", p.types}, {"loaded", p.loaded}};
-      if (!p.error.empty()) pj["error"] = p.error;
-      j["plugins"].push_back(pj);
-    }
-    j["types"] = json::array();
-    for (const auto& n : names) j["types"].push_back(type_json(registry, n, origin_of(n)));
-    j["data_types"] = json::array();
-    for (const auto& d : data_types) j["data_types"].push_back(data_type_json(d));
-    j["errors"] = json::array();
-    for (const auto& e : errors) j["errors"].push_back({{"file", e.file()}, {"reason", e.reason()}});
-    std::cout << j.dump(2) << "\n";
-  } else {
-    std::cout << "Plugin search path:\n";
-    for (const auto& d : search) std::cout << "  " << d.string() << "\n";
-    std::cout << "\nPlugins:\n";
-    for (const auto& p : plugins) {
-      std::cout << "  " << (p.name.empty() ? std::filesystem::path(p.file).filename().string() : p.name) << "  (" << p.file;
-      if (!p.version.empty()) std::cout << ", fba " << p.version;
-      std::cout << ")" << (p.error.empty() ? "" : "  BROKEN: " + p.error) << "\n";
-      for (const auto& t : p.types) {
-        const json j = json::parse(registry.interface_json(t));
-        std::cout << "    " << t << "  " << j["kind"].get<std::string>() << "\n";
-      }
-    }
-    std::cout << "\nComposites:\n";
-    for (const auto* t : registry.types())
-      if (t->composite) std::cout << "  " << t->spec.type_name() << "  (" << t->origin << ")\n";
-    std::cout << "\nData types:\n";
-    for (const auto& d : data_types)
-      std::cout << "  " << d.name << "  (" << fba::to_string(d.layout) << (d.header.empty() ? "" : ", <" + d.header + ">")
-                << ")\n      " << d.doc << "\n";
-    std::cout << "\n" << names.size() << " component types, " << data_types.size()
-              << " data types. 'fba-inspect TYPE' shows one.\n";
+  const auto& plugins = found.plugins;
+  json j;
+  j["version"] = FBA_VERSION;
+  j["search_path"] = json::array();
+  for (const auto& d : found.search) j["search_path"].push_back(d.string());
+  j["plugins"] = json::array();
+  for (const auto& p : plugins) {
+    json pj{{"file", p.file}, {"name", p.name}, {"fba_version", p.version}, {"types", p.types}, {"loaded", p.loaded}};
+    if (!p.error.empty()) pj["error"] = p.error;
+    j["plugins"].push_back(pj);
   }
-  return errors.empty() ? 0 : kError;
+  j["types"] = json::array();
+  for (const auto& n : names) j["types"].push_back(type_json(registry, n, origin_of(registry, plugins, n)));
+  j["data_types"] = json::array();
+  for (const auto& d : found.data_types) j["data_types"].push_back(data_type_json(d));
+  j["errors"] = json::array();
+  for (const auto& e : found.errors) j["errors"].push_back({{"file", e.file()}, {"reason", e.reason()}});
+  std::cout << j.dump(2) << "\n";
+}
+
+void list_text(const fba::Registry& registry, const Found& found) {
+  const auto names = registry.type_names();
+  const auto& data_types = found.data_types;
+  std::cout << "Plugin search path:\n";
+  for (const auto& d : found.search) std::cout << "  " << d.string() << "\n";
+  std::cout << "\nPlugins:\n";
+  for (const auto& p : found.plugins) {
+    std::cout << "  " << (p.name.empty() ? std::filesystem::path(p.file).filename().string() : p.name) << "  (" << p.file;
+    if (!p.version.empty()) std::cout << ", fba " << p.version;
+    std::cout << ")" << (p.error.empty() ? "" : "  BROKEN: " + p.error) << "\n";
+    for (const auto& t : p.types) {
+      const json j = json::parse(registry.interface_json(t));
+      std::cout << "    " << t << "  " << j["kind"].get<std::string>() << "\n";
+    }
+  }
+  std::cout << "\nComposites:\n";
+  for (const auto* t : registry.types())
+    if (t->composite) std::cout << "  " << t->spec.type_name() << "  (" << t->origin << ")\n";
+  std::cout << "\nData types:\n";
+  for (const auto& d : data_types)
+    std::cout << "  " << d.name << "  (" << fba::to_string(d.layout) << (d.header.empty() ? "" : ", <" + d.header + ">")
+              << ")\n      " << d.doc << "\n";
+  std::cout << "\n" << names.size() << " component types, " << data_types.size()
+            << " data types. 'fba-inspect TYPE' shows one.\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  if (const auto status = parse_options(argc, argv, options)) return *status;
+  fba::Registry registry;
+  Found found;
+  found.search = fba::plugin_search_path(options.plugin_dirs);
+  found.errors = registry.load_path(found.search);
+  for (const auto& e : found.errors) std::cerr << "fba-inspect: plugin " << e.file() << ": " << e.reason() << "\n";
+  found.plugins = registry.plugins();
+  found.data_types = registry.data_types();
+  if (options.type) return show_one(registry, found, *options.type, options.as_json);
+  if (options.as_json) list_json(registry, found);
+  else list_text(registry, found);
+  return found.errors.empty() ? 0 : kError;
 }

@@ -21,6 +21,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sys/resource.h>
 #include <string>
 #include <vector>
@@ -206,70 +207,73 @@ long rss_kib() {
   return -1;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Options {
   bool quick = false, json = false;
-  std::string reference;
+  std::string reference;  // a file of expected ratios; empty: none
+};
+
+// The command line into `o`; the exit status when it is wrong.
+std::optional<int> parse_options(int argc, char** argv, Options& o) {
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) quick = true;
-    else if (!std::strcmp(argv[i], "--json")) json = true;
-    else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc) reference = argv[++i];
+    if (!std::strcmp(argv[i], "--quick")) o.quick = true;
+    else if (!std::strcmp(argv[i], "--json")) o.json = true;
+    else if (!std::strcmp(argv[i], "--reference") && i + 1 < argc) o.reference = argv[++i];
     else {
       std::fprintf(stderr, "usage: fba-runtime-benchmark [--quick] [--json] [--reference FILE]\n");
       return 2;
     }
   }
-  nlohmann::json expected;
-  if (!reference.empty()) {
-    std::ifstream in(reference);
-    expected = nlohmann::json::parse(in, nullptr, false);
-    if (!in || !expected.is_object()) {
-      std::fprintf(stderr, "fba-runtime-benchmark: --reference %s: expected a JSON object of ratios, found %s\n", reference.c_str(),
-                   in ? "something else" : "no readable file");
-      return 2;
-    }
-  }
-  std::map<std::string, double> ratios;  // what the reference file holds, measured now
-  fba::set_log_level("warn");
-  const long n = quick ? 20'000 : 1'000'000;
-  const int reps = quick ? 1 : 3;
-  const std::vector<int> ks{1, 10, 50};
+  return std::nullopt;
+}
+
+// The figures as they are measured: printed at once as text, or kept for one JSON object at the end.
+struct Report {
+  bool json = false;
   std::vector<std::string> lines;
-  auto out = [&](const std::string& key, double value, const char* unit) {
+  std::map<std::string, double> ratios;  // what the reference file holds, measured now
+
+  void out(const std::string& key, double value, const char* unit) {
     char buf[256];
     std::snprintf(buf, sizeof buf, json ? "  \"%s\": %.2f" : "%-52s %12.1f %s", key.c_str(), value, unit);
     lines.push_back(buf);
     if (!json) std::printf("%s\n", buf);
     std::fflush(stdout);
-  };
+  }
+};
 
+const std::vector<int> kHops{1, 10, 50};
+
+// Throughput of chains of each length, run each way; for the deterministic executor also the plain
+// queue it is compared with and the cost of watching every hop.
+void measure_throughput(Report& report, long n, int reps) {
   // One thread per component makes a context switch of every hop on a small machine: fewer samples.
   for (Mode mode : {Mode::Deterministic, Mode::Pooled, Mode::Dedicated}) {
     const std::string m = name(mode);
     const long count = mode == Mode::Dedicated ? n / 10 : n;
     std::vector<PerSample> t;
-    for (int k : ks) {
+    for (int k : kHops) {
       t.push_back(per_sample(k, count, mode, reps));
-      out(m + " K=" + std::to_string(k) + " per sample", t.back().wall_ns, "ns");
-      out(m + " K=" + std::to_string(k) + " CPU per sample", t.back().cpu_ns, "ns");
+      report.out(m + " K=" + std::to_string(k) + " per sample", t.back().wall_ns, "ns");
+      report.out(m + " K=" + std::to_string(k) + " CPU per sample", t.back().cpu_ns, "ns");
     }
-    out(m + " per extra hop (K=1..50)", (t[2].wall_ns - t[0].wall_ns) / 49.0, "ns");
-    out(m + " per extra hop (K=10..50)", (t[2].wall_ns - t[1].wall_ns) / 40.0, "ns");
-    out(m + " CPU per extra hop (K=1..50)", (t[2].cpu_ns - t[0].cpu_ns) / 49.0, "ns");
+    report.out(m + " per extra hop (K=1..50)", (t[2].wall_ns - t[0].wall_ns) / 49.0, "ns");
+    report.out(m + " per extra hop (K=10..50)", (t[2].wall_ns - t[1].wall_ns) / 40.0, "ns");
+    report.out(m + " CPU per extra hop (K=1..50)", (t[2].cpu_ns - t[0].cpu_ns) / 49.0, "ns");
     if (mode == Mode::Deterministic) {
       const double plain = (plain_queue_chain_cpu_ns(50, count, reps) - plain_queue_chain_cpu_ns(1, count, reps)) / 49.0;
-      out("plain mutex-guarded deque: CPU per extra hop (K=1..50)", plain, "ns");
-      ratios["deterministic CPU per extra hop / plain queue hop"] = (t[2].cpu_ns - t[0].cpu_ns) / 49.0 / plain;
+      report.out("plain mutex-guarded deque: CPU per extra hop (K=1..50)", plain, "ns");
+      report.ratios["deterministic CPU per extra hop / plain queue hop"] = (t[2].cpu_ns - t[0].cpu_ns) / 49.0 / plain;
       // A live view's cost on the producer: every hop's output also handed to a watch (fba-run --serve).
       const PerSample w1 = per_sample(1, count, mode, reps, true), w50 = per_sample(50, count, mode, reps, true);
-      out(m + " watched: CPU per extra hop (K=1..50)", (w50.cpu_ns - w1.cpu_ns) / 49.0, "ns");
+      report.out(m + " watched: CPU per extra hop (K=1..50)", (w50.cpu_ns - w1.cpu_ns) / 49.0, "ns");
     }
   }
+}
 
-  // Latency: one sample at a time, every millisecond, through K hops of both threaded kinds.
+// Latency: one sample at a time, every millisecond, through K hops of both threaded kinds.
+void measure_latency(Report& report, bool quick) {
   for (Mode mode : {Mode::Pooled, Mode::Dedicated}) {
-    for (int k : ks) {
+    for (int k : kHops) {
       const long samples = quick ? 200 : 2000;
       {
         std::lock_guard lock(g_latency_mutex);
@@ -285,84 +289,93 @@ int main(int argc, char** argv) {
       const double median = static_cast<double>(l[l.size() / 2]) / 1000.0;
       const double p99 = static_cast<double>(l[l.size() * 99 / 100]) / 1000.0;
       const std::string m = std::string(name(mode)) + " latency K=" + std::to_string(k);
-      out(m + " median end to end (1 kHz)", median, "us");
-      out(m + " median per hop (1 kHz)", median / (k + 1), "us");
-      out(m + " p99 end to end (1 kHz)", p99, "us");
+      report.out(m + " median end to end (1 kHz)", median, "us");
+      report.out(m + " median per hop (1 kHz)", median / (k + 1), "us");
+      report.out(m + " p99 end to end (1 kHz)", p99, "us");
     }
   }
+}
 
-  // More workers than cores: idle workers must sleep, not take the cores from the busy ones.
+// More workers than cores: idle workers must sleep, not take the cores from the busy ones.
+void measure_many_workers(Report& report, long n) {
   for (int workers : {2, 256}) {
     const Measured m = run(chain_yaml(10, n, 0, "examples.sink", 64, Mode::Pooled), workers);
     const std::string key = "pooled K=10, " + std::to_string(workers) + " workers: ";
-    out(key + "wall per sample", m.result.run_s() * 1e9 / static_cast<double>(n), "ns");
-    out(key + "CPU per sample", m.cpu_s * 1e9 / static_cast<double>(n), "ns");
+    report.out(key + "wall per sample", m.result.run_s() * 1e9 / static_cast<double>(n), "ns");
+    report.out(key + "CPU per sample", m.cpu_s * 1e9 / static_cast<double>(n), "ns");
   }
+}
 
-  // Building a task of 1000 components: parse, check, construct. Timed in the thread's CPU time
-  // (both happen on this thread), best of five even when quick: wall times taken at different
-  // moments of a loaded machine made the ratio noise.
-  {
-    const std::string yaml = chain_yaml(998, 10, 0, "examples.sink", 16, Mode::Pooled);
-    const int build_reps = std::max(reps, 5);
-    double best = 1e300;
-    for (int i = 0; i < build_reps; ++i) {
-      const double start = thread_cpu_s();
-      fba::Task task(fba::load_task_text(yaml, "bench.yaml", ".", registry()));
-      best = std::min(best, thread_cpu_s() - start);
-    }
-    out("build a task of 1000 components (CPU)", best * 1e3, "ms");
-    double parse = 1e300;
-    for (int i = 0; i < build_reps; ++i) {
-      const double start = thread_cpu_s();
-      const YAML::Node doc = YAML::Load(yaml);
-      parse = std::min(parse, thread_cpu_s() - start);
-      if (!doc["components"]) return 1;
-    }
-    out("yaml-cpp's parse of its file alone (CPU)", parse * 1e3, "ms");
-    ratios["build 1000 components / yaml-cpp parse"] = best / parse;
+// Building a task of 1000 components: parse, check, construct. Timed in the thread's CPU time
+// (both happen on this thread), best of five even when quick: wall times taken at different
+// moments of a loaded machine made the ratio noise. False when yaml-cpp's parse misread the file.
+bool measure_build(Report& report, int reps) {
+  const std::string yaml = chain_yaml(998, 10, 0, "examples.sink", 16, Mode::Pooled);
+  const int build_reps = std::max(reps, 5);
+  double best = 1e300;
+  for (int i = 0; i < build_reps; ++i) {
+    const double start = thread_cpu_s();
+    fba::Task task(fba::load_task_text(yaml, "bench.yaml", ".", registry()));
+    best = std::min(best, thread_cpu_s() - start);
   }
+  report.out("build a task of 1000 components (CPU)", best * 1e3, "ms");
+  double parse = 1e300;
+  for (int i = 0; i < build_reps; ++i) {
+    const double start = thread_cpu_s();
+    const YAML::Node doc = YAML::Load(yaml);
+    parse = std::min(parse, thread_cpu_s() - start);
+    if (!doc["components"]) return false;
+  }
+  report.out("yaml-cpp's parse of its file alone (CPU)", parse * 1e3, "ms");
+  report.ratios["build 1000 components / yaml-cpp parse"] = best / parse;
+  return true;
+}
 
-  // Soak: a lossless threaded chain; the sink fails the run on any gap; memory must not grow. After
-  // a warm-up run (allocator arenas, queues), a leak of even 4 bytes per sample shows over 1M samples.
-  {
-    const long soak = quick ? 200'000 : 1'000'000;
-    const long growth_limit_kib = 4096;
-    run(chain_yaml(10, soak / 10, 0, "examples.sink", 64, Mode::Pooled));  // warm up allocators
-    const long before = rss_kib();
-    const auto r = run(chain_yaml(10, soak, 0, "examples.sink", 64, Mode::Pooled)).result;
-    const long after = rss_kib();
-    std::uint64_t dropped = 0, unaccounted = 0;
-    for (const auto& c : r.connections) {
-      dropped += c.dropped + c.left;  // a sample left in a queue at the stop is lost too
-      unaccounted += c.pushed - c.delivered - c.dropped - c.left;
-    }
-    out("soak: samples through 10 threaded lossless hops", static_cast<double>(r.components.back().samples_in), "");
-    out("soak: samples dropped or left in queues", static_cast<double>(dropped), "");
-    out("soak: resident memory growth", static_cast<double>(after - before), "KiB");
-    out("soak: resident memory growth allowed", static_cast<double>(growth_limit_kib), "KiB");
-    if (r.components.back().samples_in != static_cast<std::uint64_t>(soak) || dropped != 0 || unaccounted != 0) {
-      std::fprintf(stderr, "soak lost samples: %llu of %ld arrived, %llu dropped or left, %llu unaccounted\n",
-                   static_cast<unsigned long long>(r.components.back().samples_in), soak,
-                   static_cast<unsigned long long>(dropped), static_cast<unsigned long long>(unaccounted));
-      return 1;
-    }
-    if (before < 0 || after < 0) {
-      std::fprintf(stderr, "soak: cannot read VmRSS from /proc/self/status\n");
-      return 1;
-    }
-    if (after - before > growth_limit_kib) {
-      std::fprintf(stderr, "soak: resident memory grew by %ld KiB over %ld samples; the bound is %ld KiB\n",
-                   after - before, soak, growth_limit_kib);
-      return 1;
-    }
+// Soak: a lossless threaded chain; the sink fails the run on any gap; memory must not grow. After
+// a warm-up run (allocator arenas, queues), a leak of even 4 bytes per sample shows over 1M samples.
+// False (after saying why) when a sample was lost or memory grew too much.
+bool measure_soak(Report& report, bool quick) {
+  const long soak = quick ? 200'000 : 1'000'000;
+  const long growth_limit_kib = 4096;
+  run(chain_yaml(10, soak / 10, 0, "examples.sink", 64, Mode::Pooled));  // warm up allocators
+  const long before = rss_kib();
+  const auto r = run(chain_yaml(10, soak, 0, "examples.sink", 64, Mode::Pooled)).result;
+  const long after = rss_kib();
+  std::uint64_t dropped = 0, unaccounted = 0;
+  for (const auto& c : r.connections) {
+    dropped += c.dropped + c.left;  // a sample left in a queue at the stop is lost too
+    unaccounted += c.pushed - c.delivered - c.dropped - c.left;
   }
-  for (const auto& [key, value] : ratios) out("ratio: " + key, value, "");
-  // A ratio a third above its reference is named: the hop or the loader got slower than the plain
-  // code beside it, whatever the machine's speed or load. Printed, not failed: a loaded machine's
-  // noise must not fail CI, and a person reads it the day it lands.
+  report.out("soak: samples through 10 threaded lossless hops", static_cast<double>(r.components.back().samples_in), "");
+  report.out("soak: samples dropped or left in queues", static_cast<double>(dropped), "");
+  report.out("soak: resident memory growth", static_cast<double>(after - before), "KiB");
+  report.out("soak: resident memory growth allowed", static_cast<double>(growth_limit_kib), "KiB");
+  if (r.components.back().samples_in != static_cast<std::uint64_t>(soak) || dropped != 0 || unaccounted != 0) {
+    std::fprintf(stderr, "soak lost samples: %llu of %ld arrived, %llu dropped or left, %llu unaccounted\n",
+                 static_cast<unsigned long long>(r.components.back().samples_in), soak,
+                 static_cast<unsigned long long>(dropped), static_cast<unsigned long long>(unaccounted));
+    return false;
+  }
+  if (before < 0 || after < 0) {
+    std::fprintf(stderr, "soak: cannot read VmRSS from /proc/self/status\n");
+    return false;
+  }
+  if (after - before > growth_limit_kib) {
+    std::fprintf(stderr, "soak: resident memory grew by %ld KiB over %ld samples; the bound is %ld KiB\n",
+                 after - before, soak, growth_limit_kib);
+    return false;
+  }
+  return true;
+}
+
+// The ratios, then each against its reference. A ratio a third above its reference is named: the
+// hop or the loader got slower than the plain code beside it, whatever the machine's speed or
+// load. Printed, not failed: a loaded machine's noise must not fail CI, and a person reads it the
+// day it lands.
+void compare_ratios(Report& report, const nlohmann::json& expected, const std::string& reference) {
+  for (const auto& [key, value] : report.ratios) report.out("ratio: " + key, value, "");
   bool slower = false;
-  for (const auto& [key, value] : ratios) {
+  for (const auto& [key, value] : report.ratios) {
     if (!expected.contains(key) || !expected[key].is_number()) continue;
     const double ref = expected[key].get<double>();
     const bool worse = value > ref * 4.0 / 3.0;
@@ -370,9 +383,38 @@ int main(int argc, char** argv) {
     std::printf("%s %s: %.2f now, %.2f in %s\n", worse ? "REGRESSION" : "as before:", key.c_str(), value, ref, reference.c_str());
   }
   if (!reference.empty() && !slower) std::printf("no regression against %s\n", reference.c_str());
-  if (json) {
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  if (const auto status = parse_options(argc, argv, options)) return *status;
+  nlohmann::json expected;
+  if (!options.reference.empty()) {
+    std::ifstream in(options.reference);
+    expected = nlohmann::json::parse(in, nullptr, false);
+    if (!in || !expected.is_object()) {
+      std::fprintf(stderr, "fba-runtime-benchmark: --reference %s: expected a JSON object of ratios, found %s\n",
+                   options.reference.c_str(), in ? "something else" : "no readable file");
+      return 2;
+    }
+  }
+  fba::set_log_level("warn");
+  const long n = options.quick ? 20'000 : 1'000'000;
+  const int reps = options.quick ? 1 : 3;
+  Report report;
+  report.json = options.json;
+  measure_throughput(report, n, reps);
+  measure_latency(report, options.quick);
+  measure_many_workers(report, n);
+  if (!measure_build(report, reps)) return 1;
+  if (!measure_soak(report, options.quick)) return 1;
+  compare_ratios(report, expected, options.reference);
+  if (options.json) {
     std::printf("{\n");
-    for (std::size_t i = 0; i < lines.size(); ++i) std::printf("%s%s\n", lines[i].c_str(), i + 1 < lines.size() ? "," : "");
+    for (std::size_t i = 0; i < report.lines.size(); ++i)
+      std::printf("%s%s\n", report.lines[i].c_str(), i + 1 < report.lines.size() ? "," : "");
     std::printf("}\n");
   }
   return 0;

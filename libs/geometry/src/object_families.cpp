@@ -387,6 +387,7 @@ SolidProperties solid_properties(const TriangleMesh& mesh) {
 }
 
 FamilyObject make_family_object(ObjectFamily family, std::uint64_t set_seed, int index) {
+  // One function: one short case per family, all drawing through the same lambdas and retry loop.
   if (index < 0) throw std::invalid_argument("object families: expected an index >= 0, found " + std::to_string(index));
   FamilyObject o;
   o.family = family;

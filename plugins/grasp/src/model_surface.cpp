@@ -95,6 +95,119 @@ FaceNeighbours face_neighbours(const Octree& model, const OccupiedLeaves& leaves
   return out;
 }
 
+// The occupied leaves in the model's walk order.
+OccupiedLeaves occupied_leaves(const Octree& model) {
+  OccupiedLeaves leaves;
+  model.for_each_occupied_leaf([&](const OctreeCell& c) {
+    leaves.index.emplace(c.node, std::int32_t(leaves.cells.size()));
+    leaves.cells.push_back(c);
+  });
+  return leaves;
+}
+
+// The object, with a table: the occupied leaves joined through shared faces to one that stands
+// on it. A pillar the views could not carve stays joined; space above the object that no view saw
+// (carving keeps it: nothing there was seen to be empty), cut off from the object by carved space
+// centimetres above the table, does not. A leaf stands on the table when its bottom lies within
+// one of its edges of it: an object that touches the table on a small patch or a point (a sphere,
+// an ellipsoid) has only a leaf or two there, and the carver judges a leaf by its centre, which
+// beside such a contact lies outside the object (under a sphere's lowest point), so the leaf that
+// straddles the table is carved and the object's lowest leaf stands up to an edge above it.
+// Without a table, every occupied leaf. 1 for a leaf of the object, by leaf index.
+std::vector<char> object_leaves(const OccupiedLeaves& leaves, const std::vector<FaceNeighbours>& neighbours,
+                                std::optional<double> table_z) {
+  std::vector<char> object(leaves.cells.size(), table_z ? 0 : 1);
+  if (!table_z) return object;
+  std::vector<std::int32_t> queue;
+  for (std::size_t i = 0; i < leaves.cells.size(); ++i) {
+    const OctreeCell& c = leaves.cells[i];
+    if (c.centre.z() - 3 * c.half_size <= *table_z) object[i] = 1, queue.push_back(std::int32_t(i));
+  }
+  while (!queue.empty()) {
+    const FaceNeighbours& f = neighbours[std::size_t(queue.back())];
+    queue.pop_back();
+    for (int k = 0; k < f.count; ++k)
+      if (const std::int32_t j = f.probes[std::size_t(k)].leaf; j >= 0 && !object[std::size_t(j)])
+        object[std::size_t(j)] = 1, queue.push_back(j);
+  }
+  return object;
+}
+
+// A surface leaf before the fit: where the surface is and which way its free faces point.
+struct Raw {
+  Eigen::Vector3d position, free_direction;
+  bool uncertain;
+};
+
+// An object leaf, if it is on the surface.
+std::optional<Raw> examine_leaf(const Octree& model, const ModelSurfaceParams& params, const OctreeCell& c,
+                                const FaceNeighbours& f, const std::vector<char>& object) {
+  auto is_object = [&](std::int32_t leaf) { return leaf >= 0 && object[std::size_t(leaf)]; };
+  Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();  // towards the faces no object leaf is beyond
+  for (int k = 0; k < f.count; ++k) {
+    const auto& probe = f.probes[std::size_t(k)];
+    if (!is_object(probe.leaf)) free_direction[probe.axis] += probe.sign * probe.quarters / 4.0;
+  }
+  bool any_free = false;
+  for (int a = 0; a < 3; ++a) any_free = any_free || free_direction[a] != 0;
+  // Faces free on both sides of an axis cancel there (a wall one leaf thick): such a leaf is
+  // surface too, its direction left to the neighbours' fit.
+  if (!any_free) {
+    bool two_sided = false;
+    for (int a = 0; a < 3 && !two_sided; ++a) two_sided = !is_object(f.centre[2 * a]) && !is_object(f.centre[2 * a + 1]);
+    if (!two_sided) return std::nullopt;
+  }
+  const Eigen::Vector3d position = c.centre + c.half_size * free_direction.cwiseMax(-1.0).cwiseMin(1.0);
+  if (params.table_z && position.z() < *params.table_z) return std::nullopt;  // the model's cone below the table
+  return Raw{position, free_direction, c.state() == NodeState::Partial && c.depth < model.max_depth};
+}
+
+// A surface sample from its raw leaf and its neighbours': the normal of the plane fitted to them
+// (or, failing a fit, the free direction), and the position moved onto that plane.
+SurfaceSample fit_sample(const Octree& model, const std::vector<Raw>& raw, const std::vector<SurfaceSample>& s,
+                         const std::vector<std::size_t>& nb, std::size_t i, double radius) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero(), direction = Eigen::Vector3d::Zero();
+  for (std::size_t j : nb) {
+    mean += s[j].position;
+    direction += raw[j].free_direction;
+  }
+  mean /= double(nb.size());
+  Eigen::Vector3d normal = direction;
+  if (nb.size() >= 6) {
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t j : nb) cov += (s[j].position - mean) * (s[j].position - mean).transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    // A fit only where the neighbours spread in two directions: a line of points has no plane.
+    if (eig.eigenvalues()[1] > 1e-12 * radius * radius) {
+      normal = eig.eigenvectors().col(0);
+      if (normal.dot(direction) < 0) normal = -normal;
+      if (direction.squaredNorm() == 0) normal = Eigen::Vector3d::Zero();
+    }
+  }
+  if (normal.squaredNorm() == 0) normal = raw[i].free_direction;
+  if (normal.squaredNorm() == 0) normal = s[i].position - model.bounds.center();  // a lone voxel: away from the centre
+  if (normal.squaredNorm() == 0) normal = Eigen::Vector3d::UnitZ();
+  normal.normalize();
+  SurfaceSample out = s[i];
+  out.normal = normal;
+  // Onto the fitted plane: removes the voxel staircase that would read as curvature.
+  out.position = s[i].position + (mean - s[i].position).dot(normal) * normal;
+  return out;
+}
+
+// The raw surface leaves as samples with fitted normals, each against its neighbours within `radius`.
+std::vector<SurfaceSample> fit_samples(const Octree& model, const std::vector<Raw>& raw, double radius,
+                                       const ParallelFor& parallel_for) {
+  std::vector<SurfaceSample> s(raw.size());
+  for (std::size_t i = 0; i < raw.size(); ++i) s[i].position = raw[i].position, s[i].uncertain = raw[i].uncertain;
+  const std::vector<std::vector<std::size_t>> neighbourhoods = NeighbourGrid(s, radius).neighbourhoods(true, parallel_for);
+  std::vector<SurfaceSample> smoothed = s;
+  for_each_chunk(parallel_for, s.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) smoothed[i] = fit_sample(model, raw, s, neighbourhoods[i], i, radius);
+  });
+  return smoothed;
+}
+
 }  // namespace
 
 ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params) {
@@ -109,74 +222,21 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
   // Surface leaves and their free faces. A face whose neighbour is finer is probed at its four
   // quarter points just outside it, so a coarse leaf next to finer ones sees a free finer one too.
   // The neighbours are found once per leaf, at once with a parallel_for.
-  OccupiedLeaves leaves;
-  model.for_each_occupied_leaf([&](const OctreeCell& c) {
-    leaves.index.emplace(c.node, std::int32_t(leaves.cells.size()));
-    leaves.cells.push_back(c);
-  });
+  const OccupiedLeaves leaves = occupied_leaves(model);
   out.leaves = leaves.cells.size();
   std::vector<FaceNeighbours> neighbours(leaves.cells.size());
   for_each_chunk(params.parallel_for, leaves.cells.size(), [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) neighbours[i] = face_neighbours(model, leaves, leaves.cells[i]);
   });
-
-  // The object, with a table: the occupied leaves joined through shared faces to one that stands
-  // on it. A pillar the views could not carve stays joined; space above the object that no view saw
-  // (carving keeps it: nothing there was seen to be empty), cut off from the object by carved space
-  // centimetres above the table, does not. A leaf stands on the table when its bottom lies within
-  // one of its edges of it: an object that touches the table on a small patch or a point (a sphere,
-  // an ellipsoid) has only a leaf or two there, and the carver judges a leaf by its centre, which
-  // beside such a contact lies outside the object (under a sphere's lowest point), so the leaf that
-  // straddles the table is carved and the object's lowest leaf stands up to an edge above it.
-  std::vector<char> object(leaves.cells.size(), params.table_z ? 0 : 1);
-  if (params.table_z) {
-    std::vector<std::int32_t> queue;
-    for (std::size_t i = 0; i < leaves.cells.size(); ++i) {
-      const OctreeCell& c = leaves.cells[i];
-      if (c.centre.z() - 3 * c.half_size <= *params.table_z) object[i] = 1, queue.push_back(std::int32_t(i));
-    }
-    while (!queue.empty()) {
-      const FaceNeighbours& f = neighbours[std::size_t(queue.back())];
-      queue.pop_back();
-      for (int k = 0; k < f.count; ++k)
-        if (const std::int32_t j = f.probes[std::size_t(k)].leaf; j >= 0 && !object[std::size_t(j)])
-          object[std::size_t(j)] = 1, queue.push_back(j);
-    }
-  }
+  const std::vector<char> object = object_leaves(leaves, neighbours, params.table_z);
   const std::size_t objects = std::size_t(std::count(object.begin(), object.end(), 1));
   out.unsupported_leaves = leaves.cells.size() - objects;
-  auto is_object = [&](std::int32_t leaf) { return leaf >= 0 && object[std::size_t(leaf)]; };
 
-  struct Raw {
-    Eigen::Vector3d position, free_direction;
-    bool uncertain;
-  };
   // Each leaf on its own (at once with a parallel_for), kept in the walk's order.
   std::vector<std::optional<Raw>> surface_leaf(leaves.cells.size());
-  auto examine = [&](std::size_t i) -> std::optional<Raw> {
-    const OctreeCell& c = leaves.cells[i];
-    const FaceNeighbours& f = neighbours[i];
-    Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();  // towards the faces no object leaf is beyond
-    for (int k = 0; k < f.count; ++k) {
-      const auto& probe = f.probes[std::size_t(k)];
-      if (!is_object(probe.leaf)) free_direction[probe.axis] += probe.sign * probe.quarters / 4.0;
-    }
-    bool any_free = false;
-    for (int a = 0; a < 3; ++a) any_free = any_free || free_direction[a] != 0;
-    // Faces free on both sides of an axis cancel there (a wall one leaf thick): such a leaf is
-    // surface too, its direction left to the neighbours' fit.
-    if (!any_free) {
-      bool two_sided = false;
-      for (int a = 0; a < 3 && !two_sided; ++a) two_sided = !is_object(f.centre[2 * a]) && !is_object(f.centre[2 * a + 1]);
-      if (!two_sided) return std::nullopt;
-    }
-    const Eigen::Vector3d position = c.centre + c.half_size * free_direction.cwiseMax(-1.0).cwiseMin(1.0);
-    if (params.table_z && position.z() < *params.table_z) return std::nullopt;  // the model's cone below the table
-    return Raw{position, free_direction, c.state() == NodeState::Partial && c.depth < model.max_depth};
-  };
   for_each_chunk(params.parallel_for, leaves.cells.size(), [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)
-      if (object[i]) surface_leaf[i] = examine(i);
+      if (object[i]) surface_leaf[i] = examine_leaf(model, params, leaves.cells[i], neighbours[i], object);
   });
   // The finest depth among the object's leaves, surface or not.
   int finest_depth = -1;
@@ -188,43 +248,8 @@ ModelSurface model_surface(const Octree& model, const ModelSurfaceParams& params
   if (raw.empty()) return out;
   out.finest_edge = size.x() / double(std::int64_t(1) << finest_depth);
   out.radius = params.radius > 0 ? params.radius : 3 * out.finest_edge;
-
-  std::vector<SurfaceSample> s(raw.size());
-  for (std::size_t i = 0; i < raw.size(); ++i) s[i].position = raw[i].position, s[i].uncertain = raw[i].uncertain;
-  const std::vector<std::vector<std::size_t>> neighbourhoods = NeighbourGrid(s, out.radius).neighbourhoods(true, params.parallel_for);
-  std::vector<SurfaceSample> smoothed = s;
-  for_each_chunk(params.parallel_for, s.size(), [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero(), direction = Eigen::Vector3d::Zero();
-      const std::vector<std::size_t>& nb = neighbourhoods[i];
-      for (std::size_t j : nb) {
-        mean += s[j].position;
-        direction += raw[j].free_direction;
-      }
-      mean /= double(nb.size());
-      Eigen::Vector3d normal = direction;
-      if (nb.size() >= 6) {
-        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-        for (std::size_t j : nb) cov += (s[j].position - mean) * (s[j].position - mean).transpose();
-        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-        // A fit only where the neighbours spread in two directions: a line of points has no plane.
-        if (eig.eigenvalues()[1] > 1e-12 * out.radius * out.radius) {
-          normal = eig.eigenvectors().col(0);
-          if (normal.dot(direction) < 0) normal = -normal;
-          if (direction.squaredNorm() == 0) normal = Eigen::Vector3d::Zero();
-        }
-      }
-      if (normal.squaredNorm() == 0) normal = raw[i].free_direction;
-      if (normal.squaredNorm() == 0) normal = s[i].position - model.bounds.center();  // a lone voxel: away from the centre
-      if (normal.squaredNorm() == 0) normal = Eigen::Vector3d::UnitZ();
-      normal.normalize();
-      smoothed[i].normal = normal;
-      // Onto the fitted plane: removes the voxel staircase that would read as curvature.
-      smoothed[i].position = s[i].position + (mean - s[i].position).dot(normal) * normal;
-    }
-  });
-  estimate_curvature(smoothed, out.radius, params.parallel_for);
-  out.samples = std::move(smoothed);
+  out.samples = fit_samples(model, raw, out.radius, params.parallel_for);
+  estimate_curvature(out.samples, out.radius, params.parallel_for);
   return out;
 }
 

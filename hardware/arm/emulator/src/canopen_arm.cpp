@@ -560,152 +560,167 @@ void apply_rpdo(CanopenArmEmulator::Node& n, int p, const can::Frame& frame,
 
 }  // namespace
 
+// A frame from the bus, by kind: NMT, SYNC, or an SDO request or RPDO to one of the nodes.
 void CanopenArmEmulator::handle(const can::Frame& frame) {
   if (frame.extended || frame.rtr) return;
-  const auto sender = [this](const can::Frame& f) { send(f); };
-  if (frame.id == kNmt) {
-    if (frame.dlc != 2) return;
-    for (auto& [id, n] : nodes_) {
-      if (n->silent || (frame.data[1] != 0 && frame.data[1] != id)) continue;
-      switch (frame.data[0]) {
-        case 0x01:
-          n->nmt = kOperational;
-          break;
-        case 0x02:
-          n->nmt = kStopped;
-          break;
-        case 0x80:
-          n->nmt = kPreOperational;
-          break;
-        case 0x81:  // reset node: the whole dictionary, and the drive (a fault is cleared)
-        case 0x82:  // reset communication: the communication objects only; the drive keeps its state
-          if (frame.data[0] == 0x81)
-            reset_dictionary(*n, options_);
-          else
-            reset_communication(*n, options_);
-          send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {0x00}));
-          n->nmt = kPreOperational;
-          n->last_heartbeat = Clock::now();
-          break;
-        default:
-          break;
-      }
-    }
-    return;
-  }
-  if (frame.id == kSync) {
-    const std::uint64_t sync = ++syncs_;
-    const auto now = Clock::now();
-    SyncSetPoints taken{sync, now, {}, 0};
-    for (auto& [id, n] : nodes_) {
-      if (n->silent || n->nmt != kOperational) continue;
-      n->took_set_point = false;
-      for (int p = 0; p < 4; ++p)
-        if (n->rpdo_pending[p]) {
-          apply_rpdo(*n, p, *n->rpdo_pending[p], sender);
-          n->rpdo_pending[p].reset();
-        }
-      // Cyclic synchronous position: the set-point that came before this SYNC is taken on it, and
-      // the drive follows the straight line from the one before to it over the interpolation
-      // period (a SYNC that comes early cuts the line short: the drive is then at the one before).
-      if (n->cyclic() && !n->ignores_set_points) {
-        const auto lo = static_cast<double>(static_cast<std::int32_t>(n->get(0x607D, 1)));
-        const auto hi = static_cast<double>(static_cast<std::int32_t>(n->get(0x607D, 2)));
-        const auto demand = static_cast<double>(static_cast<std::int32_t>(n->get(0x607A, 0)));
-        n->limited = demand < lo || demand > hi;
-        n->csp_from = n->csp_demand;
-        n->csp_demand = std::clamp(demand, lo, hi);
-        n->csp_since = now;
-        taken.mode = 8;
-        taken.set_points.emplace_back(id, static_cast<std::int32_t>(n->csp_demand));
-      } else if (n->took_set_point) {
-        if (taken.mode == 0) taken.mode = 1;
-        taken.set_points.emplace_back(id, static_cast<std::int32_t>(n->target));
-      }
-      for (int p = 0; p < 4; ++p) {
-        const auto communication = static_cast<std::uint16_t>(0x1800 + p);
-        const std::uint32_t type = n->get(communication, 2);
-        if (!pdo_valid(*n, communication) || type > 240) continue;
-        auto bytes = pdo_bytes(*n, static_cast<std::uint16_t>(0x1A00 + p));
-        const bool due = type == 0 ? bytes != n->tpdo_last[p] : ++n->tpdo_syncs[p] >= static_cast<int>(type);
-        if (!due) continue;
-        n->tpdo_syncs[p] = 0;
-        can::Frame f;
-        f.id = n->get(communication, 1) & 0x7FF;
-        f.dlc = static_cast<std::uint8_t>(bytes.size());
-        std::copy(bytes.begin(), bytes.end(), f.data.begin());
-        send(f);
-        n->tpdo_last[p] = std::move(bytes);
-      }
-    }
-    if (!taken.set_points.empty()) {
-      set_points_.push_back(std::move(taken));
-      if (set_points_.size() > kHeardKept) set_points_.pop_front();
-    }
-    return;
-  }
+  if (frame.id == kNmt) return handle_nmt(frame);
+  if (frame.id == kSync) return handle_sync();
   const int id = static_cast<int>(frame.id & 0x7F);
   const auto it = nodes_.find(id);
   if (it == nodes_.end() || it->second->silent) return;
   Node& n = *it->second;
   const std::uint32_t function = frame.id & 0x780;
-  if (function == kSdoRx) {
-    if (n.nmt == kStopped || frame.dlc != 8) return;
-    const std::uint8_t command = frame.data[0];
-    const auto index = static_cast<std::uint16_t>(frame.data[1] | frame.data[2] << 8);
-    const std::uint8_t sub = frame.data[3];
-    const std::uint32_t value =
-        static_cast<std::uint32_t>(frame.data[4]) | static_cast<std::uint32_t>(frame.data[5]) << 8 |
-        static_cast<std::uint32_t>(frame.data[6]) << 16 | static_cast<std::uint32_t>(frame.data[7]) << 24;
-    switch (command >> 5) {
-      case 1: {  // initiate download
-        ++n.sdo_downloads;
-        if (!(command & 0x02)) {
-          send(sdo_abort(id, index, sub, kAbortCommand));  // segmented transfers: not offered
-          return;
-        }
-        const std::size_t size = (command & 0x01) ? 4 - ((command >> 2) & 0x03) : 4;
-        const std::uint32_t masked = size == 4 ? value : value & ((1U << (8 * size)) - 1);
-        if (const std::uint32_t abort = write_object(n, index, sub, masked, size, sender)) {
-          send(sdo_abort(id, index, sub, abort));
-        } else {
-          send(can::make_frame(
-              kSdoTx + static_cast<std::uint32_t>(id),
-              {0x60, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub, 0, 0, 0, 0}));
-        }
-        return;
-      }
-      case 2: {  // initiate upload
-        refresh(n);
-        const auto entry = n.od.find(key(index, sub));
-        if (entry == n.od.end()) {
-          const auto any = n.od.lower_bound(key(index, 0));
-          send(sdo_abort(id, index, sub,
-                         any != n.od.end() && (any->first >> 8) == index ? kAbortNoSub : kAbortNoObject));
-          return;
-        }
-        if (!entry->second.readable) {
-          send(sdo_abort(id, index, sub, kAbortWriteOnly));
-          return;
-        }
-        const std::uint32_t v = entry->second.value;
-        const int size = entry->second.size;
-        send(can::make_frame(
-            kSdoTx + static_cast<std::uint32_t>(id),
-            {static_cast<std::uint8_t>(0x43 | ((4 - size) << 2)), static_cast<std::uint8_t>(index),
-             static_cast<std::uint8_t>(index >> 8), sub, static_cast<std::uint8_t>(v),
-             static_cast<std::uint8_t>(size > 1 ? v >> 8 : 0), static_cast<std::uint8_t>(size > 2 ? v >> 16 : 0),
-             static_cast<std::uint8_t>(size > 3 ? v >> 24 : 0)}));
-        return;
-      }
-      case 4:
-        return;  // the client aborted: nothing in flight to drop
+  if (function == kSdoRx) return handle_sdo(n, id, frame);
+  if (n.nmt != kOperational) return;
+  handle_rpdo(n, frame);
+}
+
+// NMT: a state change or a reset, for one node or (node 0) all of them.
+void CanopenArmEmulator::handle_nmt(const can::Frame& frame) {
+  if (frame.dlc != 2) return;
+  for (auto& [id, n] : nodes_) {
+    if (n->silent || (frame.data[1] != 0 && frame.data[1] != id)) continue;
+    switch (frame.data[0]) {
+      case 0x01:
+        n->nmt = kOperational;
+        break;
+      case 0x02:
+        n->nmt = kStopped;
+        break;
+      case 0x80:
+        n->nmt = kPreOperational;
+        break;
+      case 0x81:  // reset node: the whole dictionary, and the drive (a fault is cleared)
+      case 0x82:  // reset communication: the communication objects only; the drive keeps its state
+        if (frame.data[0] == 0x81)
+          reset_dictionary(*n, options_);
+        else
+          reset_communication(*n, options_);
+        send(can::make_frame(kHeartbeat + static_cast<std::uint32_t>(id), {0x00}));
+        n->nmt = kPreOperational;
+        n->last_heartbeat = Clock::now();
+        break;
       default:
-        send(sdo_abort(id, index, sub, kAbortCommand));
-        return;
+        break;
     }
   }
-  if (n.nmt != kOperational) return;
+}
+
+// SYNC: each operational node applies its pending RPDOs, takes its set-point and sends its due TPDOs.
+void CanopenArmEmulator::handle_sync() {
+  const auto sender = [this](const can::Frame& f) { send(f); };
+  const std::uint64_t sync = ++syncs_;
+  const auto now = Clock::now();
+  SyncSetPoints taken{sync, now, {}, 0};
+  for (auto& [id, n] : nodes_) {
+    if (n->silent || n->nmt != kOperational) continue;
+    n->took_set_point = false;
+    for (int p = 0; p < 4; ++p)
+      if (n->rpdo_pending[p]) {
+        apply_rpdo(*n, p, *n->rpdo_pending[p], sender);
+        n->rpdo_pending[p].reset();
+      }
+    // Cyclic synchronous position: the set-point that came before this SYNC is taken on it, and
+    // the drive follows the straight line from the one before to it over the interpolation
+    // period (a SYNC that comes early cuts the line short: the drive is then at the one before).
+    if (n->cyclic() && !n->ignores_set_points) {
+      const auto lo = static_cast<double>(static_cast<std::int32_t>(n->get(0x607D, 1)));
+      const auto hi = static_cast<double>(static_cast<std::int32_t>(n->get(0x607D, 2)));
+      const auto demand = static_cast<double>(static_cast<std::int32_t>(n->get(0x607A, 0)));
+      n->limited = demand < lo || demand > hi;
+      n->csp_from = n->csp_demand;
+      n->csp_demand = std::clamp(demand, lo, hi);
+      n->csp_since = now;
+      taken.mode = 8;
+      taken.set_points.emplace_back(id, static_cast<std::int32_t>(n->csp_demand));
+    } else if (n->took_set_point) {
+      if (taken.mode == 0) taken.mode = 1;
+      taken.set_points.emplace_back(id, static_cast<std::int32_t>(n->target));
+    }
+    for (int p = 0; p < 4; ++p) {
+      const auto communication = static_cast<std::uint16_t>(0x1800 + p);
+      const std::uint32_t type = n->get(communication, 2);
+      if (!pdo_valid(*n, communication) || type > 240) continue;
+      auto bytes = pdo_bytes(*n, static_cast<std::uint16_t>(0x1A00 + p));
+      const bool due = type == 0 ? bytes != n->tpdo_last[p] : ++n->tpdo_syncs[p] >= static_cast<int>(type);
+      if (!due) continue;
+      n->tpdo_syncs[p] = 0;
+      can::Frame f;
+      f.id = n->get(communication, 1) & 0x7FF;
+      f.dlc = static_cast<std::uint8_t>(bytes.size());
+      std::copy(bytes.begin(), bytes.end(), f.data.begin());
+      send(f);
+      n->tpdo_last[p] = std::move(bytes);
+    }
+  }
+  if (!taken.set_points.empty()) {
+    set_points_.push_back(std::move(taken));
+    if (set_points_.size() > kHeardKept) set_points_.pop_front();
+  }
+}
+
+// An SDO request to node `id`: an expedited download or upload; anything else is refused.
+void CanopenArmEmulator::handle_sdo(Node& n, int id, const can::Frame& frame) {
+  const auto sender = [this](const can::Frame& f) { send(f); };
+  if (n.nmt == kStopped || frame.dlc != 8) return;
+  const std::uint8_t command = frame.data[0];
+  const auto index = static_cast<std::uint16_t>(frame.data[1] | frame.data[2] << 8);
+  const std::uint8_t sub = frame.data[3];
+  const std::uint32_t value =
+      static_cast<std::uint32_t>(frame.data[4]) | static_cast<std::uint32_t>(frame.data[5]) << 8 |
+      static_cast<std::uint32_t>(frame.data[6]) << 16 | static_cast<std::uint32_t>(frame.data[7]) << 24;
+  switch (command >> 5) {
+    case 1: {  // initiate download
+      ++n.sdo_downloads;
+      if (!(command & 0x02)) {
+        send(sdo_abort(id, index, sub, kAbortCommand));  // segmented transfers: not offered
+        return;
+      }
+      const std::size_t size = (command & 0x01) ? 4 - ((command >> 2) & 0x03) : 4;
+      const std::uint32_t masked = size == 4 ? value : value & ((1U << (8 * size)) - 1);
+      if (const std::uint32_t abort = write_object(n, index, sub, masked, size, sender)) {
+        send(sdo_abort(id, index, sub, abort));
+      } else {
+        send(can::make_frame(
+            kSdoTx + static_cast<std::uint32_t>(id),
+            {0x60, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub, 0, 0, 0, 0}));
+      }
+      return;
+    }
+    case 2: {  // initiate upload
+      refresh(n);
+      const auto entry = n.od.find(key(index, sub));
+      if (entry == n.od.end()) {
+        const auto any = n.od.lower_bound(key(index, 0));
+        send(sdo_abort(id, index, sub,
+                       any != n.od.end() && (any->first >> 8) == index ? kAbortNoSub : kAbortNoObject));
+        return;
+      }
+      if (!entry->second.readable) {
+        send(sdo_abort(id, index, sub, kAbortWriteOnly));
+        return;
+      }
+      const std::uint32_t v = entry->second.value;
+      const int size = entry->second.size;
+      send(can::make_frame(
+          kSdoTx + static_cast<std::uint32_t>(id),
+          {static_cast<std::uint8_t>(0x43 | ((4 - size) << 2)), static_cast<std::uint8_t>(index),
+           static_cast<std::uint8_t>(index >> 8), sub, static_cast<std::uint8_t>(v),
+           static_cast<std::uint8_t>(size > 1 ? v >> 8 : 0), static_cast<std::uint8_t>(size > 2 ? v >> 16 : 0),
+           static_cast<std::uint8_t>(size > 3 ? v >> 24 : 0)}));
+      return;
+    }
+    case 4:
+      return;  // the client aborted: nothing in flight to drop
+    default:
+      send(sdo_abort(id, index, sub, kAbortCommand));
+      return;
+  }
+}
+
+// A frame that may be one of an operational node's RPDOs: applied now, or on the next SYNC.
+void CanopenArmEmulator::handle_rpdo(Node& n, const can::Frame& frame) {
+  const auto sender = [this](const can::Frame& f) { send(f); };
   for (int p = 0; p < 4; ++p) {
     const auto communication = static_cast<std::uint16_t>(0x1400 + p);
     if (!pdo_valid(n, communication) || frame.id != (n.get(communication, 1) & 0x7FF)) continue;

@@ -96,6 +96,10 @@ class CanopenArmEmulator {
 
  private:
   void handle(const can::Frame& frame);
+  void handle_nmt(const can::Frame& frame);
+  void handle_sync();
+  void handle_sdo(Node& n, int id, const can::Frame& frame);
+  void handle_rpdo(Node& n, const can::Frame& frame);
   void send(const can::Frame& frame);
   void update(std::chrono::steady_clock::time_point now);
   Node& node(int id) const;
