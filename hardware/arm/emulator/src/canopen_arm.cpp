@@ -530,6 +530,16 @@ std::vector<std::uint8_t> pdo_bytes(CanopenArmEmulator::Node& n, std::uint16_t m
   return bytes;
 }
 
+// The frame of TPDO p (its COB-ID from 0x1800 + p), remembered as the last one sent.
+can::Frame tpdo_frame(CanopenArmEmulator::Node& n, int p, std::vector<std::uint8_t> bytes) {
+  can::Frame f;
+  f.id = n.get(static_cast<std::uint16_t>(0x1800 + p), 1) & 0x7FF;
+  f.dlc = static_cast<std::uint8_t>(bytes.size());
+  std::copy(bytes.begin(), bytes.end(), f.data.begin());
+  n.tpdo_last[p] = std::move(bytes);
+  return f;
+}
+
 void apply_rpdo(CanopenArmEmulator::Node& n, int p, const can::Frame& frame,
                 const std::function<void(const can::Frame&)>& send) {
   const auto mapping = static_cast<std::uint16_t>(0x1600 + p);
@@ -645,12 +655,7 @@ void CanopenArmEmulator::handle_sync() {
       const bool due = type == 0 ? bytes != n->tpdo_last[p] : ++n->tpdo_syncs[p] >= static_cast<int>(type);
       if (!due) continue;
       n->tpdo_syncs[p] = 0;
-      can::Frame f;
-      f.id = n->get(communication, 1) & 0x7FF;
-      f.dlc = static_cast<std::uint8_t>(bytes.size());
-      std::copy(bytes.begin(), bytes.end(), f.data.begin());
-      send(f);
-      n->tpdo_last[p] = std::move(bytes);
+      send(tpdo_frame(*n, p, std::move(bytes)));
     }
   }
   if (!taken.set_points.empty()) {
@@ -770,12 +775,7 @@ void CanopenArmEmulator::update(Clock::time_point now) {
       const std::uint32_t timer = n->get(communication, 5);
       if (bytes == n->tpdo_last[p] && (timer == 0 || now - n->tpdo_time[p] < std::chrono::milliseconds(timer)))
         continue;
-      can::Frame f;
-      f.id = n->get(communication, 1) & 0x7FF;
-      f.dlc = static_cast<std::uint8_t>(bytes.size());
-      std::copy(bytes.begin(), bytes.end(), f.data.begin());
-      send(f);
-      n->tpdo_last[p] = std::move(bytes);
+      send(tpdo_frame(*n, p, std::move(bytes)));
       n->tpdo_time[p] = now;
     }
   }
