@@ -214,6 +214,17 @@ TEST(GraspSynthesisComponent, AfterMaxViewsItSettlesForACandidateWhoseContactsAr
   EXPECT_EQ(h.values<fba::Grasp>("grasp").size(), 1u);
 }
 
+// The same model with contacts_views 3: a candidate whose contacts are resolved is taken from the
+// third view on, long before max_views (without it, the third view asks for more: the test above).
+TEST(GraspSynthesisComponent, WithContactsViewsACandidateOnResolvedContactsIsTakenFromThatView) {
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"max_views", 10}, {"contacts_views", 3}});
+  auto coarse = [](const Eigen::Vector3d&) { return 4; };
+  h.push<fba::Octree>("octree", cylinder(3, coarse));
+  h.run();
+  EXPECT_TRUE(named(h.events(), "planning_performed").empty());
+  EXPECT_EQ(h.values<fba::Grasp>("grasp").size(), 1u);
+}
+
 // The cylinder's middle band left at depth 5 of 6 (unresolved), its ends resolved: the steadiest
 // grasps, around the middle, are not resolved yet (epsilon 0.11 on the model against 0.04 for the
 // best resolved one, near an end). Before the last view the resolved one waits for them (the
