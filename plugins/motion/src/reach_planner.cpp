@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <random>
 #include <stdexcept>
 #include <utility>
 
@@ -115,6 +116,7 @@ struct ReachPlanner::Impl {
     check(p.speed_scale > 0 && p.speed_scale <= 1, "speed_scale must be in (0, 1], found " + format("%g", p.speed_scale));
     check(p.acceleration > 0 && p.sample_period > 0, "acceleration and sample_period must be > 0");
     check(p.max_backout >= 0 && std::isfinite(p.max_backout), "max_backout must be >= 0, found " + format("%g", p.max_backout));
+    check(p.jiggle_share >= 0 && p.jiggle_share <= 1, "jiggle_share must be in [0, 1], found " + format("%g", p.jiggle_share));
     const auto n = static_cast<Eigen::Index>(arm.size());
     max_velocity.resize(n);
     for (Eigen::Index i = 0; i < n; ++i) max_velocity(i) = arm.limits()[static_cast<std::size_t>(i)].velocity * p.speed_scale;
@@ -175,8 +177,9 @@ struct ReachPlanner::Impl {
   // the arm itself (the model's leaves the hand is in lie on the way out), until a pose clear of
   // everything, within max_backout: along the flange's -z axis (the wrist camera's line of sight,
   // backwards), else, where the arm cannot go that way (a view on the far side of the object
-  // stretches it towards the end of its reach), straight up. Returns why not, or "" with `path`
-  // filled (the current joints first, the clear pose last). `robot` checks the model again after.
+  // stretches it towards the end of its reach), straight up, else by joints alone (jiggle: at the
+  // end of its reach the arm can still fold back). Returns why not, or "" with `path` filled (the
+  // current joints first, the clear pose last). `robot` checks the model again after.
   std::string back_out(const Eigen::VectorXd& current, RobotCollision& robot, std::vector<Eigen::VectorXd>& path,
                        ReachFigures& figures) const {
     const Eigen::Isometry3d flange = arm.forward(current);
@@ -200,8 +203,46 @@ struct ReachPlanner::Impl {
       if (failed.empty()) failed = text::metres(params.max_backout) + " back (max_backout), it still puts " + into(still);
       why += std::string(why.empty() ? "" : "; ") + way + ": " + failed;
     }
-    path.clear();
-    return why;
+    if (std::string failed = jiggle(current, robot, path, figures); !failed.empty()) {
+      path.clear();
+      return why + "; by joints alone: " + failed;
+    }
+    return {};
+  }
+
+  // As MoveIt's FixStartStateCollision: joint positions drawn around the current ones, each joint
+  // within a share of its range that grows with the draws up to jiggle_share, the first one clear of
+  // everything whose straight joint motion from the current joints is clear of the table and the
+  // arm itself (the model off, as on the lines above). Returns why not, or "" with `path` the two.
+  std::string jiggle(const Eigen::VectorXd& current, RobotCollision& robot, std::vector<Eigen::VectorXd>& path,
+                     ReachFigures& figures) const {
+    if (params.jiggle_draws == 0) return "not tried (jiggle_draws 0)";
+    std::mt19937_64 random(params.seed);  // the same way out on every run
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    const auto collision = checker(robot);
+    std::string last;
+    for (std::size_t k = 1; k <= params.jiggle_draws; ++k) {
+      const double share = params.jiggle_share * double(k) / double(params.jiggle_draws);
+      Eigen::VectorXd q = current;
+      for (Eigen::Index i = 0; i < q.size(); ++i) {
+        const arm::JointLimits& l = arm.limits()[static_cast<std::size_t>(i)];
+        const double range = std::isfinite(l.upper - l.lower) ? l.upper - l.lower : 2 * M_PI;
+        q(i) = std::clamp(current(i) + share * range * unit(random), l.lower, l.upper);
+      }
+      ++figures.collision_checks;
+      if (std::string c = robot.collision(q); !c.empty()) {
+        last = c;
+        continue;
+      }
+      robot.check_model(false);
+      last = motion_collision(current, q, params.collision_step, collision, &figures.collision_checks);
+      robot.check_model(true);
+      if (!last.empty()) continue;
+      path = {current, q};
+      return {};
+    }
+    return "none of " + std::to_string(params.jiggle_draws) + " joint positions within " +
+           format("%.0f%%", 100 * params.jiggle_share) + " of each joint's range is clear (the last: " + last + ")";
   }
 };
 

@@ -173,9 +173,11 @@ TEST(ReachPlanner, AStartWhoseFingersAreInSpaceNotYetCarvedBacksOutAlongTheFlang
   EXPECT_EQ(quick.backout_path, plan.backout_path);
   EXPECT_EQ(quick.pregrasp_joints, plan.pregrasp_joints);
 
-  // Allowed to back out a centimetre only: the fingers are still in it there.
+  // Allowed to back out a centimetre only, and no joint positions drawn: the fingers are still in
+  // it there.
   ReachParams near = p;
   near.max_backout = 0.01;
+  near.jiggle_draws = 0;
   const ReachPlan refused = ReachPlanner(arm_urdf(), near).plan(grasp, model, home());
   EXPECT_FALSE(refused.ok);
   EXPECT_EQ(refused.refusal, Refusal::Start);
@@ -185,7 +187,9 @@ TEST(ReachPlanner, AStartWhoseFingersAreInSpaceNotYetCarvedBacksOutAlongTheFlang
             std::string::npos)
       << refused.why;
   EXPECT_NE(refused.why.find("; straight up: 0.010 m back (max_backout), it still puts the "), std::string::npos) << refused.why;
-  // Not at all: refused as before.
+  EXPECT_NE(refused.why.find("; by joints alone: not tried (jiggle_draws 0)"), std::string::npos) << refused.why;
+  // Not at all: refused as before, whatever the draws.
+  near.jiggle_draws = p.jiggle_draws;
   near.max_backout = 0;
   const ReachPlan kept = ReachPlanner(arm_urdf(), near).plan(grasp, model, home());
   EXPECT_EQ(kept.refusal, Refusal::Start);
@@ -226,4 +230,35 @@ TEST(ReachPlanner, AStartTheArmCannotBackOutOfAlongTheFlangesAxisBacksOutStraigh
     EXPECT_NEAR(moved.z(), p.cartesian_step * static_cast<double>(i), 1e-3) << i;
     EXPECT_LT(moved.head<2>().norm(), 1e-3) << i;
   }
+}
+
+// Where no straight line backs the hand out (here: allowed a centimetre only, as when a view at the
+// end of the arm's reach leaves no room along the flange's axis nor upwards), joint positions drawn
+// around the current ones take it out: the trajectory starts with that one motion, every joint
+// within jiggle_share of its range, and the plan from there is sound.
+TEST(ReachPlanner, AStartNoLineBacksOutOfIsLeftByJointsAlone) {
+  const auto box = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, kBox.z() / 2), kBox);
+  const auto uncarved = fba::grasp::test::box_sdf(Eigen::Vector3d(-0.015, 0, 0.15), Eigen::Vector3d(0.03, 0.14, 0.06));
+  const fba::Octree model = fba::grasp::test::voxelise([&](const Eigen::Vector3d& p) { return std::min(box(p), uncarved(p)); }, workspace(), 6);
+  const fba::Grasp grasp = box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07);
+  ReachParams p = planner().params();
+  p.max_backout = 0.01;
+  const ReachPlanner jiggling(arm_urdf(), p);
+  const ReachPlan plan = jiggling.plan(grasp, model, home());
+  expect_a_sound_plan(jiggling, plan, grasp, model, home());
+  ASSERT_EQ(plan.backout_path.size(), 2u);
+  EXPECT_EQ(plan.backout_path.front(), home());
+  EXPECT_EQ(plan.start_joints, plan.backout_path.back());
+  const auto& limits = jiggling.arm().limits();
+  for (std::size_t i = 0; i < limits.size(); ++i)
+    EXPECT_LE(std::abs(plan.start_joints(static_cast<Eigen::Index>(i)) - home()(static_cast<Eigen::Index>(i))),
+              p.jiggle_share * (limits[i].upper - limits[i].lower) + 1e-12)
+        << i;
+  RobotCollision robot(jiggling.arm(), p.flange_from_palm);
+  robot.set_hand(place_hand(grasp, p.clearance).opening, grasp.spread);
+  robot.set_model(ReachPlanner::obstacles(model));
+  EXPECT_EQ(robot.collision(plan.start_joints), "");
+  EXPECT_NE(robot.collision(home()), "");
+  // The same way out on every run.
+  EXPECT_EQ(jiggling.reachable(grasp, model, home()).backout_path, plan.backout_path);
 }

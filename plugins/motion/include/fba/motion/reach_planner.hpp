@@ -61,6 +61,11 @@ struct ReachParams {
   // flange's -z axis (the wrist camera's line of sight, backwards) at most this far, in
   // cartesian_step steps, each an IK solution, until clear of the model. 0: such a start is refused.
   double max_backout = 0.2;
+  // Where neither line backs out (the arm at the end of its reach), joint positions drawn around
+  // the current ones, each joint within up to jiggle_share of its range (MoveIt's
+  // FixStartStateCollision, its jiggle_fraction 0.05 and 100 draws). 0 draws: not tried.
+  std::size_t jiggle_draws = 100;
+  double jiggle_share = 0.05;
   // The pregrasp's IK: the first solution found from which the straight approach and lift work,
   // rather than the one nearest the current joints among all ik_attempts. A yes-or-no check
   // (grasp synthesis's) at a fraction of the cost: the lines are then checked for one solution, not
