@@ -14,6 +14,8 @@
 
 #include "arm_model.hpp"
 #include "fba/geometry/box_decomposition.hpp"
+#include "fba/geometry/convex_hull.hpp"
+#include "fba/geometry/decimate.hpp"
 #include "fba/motion/reach_planner.hpp"
 #include "robot_urdf.hpp"
 #include "robot_world.hpp"
@@ -74,6 +76,8 @@ const std::vector<double> kArmHome{-0.4148, -2.1223, 2.2888, -2.2234, -1.3679, -
 // above needs a short path. The fingers reach about this far past the palm's frame.
 constexpr double kStartClearance = 0.25;
 constexpr double kFingerReach = 0.18;
+// At most this many vertices of a convex object's hull go to MuJoCo (see the constructor).
+constexpr std::size_t kMaxHullVertices = 1000;
 
 std::string seconds(double t) { return fmt::format("t={:.2f} s", t); }
 
@@ -333,14 +337,22 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
   s.params = params;
   s.object = place_on_table(mesh, placement);
 
-  // The object as boxes: its voxelisation merged, whose fit is known.
+  // The object as boxes: its voxelisation merged, whose fit is known; a convex object as its hull,
+  // exact and smooth where the boxes would be a staircase of ledges a fingertip rests on.
   geometry::BoxDecomposition pieces;
+  geometry::ConvexHull hull;
   try {
     pieces = geometry::decompose_into_boxes(s.object, params.voxel_size);
-  } catch (const std::invalid_argument& e) {
+    // MuJoCo walks a hull's vertices in every collision test near it, and qhull merges facets for
+    // minutes on a fine mesh's flat faces: a fine mesh's hull is that of the mesh clustered to a
+    // few thousand triangles (its hull moved inwards by a cluster's sagitta: under a tenth of a
+    // millimetre on a 10 cm sphere).
+    hull = geometry::convex_hull(geometry::decimate(s.object, 2 * kMaxHullVertices).mesh);
+  } catch (const std::exception& e) {  // std::invalid_argument, geometry::ConvexHullError
     throw LiftTestError(std::string("lift test: the object cannot be given to MuJoCo: ") + e.what());
   }
-  s.pieces = {pieces.boxes.size(), pieces.voxel_size, pieces.iou, pieces.volume, pieces.mesh_volume};
+  const bool convex = pieces.mesh_volume >= geometry::kConvexVolumeShare * hull.volume;
+  s.pieces = {convex, hull.volume, pieces.boxes.size(), pieces.voxel_size, pieces.iou, pieces.volume, pieces.mesh_volume};
 
   // The robot: its one description, with the measured transforms in place.
   const std::string name = robot.urdf.empty() ? "wrist_camera_arm.urdf (built in)" : robot.urdf_name.empty() ? "the robot's URDF" : robot.urdf_name;
@@ -387,7 +399,8 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
 
   // The world: the robot, the table and the object's boxes.
   try {
-    s.mjcf = robot_world_mjcf(urdf, name, WorldObject{pieces.boxes, params.mass, pieces.centroid, pieces.inertia, params.friction});
+    s.mjcf = robot_world_mjcf(urdf, name, WorldObject{pieces.boxes, convex ? hull.vertices : std::vector<Eigen::Vector3d>{},
+                                                      params.mass, pieces.centroid, pieces.inertia, params.friction});
   } catch (const RobotWorldError& e) {
     throw LiftTestError(std::string("lift test: ") + e.what());
   }

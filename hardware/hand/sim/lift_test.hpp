@@ -73,9 +73,12 @@ struct RobotSetup {
   std::map<std::string, Eigen::Isometry3d> origins;
 };
 
-// What MuJoCo was given for the object.
+// What MuJoCo was given for the object: a convex mesh (its volume at least kConvexVolumeShare of
+// its hull's) as its hull, one exact piece; any other as boxes of voxels (box_decomposition.hpp).
 struct ObjectPieces {
-  std::size_t boxes = 0;
+  bool hull = false;       // the object collides as its convex hull, not as the boxes
+  double hull_volume = 0;  // m^3, of the mesh's convex hull
+  std::size_t boxes = 0;   // the voxels' boxes (the lift test's own reach planning uses them either way)
   double voxel_size = 0;   // m
   double iou = 0;          // volume IoU of the boxes against the mesh
   double volume = 0;       // m^3, of the boxes

@@ -219,11 +219,12 @@ std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& ori
   // table. A plane touches a solid only on the solid's convex hull, so the table's contacts are
   // exactly the boxes' (the few MuJoCo makes for a convex mesh on a plane, where the boxes on the
   // table would have made four each: hundreds of constraints a step, in MuJoCo 2.2's dense
-  // buffers).
+  // buffers). A convex object given as its hull is that one mesh, which touches both.
   std::string object_xml, assets;
-  if (!object.boxes.empty()) {
+  if (!object.boxes.empty() || !object.hull.empty()) {
     Eigen::AlignedBox3d bounds;
     for (const auto& b : object.boxes) bounds.extend(b);
+    for (const auto& p : object.hull) bounds.extend(p);
     const Eigen::Vector3d c = bounds.center();
     object_xml += fmt::format(R"(    <body name="object" pos="{}">)", vec(c.x(), c.y(), c.z())) + "\n";
     object_xml += R"(      <freejoint name="object"/>)" "\n";
@@ -234,19 +235,25 @@ std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& ori
                               num(inertia(0, 2)), num(inertia(1, 2))) +
                   "\n";
     std::string corners;
-    for (std::size_t i = 0; i < object.boxes.size(); ++i) {
-      const Eigen::Vector3d p = object.boxes[i].center() - c, h = object.boxes[i].sizes() / 2;
-      object_xml += fmt::format(R"(      <geom name="object_{}" type="box" pos="{}" size="{}" contype="0" conaffinity="2" condim="4" )"
-                                R"(rgba="0.8 0.3 0.2 1"/>)",
-                                i, vec(p.x(), p.y(), p.z()), vec(h.x(), h.y(), h.z())) +
-                    "\n";
-      for (int k = 0; k < 8; ++k) {
-        const Eigen::Vector3d q = object.boxes[i].corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - c;
-        corners += vec(q.x(), q.y(), q.z()) + " ";
+    if (!object.hull.empty()) {
+      for (const auto& p : object.hull) corners += vec(p.x() - c.x(), p.y() - c.y(), p.z() - c.z()) + " ";
+    } else {
+      for (std::size_t i = 0; i < object.boxes.size(); ++i) {
+        const Eigen::Vector3d p = object.boxes[i].center() - c, h = object.boxes[i].sizes() / 2;
+        object_xml += fmt::format(R"(      <geom name="object_{}" type="box" pos="{}" size="{}" contype="0" conaffinity="2" condim="4" )"
+                                  R"(rgba="0.8 0.3 0.2 1"/>)",
+                                  i, vec(p.x(), p.y(), p.z()), vec(h.x(), h.y(), h.z())) +
+                      "\n";
+        for (int k = 0; k < 8; ++k) {
+          const Eigen::Vector3d q = object.boxes[i].corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - c;
+          corners += vec(q.x(), q.y(), q.z()) + " ";
+        }
       }
     }
     assets = "  <asset>\n    <mesh name=\"object_hull\" vertex=\"" + corners + "\"/>\n  </asset>\n";
-    object_xml += R"(      <geom name="object_hull" type="mesh" mesh="object_hull" contype="4" conaffinity="1" condim="4" rgba="0 0 0 0"/>)"
+    // conaffinity 1: the table; 3: the robot too (kRobotContact's contype 2).
+    object_xml += fmt::format(R"(      <geom name="object_hull" type="mesh" mesh="object_hull" contype="4" conaffinity="{}" condim="4" rgba="{}"/>)",
+                              object.hull.empty() ? 1 : 3, object.hull.empty() ? "0 0 0 0" : "0.8 0.3 0.2 1") +
                   "\n";
     object_xml += "    </body>\n";
   }

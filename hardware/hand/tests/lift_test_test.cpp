@@ -151,20 +151,23 @@ TEST(LiftTest, ContactsOffCentreOnAHeavyBarDrop) {
 
 // A U standing on the table, its gap between the walls open upwards and at both ends. A grasp on
 // its ends' faces across the gap: on the convex hull, which fills the gap, the fingers would meet
-// those faces and hold; on the U itself they close through the gap on nothing. The solid block the
-// hull is holds with the same grasp.
+// those faces and hold; on the U itself (as boxes: it is not convex) they close through the gap on
+// nothing. The solid block the hull is (convex: collided as its hull) holds with the same grasp.
 TEST(LiftTest, AConcaveObjectIsNotHeldWhereOnlyItsHullWouldBe) {
   const fba::test::UShape u;
   const fba::Grasp g = box_grasp(Eigen::Vector3d(u.width, u.length, u.height), Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitZ(), 0.07);
   LiftTestParams p;
   p.voxel_size = 0.005;  // the U's walls and base are whole voxels
   LiftTest concave(fba::test::make_u_shape(u), {}, p);
+  EXPECT_FALSE(concave.pieces().hull);  // boxes: its volume is two thirds of its hull's
   EXPECT_GT(concave.pieces().iou, 0.99);
   const auto r = concave.run(g);
   EXPECT_FALSE(r.held);
   EXPECT_NE(r.reason.find("no contact with the object"), std::string::npos) << r.reason;
 
   LiftTest hull(box_mesh(Eigen::Vector3d(u.width, u.length, u.height)), {}, p);
+  EXPECT_TRUE(hull.pieces().hull);  // convex: its hull, exactly
+  EXPECT_NEAR(hull.pieces().hull_volume, u.width * u.length * u.height, 1e-9);
   const auto h = hull.run(g);
   EXPECT_TRUE(h.held) << h.reason;
 }

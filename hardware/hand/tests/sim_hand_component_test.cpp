@@ -12,6 +12,7 @@
 #include <fba/types/grasp.hpp>
 #include <fba/types/grasp_execution.hpp>
 #include <fba/types/hand_command.hpp>
+#include "fba/geometry/object_families.hpp"
 #include <fba/types/joint_trajectory.hpp>
 
 #include "fba/geometry/mesh_io.hpp"
@@ -64,19 +65,24 @@ TEST(SimHand, GoodGraspHoldsAndSaysSo) {
 }
 
 // An OBJ beyond MuJoCo's 200,000 faces: once MuJoCo refused the scene ("perhaps this is an ASCII
-// file?"); MuJoCo is now given the object's voxels as boxes, whatever its triangles.
+// file?"); MuJoCo is now given the object's voxels as boxes, or a convex object's hull of at most
+// a thousand vertices, whatever its triangles. A can of 60,000 sides, convex: its hull.
 TEST(SimHand, AMeshOverMuJoCosFaceLimitIsGrasped) {
   fba::test::TempDir dir;
-  const auto obj = dir.path() / "fine_sphere.obj";
-  const auto sphere = fba::geometry::make_uv_sphere({0, 0, 0.04}, 0.04, 400, 300);
-  ASSERT_GT(sphere.triangles.size(), 200000u);
-  fba::test::write_obj(sphere, obj);
+  const auto obj = dir.path() / "fine_can.obj";
+  auto can = fba::geometry::make_cylinder_shape(0.035, 0.1, 60000);
+  for (auto& v : can.vertices) v.z() += 0.05f;  // its base on the table
+  ASSERT_GT(can.triangles.size(), 200000u);
+  fba::test::write_obj(can, obj);
   ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", obj.string()}});
-  h.push<fba::Grasp>("grasp", fba::sim_hand::ring_grasp(sphere, 0.04, 0));
+  h.push<fba::Grasp>("grasp", fba::sim_hand::ring_grasp(can, 0.05, 0));
   h.run();
   const auto results = h.values<fba::GraspExecution>("result");
   ASSERT_EQ(results.size(), 1u);
   EXPECT_TRUE(results[0].held) << results[0].reason;
+  const auto held = find_event(h.events(), "held");
+  ASSERT_TRUE(held);
+  EXPECT_EQ(nlohmann::json::parse(held->payload)["object"]["collides_as"], "convex hull");
 }
 
 TEST(SimHand, InTheMeshFrameGraspsAndContactsAreInTheMeshFilesCoordinates) {

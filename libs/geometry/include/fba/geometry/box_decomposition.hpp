@@ -3,7 +3,8 @@
 // the boxes' union is exactly the occupied voxels, so a concavity wider than a voxel stays empty.
 // Chosen over an approximate convex decomposition (HACD, V-HACD): the pieces' fit is known in
 // advance (a surface off by at most half a voxel's diagonal), the result is the same on every run,
-// and boxes are the shapes engines collide fastest and most robustly.
+// and boxes are the shapes engines collide fastest and most robustly. A convex solid needs none of
+// this: it is its own hull (convex_hull.hpp).
 #pragma once
 
 #include <cstddef>
