@@ -29,6 +29,7 @@ namespace {
 
 using fba::testing::ComponentHarness;
 
+using fba::sim_hand::test::open_then_close;
 using fba::test::kCan;
 
 // The ring grasp on the can as sim.hand places it (at x, y, yaw degrees).
@@ -175,14 +176,7 @@ TEST(SimHand, AReachPlansTrajectoryAndCommandsAreExecutedInTheWorld) {
 // there, on nothing.
 TEST(SimHand, CommandsWithoutATrajectoryCloseWhereTheArmStands) {
   ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}}, {"commands"});
-  fba::HandCommand open;
-  open.opening = 0.1;
-  open.spread = 0.04;
-  fba::HandCommand close;
-  close.action = fba::HandCommand::Action::Close;
-  close.force = 10;
-  h.push<fba::HandCommand>("commands", open);
-  h.push<fba::HandCommand>("commands", close);
+  for (const auto& command : open_then_close()) h.push<fba::HandCommand>("commands", command);
   h.run();
   const auto results = h.values<fba::GraspExecution>("result");
   ASSERT_EQ(results.size(), 1u);
