@@ -23,6 +23,7 @@
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
+#include "support/events.hpp"
 #include "support/mesh_files.hpp"
 
 namespace {
@@ -30,18 +31,13 @@ namespace {
 using fba::testing::ComponentHarness;
 
 using fba::sim_hand::test::open_then_close;
+using fba::test::find_event;
 using fba::test::kCan;
 
 // The ring grasp on the can as sim.hand places it (at x, y, yaw degrees).
 fba::Grasp can_grasp(double x, double y, double yaw_deg, double thumb_deg) {
   const auto placed = fba::sim_hand::place_on_table(fba::geometry::load_mesh(kCan), {x, y, yaw_deg * M_PI / 180});
   return fba::sim_hand::ring_grasp(placed, fba::geometry::mesh_bounds(placed).center().z(), thumb_deg * M_PI / 180);
-}
-
-std::optional<fba::Event> find_event(const std::vector<fba::Event>& events, const std::string& name) {
-  for (const auto& e : events)
-    if (e.name == name) return e;
-  return std::nullopt;
 }
 
 TEST(SimHand, GoodGraspHoldsAndSaysSo) {
