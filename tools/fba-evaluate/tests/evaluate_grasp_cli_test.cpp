@@ -13,6 +13,7 @@
 
 #include "evaluate_grasp.hpp"
 #include "support/build_paths.hpp"
+#include "support/temp_dir.hpp"
 
 namespace {
 
@@ -25,20 +26,17 @@ using fba::test::evaluate_grasp;
 class EvaluateGraspCli : public testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::path(testing::TempDir()) / ("fba-evaluate-grasp-" + std::to_string(getpid()) + "-" +
-                                           testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
     // A 10 cm cube centred on the origin.
     fba::geometry::write_ply(fba::geometry::make_box({-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05}), mesh());
   }
-  void TearDown() override { fs::remove_all(dir_); }
   std::string mesh() const { return (dir_ / "cube.ply").string(); }
   std::string summary(const std::string& grasp) const {
     const fs::path p = dir_ / "summary.json";
     std::ofstream(p) << R"({"outcome": "success", "grasp": )" << grasp << "}";
     return p.string();
   }
-  fs::path dir_;
+  fba::test::TempDir tmp_;
+  const fs::path dir_ = tmp_.path();
 };
 
 TEST_F(EvaluateGraspCli, AGraspOnOpposingFacesIsForceClosureAndBeatsRandomSets) {
