@@ -20,4 +20,12 @@ inline bool has_event(const std::vector<Event>& events, const std::string& name)
   return find_event(events, name).has_value();
 }
 
+// Every event called `name`, in order.
+inline std::vector<Event> named(const std::vector<Event>& events, const std::string& name) {
+  std::vector<Event> out;
+  for (const auto& e : events)
+    if (e.name == name) out.push_back(e);
+  return out;
+}
+
 }  // namespace fba::test

@@ -30,6 +30,7 @@
 #include "arm_model.hpp"
 #include "support/wrist_camera_arm.hpp"
 #include "support/built_plugins.hpp"
+#include "support/events.hpp"
 #include "support/canopen_frames.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
@@ -49,13 +50,7 @@ using fba::test::built_plugins;
 using fba::test::wrist_camera_arm;
 
 using fba::test::contains;
-
-std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::string& name) {
-  std::vector<fba::Event> out;
-  for (const auto& e : events)
-    if (e.name == name) out.push_back(e);
-  return out;
-}
+using fba::test::named;
 
 using Emulator = fba::test::EmulatedCanopenArm;
 

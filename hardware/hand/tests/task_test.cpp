@@ -15,6 +15,7 @@
 #include <stop_token>
 #include <thread>
 
+#include "support/built_plugins.hpp"
 #include "support/emulated_hand.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
@@ -45,12 +46,7 @@ class GraspSource final : public fba::Component {
 FBA_COMPONENT(GraspSource);
 
 const fba::Registry& registry() {
-  static const fba::Registry r = [] {
-    fba::Registry reg;
-    for (const auto& e : reg.load_path({fba::test::plugin_dir()})) ADD_FAILURE() << e.what();
-    reg.add_builtin(fba::detail::plugin_entries(), "task_test");
-    return reg;
-  }();
+  static const fba::Registry r = fba::test::built_plugins_and_own("task_test");
   return r;
 }
 
