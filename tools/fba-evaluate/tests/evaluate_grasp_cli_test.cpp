@@ -9,11 +9,8 @@
 #include <fstream>
 #include <string>
 
-#include "fba/geometry/mesh_io.hpp"
-
 #include "evaluate_grasp.hpp"
 #include "support/build_paths.hpp"
-#include "support/temp_dir.hpp"
 
 namespace {
 
@@ -23,20 +20,13 @@ using Result = fba::test::Result;
 
 using fba::test::evaluate_grasp;
 
-class EvaluateGraspCli : public testing::Test {
+class EvaluateGraspCli : public fba::test::CubeTest {
  protected:
-  void SetUp() override {
-    // A 10 cm cube centred on the origin.
-    fba::geometry::write_ply(fba::geometry::make_box({-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05}), mesh());
-  }
-  std::string mesh() const { return (dir_ / "cube.ply").string(); }
   std::string summary(const std::string& grasp) const {
     const fs::path p = dir_ / "summary.json";
     std::ofstream(p) << R"({"outcome": "success", "grasp": )" << grasp << "}";
     return p.string();
   }
-  fba::test::TempDir tmp_;
-  const fs::path dir_ = tmp_.path();
 };
 
 TEST_F(EvaluateGraspCli, AGraspOnOpposingFacesIsForceClosureAndBeatsRandomSets) {

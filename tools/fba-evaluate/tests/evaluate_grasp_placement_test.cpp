@@ -12,9 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "evaluate_grasp.hpp"
-#include "fba/geometry/mesh_io.hpp"
 #include "support/build_paths.hpp"
-#include "support/temp_dir.hpp"
 
 namespace {
 
@@ -24,16 +22,7 @@ using fba::test::evaluate_grasp;
 using fba::test::line_starting;
 using fba::test::write_fba_run_stand_in;
 
-class EvaluateGraspPlacement : public testing::Test {
- protected:
-  void SetUp() override {
-    // A 10 cm cube centred on the origin; on the table (batch) it stands on z = 0, its top at 0.1.
-    fba::geometry::write_ply(fba::geometry::make_box({-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05}), mesh());
-  }
-  std::string mesh() const { return (dir_ / "cube.ply").string(); }
-  fba::test::TempDir tmp_;
-  const fs::path dir_ = tmp_.path();
-};
+class EvaluateGraspPlacement : public fba::test::CubeTest {};
 
 // The thumb on the -x face; the fingers 2 mm inside the +x face and half a millimetre under the
 // top, pushing along -x: along their normals they land on the +x face (force closure), at their
