@@ -54,20 +54,25 @@ using fba::test::named;
 
 using Emulator = fba::test::EmulatedCanopenArm;
 
+// The arm's six joints on the emulator at `device`, with `more` added or replacing. Generous
+// timeouts: the emulator's thread may wait for a core on a loaded machine, and a timeout is not
+// what these tests are about (except where one sets its own).
+fba::testing::Params arm_params(const std::string& device, const fba::testing::Params& more) {
+  fba::testing::Params p{{"device", device},
+                         {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
+                         {"counts_per_rad", std::vector<double>(6, kCounts)},
+                         {"heartbeat_period_ms", 20},
+                         {"heartbeat_timeout_ms", 1000},
+                         {"sdo_timeout_ms", 1000}};
+  for (const auto& [k, v] : more) p[k] = v;
+  return p;
+}
+
 class CanopenArmComponent : public ::testing::Test {
  protected:
-  // Generous timeouts: the emulator's thread may wait for a core on a loaded machine, and a
-  // timeout is not what these tests are about (except where one sets its own).
   fba::testing::Params params(fba::testing::Params more = {}) {
-    fba::testing::Params p{{"device", emulator_.device()},
-                           {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
-                           {"counts_per_rad", std::vector<double>(6, kCounts)},
-                           {"speed_scale", 1.0},
-                           {"heartbeat_period_ms", 20},
-                           {"heartbeat_timeout_ms", 1000},
-                           {"sdo_timeout_ms", 1000}};
-    for (auto& [k, v] : more) p[k] = v;
-    return p;
+    more.try_emplace("speed_scale", 1.0);
+    return arm_params(emulator_.device(), more);
   }
   void make(fba::testing::Params more = {}) {
     harness_.emplace(built_plugins(), "hw.canopen_arm", params(std::move(more)),
@@ -615,16 +620,9 @@ class CanopenArmStartUp : public ::testing::Test {
  protected:
   std::string construct(const fba::emulators::CanopenArmOptions& options, fba::testing::Params more = {}) {
     emulator_.emplace(options);
-    fba::testing::Params p{{"device", emulator_->device()},
-                           {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
-                           {"counts_per_rad", std::vector<double>(6, kCounts)},
-                           {"heartbeat_period_ms", 20},
-                           {"heartbeat_timeout_ms", 1000},
-                           {"sdo_timeout_ms", 1000},
-                           {"enable_timeout_ms", 1000}};
-    for (auto& [k, v] : more) p[k] = v;
+    more.try_emplace("enable_timeout_ms", 1000);
     try {
-      ComponentHarness h(built_plugins(), "hw.canopen_arm", p);
+      ComponentHarness h(built_plugins(), "hw.canopen_arm", arm_params(emulator_->device(), more));
     } catch (const fba::ConstructionError& e) {
       EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
       return e.what();
