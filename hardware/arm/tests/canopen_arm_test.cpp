@@ -384,14 +384,7 @@ TEST_F(CanopenArmComponent, ASilentDriveFailsTheSafeStateNamingItAfterEveryOther
   EXPECT_TRUE(contains(why, "joint 'shoulder_lift_joint' (node 2): node 2: no answer")) << why;
   EXPECT_TRUE(contains(why, "the other 5 confirmed")) << why;
   for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
-  long given_up = -1;
-  const auto heard = fba::test::heard_until_given_up(*emulator_, 2, given_up);
-  ASSERT_GE(given_up, 0) << "the driver did not tell node 2 it gave up its quick stop";
-  for (int node = 1; node <= 6; ++node) {
-    const long sent = fba::test::last_quick_stop(heard, node);
-    EXPECT_GE(sent, 0) << "node " << node;
-    EXPECT_LT(sent, given_up) << "node " << node << "'s quick stop waited for node 2's time-out";
-  }
+  fba::test::expect_quick_stops_before_giving_up(*emulator_, 2);
 }
 
 TEST_F(CanopenArmComponent, AConfigurationThatDoesNotFitTheArmIsRefusedNamingTheParameter) {
