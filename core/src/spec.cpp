@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "find_named.hpp"
+
 namespace fba {
 
 const char* to_string(Kind k) {
@@ -76,27 +78,10 @@ Spec& Spec::stages(std::vector<std::string> names, std::vector<std::pair<std::st
   return event("stage", "the component entered another stage; payload: the stage's name");
 }
 
-namespace {
-template <class V>
-const PortSpec* find_port(const V& v, std::string_view name) {
-  for (const auto& p : v)
-    if (p.name == name) return &p;
-  return nullptr;
-}
-}  // namespace
-
-const PortSpec* Spec::find_input(std::string_view name) const { return find_port(inputs_, name); }
-const PortSpec* Spec::find_output(std::string_view name) const { return find_port(outputs_, name); }
-const ParamSpec* Spec::find_param(std::string_view name) const {
-  for (const auto& p : params_)
-    if (p.name == name) return &p;
-  return nullptr;
-}
-const EventSpec* Spec::find_event(std::string_view name) const {
-  for (const auto& e : events_)
-    if (e.name == name) return &e;
-  return nullptr;
-}
+const PortSpec* Spec::find_input(std::string_view name) const { return find_named(inputs_, name); }
+const PortSpec* Spec::find_output(std::string_view name) const { return find_named(outputs_, name); }
+const ParamSpec* Spec::find_param(std::string_view name) const { return find_named(params_, name); }
+const EventSpec* Spec::find_event(std::string_view name) const { return find_named(events_, name); }
 
 const Value& ParamValues::value(std::string_view name, ParamType type) const {
   const ParamSpec* ps = spec_.find_param(name);

@@ -13,6 +13,7 @@
 #include "fba/message_text.hpp"
 #include "fba/task.hpp"
 #include "fba/task_config.hpp"
+#include "find_named.hpp"
 #include "graph_checking.hpp"
 #include "loader.hpp"
 
@@ -57,17 +58,9 @@ const char* to_string(BufferPolicy p) {
 
 const char* to_string(ExecutorKind k) { return k == ExecutorKind::Threaded ? "threaded" : "deterministic"; }
 
-const ComponentConfig* TaskConfig::find(std::string_view name) const {
-  for (const auto& c : components)
-    if (c.name == name) return &c;
-  return nullptr;
-}
+const ComponentConfig* TaskConfig::find(std::string_view name) const { return find_named(components, name); }
 
-const SlotConfig* TaskConfig::find_slot(std::string_view name) const {
-  for (const auto& s : slots)
-    if (s.name == name) return &s;
-  return nullptr;
-}
+const SlotConfig* TaskConfig::find_slot(std::string_view name) const { return find_named(slots, name); }
 
 namespace loader {
 

@@ -1,8 +1,6 @@
 // Components that exist only for the runtime's tests: each exercises one rule.
 #include "fixture_components.hpp"
 
-#include <condition_variable>
-#include <mutex>
 
 #include <fba/component.hpp>
 #include "support/build_paths.hpp"
@@ -167,20 +165,11 @@ class Blocker final : public fba::Component {
     return fba::Spec::actuator("test.blocker", "Blocks in process() until interrupted, like a device read.").add(kIn).blocking();
   }
   explicit Blocker(fba::Context&) {}
-  void process() override {
-    std::unique_lock lock(mutex_);
-    cv_.wait(lock, [this] { return interrupted_; });
-  }
-  void interrupt() override {
-    std::lock_guard lock(mutex_);
-    interrupted_ = true;
-    cv_.notify_all();
-  }
+  void process() override { interrupted_.wait(); }
+  void interrupt() override { interrupted_.raise(); }
 
  private:
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  bool interrupted_ = false;
+  fba::test::Flag interrupted_;
 };
 
 // Plugin bugs: reads a parameter its spec does not declare (the handle was left out of spec()).

@@ -2,7 +2,10 @@
 // components, and a loader for inline task text and what it says.
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -22,6 +25,32 @@ std::string errors_of(const std::string& yaml, const LoadOptions& options = {});
 std::vector<Diagnostic> diagnostics_of_file(const std::filesystem::path& file, const LoadOptions& options = {});
 // Those diagnostics as text, a line each.
 std::string errors_of_file(const std::filesystem::path& file);
+
+// A flag one thread raises and another waits for: a blocking component's release.
+class Flag {
+ public:
+  void raise() {
+    {
+      std::lock_guard lock(mutex_);
+      raised_ = true;
+    }
+    cv_.notify_all();
+  }
+  void wait() {
+    std::unique_lock lock(mutex_);
+    cv_.wait(lock, [this] { return raised_; });
+  }
+  // Whether it was raised within `timeout`.
+  bool wait_for(std::chrono::nanoseconds timeout) {
+    std::unique_lock lock(mutex_);
+    return cv_.wait_for(lock, timeout, [this] { return raised_; });
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool raised_ = false;
+};
 
 // A chain that loads: a counter of 5, a passthrough and a sink.
 inline constexpr const char* kChain = R"(

@@ -16,6 +16,7 @@
 using fba::test::errors_of;
 using fba::test::kChain;
 using fba::test::load;
+using fba::test::with;
 
 TEST(Loader, UnknownPortsListTheValidOnes) {
   const auto e = errors_of("components:\n  a: { type: examples.counter }\n  b: { type: examples.sink }\nconnections:\n  - a.output -> b.in\n");
@@ -120,9 +121,6 @@ on:
 
 TEST(Loader, ATaskThatPassesTheCheckRunsWithEventsDeliveredToAnAnyInput) {
   // The check passed and the run failed: the unconnected output was typed 'any' at run time.
-  fba::RunOptions o;
-  o.executor = fba::ExecutorKind::Deterministic;
-  o.timeout_s = 60;
   fba::Task task(load(R"(
 components:
   src: { type: examples.counter, params: { count: 3 } }
@@ -130,7 +128,7 @@ components:
 on:
   src.finished: { deliver: pass.in }
 )"),
-                 o);
+                 with(fba::ExecutorKind::Deterministic));
   const auto r = task.run();
   EXPECT_EQ(r.exit_code(), 0) << r.reason;
 }

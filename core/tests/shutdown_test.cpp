@@ -126,22 +126,15 @@ class ThrowingInterrupt final : public fba::Component {
   explicit ThrowingInterrupt(fba::Context&) {}
   void process() override {
     g_interrupt_entered.fetch_add(1);
-    std::unique_lock lock(mutex_);
-    cv_.wait(lock, [this] { return interrupted_; });
+    interrupted_.wait();
   }
   void interrupt() override {
-    {
-      std::lock_guard lock(mutex_);
-      interrupted_ = true;
-    }
-    cv_.notify_all();
+    interrupted_.raise();
     throw 5;
   }
 
  private:
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  bool interrupted_ = false;
+  fba::test::Flag interrupted_;
 };
 
 // Fails every invocation, on a thread of its own: restarts run while the stop interrupts it.
@@ -226,20 +219,12 @@ class ConcurrentSafeState final : public fba::Component {
   explicit ConcurrentSafeState(fba::Context&) {}
   void process() override {
     g_concurrent_safe_entered.fetch_add(1);
-    std::unique_lock lock(mutex_);
-    cv_.wait_for(lock, std::chrono::seconds(20), [this] { return safe_; });
-    if (safe_) g_concurrent_safe_seen_in_process.store(true);
+    if (safe_.wait_for(std::chrono::seconds(20))) g_concurrent_safe_seen_in_process.store(true);
   }
-  void safe_state() override {
-    std::lock_guard lock(mutex_);
-    safe_ = true;
-    cv_.notify_all();
-  }
+  void safe_state() override { safe_.raise(); }
 
  private:
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  bool safe_ = false;
+  fba::test::Flag safe_;
 };
 
 // Its constructor waits on the device (here: for the stop) for as long as a hand's activation

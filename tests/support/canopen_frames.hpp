@@ -2,6 +2,8 @@
 // master's quick stops and give-ups stand in the order the drives received them.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <chrono>
 #include <thread>
 #include <vector>
@@ -45,6 +47,20 @@ std::vector<can::Frame> heard_until_given_up(const Emulator& emulator, int node,
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   return heard;
+}
+
+// Checks, in the order the drives heard it, that each of the arm's six drives got its quick stop
+// before the master gave up on the drive at `silent` (a silent one costs a single time-out).
+template <class Emulator>
+void expect_quick_stops_before_giving_up(const Emulator& emulator, int silent) {
+  long given_up = -1;
+  const auto heard = heard_until_given_up(emulator, silent, given_up);
+  ASSERT_GE(given_up, 0) << "node " << silent << " was not told its quick stop was given up";
+  for (int node = 1; node <= 6; ++node) {
+    const long sent = last_quick_stop(heard, node);
+    EXPECT_GE(sent, 0) << "node " << node;
+    EXPECT_LT(sent, given_up) << "node " << node << "'s quick stop waited for node " << silent << "'s time-out";
+  }
 }
 
 }  // namespace fba::test

@@ -121,23 +121,11 @@ TEST(CarveOutputs, ModelPlyHoldsTheLeavesTwoViewsSawAndThePicturesExplainThemsel
   ASSERT_GT(expected.triangles.size(), 1000u);
   EXPECT_EQ(written.vertices, expected.vertices);
   EXPECT_EQ(written.triangles, expected.triangles);
-  for (const char* name : {"model.png", "views.png"}) {
-    const cv::Mat picture = cv::imread((dir.path() / name).string());
-    ASSERT_FALSE(picture.empty()) << name;
-    EXPECT_EQ(picture.size(), fba::vision::captioned_size({800, 600})) << name;
-    EXPECT_GT(fba::test::legend_ink(picture), 0.01) << name;
-  }
+  for (const char* name : {"model.png", "views.png"}) fba::test::expect_captioned(dir.path() / name, {800, 600});
   // The model picture frames the dino, not its surroundings.
   EXPECT_GT(fba::test::object_share(cv::imread((dir.path() / "model.png").string())), 0.08);
   // One contour picture per view, of the image's size and captioned.
-  std::size_t contours = 0;
-  for (const auto& f : std::filesystem::directory_iterator(dir.path() / "contours")) {
-    const cv::Mat picture = cv::imread(f.path().string());
-    EXPECT_EQ(picture.size(), fba::vision::captioned_size({640, 480})) << f.path();
-    EXPECT_GT(fba::test::legend_ink(picture), 0.01) << f.path();
-    ++contours;
-  }
-  EXPECT_EQ(contours, silhouettes.size());
+  EXPECT_EQ(fba::test::expect_captioned_contours(dir.path() / "contours"), silhouettes.size());
 }
 
 TEST(CarveOutputs, PlyLeavesOccupiedWritesEveryOccupiedLeafsSurface) {

@@ -109,12 +109,7 @@ class ReachPlanSource final : public fba::Component {
 FBA_COMPONENT(ReachPlanSource);
 
 const fba::Registry& registry() {
-  static const fba::Registry r = [] {
-    fba::Registry reg;
-    for (const auto& e : reg.load_path({fba::test::plugin_dir()})) ADD_FAILURE() << e.what();
-    reg.add_builtin(fba::detail::plugin_entries(), "grasp_emulated_test");
-    return reg;
-  }();
+  static const fba::Registry r = fba::test::built_plugins_and_own("grasp_emulated_test");
   return r;
 }
 

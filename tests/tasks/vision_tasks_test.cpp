@@ -208,19 +208,8 @@ TEST(GraspSimTask, TheLoopExploresBeyondTheInitialViewsAndTheSelectedGraspHolds)
   // planning's robot at the pregrasp and at the lift, and a contour picture per view.
   for (const auto& [name, size] : {std::pair{"grasp_model.png", cv::Size(800, 600)}, std::pair{"views.png", cv::Size(800, 600)},
                                    std::pair{"grasp_view.png", cv::Size(640, 480)}, std::pair{"robot_pregrasp.png", cv::Size(800, 600)},
-                                   std::pair{"robot_lift.png", cv::Size(800, 600)}}) {
-    const cv::Mat picture = cv::imread((out.path() / name).string());
-    ASSERT_FALSE(picture.empty()) << name;
-    EXPECT_EQ(picture.size(), fba::vision::captioned_size(size)) << name;
-    EXPECT_GT(fba::test::legend_ink(picture), 0.01) << name;
-  }
+                                   std::pair{"robot_lift.png", cv::Size(800, 600)}})
+    fba::test::expect_captioned(out.path() / name, size);
   EXPECT_GT(fba::test::object_share(cv::imread((out.path() / "grasp_model.png").string())), 0.08);
-  std::size_t contours = 0;
-  for (const auto& f : std::filesystem::directory_iterator(out.path() / "contours")) {
-    const cv::Mat picture = cv::imread(f.path().string());
-    EXPECT_EQ(picture.size(), fba::vision::captioned_size({640, 480})) << f.path();
-    EXPECT_GT(fba::test::legend_ink(picture), 0.01) << f.path();
-    ++contours;
-  }
-  EXPECT_GE(contours, 4u);  // one per view, and the grasp's model had at least 4
+  EXPECT_GE(fba::test::expect_captioned_contours(out.path() / "contours"), 4u);  // one per view, and the grasp's model had at least 4
 }

@@ -30,6 +30,7 @@
 #include "arm_model.hpp"
 #include "support/wrist_camera_arm.hpp"
 #include "support/built_plugins.hpp"
+#include "support/events.hpp"
 #include "support/canopen_frames.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
@@ -49,30 +50,29 @@ using fba::test::built_plugins;
 using fba::test::wrist_camera_arm;
 
 using fba::test::contains;
-
-std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::string& name) {
-  std::vector<fba::Event> out;
-  for (const auto& e : events)
-    if (e.name == name) out.push_back(e);
-  return out;
-}
+using fba::test::named;
 
 using Emulator = fba::test::EmulatedCanopenArm;
 
+// The arm's six joints on the emulator at `device`, with `more` added or replacing. Generous
+// timeouts: the emulator's thread may wait for a core on a loaded machine, and a timeout is not
+// what these tests are about (except where one sets its own).
+fba::testing::Params arm_params(const std::string& device, const fba::testing::Params& more) {
+  fba::testing::Params p{{"device", device},
+                         {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
+                         {"counts_per_rad", std::vector<double>(6, kCounts)},
+                         {"heartbeat_period_ms", 20},
+                         {"heartbeat_timeout_ms", 1000},
+                         {"sdo_timeout_ms", 1000}};
+  for (const auto& [k, v] : more) p[k] = v;
+  return p;
+}
+
 class CanopenArmComponent : public ::testing::Test {
  protected:
-  // Generous timeouts: the emulator's thread may wait for a core on a loaded machine, and a
-  // timeout is not what these tests are about (except where one sets its own).
   fba::testing::Params params(fba::testing::Params more = {}) {
-    fba::testing::Params p{{"device", emulator_.device()},
-                           {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
-                           {"counts_per_rad", std::vector<double>(6, kCounts)},
-                           {"speed_scale", 1.0},
-                           {"heartbeat_period_ms", 20},
-                           {"heartbeat_timeout_ms", 1000},
-                           {"sdo_timeout_ms", 1000}};
-    for (auto& [k, v] : more) p[k] = v;
-    return p;
+    more.try_emplace("speed_scale", 1.0);
+    return arm_params(emulator_.device(), more);
   }
   void make(fba::testing::Params more = {}) {
     harness_.emplace(built_plugins(), "hw.canopen_arm", params(std::move(more)),
@@ -384,14 +384,7 @@ TEST_F(CanopenArmComponent, ASilentDriveFailsTheSafeStateNamingItAfterEveryOther
   EXPECT_TRUE(contains(why, "joint 'shoulder_lift_joint' (node 2): node 2: no answer")) << why;
   EXPECT_TRUE(contains(why, "the other 5 confirmed")) << why;
   for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(emulator_.quick_stopped(node)) << "node " << node;
-  long given_up = -1;
-  const auto heard = fba::test::heard_until_given_up(*emulator_, 2, given_up);
-  ASSERT_GE(given_up, 0) << "the driver did not tell node 2 it gave up its quick stop";
-  for (int node = 1; node <= 6; ++node) {
-    const long sent = fba::test::last_quick_stop(heard, node);
-    EXPECT_GE(sent, 0) << "node " << node;
-    EXPECT_LT(sent, given_up) << "node " << node << "'s quick stop waited for node 2's time-out";
-  }
+  fba::test::expect_quick_stops_before_giving_up(*emulator_, 2);
 }
 
 TEST_F(CanopenArmComponent, AConfigurationThatDoesNotFitTheArmIsRefusedNamingTheParameter) {
@@ -620,16 +613,9 @@ class CanopenArmStartUp : public ::testing::Test {
  protected:
   std::string construct(const fba::emulators::CanopenArmOptions& options, fba::testing::Params more = {}) {
     emulator_.emplace(options);
-    fba::testing::Params p{{"device", emulator_->device()},
-                           {"node_ids", std::vector<double>{1, 2, 3, 4, 5, 6}},
-                           {"counts_per_rad", std::vector<double>(6, kCounts)},
-                           {"heartbeat_period_ms", 20},
-                           {"heartbeat_timeout_ms", 1000},
-                           {"sdo_timeout_ms", 1000},
-                           {"enable_timeout_ms", 1000}};
-    for (auto& [k, v] : more) p[k] = v;
+    more.try_emplace("enable_timeout_ms", 1000);
     try {
-      ComponentHarness h(built_plugins(), "hw.canopen_arm", p);
+      ComponentHarness h(built_plugins(), "hw.canopen_arm", arm_params(emulator_->device(), more));
     } catch (const fba::ConstructionError& e) {
       EXPECT_EQ(e.outcome(), fba::Outcome::RuntimeError) << e.what();
       return e.what();

@@ -21,6 +21,7 @@
 #endif
 #include "support/wrist_camera_arm.hpp"
 #include "support/built_plugins.hpp"
+#include "support/events.hpp"
 #include "support/temp_dir.hpp"
 #include "support/data_sets.hpp"
 #include "support/joint_trajectories.hpp"
@@ -30,6 +31,7 @@ using fba::testing::ComponentHarness;
 namespace {
 
 using fba::test::built_plugins;
+using fba::test::named;
 
 const std::string kMesh = fba::test::ycb_mesh("YcbMustardBottle");
 constexpr std::int64_t kPeriodNs = 20'000'000;  // the default rate, 50 Hz
@@ -46,13 +48,6 @@ fba::Pose looking_at_origin(double elevation, double azimuth, double distance) {
   p.world_from_frame.linear() << x, y, z;
   p.world_from_frame.translation() = c;
   return p;
-}
-
-std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::string& name) {
-  std::vector<fba::Event> out;
-  for (const auto& e : events)
-    if (e.name == name) out.push_back(e);
-  return out;
 }
 
 // One period of the task's clock, and the invocation it triggers.

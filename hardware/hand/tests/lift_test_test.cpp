@@ -183,14 +183,7 @@ TEST(LiftTest, ASweepThroughTheObjectBeforeTheCloseIsTheFailure) {
     ASSERT_EQ(q.back().size(), 6) << "no IK solution at x = " << x;
     seed = q.back();
   }
-  fba::HandCommand open;
-  open.opening = 0.1;
-  open.spread = 0.04;
-  fba::HandCommand close;
-  close.action = fba::HandCommand::Action::Close;
-  close.force = 10;
-  close.time = 3.0;  // after the sweep
-  const auto r = test.execute(through(q, 0.1, test.arm_joints()), {open, close});
+  const auto r = test.execute(through(q, 0.1, test.arm_joints()), open_then_close(3.0));  // closes after the sweep
   EXPECT_FALSE(r.held);
   EXPECT_EQ(r.reason.rfind("collision before the fingers closed, at t=", 0), 0u) << r.reason;
   EXPECT_NE(r.reason.find("touches the object"), std::string::npos) << r.reason;

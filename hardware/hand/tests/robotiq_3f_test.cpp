@@ -22,6 +22,7 @@
 
 #include "support/emulated_hand.hpp"
 #include "support/built_plugins.hpp"
+#include "support/events.hpp"
 #include "support/temp_dir.hpp"
 
 using fba::emulators::Robotiq3fEmulator;
@@ -31,6 +32,7 @@ using fba::testing::ComponentHarness;
 namespace {
 
 using fba::test::built_plugins;
+using fba::test::named;
 
 using fba::test::EmulatedHand;
 
@@ -57,13 +59,6 @@ fba::Grasp grasp(double aperture = 0.1, double spread = 0.03) {
   g.aperture = aperture;
   g.spread = spread;
   return g;
-}
-
-std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::string& name) {
-  std::vector<fba::Event> out;
-  for (const auto& e : events)
-    if (e.name == name) out.push_back(e);
-  return out;
 }
 
 // Takes the grasp `g` to its end and gives its one result; the test fails, with a default result,

@@ -13,6 +13,7 @@
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/motion/reach_planner.hpp"
 #include "fba/types/grasp.hpp"
+#include "fba/types/hand_command.hpp"
 #include "fba/types/joint_trajectory.hpp"
 #include "fba/types/octree.hpp"
 #include "support/voxel_shapes.hpp"
@@ -24,6 +25,19 @@ namespace fba::sim_hand::test {
 using fba::test::box_grasp;
 using fba::test::box_model;
 using fba::test::workspace;
+
+// The hand opened to a pregrasp (10 cm, the fingers 4 cm apart), then closed with 10 N at
+// `close_time` on the arm's trajectory.
+inline std::vector<HandCommand> open_then_close(double close_time = 0) {
+  HandCommand open;
+  open.opening = 0.1;
+  open.spread = 0.04;
+  HandCommand close;
+  close.action = HandCommand::Action::Close;
+  close.force = 10;
+  close.time = close_time;
+  return {open, close};
+}
 
 // A box standing on the table, centred on (x, y).
 inline TriangleMesh box_mesh(const Eigen::Vector3d& size, double x = 0, double y = 0) {

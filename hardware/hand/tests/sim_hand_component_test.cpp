@@ -23,24 +23,21 @@
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
+#include "support/events.hpp"
 #include "support/mesh_files.hpp"
 
 namespace {
 
 using fba::testing::ComponentHarness;
 
+using fba::sim_hand::test::open_then_close;
+using fba::test::find_event;
 using fba::test::kCan;
 
 // The ring grasp on the can as sim.hand places it (at x, y, yaw degrees).
 fba::Grasp can_grasp(double x, double y, double yaw_deg, double thumb_deg) {
   const auto placed = fba::sim_hand::place_on_table(fba::geometry::load_mesh(kCan), {x, y, yaw_deg * M_PI / 180});
   return fba::sim_hand::ring_grasp(placed, fba::geometry::mesh_bounds(placed).center().z(), thumb_deg * M_PI / 180);
-}
-
-std::optional<fba::Event> find_event(const std::vector<fba::Event>& events, const std::string& name) {
-  for (const auto& e : events)
-    if (e.name == name) return e;
-  return std::nullopt;
 }
 
 TEST(SimHand, GoodGraspHoldsAndSaysSo) {
@@ -175,14 +172,7 @@ TEST(SimHand, AReachPlansTrajectoryAndCommandsAreExecutedInTheWorld) {
 // there, on nothing.
 TEST(SimHand, CommandsWithoutATrajectoryCloseWhereTheArmStands) {
   ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", kCan}}, {"commands"});
-  fba::HandCommand open;
-  open.opening = 0.1;
-  open.spread = 0.04;
-  fba::HandCommand close;
-  close.action = fba::HandCommand::Action::Close;
-  close.force = 10;
-  h.push<fba::HandCommand>("commands", open);
-  h.push<fba::HandCommand>("commands", close);
+  for (const auto& command : open_then_close()) h.push<fba::HandCommand>("commands", command);
   h.run();
   const auto results = h.values<fba::GraspExecution>("result");
   ASSERT_EQ(results.size(), 1u);

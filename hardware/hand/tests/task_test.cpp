@@ -15,6 +15,7 @@
 #include <stop_token>
 #include <thread>
 
+#include "support/built_plugins.hpp"
 #include "support/emulated_hand.hpp"
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
@@ -45,12 +46,7 @@ class GraspSource final : public fba::Component {
 FBA_COMPONENT(GraspSource);
 
 const fba::Registry& registry() {
-  static const fba::Registry r = [] {
-    fba::Registry reg;
-    for (const auto& e : reg.load_path({fba::test::plugin_dir()})) ADD_FAILURE() << e.what();
-    reg.add_builtin(fba::detail::plugin_entries(), "task_test");
-    return reg;
-  }();
+  static const fba::Registry r = fba::test::built_plugins_and_own("task_test");
   return r;
 }
 
@@ -68,6 +64,13 @@ std::string task_yaml(const std::string& device, double aperture, double hold_ti
          "on:\n  hand.held: stop_success\n  hand.dropped: stop_failure\n";
 }
 
+// The task of task_yaml run to its end, in a folder of its own.
+fba::RunResult run_grasp(const std::string& device, double aperture, double hold_time = 0.2) {
+  fba::test::TempDir dir;
+  fba::Task task(fba::load_task_text(task_yaml(device, aperture, hold_time), "grasp.yaml", dir.path(), registry()));
+  return task.run();
+}
+
 const fba::SafeStateResult* safe_state_of(const fba::RunResult& r, const std::string& component) {
   for (const auto& s : r.safe_states)
     if (s.component == component) return &s;
@@ -77,10 +80,8 @@ const fba::SafeStateResult* safe_state_of(const fba::RunResult& r, const std::st
 }  // namespace
 
 TEST(Robotiq3fTask, TaskEndsInSuccessWhenTheHandHoldsAndTheHandEndsOpen) {
-  fba::test::TempDir dir;
   EmulatedHand hand;
-  fba::Task task(fba::load_task_text(task_yaml(hand.device(), 0.1), "grasp.yaml", dir.path(), registry()));
-  const auto result = task.run();
+  const auto result = run_grasp(hand.device(), 0.1);
   EXPECT_EQ(result.outcome, fba::Outcome::Success) << result.reason;
   ASSERT_TRUE(result.final_event);
   EXPECT_EQ(result.final_event->name, "held");
@@ -91,10 +92,8 @@ TEST(Robotiq3fTask, TaskEndsInSuccessWhenTheHandHoldsAndTheHandEndsOpen) {
 }
 
 TEST(Robotiq3fTask, GraspOutsideTheHandsRangeStopsTheTaskByItsErrorPolicyNamingTheDevice) {
-  fba::test::TempDir dir;
   EmulatedHand hand;
-  fba::Task task(fba::load_task_text(task_yaml(hand.device(), 0.3), "grasp.yaml", dir.path(), registry()));
-  const auto result = task.run();
+  const auto result = run_grasp(hand.device(), 0.3);
   EXPECT_EQ(result.outcome, fba::Outcome::RuntimeError) << result.reason;
   EXPECT_NE(result.reason.find(hand.device()), std::string::npos) << result.reason;
   EXPECT_NE(result.reason.find("grasp refused before sending"), std::string::npos) << result.reason;
@@ -104,7 +103,6 @@ TEST(Robotiq3fTask, GraspOutsideTheHandsRangeStopsTheTaskByItsErrorPolicyNamingT
 }
 
 TEST(Robotiq3fTask, LineDisappearingMidCloseStopsTheTaskNamingTheDeviceAndTheSafeStateSaysWhyNot) {
-  fba::test::TempDir dir;
   EmulatedHand hand;
   std::atomic<bool> done{false};
   std::thread pull([&] {  // pulls the cable once the fingers are closing
@@ -118,8 +116,7 @@ TEST(Robotiq3fTask, LineDisappearingMidCloseStopsTheTaskNamingTheDeviceAndTheSaf
     }
   });
   // A long hold: the line goes before the grasp could end, however slowly this machine runs.
-  fba::Task task(fba::load_task_text(task_yaml(hand.device(), 0.1, 60), "grasp.yaml", dir.path(), registry()));
-  const auto result = task.run();
+  const auto result = run_grasp(hand.device(), 0.1, 60);
   done = true;
   pull.join();
   EXPECT_EQ(result.outcome, fba::Outcome::RuntimeError) << result.reason;

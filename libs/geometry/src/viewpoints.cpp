@@ -91,4 +91,25 @@ double framing_distance(const Eigen::AlignedBox3d& box, int width, int height, d
   return margin * sphere_radius / std::sin(half_fov);
 }
 
+CameraModel framing_camera(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& centre,
+                           const Eigen::Vector3d& toward, const Eigen::Vector3d& up, int width, int height, double fill) {
+  const int W = width, H = height;
+  const double f = W;
+  double radius = 1e-6;
+  for (const auto& p : points) radius = std::max(radius, (p - centre).norm());
+  // A projection shrinks about as 1 / distance: a few steps settle the distance.
+  double d = framing_distance(Eigen::AlignedBox3d(centre, centre + Eigen::Vector3d::Constant(radius)), W, H, f);
+  for (int i = 0; i < 8; ++i) {
+    const CameraModel camera = make_camera(W, H, f, f, (W - 1) / 2.0, (H - 1) / 2.0, look_at(centre + d * toward, centre, up));
+    double filled = 0;
+    for (const auto& p : points) {
+      Eigen::Vector2d px;
+      if (!project(camera, p, px)) filled = 10;
+      else filled = std::max({filled, std::abs(px.x() - camera.K(0, 2)) / (W / 2.0), std::abs(px.y() - camera.K(1, 2)) / (H / 2.0)});
+    }
+    d = std::max(d * filled / fill, 1.05 * radius);
+  }
+  return make_camera(W, H, f, f, (W - 1) / 2.0, (H - 1) / 2.0, look_at(centre + d * toward, centre, up));
+}
+
 }  // namespace fba::geometry

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -10,6 +9,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
+#include <fba/geometry/qhull.hpp>
 
 extern "C" {
 #include <libqhull_r/qhull_ra.h>
@@ -82,31 +82,17 @@ bool separated_from_origin(const Eigen::Matrix<double, 6, Eigen::Dynamic>& w) {
 double min_facet_distance(const Eigen::Matrix<double, 6, Eigen::Dynamic>& points) {
   constexpr int dim = 6;
   std::vector<coordT> coords(points.data(), points.data() + points.size());  // column-major = one point per 6
-  char* err_text = nullptr;
-  std::size_t err_size = 0;
-  FILE* err = open_memstream(&err_text, &err_size);
-  qhT qh_storage;
-  qhT* qh = &qh_storage;
-  qh_zero(qh, err);
-  // Qt: triangulated facets; every facet then has its own hyperplane.
-  char options[] = "qhull Qt";
-  const int code = qh_new_qhull(qh, dim, static_cast<int>(points.cols()), coords.data(), False, options,
-                                nullptr, err);
   double min_distance = std::numeric_limits<double>::infinity();
-  if (code == 0) {
+  // Qt: triangulated facets; every facet then has its own hyperplane.
+  const auto status = geometry::run_qhull(dim, coords, "qhull Qt", [&](qhT* qh) {
     facetT* facet;
     FORALLfacets {
       // qhull: a point p is outside a facet when normal . p + offset > 0; the origin gives offset.
       min_distance = std::min(min_distance, -facet->offset);
     }
-  }
-  qh_freeqhull(qh, !qh_ALL);
-  int curlong = 0, totlong = 0;
-  qh_memfreeshort(qh, &curlong, &totlong);
-  std::fclose(err);
-  std::string message(err_text ? err_text : "");
-  std::free(err_text);
-  if (code != 0) throw std::runtime_error("grasp quality: qhull failed (code " + std::to_string(code) + "): " + message);
+  });
+  if (status.code != 0)
+    throw std::runtime_error("grasp quality: qhull failed (code " + std::to_string(status.code) + "): " + status.message);
   return min_distance;
 }
 

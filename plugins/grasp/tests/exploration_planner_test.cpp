@@ -20,12 +20,14 @@
 #include "support/built_plugins.hpp"
 #include "support/voxel_shapes.hpp"
 #include "support/data_sets.hpp"
+#include "support/events.hpp"
 
 using fba::testing::ComponentHarness;
 
 namespace {
 
 using fba::test::built_plugins;
+using fba::test::find_event;
 
 // A unit box in the cube [-1, 1]^3 at depth 3: its outer layer of leaves Partial, the inside Full.
 fba::Octree box_model(int views) {
@@ -50,12 +52,6 @@ fba::testing::Params ring8(fba::testing::Params extra = {}) {
 int azimuth_deg(const fba::Pose& p) {
   const Eigen::Vector3d t = p.world_from_frame.translation();
   return static_cast<int>(std::lround(std::atan2(t.y(), t.x()) * 180 / std::numbers::pi + 360)) % 360;
-}
-
-std::optional<fba::Event> find_event(const std::vector<fba::Event>& events, const std::string& name) {
-  for (const auto& e : events)
-    if (e.name == name) return e;
-  return std::nullopt;
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 #include <fba/types/regions_of_interest.hpp>
 #include <fba/types/grasp.hpp>
 
+#include "support/built_plugins.hpp"
 #include "support/reach_scenes.hpp"
 #include "support/build_paths.hpp"
 #include "support/voxel_shapes.hpp"
@@ -60,12 +61,7 @@ class SceneSensor final : public fba::Component {
 
 // The plugins this build made, and test.reach_scene.
 inline const fba::Registry& reach_registry() {
-  static const fba::Registry r = [] {
-    fba::Registry reg;
-    for (const auto& e : reg.load_path({fba::test::plugin_dir()})) ADD_FAILURE() << e.what();
-    reg.add_builtin(fba::detail::plugin_entries(), "reach_scene");
-    return reg;
-  }();
+  static const fba::Registry r = fba::test::built_plugins_and_own("reach_scene");
   return r;
 }
 

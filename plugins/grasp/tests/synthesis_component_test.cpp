@@ -18,6 +18,7 @@
 
 #include "fba/grasp/grasp_json.hpp"
 #include "support/built_plugins.hpp"
+#include "support/events.hpp"
 #include "support/voxel_shapes.hpp"
 
 namespace {
@@ -26,6 +27,7 @@ using fba::testing::ComponentHarness;
 namespace gt = fba::grasp::test;
 
 using fba::test::built_plugins;
+using fba::test::named;
 
 const Eigen::AlignedBox3d kCube(Eigen::Vector3d::Constant(-0.08), Eigen::Vector3d::Constant(0.08));
 constexpr double kRadius = 0.035;
@@ -34,13 +36,6 @@ constexpr double kRadius = 0.035;
 // leaf_depth allows.
 fba::Octree cylinder(int views, std::function<int(const Eigen::Vector3d&)> leaf_depth = {}) {
   return gt::voxelise(gt::cylinder_sdf(kRadius, -0.06, 0.12), kCube, 6, std::move(leaf_depth), views);
-}
-
-std::vector<fba::Event> named(const std::vector<fba::Event>& events, const std::string& name) {
-  std::vector<fba::Event> out;
-  for (const auto& e : events)
-    if (e.name == name) out.push_back(e);
-  return out;
 }
 
 TEST(GraspSynthesisComponent, SelectsAGraspOnACylinderWithContactsOnItsSide) {

@@ -173,25 +173,8 @@ CameraModel robot_picture_camera(const ReachPlanner& planner, const ReachPlan& p
   const Eigen::Vector3d centre = box.center();
   const double az = kAzimuthDeg * M_PI / 180, el = kElevationDeg * M_PI / 180;
   const Eigen::Vector3d toward = std::cos(el) * Eigen::Vector3d(std::sin(az), -std::cos(az), 0) + std::sin(el) * Eigen::Vector3d::UnitZ();
-  const int W = size.width, H = size.height;
-  const double f = W;
-  double radius = 1e-6;
-  for (const auto& p : points) radius = std::max(radius, (p - centre).norm());
-  // From the distance that fits the points' sphere, nearer until their projections fill 90% of
-  // the picture's half-width or half-height (a projection shrinks about as 1 / distance).
-  double d = geometry::framing_distance(Eigen::AlignedBox3d(centre, centre + Eigen::Vector3d::Constant(radius)), W, H, f);
-  for (int i = 0; i < 8; ++i) {
-    const CameraModel camera =
-        geometry::make_camera(W, H, f, f, (W - 1) / 2.0, (H - 1) / 2.0, geometry::look_at(centre + d * toward, centre));
-    double fill = 0;
-    for (const auto& p : points) {
-      Eigen::Vector2d px;
-      if (!geometry::project(camera, p, px)) fill = 10;
-      else fill = std::max({fill, std::abs(px.x() - camera.K(0, 2)) / (W / 2.0), std::abs(px.y() - camera.K(1, 2)) / (H / 2.0)});
-    }
-    d = std::max(d * fill / 0.9, 1.05 * radius);
-  }
-  return geometry::make_camera(W, H, f, f, (W - 1) / 2.0, (H - 1) / 2.0, geometry::look_at(centre + d * toward, centre));
+  // As near as the points fill 90% of the picture's half-width or half-height.
+  return geometry::framing_camera(points, centre, toward, Eigen::Vector3d::UnitZ(), size.width, size.height, 0.9);
 }
 
 cv::Mat robot_picture(const ReachPlanner& planner, const ReachPlan& plan, const Grasp& grasp, const Octree& model, PlanPose pose,

@@ -10,6 +10,27 @@
 using namespace fba::motion;
 using namespace fba::motion::test;
 
+namespace {
+
+// The model of kBox on the table and of a box of space the views have not carved yet, `size`
+// about `centre`.
+fba::Octree box_and_uncarved(const Eigen::Vector3d& centre, const Eigen::Vector3d& size) {
+  const auto box = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, kBox.z() / 2), kBox);
+  const auto uncarved = fba::grasp::test::box_sdf(centre, size);
+  return fba::grasp::test::voxelise([&](const Eigen::Vector3d& p) { return std::min(box(p), uncarved(p)); }, workspace(), 6);
+}
+
+// The robot's collisions as `planner` checks them for `grasp`: the hand open for it, `model` the obstacle.
+RobotCollision robot_for(const ReachPlanner& planner, const fba::Grasp& grasp, const fba::Octree& model) {
+  const ReachParams& p = planner.params();
+  RobotCollision robot(planner.arm(), p.flange_from_palm);
+  robot.set_hand(place_hand(grasp, p.clearance).opening, grasp.spread);
+  robot.set_model(ReachPlanner::obstacles(model));
+  return robot;
+}
+
+}  // namespace
+
 TEST(ReachPlanner, ABoxBeforeTheArmIsTakenFromAboveOnACollisionFreeTimedTrajectory) {
   const fba::Octree model = box_model(kBox);
   const fba::Grasp grasp = box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07);
@@ -90,9 +111,7 @@ TEST(ReachPlanner, APathThatCouldOnlyGoThroughTheTableIsRefused) {
 // Space the views have not carved yet stands above the box where the hand comes down: refused
 // until it is carved.
 TEST(ReachPlanner, SpaceNotYetCarvedIsAnObstacleUntilItIsCarved) {
-  const auto box = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, kBox.z() / 2), kBox);
-  const auto uncarved = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, 0.15), Eigen::Vector3d(0.09, 0.09, 0.10));
-  const fba::Octree before = fba::grasp::test::voxelise([&](const Eigen::Vector3d& p) { return std::min(box(p), uncarved(p)); }, workspace(), 6);
+  const fba::Octree before = box_and_uncarved(Eigen::Vector3d(0, 0, 0.15), Eigen::Vector3d(0.09, 0.09, 0.10));
   const fba::Grasp grasp = box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07);
   ASSERT_EQ(RobotCollision(planner().arm(), ReachParams{}.flange_from_palm).collision(ready()), "");
   const ReachPlan refused = planner().plan(grasp, before, ready());
@@ -136,16 +155,12 @@ TEST(ReachPlanner, ParametersOutOfRangeAreRefusedByName) {
 // and plans from there; the trajectory begins with that retreat. Backing out less than it takes is
 // refused with the reason, each way tried.
 TEST(ReachPlanner, AStartWhoseFingersAreInSpaceNotYetCarvedBacksOutAlongTheFlangesAxisFirst) {
-  const auto box = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, kBox.z() / 2), kBox);
   // A slab above the box, between where the thumb and the fingers come down for the grasp below
   // (at x = -5 cm and +5 cm), where the hand's fingers are at home (6 cm either side of y = 0).
-  const auto uncarved = fba::grasp::test::box_sdf(Eigen::Vector3d(-0.015, 0, 0.15), Eigen::Vector3d(0.03, 0.14, 0.06));
-  const fba::Octree model = fba::grasp::test::voxelise([&](const Eigen::Vector3d& p) { return std::min(box(p), uncarved(p)); }, workspace(), 6);
+  const fba::Octree model = box_and_uncarved(Eigen::Vector3d(-0.015, 0, 0.15), Eigen::Vector3d(0.03, 0.14, 0.06));
   const fba::Grasp grasp = box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07);
   const ReachParams& p = planner().params();
-  RobotCollision robot(planner().arm(), p.flange_from_palm);
-  robot.set_hand(place_hand(grasp, p.clearance).opening, grasp.spread);
-  robot.set_model(ReachPlanner::obstacles(model));
+  RobotCollision robot = robot_for(planner(), grasp, model);
   const std::string touches = robot.collision(home());
   ASSERT_NE(touches.find("touches the model"), std::string::npos) << touches;
   ASSERT_EQ(touches.find("palm"), std::string::npos) << touches;  // the fingers, in space not yet carved
@@ -208,15 +223,11 @@ TEST(ReachPlanner, AStartWhoseFingersAreInSpaceNotYetCarvedBacksOutAlongTheFlang
 TEST(ReachPlanner, AStartTheArmCannotBackOutOfAlongTheFlangesAxisBacksOutStraightUp) {
   Eigen::VectorXd far(6);
   far << -0.2328, -0.7103, 0.6413, -0.4664, -1.5849, 3.1332;
-  const auto box = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, kBox.z() / 2), kBox);
   // Not carved yet: a slab beside the box, on the far side, where the fingers are.
-  const auto uncarved = fba::grasp::test::box_sdf(Eigen::Vector3d(0.07, 0, 0.15), Eigen::Vector3d(0.06, 0.16, 0.06));
-  const fba::Octree model = fba::grasp::test::voxelise([&](const Eigen::Vector3d& p) { return std::min(box(p), uncarved(p)); }, workspace(), 6);
+  const fba::Octree model = box_and_uncarved(Eigen::Vector3d(0.07, 0, 0.15), Eigen::Vector3d(0.06, 0.16, 0.06));
   const fba::Grasp grasp = box_grasp(kBox, Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitZ(), 0.07);
   const ReachParams& p = planner().params();
-  RobotCollision robot(planner().arm(), p.flange_from_palm);
-  robot.set_hand(place_hand(grasp, p.clearance).opening, grasp.spread);
-  robot.set_model(ReachPlanner::obstacles(model));
+  RobotCollision robot = robot_for(planner(), grasp, model);
   ASSERT_NE(robot.collision(far).find("touches the model"), std::string::npos);
   const Eigen::Isometry3d start = planner().arm().forward(far);
   ASSERT_GT(start.translation().x(), 0.2);  // beyond the object, seen from the arm's base at x = -0.45
@@ -237,9 +248,7 @@ TEST(ReachPlanner, AStartTheArmCannotBackOutOfAlongTheFlangesAxisBacksOutStraigh
 // around the current ones take it out: the trajectory starts with that one motion, every joint
 // within jiggle_share of its range, and the plan from there is sound.
 TEST(ReachPlanner, AStartNoLineBacksOutOfIsLeftByJointsAlone) {
-  const auto box = fba::grasp::test::box_sdf(Eigen::Vector3d(0, 0, kBox.z() / 2), kBox);
-  const auto uncarved = fba::grasp::test::box_sdf(Eigen::Vector3d(-0.015, 0, 0.15), Eigen::Vector3d(0.03, 0.14, 0.06));
-  const fba::Octree model = fba::grasp::test::voxelise([&](const Eigen::Vector3d& p) { return std::min(box(p), uncarved(p)); }, workspace(), 6);
+  const fba::Octree model = box_and_uncarved(Eigen::Vector3d(-0.015, 0, 0.15), Eigen::Vector3d(0.03, 0.14, 0.06));
   const fba::Grasp grasp = box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07);
   ReachParams p = planner().params();
   p.max_backout = 0.01;
@@ -254,9 +263,7 @@ TEST(ReachPlanner, AStartNoLineBacksOutOfIsLeftByJointsAlone) {
     EXPECT_LE(std::abs(plan.start_joints(static_cast<Eigen::Index>(i)) - home()(static_cast<Eigen::Index>(i))),
               p.jiggle_share * (limits[i].upper - limits[i].lower) + 1e-12)
         << i;
-  RobotCollision robot(jiggling.arm(), p.flange_from_palm);
-  robot.set_hand(place_hand(grasp, p.clearance).opening, grasp.spread);
-  robot.set_model(ReachPlanner::obstacles(model));
+  RobotCollision robot = robot_for(jiggling, grasp, model);
   EXPECT_EQ(robot.collision(plan.start_joints), "");
   EXPECT_NE(robot.collision(home()), "");
   // The same way out on every run.

@@ -217,6 +217,17 @@ void check_views(const std::vector<ViewDescriptor>& views, const std::string& fi
                             std::to_string(views[i].camera.height) + " (" + views[i].path + ")");
 }
 
+// Opens `file` in `storage` for reading; a FormatError when it is not a readable `what`, or not
+// well-formed `format` (OpenCV's parser names the line in its message, which is kept).
+void open_to_read(cv::FileStorage& storage, const std::string& file, const std::string& what, const std::string& format) {
+  try {
+    if (!storage.open(file, cv::FileStorage::READ | cv::FileStorage::FORMAT_AUTO))
+      throw FormatError(file, 0, "expected a readable " + what + ", found none");
+  } catch (const cv::Exception& e) {
+    throw FormatError(file, 0, "expected well-formed " + format + ", found a parse error: " + e.msg);
+  }
+}
+
 }  // namespace
 
 FormatError::FormatError(std::string file, int line, const std::string& what)
@@ -333,13 +344,7 @@ ImageSet ImageSet::load_yaml(const std::string& file) {
 
 ImageSet ImageSet::load_yaml_checked(const std::string& file) {
   cv::FileStorage fsr;
-  try {
-    if (!fsr.open(file, cv::FileStorage::READ | cv::FileStorage::FORMAT_AUTO))
-      throw FormatError(file, 0, "expected a readable fba image-set YAML file, found none");
-  } catch (const cv::Exception& e) {
-    // OpenCV's parser reports the line in its message; keep it.
-    throw FormatError(file, 0, "expected well-formed YAML, found a parse error: " + e.msg);
-  }
+  open_to_read(fsr, file, "an fba image-set YAML file", "YAML");
   const cv::FileNode root = fsr.root();
   const cv::FileNode images = root["images"];
   if (images.empty() || !images.isSeq())
@@ -523,12 +528,7 @@ std::optional<std::size_t> ImageSet::nearest_unserved_view(const Eigen::Vector3d
 
 CameraModel load_opencv_calibration(const std::string& file) {
   cv::FileStorage in;
-  try {
-    if (!in.open(file, cv::FileStorage::READ | cv::FileStorage::FORMAT_AUTO))
-      throw FormatError(file, 0, "expected a readable OpenCV calibration file, found none");
-  } catch (const cv::Exception& e) {
-    throw FormatError(file, 0, "expected well-formed YAML/XML, found a parse error: " + e.msg);
-  }
+  open_to_read(in, file, "an OpenCV calibration file", "YAML/XML");
   CameraModel cam;
   const auto K = read_numbers(in["camera_matrix"], file, "camera_matrix", 9);
   cam.K = matrix3(K);

@@ -81,25 +81,8 @@ CameraModel picture_camera(const Eigen::AlignedBox3d& box, const std::vector<Eig
   side = Eigen::AngleAxisd(azimuth_deg * M_PI / 180, up) * side.normalized();
   const double el = elevation_deg * M_PI / 180;
   const Eigen::Vector3d toward = std::cos(el) * side + std::sin(el) * up;
-  const int W = o.size.width, H = o.size.height;
-  const double f = W;
-  double radius = 1e-6;
-  for (const auto& p : points) radius = std::max(radius, (p - centre).norm());
-  // From the distance that fits the points' sphere, nearer until their projections fill 88% of
-  // the picture's half-width or half-height (a projection shrinks about as 1 / distance).
-  double d = geometry::framing_distance(Eigen::AlignedBox3d(centre, centre).extend(centre + Eigen::Vector3d::Constant(radius)), W, H, f);
-  CameraModel camera;
-  for (int i = 0; i < 8; ++i) {
-    camera = geometry::make_camera(W, H, f, f, (W - 1) / 2.0, (H - 1) / 2.0, geometry::look_at(centre + d * toward, centre, up));
-    double fill = 0;
-    for (const auto& p : points) {
-      Eigen::Vector2d px;
-      if (!geometry::project(camera, p, px)) fill = 10;
-      else fill = std::max({fill, std::abs(px.x() - camera.K(0, 2)) / (W / 2.0), std::abs(px.y() - camera.K(1, 2)) / (H / 2.0)});
-    }
-    d = std::max(d * fill / 0.88, 1.05 * radius);
-  }
-  return geometry::make_camera(W, H, f, f, (W - 1) / 2.0, (H - 1) / 2.0, geometry::look_at(centre + d * toward, centre, up));
+  // As near as the points fill 88% of the picture's half-width or half-height.
+  return geometry::framing_camera(points, centre, toward, up, o.size.width, o.size.height, 0.88);
 }
 
 // The leaves drawn by kind: the opaque ones z-buffered together, unseen space blended over them

@@ -15,12 +15,14 @@
 #include "support/built_plugins.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
+#include "support/events.hpp"
 
 using fba::testing::ComponentHarness;
 
 namespace {
 
 using fba::test::built_plugins;
+using fba::test::has_event;
 
 using fba::test::kDinoPar;
 // The providers' tight box of the dino, in metres.
@@ -56,12 +58,6 @@ std::unique_ptr<ComponentHarness> carve(const std::vector<fba::Silhouette>& view
   return h;
 }
 
-bool has_event(const ComponentHarness& h, const std::string& name) {
-  for (const auto& e : h.events())
-    if (e.name == name) return true;
-  return false;
-}
-
 }  // namespace
 
 TEST(OctreeCarverChecks, AFrameWithoutAPoseIsRefusedNamingTheFrameAndItsSource) {
@@ -78,7 +74,7 @@ TEST(OctreeCarverChecks, AFrameWithoutAPoseIsRefusedNamingTheFrameAndItsSource) 
 TEST(OctreeCarverChecks, NoSilhouetteAtAllFailsSayingNoImageHadATarget) {
   const auto h = carve({});
   EXPECT_NE(h->failure().find("no silhouette arrived"), std::string::npos) << h->failure();
-  EXPECT_TRUE(has_event(*h, "suspect_model"));
+  EXPECT_TRUE(has_event(h->events(), "suspect_model"));
 }
 
 TEST(OctreeCarverChecks, OneViewFailsSayingTheModelIsItsViewingCone) {
@@ -87,7 +83,7 @@ TEST(OctreeCarverChecks, OneViewFailsSayingTheModelIsItsViewingCone) {
   cv::circle(blob, {320, 240}, 100, cv::Scalar(255), cv::FILLED);
   const auto h = carve({silhouette(frames[0], blob)});
   EXPECT_NE(h->failure().find("only 1 view"), std::string::npos) << h->failure();
-  EXPECT_TRUE(has_event(*h, "suspect_model"));
+  EXPECT_TRUE(has_event(h->events(), "suspect_model"));
 }
 
 // White images: every silhouette is the whole image, nothing is carved.
@@ -96,7 +92,7 @@ TEST(OctreeCarverChecks, SilhouettesThatAreTheWholeImageFailAsTheWholeRootBox) {
   for (const auto& f : dino_frames(3)) views.push_back(silhouette(f, cv::Mat(f->image.rows, f->image.cols, CV_8UC1, cv::Scalar(255))));
   const auto h = carve(views);
   EXPECT_NE(h->failure().find("the model is the whole root box"), std::string::npos) << h->failure();
-  EXPECT_TRUE(has_event(*h, "suspect_model"));
+  EXPECT_TRUE(has_event(h->events(), "suspect_model"));
 }
 
 // The dino's box given in millimetres: 1000 times the viewing cones' box.
@@ -111,7 +107,7 @@ TEST(OctreeCarverChecks, BoundsOrdersOfMagnitudeOffTheViewingConesFailAskingForM
   for (double v : kDinoBox) mm.push_back(1000 * v);
   const auto h = carve(views, mm);
   EXPECT_NE(h->failure().find("are the bounds in metres?"), std::string::npos) << h->failure();
-  EXPECT_TRUE(has_event(*h, "suspect_model"));
+  EXPECT_TRUE(has_event(h->events(), "suspect_model"));
   // The same views in the right box give a model.
   EXPECT_EQ(carve(views)->failure(), "");
 }

@@ -17,6 +17,7 @@
 #include "support/built_plugins.hpp"
 #include "support/temp_dir.hpp"
 #include "support/data_sets.hpp"
+#include "support/events.hpp"
 
 namespace fs = std::filesystem;
 using fba::testing::ComponentHarness;
@@ -24,14 +25,9 @@ using fba::testing::ComponentHarness;
 namespace {
 
 using fba::test::built_plugins;
+using fba::test::has_event;
 
 using fba::test::kDinoPar;
-
-bool has_event(const std::vector<fba::Event>& events, const std::string& name) {
-  for (const auto& e : events)
-    if (e.name == name) return true;
-  return false;
-}
 
 }  // namespace
 

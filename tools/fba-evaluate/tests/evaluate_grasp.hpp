@@ -1,5 +1,6 @@
 // `fba-evaluate grasp <args>` as a user runs it, to its end: its exit status and what it printed;
-// and what the batch tests share: stand-ins for fba-run, and what a run's folder says.
+// and what the batch tests share: stand-ins for fba-run, and what a run's folder says; a test's
+// folder with a cube to grasp.
 #pragma once
 
 #include <chrono>
@@ -9,10 +10,24 @@
 #include <string>
 #include <thread>
 
+#include <gtest/gtest.h>
+
+#include "fba/geometry/mesh_io.hpp"
 #include "support/build_paths.hpp"
 #include "support/child_process.hpp"
+#include "support/temp_dir.hpp"
 
 namespace fba::test {
+
+// A test with a folder of its own holding cube.ply, a 10 cm cube centred on the origin (a batch
+// stands it on the table: on z = 0, its top at 0.1).
+class CubeTest : public ::testing::Test {
+ protected:
+  CubeTest() { geometry::write_ply(geometry::make_box({-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05}), mesh()); }
+  std::string mesh() const { return (dir_ / "cube.ply").string(); }
+  TempDir tmp_;
+  const std::filesystem::path dir_ = tmp_.path();
+};
 
 inline Result evaluate_grasp(const std::string& args) {
   return run_shell("'" + program("fba-evaluate") + "' grasp " + args);

@@ -21,6 +21,7 @@
 #include "fba/geometry/mesh_io.hpp"
 #include "support/child_process.hpp"
 #include "support/build_paths.hpp"
+#include "support/temp_dir.hpp"
 #include "support/data_sets.hpp"
 
 namespace {
@@ -36,14 +37,8 @@ using fba::test::write_fba_run_stand_in;
 
 class EvaluateGraspBatch : public testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::path(testing::TempDir()) / ("fba-evaluate-grasp-batch-" + std::to_string(getpid()) + "-" +
-                                           testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  fba::test::TempDir tmp_;
+  const fs::path dir_ = tmp_.path();
 };
 
 std::string mustard() { return fba::test::ycb_mesh("YcbMustardBottle"); }

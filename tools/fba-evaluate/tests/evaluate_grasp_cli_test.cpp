@@ -9,8 +9,6 @@
 #include <fstream>
 #include <string>
 
-#include "fba/geometry/mesh_io.hpp"
-
 #include "evaluate_grasp.hpp"
 #include "support/build_paths.hpp"
 
@@ -22,23 +20,13 @@ using Result = fba::test::Result;
 
 using fba::test::evaluate_grasp;
 
-class EvaluateGraspCli : public testing::Test {
+class EvaluateGraspCli : public fba::test::CubeTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::path(testing::TempDir()) / ("fba-evaluate-grasp-" + std::to_string(getpid()) + "-" +
-                                           testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-    // A 10 cm cube centred on the origin.
-    fba::geometry::write_ply(fba::geometry::make_box({-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05}), mesh());
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string mesh() const { return (dir_ / "cube.ply").string(); }
   std::string summary(const std::string& grasp) const {
     const fs::path p = dir_ / "summary.json";
     std::ofstream(p) << R"({"outcome": "success", "grasp": )" << grasp << "}";
     return p.string();
   }
-  fs::path dir_;
 };
 
 TEST_F(EvaluateGraspCli, AGraspOnOpposingFacesIsForceClosureAndBeatsRandomSets) {

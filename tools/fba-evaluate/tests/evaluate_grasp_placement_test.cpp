@@ -1,7 +1,6 @@
 // fba-evaluate grasp and its --batch mode count a grasp by the worse of its two placements on the
 // true mesh (each contact along its normal, and at its closest point), and report both.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -13,7 +12,6 @@
 #include <nlohmann/json.hpp>
 
 #include "evaluate_grasp.hpp"
-#include "fba/geometry/mesh_io.hpp"
 #include "support/build_paths.hpp"
 
 namespace {
@@ -24,20 +22,7 @@ using fba::test::evaluate_grasp;
 using fba::test::line_starting;
 using fba::test::write_fba_run_stand_in;
 
-class EvaluateGraspPlacement : public testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::path(testing::TempDir()) / ("fba-evaluate-grasp-placement-" + std::to_string(getpid()) + "-" +
-                                           testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    // A 10 cm cube centred on the origin; on the table (batch) it stands on z = 0, its top at 0.1.
-    fba::geometry::write_ply(fba::geometry::make_box({-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05}), mesh());
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string mesh() const { return (dir_ / "cube.ply").string(); }
-  fs::path dir_;
-};
+class EvaluateGraspPlacement : public fba::test::CubeTest {};
 
 // The thumb on the -x face; the fingers 2 mm inside the +x face and half a millimetre under the
 // top, pushing along -x: along their normals they land on the +x face (force closure), at their

@@ -35,11 +35,18 @@ std::vector<Eigen::Isometry3d> hemisphere_views(int n, double min_elevation, dou
                                                 double radius,
                                                 const Eigen::Vector3d& target = Eigen::Vector3d::Zero());
 
-// An ideal pinhole camera (no distortion) with the given intrinsics and pose.
 // How far from the box's centre a camera of this size and focal length must stand for the
 // sphere around the box to fit the image's shorter side, with `margin` to spare (1.05: 5%).
 double framing_distance(const Eigen::AlignedBox3d& box, int width, int height, double focal, double margin = 1.05);
 
+// A picture's camera, width x height pixels with the width as focal length, looking at `centre`
+// from along the unit vector `toward`, its image up as near `up` as look_at makes it, and as near
+// as frames `points`: from the distance that fits their sphere about `centre`, nearer until their
+// projections fill the share `fill` of the picture's half-width or half-height.
+CameraModel framing_camera(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& centre,
+                           const Eigen::Vector3d& toward, const Eigen::Vector3d& up, int width, int height, double fill);
+
+// An ideal pinhole camera (no distortion) with the given intrinsics and pose.
 CameraModel make_camera(int width, int height, double fx, double fy, double cx, double cy,
                         const Eigen::Isometry3d& camera_from_world = Eigen::Isometry3d::Identity());
 
