@@ -219,41 +219,52 @@ std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& ori
   // table. A plane touches a solid only on the solid's convex hull, so the table's contacts are
   // exactly the boxes' (the few MuJoCo makes for a convex mesh on a plane, where the boxes on the
   // table would have made four each: hundreds of constraints a step, in MuJoCo 2.2's dense
-  // buffers). A convex object given as its hull is that one mesh, which touches both.
+  // buffers). A convex object given as its hull touches the robot as that hull ("object_shape"),
+  // and still the table as its boxes' hull: a ball's is flat across its lowest voxels and stands
+  // where it was put, as a real ball does, where the hull's lowest vertex would tip it and roll it
+  // centimetres from where the camera saw it. Its mass properties are then MuJoCo's, from the hull
+  // (the voxels' centroid lies up to half a voxel off a ball's centre).
   std::string object_xml, assets;
-  if (!object.boxes.empty() || !object.hull.empty()) {
+  if (!object.boxes.empty()) {
+    const bool hull = !object.hull.empty();
     Eigen::AlignedBox3d bounds;
     for (const auto& b : object.boxes) bounds.extend(b);
-    for (const auto& p : object.hull) bounds.extend(p);
     const Eigen::Vector3d c = bounds.center();
     object_xml += fmt::format(R"(    <body name="object" pos="{}">)", vec(c.x(), c.y(), c.z())) + "\n";
     object_xml += R"(      <freejoint name="object"/>)" "\n";
     const Eigen::Vector3d com = object.centroid - c;
     const Eigen::Matrix3d inertia = object.mass * object.inertia;
-    object_xml += fmt::format(R"(      <inertial pos="{}" mass="{}" fullinertia="{} {} {} {} {} {}"/>)", vec(com.x(), com.y(), com.z()),
-                              num(object.mass), num(inertia(0, 0)), num(inertia(1, 1)), num(inertia(2, 2)), num(inertia(0, 1)),
-                              num(inertia(0, 2)), num(inertia(1, 2))) +
-                  "\n";
+    if (!hull)
+      object_xml += fmt::format(R"(      <inertial pos="{}" mass="{}" fullinertia="{} {} {} {} {} {}"/>)", vec(com.x(), com.y(), com.z()),
+                                num(object.mass), num(inertia(0, 0)), num(inertia(1, 1)), num(inertia(2, 2)), num(inertia(0, 1)),
+                                num(inertia(0, 2)), num(inertia(1, 2))) +
+                    "\n";
     std::string corners;
-    if (!object.hull.empty()) {
-      for (const auto& p : object.hull) corners += vec(p.x() - c.x(), p.y() - c.y(), p.z() - c.z()) + " ";
-    } else {
-      for (std::size_t i = 0; i < object.boxes.size(); ++i) {
-        const Eigen::Vector3d p = object.boxes[i].center() - c, h = object.boxes[i].sizes() / 2;
+    for (std::size_t i = 0; i < object.boxes.size(); ++i) {
+      const Eigen::Vector3d p = object.boxes[i].center() - c, h = object.boxes[i].sizes() / 2;
+      if (!hull)
         object_xml += fmt::format(R"(      <geom name="object_{}" type="box" pos="{}" size="{}" contype="0" conaffinity="2" condim="4" )"
                                   R"(rgba="0.8 0.3 0.2 1"/>)",
                                   i, vec(p.x(), p.y(), p.z()), vec(h.x(), h.y(), h.z())) +
                       "\n";
-        for (int k = 0; k < 8; ++k) {
-          const Eigen::Vector3d q = object.boxes[i].corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - c;
-          corners += vec(q.x(), q.y(), q.z()) + " ";
-        }
+      for (int k = 0; k < 8; ++k) {
+        const Eigen::Vector3d q = object.boxes[i].corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - c;
+        corners += vec(q.x(), q.y(), q.z()) + " ";
       }
     }
-    assets = "  <asset>\n    <mesh name=\"object_hull\" vertex=\"" + corners + "\"/>\n  </asset>\n";
-    // conaffinity 1: the table; 3: the robot too (kRobotContact's contype 2).
-    object_xml += fmt::format(R"(      <geom name="object_hull" type="mesh" mesh="object_hull" contype="4" conaffinity="{}" condim="4" rgba="{}"/>)",
-                              object.hull.empty() ? 1 : 3, object.hull.empty() ? "0 0 0 0" : "0.8 0.3 0.2 1") +
+    assets = "  <asset>\n    <mesh name=\"object_hull\" vertex=\"" + corners + "\"/>\n";
+    if (hull) {
+      std::string points;
+      for (const auto& p : object.hull) points += vec(p.x() - c.x(), p.y() - c.y(), p.z() - c.z()) + " ";
+      assets += "    <mesh name=\"object_shape\" vertex=\"" + points + "\"/>\n";
+      object_xml += fmt::format(R"(      <geom name="object_shape" type="mesh" mesh="object_shape" contype="0" conaffinity="2" condim="4" )"
+                                R"(mass="{}" rgba="0.8 0.3 0.2 1"/>)",
+                                num(object.mass)) +
+                    "\n";
+    }
+    assets += "  </asset>\n";
+    object_xml += fmt::format(R"(      <geom name="object_hull" type="mesh" mesh="object_hull" contype="4" conaffinity="1" condim="4" rgba="0 0 0 0"{}/>)",
+                              hull ? R"( mass="0")" : "") +
                   "\n";
     object_xml += "    </body>\n";
   }

@@ -29,9 +29,10 @@ class RobotWorldError : public std::runtime_error {
 
 struct WorldObject {
   std::vector<Eigen::AlignedBox3d> boxes;  // world coordinates: the object's convex pieces (they may overlap)
-  std::vector<Eigen::Vector3d> hull;       // world coordinates: when given, the object is these points' convex hull, the boxes unused
+  std::vector<Eigen::Vector3d> hull;       // world coordinates: when given, the robot touches these points' convex hull, not the boxes
   double mass = 0.3;                       // kg
-  // The solid's centre of mass (world) and its inertia about it per unit mass (m^2).
+  // The solid's centre of mass (world) and its inertia about it per unit mass (m^2); with a hull,
+  // MuJoCo's from the hull.
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Identity() * 1e-4;
   double friction = 0.5;                   // sliding friction, of every geom of the world
@@ -40,7 +41,8 @@ struct WorldObject {
 // The world's MJCF: the table (the plane z = 0, the world frame), the robot from `urdf_xml` (its
 // root link is the world), the object as a free body named "object" made of the boxes (geoms
 // "object_N") and, for the table, their convex hull ("object_hull": a plane touches a solid only
-// on its hull), or, given `hull`, of that hull alone ("object_hull", touching robot and table). Contact classes: the robot's geoms touch the table and the object's boxes but not
+// on its hull); given `hull`, the robot touches that hull ("object_shape") instead of the boxes.
+// Contact classes: the robot's geoms touch the table and the object's boxes but not
 // each other (the arm's self-collision is reach planning's to avoid); the arm's base, welded to
 // the world, does not touch the table it is bolted to. Actuators: one per movable joint, named as it: a motor
 // (N or N m, within the joint's effort limit) for the arm's joints and the fingers' closing

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "fba/geometry/mesh_io.hpp"
+#include "fba/geometry/object_families.hpp"
 #include "lift_test.hpp"
 #include "ring_grasp.hpp"
 #include "scenes.hpp"
@@ -120,6 +121,22 @@ TEST(LiftTest, RunPlansTheReachAndTheRingGraspAroundTheCanHolds) {
     to_axis.z() = 0;
     EXPECT_GT(c.normal.dot(to_axis.normalized()), 0.5) << c.link << ": the normal does not point into the can";
   }
+}
+
+// A ball, convex: the fingers touch its hull, smooth, and it stands where it was put (on its
+// boxes' flat base) rather than rolling off its hull's lowest vertex before the hand arrives; the
+// ring grasp around its equator holds it, each finger where it was planned.
+TEST(LiftTest, ABallStandsWhereItWasPutAndTheRingGraspAroundItsEquatorHoldsIt) {
+  // A generated ball (sampled on a cube's faces), turned as a drop might leave it: no vertex
+  // straight below its centre.
+  fba::TriangleMesh ball = fba::geometry::make_family_object(fba::geometry::ObjectFamily::sphere, 31, 1).mesh;
+  const Eigen::Matrix3f turn = Eigen::AngleAxisf(0.7f, Eigen::Vector3f(1, 2, 3).normalized()).toRotationMatrix();
+  for (auto& v : ball.vertices) v = turn * v;
+  LiftTest test(ball, {0.01, 0.02, 0});
+  EXPECT_TRUE(test.pieces().hull);
+  const auto r = test.run(fba::sim_hand::ring_grasp(test.object(), mid_height(test.object()), 180 * kDegree));
+  EXPECT_TRUE(r.held) << r.reason;
+  EXPECT_LT(r.slip_m, 0.005);
 }
 
 // The same grasp 20 cm above the box: the fingers close on the air.
