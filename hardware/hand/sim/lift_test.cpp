@@ -397,7 +397,7 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
   }
   s.obstacles = motion::ReachPlanner::obstacles(octree_of(pieces.grid));
 
-  // The world: the robot, the table and the object's boxes.
+  // The world: the robot, the table and the object (its boxes, or its hull and its boxes' base).
   try {
     s.mjcf = robot_world_mjcf(urdf, name, WorldObject{pieces.boxes, convex ? hull.vertices : std::vector<Eigen::Vector3d>{},
                                                       params.mass, pieces.centroid, pieces.inertia, params.friction});
