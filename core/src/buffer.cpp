@@ -102,11 +102,10 @@ std::int64_t Buffer::head_stamp() {
   return queue.front().header().stamp_ns;
 }
 
-std::size_t Buffer::queued() {
-  if (tap) return 0;
-  if (one_thread) return size.load(std::memory_order_relaxed);  // another thread may be asking
-  std::lock_guard lock(mutex);
-  return policy == BufferPolicy::Latest ? (latest ? 1 : 0) : queue.size();
+std::size_t Buffer::queued() const {
+  // The size published after every change (publish_size), not the queue under the lock: a
+  // sampler reading it while the task runs must never make a worker wait for the lock.
+  return tap ? 0 : size.load(std::memory_order_relaxed);
 }
 
 }  // namespace fba::detail

@@ -86,8 +86,8 @@ struct Buffer {
   bool empty() const { return size.load(std::memory_order_seq_cst) == 0; }
   // Peeks at the head's stamp (All trigger matching); requires non-empty.
   std::int64_t head_stamp();
-  // Samples still queued (at the stop: left unseen). Takes the lock.
-  std::size_t queued();
+  // Samples still queued (at the stop: left unseen). Without the lock.
+  std::size_t queued() const;
 
  private:
   bool take_head(Packet& out, bool& was_full);  // under the lock

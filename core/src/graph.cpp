@@ -396,8 +396,11 @@ RunResult Graph::run() {
   return r;
 }
 
-// Per-component and per-connection counts as they stand; callable while the task runs (every
-// count read is atomic or taken under its buffer's lock). Returns the samples queued now.
+// Per-component and per-connection counts as they stand; callable while the task runs. A
+// connection's counts are atomics written under its buffer's lock and read here without it, so
+// that sampling a running task never holds up a worker on the data path; read while it runs, they
+// may be a sample apart (pushed = delivered + dropped + left holds once the workers have stopped).
+// Returns the samples queued now.
 std::uint64_t Graph::collect_stats(RunResult& r) {
   for (auto& n : nodes) {
     ComponentStats s;
@@ -432,7 +435,6 @@ std::uint64_t Graph::collect_stats(RunResult& r) {
   for (auto& b : buffers) {
     if (b->tap || !b->consumer) continue;
     const std::uint64_t queued = b->queued();
-    BufferLock block(*b);
     ConnectionStats c{b->from, b->to, b->policy, b->pushed, b->consumed, b->dropped, queued, b->peak, b->peak_bytes};
     c.capacity = b->policy == BufferPolicy::Latest ? 1 : b->capacity;
     r.connections.push_back(std::move(c));
