@@ -29,26 +29,27 @@ struct ReachParameters {
   static constexpr fba::Param<std::string> kBaseLink{"base_link", "world", "the frame grasps are given in"};
   static constexpr fba::Param<std::string> kFlangeLink{"flange_link", "flange", "the link the hand is mounted on"};
   static constexpr auto kStandoff =
-      fba::Param<double>("standoff", 0.05, "metres back along the approach where the path ends and the straight approach begins").range(0, 0.5);
-  static constexpr auto kLiftHeight = fba::Param<double>("lift_height", 0.1, "metres, straight up").range(0, 0.5);
+      fba::Param<double>("standoff", reach_defaults::kStandoff, "metres back along the approach where the path ends and the straight approach begins").range(0, 0.5);
+  static constexpr auto kLiftHeight = fba::Param<double>("lift_height", reach_defaults::kLiftHeight, "metres, straight up").range(0, 0.5);
   static constexpr auto kContactAllowance = fba::Param<double>(
-      "contact_allowance", 0.005,
+      "contact_allowance", reach_defaults::kContactAllowance,
       "metres around each contact where the fingers may touch the model (about to touch the object: the model's voxel "
       "staircase there); wider lets fingers meet the object on the way in (docs/results.md, \"The grasp loop in simulation\")")
       .range(0, 0.1);
   static constexpr auto kMaxBackout = fba::Param<double>(
-      "max_backout", 0.2,
-      "metres: a start whose open hand is in the model (space the views have not carved yet) backs out along the flange's axis "
-      "at most this far until clear; 0: such a start is refused").range(0, 0.5);
+      "max_backout", reach_defaults::kMaxBackout,
+      "metres: a start whose open hand is in the model (space the views have not carved yet) backs out along the flange's axis, "
+      "else straight up, at most this far until clear, else by joints alone (within 5% of each joint's range); 0: such a start "
+      "is refused").range(0, 0.5);
   static constexpr auto kSeed =
-      fba::Param<int>("seed", 1, "seed of the path search and the IK's random starts: the same plan on every run").range(1, 2147483647);
+      fba::Param<int>("seed", static_cast<int>(reach_defaults::kSeed), "seed of the path search and the IK's random starts: the same plan on every run").range(1, 2147483647);
   static constexpr auto kIkAttempts =
-      fba::Param<int>("ik_attempts", 32, "IK starts for the pregrasp: the current joints, then random ones").range(1, 10000);
+      fba::Param<int>("ik_attempts", reach_defaults::kIkAttempts, "IK starts for the pregrasp: the current joints, then random ones").range(1, 10000);
   static constexpr auto kPlanningTime =
-      fba::Param<double>("planning_time", 30, "seconds of wall time the collision-free path search may take at most: a guard "
+      fba::Param<double>("planning_time", reach_defaults::kPlanningTime, "seconds of wall time the collision-free path search may take at most: a guard "
                          "(path_checks ends it first, at the same point on any machine)").range(0.001, 600);
   static constexpr auto kPathChecks =
-      fba::Param<std::int64_t>("path_checks", 20000, "poses the collision-free path search may check before it gives up: "
+      fba::Param<std::int64_t>("path_checks", static_cast<std::int64_t>(reach_defaults::kPathChecks), "poses the collision-free path search may check before it gives up: "
                                                      "its bound, the same on a loaded machine as on an idle one")
           .range(1, 10'000'000);
 

@@ -17,6 +17,7 @@
 // search), plan() the whole plan.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -34,23 +35,35 @@
 
 namespace fba::motion {
 
+// The defaults of ReachParams that reach_parameters.hpp's component parameters declare too.
+namespace reach_defaults {
+inline constexpr double kStandoff = 0.05;
+inline constexpr double kLiftHeight = 0.10;
+inline constexpr double kContactAllowance = 0.005;
+inline constexpr double kMaxBackout = 0.2;
+inline constexpr std::uint32_t kSeed = 1;
+inline constexpr int kIkAttempts = 32;
+inline constexpr double kPlanningTime = 30;
+inline constexpr std::size_t kPathChecks = 20000;
+}  // namespace reach_defaults
+
 struct ReachParams {
   // Where the palm sits on the flange (the flange's frame: z out of it).
   Eigen::Isometry3d flange_from_palm = Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.075));
   double clearance = 0.01;       // m between each pad and its contact at the pregrasp, at least
-  double standoff = 0.05;        // m back along the approach from the grasp: where the path ends
-  double lift_height = 0.10;     // m, straight up
+  double standoff = reach_defaults::kStandoff;        // m back along the approach from the grasp: where the path ends
+  double lift_height = reach_defaults::kLiftHeight;   // m, straight up
   double hold_s = 2.0;           // s the arm holds still at the top of the lift
   double hand_s = 1.0;           // s the arm stands still while the hand opens or closes
   double finger_force = 10.0;    // N at each pad when closing
   bool retreat = true;           // after the hold: put the object back, open, back out to the standoff
   // The fingers may touch the model within this distance of their contacts (the model is the
   // object's visual hull: near a contact the finger is about to touch the object).
-  double contact_allowance = 0.005;
-  std::size_t path_checks = 20000;  // poses the path search may check: its deterministic bound
-  double planning_time = 30;       // s: a guard on the path search's wall time
-  std::uint32_t seed = 1;        // OMPL's random numbers (and the IK's random starts): the same plan every run
-  int ik_attempts = 32;          // IK starts: the current joints, then random ones within the limits
+  double contact_allowance = reach_defaults::kContactAllowance;
+  std::size_t path_checks = reach_defaults::kPathChecks;  // poses the path search may check: its deterministic bound
+  double planning_time = reach_defaults::kPlanningTime;   // s: a guard on the path search's wall time
+  std::uint32_t seed = reach_defaults::kSeed;  // OMPL's random numbers (and the IK's and the jiggle's): the same plan every run
+  int ik_attempts = reach_defaults::kIkAttempts;  // IK starts: the current joints, then random ones within the limits
   double cartesian_step = 0.01;  // m between the IK solutions along a straight line
   double max_joint_step = 0.3;   // rad: a larger jump between two of them is a flip, not a line
   double collision_step = 0.02;  // rad: motions are checked at poses this far apart (joint space, Euclidean)
@@ -60,7 +73,7 @@ struct ReachParams {
   // m: a start whose hand touches the model (but not the table or the arm) backs out along the
   // flange's -z axis (the wrist camera's line of sight, backwards) at most this far, in
   // cartesian_step steps, each an IK solution, until clear of the model. 0: such a start is refused.
-  double max_backout = 0.2;
+  double max_backout = reach_defaults::kMaxBackout;
   // Where neither line backs out (the arm at the end of its reach), joint positions drawn around
   // the current ones, each joint within up to jiggle_share of its range (MoveIt's
   // FixStartStateCollision, its jiggle_fraction 0.05 and 100 draws). 0 draws: not tried.
