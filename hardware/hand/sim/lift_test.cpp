@@ -76,8 +76,10 @@ const std::vector<double> kArmHome{-0.4148, -2.1223, 2.2888, -2.2234, -1.3679, -
 // above needs a short path. The fingers reach about this far past the palm's frame.
 constexpr double kStartClearance = 0.25;
 constexpr double kFingerReach = 0.18;
-// At most this many vertices of a convex object's hull go to MuJoCo (see the constructor).
+// At most this many vertices of a convex object's hull go to MuJoCo, and the hull is taken of at
+// most this many of the mesh's triangles (see the constructor).
 constexpr std::size_t kMaxHullVertices = 1000;
+constexpr std::size_t kHullTriangles = 50000;
 
 std::string seconds(double t) { return fmt::format("t={:.2f} s", t); }
 
@@ -343,15 +345,19 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
   geometry::ConvexHull hull;
   try {
     pieces = geometry::decompose_into_boxes(s.object, params.voxel_size);
-    // MuJoCo walks a hull's vertices in every collision test near it, and qhull merges facets for
-    // minutes on a fine mesh's flat faces: a fine mesh's hull is that of the mesh clustered to a
-    // few thousand triangles (its hull moved inwards by a cluster's sagitta: under a tenth of a
-    // millimetre on a 10 cm sphere).
-    hull = geometry::convex_hull(geometry::decimate(s.object, 2 * kMaxHullVertices).mesh);
+    // Convexity is judged on the mesh's hull (clustered only beyond kHullTriangles, whose cells
+    // are then about a millimetre: qhull merges a fine mesh's flat faces for minutes), not on a
+    // coarse one, whose clusters cut a scan's rims and corners.
+    hull = geometry::convex_hull(geometry::decimate(s.object, kHullTriangles).mesh);
   } catch (const std::exception& e) {  // std::invalid_argument, geometry::ConvexHullError
     throw LiftTestError(std::string("lift test: the object cannot be given to MuJoCo: ") + e.what());
   }
   const bool convex = pieces.mesh_volume >= geometry::kConvexVolumeShare * hull.volume;
+  // MuJoCo walks a hull's vertices in every collision test near it: a fine convex mesh touches the
+  // robot as the hull of the mesh clustered to a few thousand triangles (moved inwards by a
+  // cluster's sagitta: under a tenth of a millimetre on a 10 cm sphere).
+  if (convex && hull.vertices.size() > kMaxHullVertices)
+    hull.vertices = geometry::convex_hull(geometry::decimate(s.object, 2 * kMaxHullVertices).mesh).vertices;
   s.pieces = {convex, hull.volume, pieces.boxes.size(), pieces.voxel_size, pieces.iou, pieces.volume, pieces.mesh_volume};
 
   // The robot: its one description, with the measured transforms in place.
@@ -452,6 +458,16 @@ LiftTest::~LiftTest() = default;
 
 const TriangleMesh& LiftTest::object() const { return impl_->object; }
 const ObjectPieces& LiftTest::pieces() const { return impl_->pieces; }
+
+std::string describe(const ObjectPieces& p) {
+  const double share = 100 * p.mesh_volume / p.hull_volume;
+  if (p.hull)
+    return fmt::format("MuJoCo collides it as its convex hull: the mesh is convex ({:.1f} cm^3, {:.1f}% of its hull's)",
+                       p.mesh_volume * 1e6, share);
+  return fmt::format("MuJoCo collides it as {} boxes of {:.1f} mm voxels, volume IoU {:.4f} against the mesh ({:.1f} of {:.1f} cm^3; "
+                     "{:.1f}% of its hull's: not convex)",
+                     p.boxes, p.voxel_size * 1e3, p.iou, p.volume * 1e6, p.mesh_volume * 1e6, share);
+}
 double LiftTest::simulated_s() const { return static_cast<double>(impl_->steps) * impl_->m->opt.timestep; }
 long LiftTest::steps() const { return impl_->steps; }
 const std::string& LiftTest::plan_note() const { return impl_->plan_note; }

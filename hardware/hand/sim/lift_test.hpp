@@ -85,6 +85,10 @@ struct ObjectPieces {
   double mesh_volume = 0;  // m^3
 };
 
+// What MuJoCo collides the object as, in words: "MuJoCo collides it as its convex hull: ...", or
+// as how many boxes of which voxels, their fit and why not the hull.
+std::string describe(const ObjectPieces& pieces);
+
 // `mesh` is in the mesh file's frame; see ObjectPlacement. Throws LiftTestError, and
 // std::invalid_argument for parameters out of range.
 class LiftTest {

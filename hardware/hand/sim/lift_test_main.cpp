@@ -182,14 +182,7 @@ int main(int argc, char** argv) {
     fba::sim_hand::LiftTest test(mesh, placement, params);
     std::printf("scene built (mesh loaded, voxelised into boxes, MuJoCo model compiled) in %.3f s wall time\n",
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count());
-    const auto& pieces = test.pieces();
-    if (pieces.hull)
-      std::printf("object: its convex hull (the mesh is convex: %.1f cm^3, %.1f%% of its hull's)\n", pieces.mesh_volume * 1e6,
-                  100 * pieces.mesh_volume / pieces.hull_volume);
-    else
-      std::printf("object: %zu boxes of %.1f mm voxels, volume IoU %.4f against the mesh (%.1f of %.1f cm^3; %.1f%% of its hull's: not convex)\n",
-                  pieces.boxes, pieces.voxel_size * 1e3, pieces.iou, pieces.volume * 1e6, pieces.mesh_volume * 1e6,
-                  100 * pieces.mesh_volume / pieces.hull_volume);
+    std::printf("object: %s\n", fba::sim_hand::describe(test.pieces()).c_str());
     if (samples > 0) return synthesised(test, samples, candidates);
     fba::Grasp grasp;
     if (given) {

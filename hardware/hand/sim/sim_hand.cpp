@@ -91,15 +91,7 @@ class SimHand final : public fba::Component {
     if (ctx(kWorld) == "table") table_shift_ = 0;
     ctx.log().info("{}: {} triangles on the table at ({:.3f}, {:.3f}), yaw {:.1f} deg, {}", ctx(kMesh).stem().string(),
                    test_.object().triangles.size(), ctx(kObjectX), ctx(kObjectY), ctx(kObjectYaw), ctx(kObjectRest));
-    const auto& pieces = test_.pieces();
-    if (pieces.hull)
-      ctx.log().info("{}: MuJoCo collides it as its convex hull: the mesh is convex ({:.1f} cm^3, {:.1f}% of its hull's)",
-                     ctx(kMesh).stem().string(), pieces.mesh_volume * 1e6, 100 * pieces.mesh_volume / pieces.hull_volume);
-    else
-      ctx.log().info("{}: MuJoCo collides it as {} boxes of {:.1f} mm voxels, volume IoU {:.4f} against the mesh ({:.1f} of {:.1f} cm^3; "
-                     "{:.1f}% of its hull's: not convex)",
-                     ctx(kMesh).stem().string(), pieces.boxes, pieces.voxel_size * 1e3, pieces.iou, pieces.volume * 1e6,
-                     pieces.mesh_volume * 1e6, 100 * pieces.mesh_volume / pieces.hull_volume);
+    ctx.log().info("{}: {}", ctx(kMesh).stem().string(), fba::sim_hand::describe(test_.pieces()));
   }
 
   // Opens the hand and ends the simulation, as the real hand opens on its way out of a run.
