@@ -78,19 +78,29 @@ bool separated_from_origin(const Eigen::Matrix<double, 6, Eigen::Dynamic>& w) {
 }
 
 // Runs qhull on the columns of `points` and returns the smallest distance from the origin to a
-// facet's hyperplane, negative when the origin lies outside some facet.
+// facet's hyperplane, negative when the origin lies outside some facet. First without merging
+// (Q0): on these few dozen 6-D points about four times faster than the merged, triangulated hull
+// (0.48 against 1.9 ms a grasp), and where its round-off shows qhull says so (a precision error,
+// about one grasp in 40 with exact box faces or parallel normals) and the merged hull decides.
+// The two agreed on every force-closure decision of 7,920 grasps, epsilon within 2e-11 relative
+// (GraspQuality.TheUnmergedHullGivesTheMergedHullsEpsilon).
 double min_facet_distance(const Eigen::Matrix<double, 6, Eigen::Dynamic>& points) {
   constexpr int dim = 6;
-  std::vector<coordT> coords(points.data(), points.data() + points.size());  // column-major = one point per 6
   double min_distance = std::numeric_limits<double>::infinity();
+  auto run = [&](const char* options) {
+    std::vector<coordT> coords(points.data(), points.data() + points.size());  // column-major = one point per 6
+    min_distance = std::numeric_limits<double>::infinity();
+    return geometry::run_qhull(dim, coords, options, [&](qhT* qh) {
+      facetT* facet;
+      FORALLfacets {
+        // qhull: a point p is outside a facet when normal . p + offset > 0; the origin gives offset.
+        min_distance = std::min(min_distance, -facet->offset);
+      }
+    });
+  };
+  if (run("qhull Q0").code == 0) return min_distance;
   // Qt: triangulated facets; every facet then has its own hyperplane.
-  const auto status = geometry::run_qhull(dim, coords, "qhull Qt", [&](qhT* qh) {
-    facetT* facet;
-    FORALLfacets {
-      // qhull: a point p is outside a facet when normal . p + offset > 0; the origin gives offset.
-      min_distance = std::min(min_distance, -facet->offset);
-    }
-  });
+  const auto status = run("qhull Qt");
   if (status.code != 0)
     throw std::runtime_error("grasp quality: qhull failed (code " + std::to_string(status.code) + "): " + status.message);
   return min_distance;

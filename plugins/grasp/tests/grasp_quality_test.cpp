@@ -8,7 +8,12 @@
 
 #include <Eigen/Geometry>
 
+#include "fba/geometry/qhull.hpp"
 #include "fba/grasp/grasp_quality.hpp"
+
+extern "C" {
+#include <libqhull_r/qhull_ra.h>
+}
 
 namespace fba::grasp {
 namespace {
@@ -88,6 +93,63 @@ TEST(GraspQuality, ContactsAtTheFaceCentresOfACubeHaveTheHandComputedEpsilon) {
     ASSERT_TRUE(eight.force_closure);
     EXPECT_NEAR(eight.epsilon, mu * std::sqrt(2.0 / 3.0), 1e-9) << "mu " << mu;
   }
+}
+
+// The smallest distance from the origin to a facet of the merged, triangulated hull of `w` ("qhull
+// Qt", qhull's robust default in 6-D), and whether qhull builds `w`'s hull without merging.
+struct Hulls {
+  double merged = 0;
+  bool unmerged_built = false;
+};
+Hulls hulls(const Eigen::Matrix<double, 6, Eigen::Dynamic>& w) {
+  Hulls h;
+  auto run = [&](const char* options, double* distance) {
+    std::vector<double> coords(w.data(), w.data() + w.size());
+    return geometry::run_qhull(6, coords, options, [&](qhT* qh) {
+      facetT* facet;
+      double d = std::numeric_limits<double>::infinity();
+      FORALLfacets { d = std::min(d, -facet->offset); }
+      if (distance) *distance = d;
+    });
+  };
+  EXPECT_EQ(run("qhull Qt", &h.merged).code, 0);
+  h.unmerged_built = run("qhull Q0", nullptr).code == 0;
+  return h;
+}
+
+// Quality hulls the wrenches without merging first and falls back to the merged hull where qhull
+// reports round-off. Contacts on a box's faces at grid points, normals exactly along the axes, are
+// the degenerate input where that happens: every decision and epsilon must be the merged hull's.
+TEST(GraspQuality, TheUnmergedHullGivesTheMergedHullsEpsilon) {
+  std::vector<GraspContact> points;  // on each face of a 8 cm cube, at 3 x 3 grid points
+  for (int axis = 0; axis < 3; ++axis)
+    for (double side : {-1.0, 1.0})
+      for (double u : {-0.02, 0.0, 0.02})
+        for (double v : {-0.02, 0.0, 0.02}) {
+          Eigen::Vector3d p;
+          p[axis] = side * 0.04, p[(axis + 1) % 3] = u, p[(axis + 2) % 3] = v;
+          points.push_back({p, -side * Eigen::Vector3d::Unit(axis)});
+        }
+  int grasps = 0, force_closure = 0, fell_back = 0;
+  for (std::size_t i = 0; i < points.size(); i += 5)
+    for (std::size_t j = i + 1; j < points.size(); j += 3)
+      for (std::size_t k = j + 1; k < points.size(); k += 7) {
+        const std::vector<GraspContact> c{points[i], points[j], points[k]};
+        const auto w = contact_wrenches(c, Eigen::Vector3d::Zero(), 0.07);
+        const Eigen::MatrixXd centred = w.colwise() - w.rowwise().mean();
+        if (Eigen::JacobiSVD<Eigen::MatrixXd>(centred).singularValues()(5) <= 1e-9) continue;  // flat: no hull
+        const Hulls h = hulls(w);
+        const GraspQuality q = evaluate_grasp(c, Eigen::Vector3d::Zero(), 0.07);
+        const std::string which = "contacts " + std::to_string(i) + ", " + std::to_string(j) + ", " + std::to_string(k);
+        ++grasps;
+        fell_back += !h.unmerged_built;
+        ASSERT_EQ(q.force_closure, h.merged > 1e-12) << which << ": merged hull's distance " << h.merged;
+        if (!q.force_closure) continue;
+        ++force_closure;
+        EXPECT_NEAR(q.epsilon, h.merged, 1e-9 * h.merged) << which;
+      }
+  EXPECT_GT(force_closure, 10) << "of " << grasps;
+  EXPECT_GT(fell_back, 0) << "of " << grasps << ": no grasp here takes the merged hull's path";
 }
 
 TEST(GraspQuality, EpsilonGrowsWithFriction) {
