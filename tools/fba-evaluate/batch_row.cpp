@@ -115,6 +115,9 @@ Row evaluate_job(const Job& j, const grasp::QualityParams& quality) {
     }
     if (r.contains("failure") && r["failure"].is_string()) row.reason = "synthesis failed: " + r["failure"].get<std::string>();
     if (r.contains("resolved") && r["resolved"].is_string()) row.resolved = r["resolved"].get<std::string>();
+    if (r.contains("seconds_per_view") && r["seconds_per_view"].is_array())
+      for (const auto& x : r["seconds_per_view"])
+        if (x.is_number()) row.synthesis_s.push_back(x.get<double>());
   }
   if (s.contains("events") && s["events"].is_array())
     for (const auto& e : s["events"]) {

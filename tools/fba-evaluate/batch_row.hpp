@@ -30,6 +30,7 @@ struct Row {
   std::string resolved;  // what synthesis had resolved under the fingers: "surface", or "contacts" (after its last view)
   int views = -1;
   double wall_s = -1, cpu_s = -1;
+  std::vector<double> synthesis_s;  // synthesis's wall seconds on each view (its result seconds_per_view)
   long long nodes = -1;
   nlohmann::json detail;  // the carver's last `detail` payload (with compare_uniform: against uniform detail), or null
 };

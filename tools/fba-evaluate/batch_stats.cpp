@@ -24,12 +24,13 @@ std::string percent(std::size_t part, std::size_t whole) {
 Stats stats_of(const std::vector<const Row*>& rows, const std::map<std::string, Baseline>& baselines) {
   Stats st;
   st.runs = rows.size();
-  std::vector<double> eps, views, wall, cpu, nodes;
+  std::vector<double> eps, views, wall, cpu, nodes, synthesis;
   for (const Row* r : rows) {
     if (r->held.value_or(false)) ++st.held;
     if (r->wall_s >= 0) wall.push_back(r->wall_s);
     if (r->cpu_s >= 0) cpu.push_back(r->cpu_s);
     if (r->nodes >= 0) nodes.push_back(static_cast<double>(r->nodes));
+    synthesis.insert(synthesis.end(), r->synthesis_s.begin(), r->synthesis_s.end());
     if (!r->selected) continue;
     ++st.selected;
     if (r->views >= 0) views.push_back(r->views);
@@ -46,6 +47,7 @@ Stats stats_of(const std::vector<const Row*>& rows, const std::map<std::string, 
   st.wall = mean(wall);
   st.cpu = mean(cpu);
   st.nodes = mean(nodes);
+  if (!synthesis.empty()) st.synthesis_s = grasp::quantile(synthesis, 0.5);
   return st;
 }
 

@@ -34,6 +34,7 @@ struct Stats {
   std::size_t runs = 0, selected = 0, evaluated = 0, fc = 0, above = 0, held = 0;
   std::size_t split = 0;  // evaluated grasps whose two placements on the mesh disagree on force closure
   double median_eps = NAN, views = NAN, wall = NAN, cpu = NAN, nodes = NAN;
+  double synthesis_s = NAN;  // the median of synthesis's seconds on one view, over every view of the runs
 };
 
 Stats stats_of(const std::vector<const Row*>& rows, const std::map<std::string, Baseline>& baselines);

@@ -21,13 +21,13 @@ std::string clip(std::string s, std::size_t n) {
 // One line of the summary table: the rows of one variant and one object (or all objects).
 std::string summary_line(int width, const std::string& variant, const std::string& object, const Stats& st, const Baseline* own) {
   char line[512];
-  std::snprintf(line, sizeof line, "%-*s %-18s %4zu %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s %5zu", width, variant.c_str(),
+  std::snprintf(line, sizeof line, "%-*s %-18s %4zu %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %7s %10s %5zu", width, variant.c_str(),
                 object.c_str(), st.runs, percent(st.selected, st.runs).c_str(), percent(st.fc, st.evaluated).c_str(),
                 fixed(st.median_eps, 4).c_str(), own && own->figures ? fixed(own->figures->epsilon_p99, 4).c_str() : "-",
                 percent(st.above, st.evaluated).c_str(),
                 own && own->figures ? fixed(100 * own->figures->force_closure_share, 1, "%").c_str() : "-",
                 percent(st.held, st.runs).c_str(), fixed(st.views, 1).c_str(), fixed(st.wall, 2).c_str(), fixed(st.cpu, 2).c_str(),
-                fixed(st.nodes, 0).c_str(), st.split);
+                fixed(st.synthesis_s, 3).c_str(), fixed(st.nodes, 0).c_str(), st.split);
   return line;
 }
 
@@ -139,8 +139,8 @@ struct Groups {
 std::string summary_lines(int width, const BatchList& l, const Groups& groups) {
   std::string out;
   char line[512];
-  std::snprintf(line, sizeof line, "%-*s %-18s %4s %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %10s %5s\n", width, "variant", "object", "runs",
-                "grasp", "FC", "med_eps", "rand_p99", ">p99", "rand_FC", "held", "views", "wall_s", "cpu_s", "nodes", "split");
+  std::snprintf(line, sizeof line, "%-*s %-18s %4s %5s %5s %8s %8s %6s %7s %5s %5s %7s %7s %7s %10s %5s\n", width, "variant", "object",
+                "runs", "grasp", "FC", "med_eps", "rand_p99", ">p99", "rand_FC", "held", "views", "wall_s", "cpu_s", "synth_s", "nodes", "split");
   out += line;
   for (const auto& v : l.variants) {
     for (const auto& mesh : groups.objects) {
@@ -241,7 +241,8 @@ std::string make_table(const BatchList& l, const std::vector<Row>& rows, const s
          "rand_p99, rand_FC: the random contact sets' 99th percentile of epsilon and force-closure share on the same mesh;\n"
          ">p99: selected grasps whose epsilon is above their mesh's rand_p99; held: runs held through the lift test;\n"
          "views: mean views until the grasp was selected; wall_s: the run's wall time (fba-run's summary), cpu_s: the\n"
-         "fba-run process's CPU time, both per run; nodes: mean octree nodes the carver visited per run.\n";
+         "fba-run process's CPU time, both per run; synth_s: the median of grasp synthesis's wall time on one view, over\n"
+         "every view of the runs; nodes: mean octree nodes the carver visited per run.\n";
   for (const auto& [mesh, b] : baselines)
     if (!b.error.empty()) out << "random baseline of " << mesh << ": " << b.error << "\n";
   out << "\n";
@@ -280,7 +281,7 @@ nlohmann::json rows_json(const std::vector<Row>& rows) {
   for (const auto& r : rows) {
     nlohmann::json j{{"variant", r.variant}, {"object", r.object}, {"mesh", r.mesh}, {"pose", r.pose}, {"dir", r.dir},
                      {"outcome", r.outcome}, {"reason", r.reason}, {"selected", r.selected}, {"views", r.views},
-                     {"wall_s", r.wall_s}, {"cpu_s", r.cpu_s}, {"nodes", r.nodes}};
+                     {"wall_s", r.wall_s}, {"cpu_s", r.cpu_s}, {"synthesis_s", r.synthesis_s}, {"nodes", r.nodes}};
     if (r.selected) j["score"] = r.score;
     if (r.force_closure) j["force_closure"] = *r.force_closure, j["epsilon"] = r.epsilon;
     if (r.on_mesh) {

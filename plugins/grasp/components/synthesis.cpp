@@ -247,7 +247,15 @@ class GraspSynthesisFilter final : public fba::Component {
     const fba::Octree& model = in.get();
     if (model.node_count == 0) return;  // no tree yet (the carver has no root box)
     if (stages_.current() != "grasp_synthesis") stages_.go("grasp_synthesis");
+    const auto start = std::chrono::steady_clock::now();
     analyse(model);
+    // The wall time of each view's analyses (a view's model may come twice: refined where synthesis
+    // asked), the result "seconds_per_view", in view order: the figure synthesis's speed is judged by.
+    if (model.views >= 1) {
+      seconds_per_view_.resize(std::max<std::size_t>(seconds_per_view_.size(), std::size_t(model.views)), 0.0);
+      seconds_per_view_[model.views - 1] += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      ctx_.report("seconds_per_view", nlohmann::json(seconds_per_view_).dump());
+    }
   }
 
  private:
@@ -753,6 +761,7 @@ class GraspSynthesisFilter final : public fba::Component {
   fba::vision::PlyLeaves ply_leaves_ = fba::vision::PlyLeaves::Seen;
   std::vector<int> view_index_;  // the silhouettes' view indices, in arrival order (their images are not kept)
   int requested_views_ = -1;      // the model views of the last regions request
+  std::vector<double> seconds_per_view_;  // wall seconds of the analyses of each view's models (index: views - 1)
   bool done_ = false;
 #if FBA_GRASP_REACH
   std::vector<Eigen::AlignedBox3d> swept_;  // the hand's way in for candidates the model blocked (hand_sweep)

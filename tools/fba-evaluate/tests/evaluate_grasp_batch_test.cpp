@@ -60,7 +60,7 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   ASSERT_EQ(r.status, 0) << r.output;
   // The per-run table and the summary table, with their columns.
   for (const char* column : {"variant", "object", "pose x y yaw", "outcome", "views", "FC", "epsilon", "held", "wall_s", "cpu_s",
-                             "nodes", "reason", "runs", "grasp", "med_eps", "rand_p99", ">p99", "rand_FC"})
+                             "nodes", "reason", "runs", "grasp", "med_eps", "rand_p99", ">p99", "rand_FC", "synth_s"})
     EXPECT_NE(r.output.find(column), std::string::npos) << column << "\n" << r.output;
   EXPECT_NE(line_starting(r.output, "uniform  YcbMustardBottle   0 0 30"), "") << r.output;
   // The mustard bottle ran to the task's own verdict, in its own folder, with figures.
@@ -88,6 +88,12 @@ TEST_F(EvaluateGraspBatch, ASmallListGivesTheTableWithTheIssuesColumnsAndAFailed
   ASSERT_TRUE(runs.is_array()) << "runs.json";
   ASSERT_EQ(runs.size(), 4u);  // loop: mustard, missing; uniform: mustard, missing
   EXPECT_GT(runs[0]["nodes"].get<long long>(), 0);
+  // Synthesis's time on each view it analysed (the mustard run's views, at most 3).
+  ASSERT_TRUE(runs[0]["synthesis_s"].is_array()) << runs[0].dump(2);
+  EXPECT_GE(runs[0]["synthesis_s"].size(), 1u) << runs[0].dump(2);
+  EXPECT_LE(runs[0]["synthesis_s"].size(), 3u) << runs[0].dump(2);
+  for (const auto& s : runs[0]["synthesis_s"]) EXPECT_GT(s.get<double>(), 0.0) << runs[0].dump(2);
+  EXPECT_TRUE(runs[1]["synthesis_s"].empty()) << runs[1].dump(2);  // the missing mesh ran no synthesis
   // The carver's comparison with uniform detail, though the run was stopped by an event rule (held,
   // or synthesis giving up) and never reached the end of its stream.
   ASSERT_TRUE(runs[0].contains("detail")) << runs[0].dump(2);
