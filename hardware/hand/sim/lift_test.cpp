@@ -217,13 +217,14 @@ struct LiftTest::Impl {
   bool is_robot(int geom) const { return m->body_rootid[m->geom_bodyid[geom]] == robot_root; }
   bool is_object(int geom) const { return m->geom_bodyid[geom] == object_body; }
 
-  // The first contact of the robot with the table or the object, as "<part> touches <other>".
+  // The first contact of the robot with the table or the object, as "<part> touches <other> at (x, y, z)" (world, m).
   std::string robot_collision() const {
     for (int i = 0; i < d->ncon; ++i) {
       const mjContact& c = d->contact[i];
       if (c.dist > 0) continue;  // within the margin, not touching
       for (auto [r, o] : {std::pair{c.geom1, c.geom2}, std::pair{c.geom2, c.geom1}})
-        if (is_robot(r) && !is_robot(o)) return geom_name(r) + " touches " + part_name(o);
+        if (is_robot(r) && !is_robot(o))
+          return fmt::format("{} touches {} at ({:.3f}, {:.3f}, {:.3f})", geom_name(r), part_name(o), c.pos[0], c.pos[1], c.pos[2]);
     }
     return {};
   }
