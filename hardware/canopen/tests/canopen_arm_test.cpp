@@ -3,6 +3,7 @@
 // ending in a quick stop of the joints that can still hear, with the joint and the reason named.
 #include <cmath>
 #include <functional>
+#include <initializer_list>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -64,6 +65,12 @@ class CanopenArmTest : public ::testing::TestWithParam<Transport> {
     ADD_FAILURE() << "the arm did not stop";
     return {};
   }
+  // `action` stops the arm naming `node`, with each of `says` in the message.
+  static void expect_stop(const std::function<void()>& action, int node, std::initializer_list<std::string> says) {
+    const Stop stop = stop_of(action);
+    EXPECT_EQ(stop.node, node);
+    for (const auto& part : says) EXPECT_TRUE(contains(stop.why, part)) << stop.why;
+  }
 
   std::optional<fba::test::EmulatedArm> emulated_;
   std::optional<Master> master_;
@@ -124,32 +131,25 @@ TEST_P(CanopenArmTest, ACommandBeyondTheLimitsIsRefusedWithNothingSent) {
 TEST_P(CanopenArmTest, AnEmcyOnOneJointQuickStopsTheOthersAndNamesIt) {
   arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);  // 100 s: the fault comes first
   emulator().inject_fault(4, 0x7121);
-  const Stop stop = stop_of([&] { arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s); });
-  EXPECT_EQ(stop.node, 4);
-  EXPECT_TRUE(contains(stop.why, "node 4")) << stop.why;
-  EXPECT_TRUE(contains(stop.why, "every joint was sent quick stop")) << stop.why;
+  expect_stop([&] { arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s); }, 4, {"node 4", "every joint was sent quick stop"});
   expect_quick_stopped_but(4);
 }
 
 TEST_P(CanopenArmTest, AJointFallingSilentQuickStopsTheOthers) {
   arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);
   emulator().silence(2);
-  const Stop stop = stop_of([&] {
+  const auto until_reached = [&] {
     while (!arm_->reached()) master_->spin_for(5ms);
-  });
-  EXPECT_EQ(stop.node, 2);
-  EXPECT_TRUE(contains(stop.why, "node 2")) << stop.why;
-  EXPECT_TRUE(contains(stop.why, "quick stop failed on 1 of 6 joints: joint 'joint2' (node 2)")) << stop.why;
+  };
+  expect_stop(until_reached, 2, {"node 2", "quick stop failed on 1 of 6 joints: joint 'joint2' (node 2)"});
   expect_quick_stopped_but(2);
 }
 
 TEST_P(CanopenArmTest, TheLineVanishingStopsTheArmWithAClearError) {
   arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);
   emulator().disconnect();
-  const Stop stop = stop_of([&] { arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s); });
-  EXPECT_EQ(stop.node, 0);
-  EXPECT_TRUE(contains(stop.why, master_->bus().name())) << stop.why;
-  EXPECT_TRUE(contains(stop.why, "quick stop failed on 6 of 6 joints")) << stop.why;
+  expect_stop([&] { arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s); }, 0,
+              {master_->bus().name(), "quick stop failed on 6 of 6 joints"});
 }
 
 TEST_P(CanopenArmTest, AccelerationsAreScaledLikeVelocitiesSoTheJointsStayInStep) {
@@ -385,15 +385,13 @@ TEST_P(CanopenArmTest, ADriveThatDoesNotFollowItsSetPointsStopsEveryJointOnThatS
   for (int n = 1; n <= 6; ++n) q[n - 1] = -0.1 * n;
   for (int k = 0; k < 3; ++k) arm_->cycle(q, 1s);
   emulator().ignore_set_points(4);
-  const Stop stop = stop_of([&] {
+  const auto move_on = [&] {
     for (int k = 0; k < 1000; ++k) {  // the bound only catches a hang
       for (double& x : q) x += 0.001;
       arm_->cycle(q, 1s);
     }
-  });
-  EXPECT_EQ(stop.node, 4);
-  EXPECT_TRUE(contains(stop.why, "joint 'joint4' (node 4): does not follow its set-point")) << stop.why;
-  EXPECT_TRUE(contains(stop.why, "every joint was sent quick stop")) << stop.why;
+  };
+  expect_stop(move_on, 4, {"joint 'joint4' (node 4): does not follow its set-point", "every joint was sent quick stop"});
   expect_quick_stopped_but(4);
   // After the last SYNC, only the quick stops went out: no set-point (RPDO), no further SYNC.
   const auto heard = emulator().heard();
@@ -413,10 +411,8 @@ TEST_P(CanopenArmTest, ADriveThatDoesNotFollowItsSetPointsStopsEveryJointOnThatS
 TEST_P(CanopenArmTest, ASetPointNotAcknowledgedStopsEveryJointWithoutPollingTheDriveBySdo) {
   emulator().ignore_set_points(2);
   const auto before = emulator().heard().size();
-  const Stop stop = stop_of([&] { arm_->move_to({1, 1, 1, 1, 1, 1}, 0.01); });
-  EXPECT_EQ(stop.node, 2);
-  EXPECT_TRUE(contains(stop.why, "joint 'joint2' (node 2): did not acknowledge its set-point within 3000 ms")) << stop.why;
-  EXPECT_TRUE(contains(stop.why, "every joint was sent quick stop")) << stop.why;
+  expect_stop([&] { arm_->move_to({1, 1, 1, 1, 1, 1}, 0.01); }, 2,
+              {"joint 'joint2' (node 2): did not acknowledge its set-point within 3000 ms", "every joint was sent quick stop"});
   expect_quick_stopped_but(2);
   const auto heard = emulator().heard();
   ASSERT_LT(before, heard.size());
