@@ -12,12 +12,14 @@
 #include <gtest/gtest.h>
 
 #include "fba/geometry/mesh_io.hpp"
+#include "load_error.hpp"
 #include "support/child_process.hpp"
 #include "support/geometry_checks.hpp"
 
 namespace fba::geometry {
 namespace {
 
+using test::load_error;
 using test::TempDir;
 
 // A float near x whose lowest byte (the first byte written, little endian) is 0x0A.
@@ -70,16 +72,6 @@ void expect_same_geometry(const TriangleMesh& read, const TriangleMesh& written)
 
 void write_bytes(const std::filesystem::path& p, const std::string& bytes) {
   std::ofstream(p, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-std::string load_error(const std::filesystem::path& p) {
-  try {
-    load_mesh(p);
-  } catch (const MeshLoadError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no error for " << p;
-  return {};
 }
 
 TEST(Ply, WrittenModelNeverStartsItsDataWithANewlineByte) {
