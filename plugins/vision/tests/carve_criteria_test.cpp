@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "carve_common.hpp"
+#include "fast_carve.hpp"
 #include "fba/geometry/viewpoints.hpp"
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/octree_carver.hpp"
@@ -16,6 +17,7 @@
 
 using namespace fba::vision;
 using namespace fba::vision::detail;
+using fba::vision::test::fast_carve;
 
 namespace {
 
@@ -119,16 +121,10 @@ TEST(GenericCriterion, ThresholdOneNeverSplitsAndZeroSplitsTheOutline) {
   p.detail_after_views = 0;
   p.occupancy_threshold = 1;
   EXPECT_EQ(reference_carve(views, box, p).node_count, 1u);
-  OctreeCarver off(p);
-  off.set_bounds(box);
-  off.add_views(views);
-  EXPECT_EQ(off.snapshot()->node_count, 1u);
+  EXPECT_EQ(fast_carve(views, box, p)->node_count, 1u);
   p.occupancy_threshold = 0;
-  OctreeCarver uniform(p);
-  uniform.set_bounds(box);
-  uniform.add_views(views);
   int deepest = 0;
-  uniform.snapshot()->for_each_leaf([&](const fba::OctreeCell& c) { deepest = std::max(deepest, c.depth); });
+  fast_carve(views, box, p)->for_each_leaf([&](const fba::OctreeCell& c) { deepest = std::max(deepest, c.depth); });
   EXPECT_EQ(deepest, 5);
 }
 
@@ -151,19 +147,12 @@ TEST(GenericCriterion, BelowGenericDepthOnlyARegionOfInterestSplits) {
     return d;
   };
   const Eigen::AlignedBox3d everywhere(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1));
-  OctreeCarver coarse(p);
-  coarse.set_bounds(box);
-  coarse.add_views(views);
-  EXPECT_EQ(deepest(*coarse.snapshot(), everywhere), 3);
+  EXPECT_EQ(deepest(*fast_carve(views, box, p), everywhere), 3);
 
   fba::RegionsOfInterest roi;
   const Eigen::AlignedBox3d region(Eigen::Vector3d(0.0, -0.06, -0.06), Eigen::Vector3d(0.06, 0.06, 0.06));  // x > 0 only
   roi.boxes.push_back(region);
-  OctreeCarver detailed(p);
-  detailed.set_bounds(box);
-  detailed.set_regions_of_interest(roi);
-  detailed.add_views(views);
-  const auto model = detailed.snapshot();
+  const auto model = fast_carve(views, box, p, roi);
   EXPECT_EQ(deepest(*model, region), 6);
   const Eigen::AlignedBox3d outside(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(-0.016, 1, 1));  // beyond the region's reach
   EXPECT_LE(deepest(*model, outside), 3);
@@ -189,13 +178,11 @@ TEST(GenericCriterion, FastCarverAndReferenceAgreeAtAThresholdBetween) {
     p.max_depth = 6;
     p.detail_after_views = 0;
     p.occupancy_threshold = t;
-    OctreeCarver fast(p);
-    fast.set_bounds(box);
-    fast.add_views(views);
+    const auto fast = fast_carve(views, box, p);
     const fba::Octree ref = reference_carve(views, box, p);
-    EXPECT_EQ(count_leaf_mismatches(*fast.snapshot(), ref), 0u) << t;
-    EXPECT_EQ(count_leaf_mismatches(ref, *fast.snapshot()), 0u) << t;
-    if (t < 0.5) EXPECT_GT(fast.snapshot()->node_count, 1u) << t;  // the criterion split something
+    EXPECT_EQ(count_leaf_mismatches(*fast, ref), 0u) << t;
+    EXPECT_EQ(count_leaf_mismatches(ref, *fast), 0u) << t;
+    if (t < 0.5) EXPECT_GT(fast->node_count, 1u) << t;  // the criterion split something
   }
 }
 
