@@ -60,6 +60,15 @@ const Lattice kCube{Eigen::Vector3d::Constant(-0.05), 0.1};
 // The root box the generic criterion's tests carve in: 12 cm around the origin.
 const Eigen::AlignedBox3d kRootBox(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
 
+// The generic criterion to `max_depth` at `occupancy_threshold`, every view in at once.
+CarverParams generic(int max_depth, double occupancy_threshold) {
+  CarverParams p;
+  p.max_depth = max_depth;
+  p.detail_after_views = 0;
+  p.occupancy_threshold = occupancy_threshold;
+  return p;
+}
+
 // The depth of the model's deepest leaf whose centre lies `within`.
 int deepest(const fba::Octree& t, const Eigen::AlignedBox3d& within = kRootBox) {
   int d = 0;
@@ -127,10 +136,7 @@ TEST(HullShare, OfAHalfCoveredNodeIsAboutOneHalf) {
 // is never split. Threshold 0 splits every node on the outline.
 TEST(GenericCriterion, ThresholdOneNeverSplitsAndZeroSplitsTheOutline) {
   const std::vector<fba::Silhouette> views = disc_views();
-  CarverParams p;
-  p.max_depth = 5;
-  p.detail_after_views = 0;
-  p.occupancy_threshold = 1;
+  CarverParams p = generic(5, 1);
   EXPECT_EQ(reference_carve(views, kRootBox, p).node_count, 1u);
   EXPECT_EQ(fast_carve(views, kRootBox, p)->node_count, 1u);
   p.occupancy_threshold = 0;
@@ -142,10 +148,7 @@ TEST(GenericCriterion, ThresholdOneNeverSplitsAndZeroSplitsTheOutline) {
 // reference agree on every leaf.
 TEST(GenericCriterion, BelowGenericDepthOnlyARegionOfInterestSplits) {
   const std::vector<fba::Silhouette> views = disc_views();
-  CarverParams p;
-  p.max_depth = 6;
-  p.detail_after_views = 0;
-  p.occupancy_threshold = 0;
+  CarverParams p = generic(6, 0);
   p.generic_depth = 3;
   EXPECT_EQ(deepest(*fast_carve(views, kRootBox, p)), 3);
 
@@ -173,10 +176,7 @@ TEST(GenericCriterion, FastCarverAndReferenceAgreeAtAThresholdBetween) {
     views.push_back(s);
   }
   for (double t : {0.3, 0.5, 0.7}) {
-    CarverParams p;
-    p.max_depth = 6;
-    p.detail_after_views = 0;
-    p.occupancy_threshold = t;
+    const CarverParams p = generic(6, t);
     const auto fast = fast_carve(views, kRootBox, p);
     const fba::Octree ref = reference_carve(views, kRootBox, p);
     EXPECT_EQ(count_leaf_mismatches(*fast, ref), 0u) << t;
