@@ -33,6 +33,14 @@ struct StepperTask {
                            "connections: [ stepper.out -> sink.in ]\n";
   }
   void let(int view) const { std::ofstream(gate / std::to_string(view)) << "go\n"; }
+  // Lets the three views through in turn, each after the run shows `line` + "N of 3" (view 1's wait
+  // is the caller's).
+  void let_each(const Child& run, const std::string& line) const {
+    for (int view = 1; view <= 3; ++view) {
+      if (view > 1) run.read_until(line + std::to_string(view) + " of 3");
+      let(view);
+    }
+  }
   // fba-run on the task with the stepping plugins, `options` before the task's file.
   Child run(std::vector<std::string> options = {}, fba::test::ChildOptions child = {}) const {
     std::vector<std::string> args{fba::test::program("fba-run"), "-p", stepping_plugins()};
@@ -53,11 +61,7 @@ TEST(Console, WithoutATerminalEachViewIsOnePlainLineAndALongCallIsSaidOnce) {
   Child run = task.run();
   // The first view's call lasts until the test lets it end: said once as a long call.
   EXPECT_NE(run.read_until("stepper: busy in one call for").find("stepper: waiting, view 1 of 3"), std::string::npos);
-  task.let(1);
-  run.read_until("stepper: waiting, view 2 of 3");
-  task.let(2);
-  run.read_until("stepper: waiting, view 3 of 3");
-  task.let(3);
+  task.let_each(run, "stepper: waiting, view ");
   ASSERT_EQ(run.wait(0), 0);
   const std::string out = run.read_until("\x01", std::chrono::milliseconds(0));
   EXPECT_EQ(out.find('\r'), std::string::npos) << out;  // nothing redrawn in place
@@ -77,11 +81,7 @@ TEST(Console, OnATerminalTheLineIsUpdatedInPlaceAndEachViewKeepsItsOwnLine) {
   Child run = task.run({}, {.terminal = true});
   // The first view's line is redrawn (its time in the view grows) until the call counts as long.
   run.read_until("stepper busy for");
-  task.let(1);
-  run.read_until("view 2 of 3");
-  task.let(2);
-  run.read_until("view 3 of 3");
-  task.let(3);
+  task.let_each(run, "view ");
   ASSERT_EQ(run.wait(0), 0);
   const std::string out = run.read_until("\x01", std::chrono::milliseconds(0));
   EXPECT_GE(count(out, "\r\033[K"), 2u) << out;  // erased and drawn again
