@@ -28,10 +28,17 @@ fba::Registry& registry() {
   return r;
 }
 
-std::string all_messages(const fba::ConfigError& e) {
-  std::string s;
-  for (const auto& d : e.diagnostics()) s += d.str() + "\n";
-  return s;
+// Every diagnostic the check gives the task, a line each; a task that passes is a test failure.
+std::string construction_errors(const fba::TaskConfig& config) {
+  try {
+    fba::check_construction(config);
+  } catch (const fba::ConfigError& e) {
+    std::string s;
+    for (const auto& d : e.diagnostics()) s += d.str() + "\n";
+    return s;
+  }
+  ADD_FAILURE() << "the task passed the check";
+  return {};
 }
 
 TEST(ConstructionCheck, AHandleTheSpecLeavesOutIsFoundWithoutARun) {
@@ -42,15 +49,10 @@ TEST(ConstructionCheck, AHandleTheSpecLeavesOutIsFoundWithoutARun) {
       "  sink: { type: examples.sink }\n"
       "connections: [ src.out -> forgetful.in, forgetful.out -> sink.in ]\n",
       "t.yaml", ".", registry());
-  try {
-    fba::check_construction(config);
-    FAIL() << "a filter using an output its spec does not declare passed the check";
-  } catch (const fba::ConfigError& e) {
-    const std::string text = all_messages(e);
-    EXPECT_NE(text.find("t.yaml:3:"), std::string::npos) << text;  // where the component is in the task
-    EXPECT_NE(text.find("component 'forgetful' (bad.undeclared_handle)"), std::string::npos) << text;
-    EXPECT_NE(text.find("uses output 'forgotten', which its spec does not declare"), std::string::npos) << text;
-  }
+  const std::string text = construction_errors(config);
+  EXPECT_NE(text.find("t.yaml:3:"), std::string::npos) << text;  // where the component is in the task
+  EXPECT_NE(text.find("component 'forgetful' (bad.undeclared_handle)"), std::string::npos) << text;
+  EXPECT_NE(text.find("uses output 'forgotten', which its spec does not declare"), std::string::npos) << text;
 }
 
 TEST(ConstructionCheck, AFilterWhoseConstructorThrowsIsFound) {
@@ -61,14 +63,9 @@ TEST(ConstructionCheck, AFilterWhoseConstructorThrowsIsFound) {
       "  sink: { type: examples.sink }\n"
       "connections: [ src.out -> m.in, m.out -> sink.in ]\n",
       "t.yaml", ".", registry());
-  try {
-    fba::check_construction(config);
-    FAIL() << "a filter whose constructor throws passed the check";
-  } catch (const fba::ConfigError& e) {
-    const std::string text = all_messages(e);
-    EXPECT_NE(text.find("t.yaml:3:"), std::string::npos) << text;
-    EXPECT_NE(text.find("component 'm' (test.misbehaving) threw a non-exception"), std::string::npos) << text;
-  }
+  const std::string text = construction_errors(config);
+  EXPECT_NE(text.find("t.yaml:3:"), std::string::npos) << text;
+  EXPECT_NE(text.find("component 'm' (test.misbehaving) threw a non-exception"), std::string::npos) << text;
 }
 
 TEST(ConstructionCheck, ATaskWhoseFiltersConstructPasses) {

@@ -11,6 +11,7 @@
 #include <fba/task_config.hpp>
 #include <nlohmann/json.hpp>
 
+#include "support/slotted_task.hpp"
 #include "support/temp_dir.hpp"
 #include "fixture_components.hpp"
 
@@ -18,6 +19,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using fba::test::errors_of;
+using fba::test::kPassProfile;
+using fba::test::kSlottedTask;
 using fba::test::load;
 using fba::test::TempDir;
 
@@ -46,27 +49,6 @@ components:
   sink: { type: examples.sink, params: { expected: "${n}" } }
 connections:
   - { from: source.out, to: sink.in, capacity: "${cap}" }
-)";
-
-// A task with slots `source` and `pass`; the profiles bind them.
-const char* kSlotTask = R"(task: slotted
-params:
-  n: { type: int, default: 3, min: 1 }
-components:
-  source: { profile: true, doc: what produces the integers }
-  pass: { profile: true, doc: what forwards them }
-  sink: { type: examples.sink, params: { expected: "${n}" } }
-connections:
-  - source.out -> pass.in
-  - pass.out -> sink.in
-on: { sink.done: stop_success, sink.gap: stop_failure }
-)";
-
-const char* kPassProfile = R"(profile: pass
-doc: a counter and a passthrough
-components:
-  source: { type: examples.counter, params: { count: "${n}" } }
-  pass: { type: examples.passthrough }
 )";
 
 }  // namespace
@@ -333,7 +315,7 @@ connections: [ source.out -> sink.in ]
 
 TEST(Profiles, BindTheSlotsToTypesAndTheirParams) {
   TempDir dir;
-  const auto file = dir.write("task.yaml", kSlotTask);
+  const auto file = dir.write("task.yaml", kSlottedTask);
   dir.write("profiles/pass.yaml", kPassProfile);
   const auto task = fba::load_task(file, fba::test::registry(), with_sets({"n=4"}, "pass"));
   EXPECT_EQ(task.profile, "pass");
@@ -359,7 +341,7 @@ TEST(Profiles, BindTheSlotsToTypesAndTheirParams) {
 
 TEST(Profiles, TheTasksProfileKeyIsTheDefaultAndOptionsOverrideIt) {
   TempDir dir;
-  const auto file = dir.write("task.yaml", std::string(kSlotTask) + "profile: pass\n");
+  const auto file = dir.write("task.yaml", std::string(kSlottedTask) + "profile: pass\n");
   dir.write("profiles/pass.yaml", kPassProfile);
   dir.write("profiles/faulty.yaml", R"(
 components:
@@ -377,7 +359,7 @@ components:
 // overrides the task file's (--executor, a RunOptions field, overrides both).
 TEST(Profiles, AProfileChoosesTheExecutorForTheDevicesItBinds) {
   TempDir dir;
-  const auto file = dir.write("task.yaml", std::string(kSlotTask) + "executor: threaded\n");
+  const auto file = dir.write("task.yaml", std::string(kSlottedTask) + "executor: threaded\n");
   dir.write("profiles/pass.yaml", kPassProfile);
   dir.write("profiles/virtual.yaml", std::string(kPassProfile) + "executor: deterministic\n");
   EXPECT_EQ(fba::load_task(file, fba::test::registry(), with_sets({}, "pass")).executor, fba::ExecutorKind::Threaded);
@@ -389,7 +371,7 @@ TEST(Profiles, AProfileChoosesTheExecutorForTheDevicesItBinds) {
 
 TEST(Profiles, ATaskWithSlotsAndNoProfileNamesTheProfilesBesideIt) {
   TempDir dir;
-  const auto file = dir.write("task.yaml", kSlotTask);
+  const auto file = dir.write("task.yaml", kSlottedTask);
   dir.write("profiles/pass.yaml", kPassProfile);
   dir.write("profiles/other.yaml", kPassProfile);
   const std::string e = load_errors(file);
@@ -404,7 +386,7 @@ TEST(Profiles, ATaskWithSlotsAndNoProfileNamesTheProfilesBesideIt) {
 
 TEST(Profiles, EverySlotIsBoundAndNothingElse) {
   TempDir dir;
-  const auto file = dir.write("task.yaml", kSlotTask);
+  const auto file = dir.write("task.yaml", kSlottedTask);
   const auto profile = dir.write("profiles/bad.yaml", R"(profile: bad
 components:
   source: { type: examples.counter }
@@ -453,7 +435,7 @@ components:
 
 TEST(Profiles, AParameterDeclaredByTaskAndProfileIsAnError) {
   TempDir dir;
-  const auto file = dir.write("task.yaml", kSlotTask);
+  const auto file = dir.write("task.yaml", kSlottedTask);
   dir.write("profiles/twice.yaml", std::string(kPassProfile) + "params: { n: { type: int, default: 2 } }\n");
   const std::string e = load_errors(file, with_sets({}, "twice"));
   EXPECT_NE(e.find("error: parameter 'n' is declared by the task already (at " + file.string() + ":3:3)"), std::string::npos) << e;
@@ -463,7 +445,7 @@ TEST(Profiles, AParameterDeclaredByTaskAndProfileIsAnError) {
 // interface are interchangeable; one that differs is found, and the difference said.
 TEST(Profiles, SlotInterfacesShowWhetherProfilesAreInterchangeable) {
   TempDir dir;
-  const auto file = dir.write("task.yaml", kSlotTask);
+  const auto file = dir.write("task.yaml", kSlottedTask);
   dir.write("profiles/pass.yaml", kPassProfile);
   dir.write("profiles/faulty.yaml", R"(
 components:
@@ -493,7 +475,7 @@ components:
 // The profile's source.count and the task's sink.expected both take n.
 TEST(Profiles, ASetOfAProfileComponentsParameterFollowsTheSameRules) {
   TempDir dir;
-  const auto file = dir.write("task.yaml", kSlotTask);
+  const auto file = dir.write("task.yaml", kSlottedTask);
   const auto profile = dir.write("profiles/pass.yaml", kPassProfile);
   const std::string conflict = load_errors(file, with_sets({"n=4", "source.count=5"}, "pass"));
   EXPECT_NE(conflict.find("--set source.count=5: error: --set source.count=5 conflicts with --set n=4: source.count is ${n} (" +
@@ -509,7 +491,7 @@ TEST(Profiles, ASetOfAProfileComponentsParameterFollowsTheSameRules) {
 // `--profile ''` (an unset shell variable) ran the task's default profile.
 TEST(Profiles, AnEmptyProfileNameIsRefused) {
   TempDir dir;
-  const auto file = dir.write("task.yaml", std::string(kSlotTask) + "profile: pass\n");
+  const auto file = dir.write("task.yaml", std::string(kSlottedTask) + "profile: pass\n");
   dir.write("profiles/pass.yaml", kPassProfile);
   auto given_empty = with_sets({});
   given_empty.profile_given = true;
@@ -521,7 +503,7 @@ TEST(Profiles, AnEmptyProfileNameIsRefused) {
   EXPECT_EQ(e.find("slot"), std::string::npos) << e;  // one error, not one per slot
   // Without --profile, the task's own.
   EXPECT_EQ(fba::load_task(file, fba::test::registry(), with_sets({})).profile, "pass");
-  const auto empty_key = dir.write("empty.yaml", std::string(kSlotTask) + "profile: ''\n");
+  const auto empty_key = dir.write("empty.yaml", std::string(kSlottedTask) + "profile: ''\n");
   const std::string k = load_errors(empty_key);
   EXPECT_NE(k.find("empty.yaml:12:10: error: 'profile:' expects a profile's name"), std::string::npos) << k;
 }

@@ -1,11 +1,13 @@
 // fba-run started from a test (through support/child_process.hpp), and what its tests share: a
-// folder per call, the misbehaving test plugin.
+// folder per call, the misbehaving test plugin, and what fba-run says refusing a command line.
 #pragma once
 
 #include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "support/build_paths.hpp"
 #include "support/child_process.hpp"
@@ -30,6 +32,14 @@ inline std::vector<std::string> fba_run_command(std::vector<std::string> args) {
 // Runs fba-run with arguments to the end; `env`: NAME=value added to the environment.
 inline Result fba_run(std::vector<std::string> args, std::vector<std::string> env = {}) {
   return run(fba_run_command(std::move(args)), {.env = std::move(env)});
+}
+
+// What fba-run says refusing a command line (or its task) with exit status 2; another status is a
+// test failure.
+inline std::string refusal(std::vector<std::string> args) {
+  const Result r = fba_run(std::move(args));
+  EXPECT_EQ(r.status, 2) << r.output;
+  return r.output;
 }
 
 }  // namespace fba::test

@@ -52,9 +52,8 @@ on: { src.finished: stop_failure }
 
 TEST(Cli, ConfigurationErrorExitsTwoWithFileLineColumn) {
   const auto f = write_task("bad.yaml", "components:\n  a: { type: examples.counter, params: { count: x } }\n");
-  const auto r = fba_run({f});
-  EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.output.find("bad.yaml:2:"), std::string::npos) << r.output;
+  const std::string out = refusal({f});
+  EXPECT_NE(out.find("bad.yaml:2:"), std::string::npos) << out;
   EXPECT_EQ(fba_run({"--no-such-option"}).status, 2);
   EXPECT_EQ(fba_run({"/nonexistent/task.yaml"}).status, 2);
 }
@@ -114,14 +113,12 @@ TEST(Cli, TimeoutExitsThree) {
 // run in order whatever the phase (the summary says which).
 TEST(Cli, ATimeoutThatIsNotANumberIsRefused) {
   // NaN compares false with every bound: it was taken as "no limit".
-  const auto r = fba_run({task("chain.yaml"), "--timeout", "nan"});
-  EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("--timeout must be a number of seconds >= 0"), std::string::npos) << r.output;
+  const std::string nan = refusal({task("chain.yaml"), "--timeout", "nan"});
+  EXPECT_NE(nan.find("--timeout must be a number of seconds >= 0"), std::string::npos) << nan;
   // The value found is shown as written, not rounded to six decimals ("-0.250000", or "-0.000000"
   // for a value that is not zero).
-  const auto small = fba_run({task("chain.yaml"), "--timeout", "-0.25"});
-  EXPECT_EQ(small.status, 2) << small.output;
-  EXPECT_NE(small.output.find("(0: none); found '-0.25'\n"), std::string::npos) << small.output;
+  const std::string small = refusal({task("chain.yaml"), "--timeout", "-0.25"});
+  EXPECT_NE(small.find("(0: none); found '-0.25'\n"), std::string::npos) << small;
   const auto tiny = fba_run({task("chain.yaml"), "--timeout", "-1e-9"});
   EXPECT_NE(tiny.output.find("found '-1e-9'\n"), std::string::npos) << tiny.output;
 }
@@ -135,31 +132,27 @@ TEST(Cli, TimesTooLargeForADoubleAreNoLimitLikeInfinity) {
       const auto r = fba_run({task("chain.yaml"), option, value});
       EXPECT_EQ(r.status, 0) << option << " " << value << ":\n" << r.output;
     }
-  const auto r = fba_run({task("chain.yaml"), "--stop-grace", "-1"});
-  EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("--stop-grace must be a number of seconds >= 0; found '-1'"), std::string::npos) << r.output;
+  const std::string grace = refusal({task("chain.yaml"), "--stop-grace", "-1"});
+  EXPECT_NE(grace.find("--stop-grace must be a number of seconds >= 0; found '-1'"), std::string::npos) << grace;
 }
 
 // An empty --output-dir or --profile is a mistake, not "none" or "the default".
 TEST(Cli, AnEmptyOutputDirOrProfileIsRefused) {
-  const auto out = fba_run({task("chain.yaml"), "-o", ""});
-  EXPECT_EQ(out.status, 2) << out.output;
-  EXPECT_NE(out.output.find("--output-dir is empty"), std::string::npos) << out.output;
-  const auto profile = fba_run({task("chain.yaml"), "--profile", ""});
-  EXPECT_EQ(profile.status, 2) << profile.output;
-  EXPECT_NE(profile.output.find("--profile expects a profile's name (profiles/NAME.yaml beside the task) or a file; found an empty name"), std::string::npos)
-      << profile.output;
+  const std::string out = refusal({task("chain.yaml"), "-o", ""});
+  EXPECT_NE(out.find("--output-dir is empty"), std::string::npos) << out;
+  const std::string profile = refusal({task("chain.yaml"), "--profile", ""});
+  EXPECT_NE(profile.find("--profile expects a profile's name (profiles/NAME.yaml beside the task) or a file; found an empty name"), std::string::npos)
+      << profile;
 }
 
 // An option is refused as the option, before anything loads: it was checked only when the task
 // started, and reported against the task file, which does not say --threads.
 TEST(Cli, ThreadsOutOfRangeIsRefusedAsTheOption) {
   for (const char* value : {"-1", "257", "100000"}) {
-    const auto r = fba_run({task("chain.yaml"), "--threads", value});
-    EXPECT_EQ(r.status, 2) << r.output;
-    EXPECT_NE(r.output.find(std::string("--threads must be in [0, 256] (0: the task file's, else one per core); found ") + value),
+    const std::string out = refusal({task("chain.yaml"), "--threads", value});
+    EXPECT_NE(out.find(std::string("--threads must be in [0, 256] (0: the task file's, else one per core); found ") + value),
               std::string::npos)
-        << r.output;
+        << out;
   }
   const auto ok = fba_run({task("chain.yaml"), "--threads", "256", "--check"});
   EXPECT_EQ(ok.status, 0) << ok.output;
@@ -481,11 +474,10 @@ TEST(Cli, CheckFindsAHandleAFilterUsesButItsSpecLeavesOut) {
                                               "  forgetful: { type: bad.undeclared_handle }\n"
                                               "  device: { type: bad.marking_actuator, params: { mark: " + mark.string() + " } }\n"
                                               "connections: [ src.out -> forgetful.in, forgetful.out -> device.in ]\n");
-  const auto r = fba_run({"--check", "-p", plugins.string(), f});
-  EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("forgetful.yaml:3:"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("component 'forgetful' (bad.undeclared_handle): plugin bug in "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("uses output 'forgotten', which its spec does not declare"), std::string::npos) << r.output;
+  const std::string out = refusal({"--check", "-p", plugins.string(), f});
+  EXPECT_NE(out.find("forgetful.yaml:3:"), std::string::npos) << out;
+  EXPECT_NE(out.find("component 'forgetful' (bad.undeclared_handle): plugin bug in "), std::string::npos) << out;
+  EXPECT_NE(out.find("uses output 'forgotten', which its spec does not declare"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(mark));
 }
 
@@ -513,9 +505,8 @@ TEST(Cli, DotEveryWritesTheLiveGraphWithCountsAndQueueFills) {
 }
 
 TEST(Cli, DotEveryNeedsAnOutputDir) {
-  const auto r = fba_run({task("chain.yaml"), "--dot-every", "1"});
-  EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.output.find("--dot-every needs --output-dir"), std::string::npos) << r.output;
+  const std::string out = refusal({task("chain.yaml"), "--dot-every", "1"});
+  EXPECT_NE(out.find("--dot-every needs --output-dir"), std::string::npos) << out;
 }
 
 TEST(Cli, OutputDirHoldsTheSummary) {

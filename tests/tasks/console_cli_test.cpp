@@ -33,6 +33,21 @@ struct StepperTask {
                            "connections: [ stepper.out -> sink.in ]\n";
   }
   void let(int view) const { std::ofstream(gate / std::to_string(view)) << "go\n"; }
+  // Lets the three views through in turn, each after the run shows `line` + "N of 3" (view 1's wait
+  // is the caller's).
+  void let_each(const Child& run, const std::string& line) const {
+    for (int view = 1; view <= 3; ++view) {
+      if (view > 1) run.read_until(line + std::to_string(view) + " of 3");
+      let(view);
+    }
+  }
+  // fba-run on the task with the stepping plugins, `options` before the task's file.
+  Child run(std::vector<std::string> options = {}, fba::test::ChildOptions child = {}) const {
+    std::vector<std::string> args{fba::test::program("fba-run"), "-p", stepping_plugins()};
+    args.insert(args.end(), options.begin(), options.end());
+    args.push_back(file.string());
+    return Child(std::move(args), std::move(child));
+  }
 };
 
 std::size_t count(const std::string& text, const std::string& what) {
@@ -43,14 +58,10 @@ std::size_t count(const std::string& text, const std::string& what) {
 
 TEST(Console, WithoutATerminalEachViewIsOnePlainLineAndALongCallIsSaidOnce) {
   StepperTask task;
-  Child run({fba::test::program("fba-run"), "-p", stepping_plugins(), task.file.string()});
+  Child run = task.run();
   // The first view's call lasts until the test lets it end: said once as a long call.
   EXPECT_NE(run.read_until("stepper: busy in one call for").find("stepper: waiting, view 1 of 3"), std::string::npos);
-  task.let(1);
-  run.read_until("stepper: waiting, view 2 of 3");
-  task.let(2);
-  run.read_until("stepper: waiting, view 3 of 3");
-  task.let(3);
+  task.let_each(run, "stepper: waiting, view ");
   ASSERT_EQ(run.wait(0), 0);
   const std::string out = run.read_until("\x01", std::chrono::milliseconds(0));
   EXPECT_EQ(out.find('\r'), std::string::npos) << out;  // nothing redrawn in place
@@ -67,14 +78,10 @@ TEST(Console, WithoutATerminalEachViewIsOnePlainLineAndALongCallIsSaidOnce) {
 
 TEST(Console, OnATerminalTheLineIsUpdatedInPlaceAndEachViewKeepsItsOwnLine) {
   StepperTask task;
-  Child run({fba::test::program("fba-run"), "-p", stepping_plugins(), task.file.string()}, {.terminal = true});
+  Child run = task.run({}, {.terminal = true});
   // The first view's line is redrawn (its time in the view grows) until the call counts as long.
   run.read_until("stepper busy for");
-  task.let(1);
-  run.read_until("view 2 of 3");
-  task.let(2);
-  run.read_until("view 3 of 3");
-  task.let(3);
+  task.let_each(run, "view ");
   ASSERT_EQ(run.wait(0), 0);
   const std::string out = run.read_until("\x01", std::chrono::milliseconds(0));
   EXPECT_GE(count(out, "\r\033[K"), 2u) << out;  // erased and drawn again
@@ -101,7 +108,7 @@ TEST(Console, OnATerminalTheLineIsUpdatedInPlaceAndEachViewKeepsItsOwnLine) {
 
 TEST(Console, OnATerminalASignalsMessageGoesAboveTheProgressLine) {
   StepperTask task;
-  Child run({fba::test::program("fba-run"), "-p", stepping_plugins(), task.file.string()}, {.terminal = true});
+  Child run = task.run({}, {.terminal = true});
   run.read_until("view 1 of 3 (");  // the progress line is drawn
   EXPECT_EQ(run.wait(SIGINT), 130);
   const std::string out = run.read_until("\x01", std::chrono::milliseconds(0));
@@ -118,7 +125,7 @@ TEST(Console, AComponentsLogLevelIsItsOwn) {
   task.let(3);
   // sink logs its safe state at info: kept at info, dropped at warn, only for it.
   const auto with = [&](const std::string& level) {
-    Child run({fba::test::program("fba-run"), "-p", stepping_plugins(), "--log-level", level, task.file.string()});
+    Child run = task.run({"--log-level", level});
     EXPECT_EQ(run.wait(0), 0);
     return run.read_until("\x01", std::chrono::milliseconds(0));
   };
@@ -129,7 +136,7 @@ TEST(Console, AComponentsLogLevelIsItsOwn) {
 
 TEST(Console, AnUnknownComponentInLogLevelIsRefusedWithTheNames) {
   StepperTask task;
-  Child run({fba::test::program("fba-run"), "-p", stepping_plugins(), "--log-level", "carver=debug", task.file.string()});
+  Child run = task.run({"--log-level", "carver=debug"});
   EXPECT_EQ(run.wait(0), 2);
   const std::string out = run.read_until("\x01", std::chrono::milliseconds(0));
   EXPECT_NE(out.find("--log-level carver=debug: the task has no component 'carver'; its components are sink, stepper"),

@@ -15,6 +15,14 @@ fba::ComponentStats component(const std::string& name, fba::Kind kind, std::map<
   return c;
 }
 
+fba::RunResult result(fba::Outcome outcome, double wall_s, std::vector<fba::ComponentStats> components = {}) {
+  fba::RunResult r;
+  r.outcome = outcome;
+  r.wall_s = wall_s;
+  r.components = std::move(components);
+  return r;
+}
+
 fba::Event event(const std::string& source, const std::string& name, const std::string& payload) {
   fba::Event e;
   e.source = source;
@@ -24,13 +32,11 @@ fba::Event event(const std::string& source, const std::string& name, const std::
 }
 
 TEST(OutcomeText, AHeldObjectIsSaidWithItsViewsScoreEpsilonAndTime) {
-  fba::RunResult r;
-  r.outcome = fba::Outcome::Success;
-  r.wall_s = 2.8;
   const std::string lift = R"({"held": true, "slip_m": 0.0017, "contacts": [)" + std::string(1500, ' ') + "]}";
-  r.components = {component("synthesis", fba::Kind::Filter,
-                            {{"views", "5"}, {"grasp", R"({"scores": {"total": 0.5251, "symmetry": 0.05}, "model_epsilon": 0.05713})"}}),
-                  component("hand", fba::Kind::Actuator, {{"lift", lift}})};
+  auto r = result(fba::Outcome::Success, 2.8,
+                  {component("synthesis", fba::Kind::Filter,
+                             {{"views", "5"}, {"grasp", R"({"scores": {"total": 0.5251, "symmetry": 0.05}, "model_epsilon": 0.05713})"}}),
+                   component("hand", fba::Kind::Actuator, {{"lift", lift}})});
   r.final_event = event("hand", "held", lift);
   EXPECT_EQ(outcome_text(r), "held the object after 5 views, grasp score 0.53, epsilon 0.057, 2.8 s");
 }
@@ -38,58 +44,46 @@ TEST(OutcomeText, AHeldObjectIsSaidWithItsViewsScoreEpsilonAndTime) {
 // A grasp reported without its epsilon (a synthesis of another plugin, a summary of an older
 // fba) is said with what it has: the line names no number that was not reported.
 TEST(OutcomeText, AGraspWithoutEpsilonIsSaidWithItsScoreOnly) {
-  fba::RunResult r;
-  r.outcome = fba::Outcome::Success;
-  r.wall_s = 2.8;
-  r.components = {component("synthesis", fba::Kind::Filter, {{"views", "5"}, {"grasp", R"({"scores": {"total": 0.5251}})"}}),
-                  component("hand", fba::Kind::Actuator, {{"lift", R"({"held": true})"}})};
+  auto r = result(fba::Outcome::Success, 2.8,
+                  {component("synthesis", fba::Kind::Filter, {{"views", "5"}, {"grasp", R"({"scores": {"total": 0.5251}})"}}),
+                   component("hand", fba::Kind::Actuator, {{"lift", R"({"held": true})"}})});
   EXPECT_EQ(outcome_text(r), "held the object after 5 views, grasp score 0.53, 2.8 s");
   r.components[0].results["grasp"] = R"({"model_epsilon": 0.1234})";
   EXPECT_EQ(outcome_text(r), "held the object after 5 views, epsilon 0.12, 2.8 s");
 }
 
 TEST(OutcomeText, APlainTaskSaysItsEventAndTheSamplesOfItsSensors) {
-  fba::RunResult r;
-  r.outcome = fba::Outcome::Success;
-  r.wall_s = 0.4129;
   auto source = component("source", fba::Kind::Sensor);
   source.samples_out = 200000;
-  r.components = {source, component("sink", fba::Kind::Actuator)};
+  auto r = result(fba::Outcome::Success, 0.4129, {source, component("sink", fba::Kind::Actuator)});
   r.final_event = event("sink", "done", "200000");
   EXPECT_EQ(outcome_text(r), "success: event sink.done (200000), 200000 samples in 0.41 s");
 }
 
 TEST(OutcomeText, AComponentThatGaveUpIsNamedWithItsReason) {
-  fba::RunResult r;
-  r.outcome = fba::Outcome::Failure;
-  r.wall_s = 31;
-  r.components = {component("synthesis", fba::Kind::Filter, {{"views", "10"}, {"failure", R"("no reachable grasp")"}})};
+  auto r = result(fba::Outcome::Failure, 31,
+                  {component("synthesis", fba::Kind::Filter, {{"views", "10"}, {"failure", R"("no reachable grasp")"}})});
   r.final_event = event("synthesis", "grasp_synthesis_failed", "no reachable grasp");
   EXPECT_EQ(outcome_text(r), "failed: synthesis gave up after 10 views, 31 s (no reachable grasp)");
 }
 
 TEST(OutcomeText, ADroppedObjectIsAFailureWithTheHandsReason) {
-  fba::RunResult r;
-  r.outcome = fba::Outcome::Failure;
-  r.wall_s = 3.14;
-  r.components = {component("synthesis", fba::Kind::Filter, {{"views", "1"}, {"grasp", R"({"scores": {"total": 0.7}, "model_epsilon": 0.02})"}}),
-                  component("hand", fba::Kind::Actuator, {{"lift", R"({"held": false, "reason": "slipped 4 cm"})"}})};
+  const auto r = result(
+      fba::Outcome::Failure, 3.14,
+      {component("synthesis", fba::Kind::Filter, {{"views", "1"}, {"grasp", R"({"scores": {"total": 0.7}, "model_epsilon": 0.02})"}}),
+       component("hand", fba::Kind::Actuator, {{"lift", R"({"held": false, "reason": "slipped 4 cm"})"}})});
   EXPECT_EQ(outcome_text(r), "failed: the object was not held after 1 view, grasp score 0.7, epsilon 0.02, 3.1 s (slipped 4 cm)");
 }
 
 TEST(OutcomeText, ALongPayloadStaysInTheSummary) {
-  fba::RunResult r;
-  r.outcome = fba::Outcome::Failure;
-  r.wall_s = 1;
+  auto r = result(fba::Outcome::Failure, 1);
   r.final_event = event("check", "bad", std::string(2000, 'x'));
   EXPECT_EQ(outcome_text(r), "failed: event check.bad, 1 s");
 }
 
 TEST(OutcomeText, AnErrorKeepsItsReasonAndAShortenedMessage) {
-  fba::RunResult r;
-  r.outcome = fba::Outcome::RuntimeError;
+  auto r = result(fba::Outcome::RuntimeError, 0.05);
   r.reason = "component 'bad' (examples.faulty) failed: injected fault";
-  r.wall_s = 0.05;
   r.final_event = event("bad", "error", "injected \x1b[2J fault\nsecond line");
   const std::string text = outcome_text(r);
   EXPECT_EQ(text.rfind("runtime_error: component 'bad' (examples.faulty) failed: injected fault (injected ", 0), 0u) << text;

@@ -82,27 +82,31 @@ class PluginBug : public std::logic_error {
 //   static constexpr fba::Out<std::int64_t> kOut{"out", "each integer times factor"};
 //   static constexpr auto kFactor = fba::Param<std::int64_t>("factor", 2, "the factor").range(-1000, 1000);
 
+namespace detail {
+// What a port or event handle holds; the handle's own type says what kind it is.
+struct NameAndDoc {
+  constexpr NameAndDoc(std::string_view name, std::string_view doc) : name(name), doc(doc) {}
+  std::string_view name, doc;
+};
+}  // namespace detail
+
 // An input of type T; get() returns const T&.
 template <class T>
-struct In {
-  constexpr In(std::string_view name, std::string_view doc) : name(name), doc(doc) {}
-  std::string_view name, doc;
+struct In : detail::NameAndDoc {
+  using NameAndDoc::NameAndDoc;
 };
 // An input of type T the task may leave unconnected (a sensor's inputs are all optional).
 template <class T>
-struct OptionalIn {
-  constexpr OptionalIn(std::string_view name, std::string_view doc) : name(name), doc(doc) {}
-  std::string_view name, doc;
+struct OptionalIn : detail::NameAndDoc {
+  using NameAndDoc::NameAndDoc;
 };
 // An input of any type: the connection decides (examples.passthrough).
-struct AnyIn {
-  constexpr AnyIn(std::string_view name, std::string_view doc) : name(name), doc(doc) {}
-  std::string_view name, doc;
+struct AnyIn : detail::NameAndDoc {
+  using NameAndDoc::NameAndDoc;
 };
 template <class T>
-struct Out {
-  constexpr Out(std::string_view name, std::string_view doc) : name(name), doc(doc) {}
-  std::string_view name, doc;
+struct Out : detail::NameAndDoc {
+  using NameAndDoc::NameAndDoc;
 };
 // An output whose type is whatever `like` is connected to.
 struct OutLike {
@@ -110,9 +114,8 @@ struct OutLike {
   std::string_view name, like, doc;
 };
 // An event the component emits; the task's rules decide what it does.
-struct EventOut {
-  constexpr EventOut(std::string_view name, std::string_view doc) : name(name), doc(doc) {}
-  std::string_view name, doc;
+struct EventOut : detail::NameAndDoc {
+  using NameAndDoc::NameAndDoc;
 };
 
 namespace detail {

@@ -48,7 +48,14 @@ int main(int argc, char** argv) {
   fba::emulators::CanopenArmOptions options;
   std::string socketcan;
   std::vector<fba::emulators::ScheduledFault> schedule;
-  fba::emulators::CanopenArmEmulator* emulator = nullptr;  // the actions below run once it exists
+  using fba::emulators::CanopenArmEmulator;
+  CanopenArmEmulator* emulator = nullptr;  // the actions below run once it exists
+  // An option S:NODE: `act` on the node S seconds in.
+  const auto on_node_after = [&](const std::string& a, const std::string& v, void (CanopenArmEmulator::*act)(int)) {
+    const auto p = kCli.fields(v, a, 2, "S:NODE");
+    const int node = kCli.integer(p[1], a, 1, 127);
+    schedule.push_back({seconds(p[0], a), [&emulator, node, act] { (emulator->*act)(node); }});
+  };
   const auto common = kCli.read(argc, argv, {}, [&](const std::string& a, const std::string& v) {
     if (a == "--nodes") {
       options.nodes.clear();
@@ -60,18 +67,14 @@ int main(int argc, char** argv) {
     } else if (a == "--velocity") {
       options.profile_velocity = static_cast<std::uint32_t>(kCli.integer(v, a, 1, 2'000'000'000));
     } else if (a == "--silence-after") {
-      const auto p = kCli.fields(v, a, 2, "S:NODE");
-      const int node = kCli.integer(p[1], a, 1, 127);
-      schedule.push_back({seconds(p[0], a), [&emulator, node] { emulator->silence(node); }});
+      on_node_after(a, v, &CanopenArmEmulator::silence);
     } else if (a == "--fault-after") {
       const auto p = kCli.fields(v, a, 3, "S:NODE:CODE");
       const int node = kCli.integer(p[1], a, 1, 127);
       const auto code = static_cast<std::uint16_t>(kCli.integer(p[2], a, 0, 0xFFFF, 16));
       schedule.push_back({seconds(p[0], a), [&emulator, node, code] { emulator->inject_fault(node, code); }});
     } else if (a == "--reboot-after") {
-      const auto p = kCli.fields(v, a, 2, "S:NODE");
-      const int node = kCli.integer(p[1], a, 1, 127);
-      schedule.push_back({seconds(p[0], a), [&emulator, node] { emulator->reboot(node); }});
+      on_node_after(a, v, &CanopenArmEmulator::reboot);
     } else if (a == "--garbage-every") {
       const double s = seconds(v, a);
       if (s <= 0) kCli.fail(a + " must be more than 0 seconds");
@@ -79,9 +82,7 @@ int main(int argc, char** argv) {
     } else if (a == "--disconnect-after") {
       schedule.push_back({seconds(v, a), [&emulator] { emulator->disconnect(); }});
     } else if (a == "--ignore-set-points-after") {
-      const auto p = kCli.fields(v, a, 2, "S:NODE");
-      const int node = kCli.integer(p[1], a, 1, 127);
-      schedule.push_back({seconds(p[0], a), [&emulator, node] { emulator->ignore_set_points(node); }});
+      on_node_after(a, v, &CanopenArmEmulator::ignore_set_points);
     } else if (a == "--fault-at-start") {
       const auto p = kCli.fields(v, a, 2, "NODE:CODE");
       options.fault_at_start[kCli.integer(p[0], a, 1, 127)] = static_cast<std::uint16_t>(kCli.integer(p[1], a, 1, 0xFFFF, 16));

@@ -51,6 +51,14 @@ fba::Pose looking_at_origin(double elevation, double azimuth, double distance) {
 }
 
 // One period of the task's clock, and the invocation it triggers.
+// A joint target that names one joint.
+fba::JointState one_joint(const std::string& name, double position) {
+  fba::JointState target;
+  target.names = {name};
+  target.positions = {position};
+  return target;
+}
+
 void tick(ComponentHarness& h) {
   h.tick();
   h.run();
@@ -137,19 +145,14 @@ TEST(SimArm, AnUnreachableTargetIsRefusedWithAnEventNamingItAndTheArmStays) {
 
 TEST(SimArm, AJointTargetOutsideTheLimitsIsRefusedNamingTheJoint) {
   ComponentHarness h(built_plugins(), "sim.arm", {}, {"joint_target"});
-  fba::JointState target;
-  target.names = {"elbow_joint"};
-  target.positions = {4.0};
-  h.push<fba::JointState>("joint_target", target);
+  h.push<fba::JointState>("joint_target", one_joint("elbow_joint", 4.0));
   tick(h);
   const auto refused = named(h.events(), "unreachable");
   ASSERT_EQ(refused.size(), 1u);
   EXPECT_NE(refused[0].payload.find("joint 'elbow_joint' at 4 rad is outside [-3.14159, 3.14159]"), std::string::npos)
       << refused[0].payload;
 
-  target.names = {"knee"};
-  target.positions = {0.0};
-  h.push<fba::JointState>("joint_target", target);
+  h.push<fba::JointState>("joint_target", one_joint("knee", 0.0));
   tick(h);
   ASSERT_EQ(named(h.events(), "unreachable").size(), 2u);
   EXPECT_NE(named(h.events(), "unreachable")[1].payload.find("no joint 'knee'"), std::string::npos);
@@ -157,10 +160,7 @@ TEST(SimArm, AJointTargetOutsideTheLimitsIsRefusedNamingTheJoint) {
 
 TEST(SimArm, AJointTargetByNameMovesOnlyThatJoint) {
   ComponentHarness h(built_plugins(), "sim.arm", {}, {"joint_target"});
-  fba::JointState target;
-  target.names = {"wrist_3_joint"};
-  target.positions = {1.0};
-  h.push<fba::JointState>("joint_target", target);
+  h.push<fba::JointState>("joint_target", one_joint("wrist_3_joint", 1.0));
   tick_until_arrived(h);
   ASSERT_EQ(named(h.events(), "arrived").size(), 1u);
   const auto last = h.values<fba::JointState>("joint_state").back();

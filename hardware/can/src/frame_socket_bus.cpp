@@ -15,8 +15,8 @@ namespace {
 constexpr std::chrono::milliseconds kSendTimeout{500};
 }
 
-FrameSocketBus::FrameSocketBus(Fd socket, std::string name) : socket_(std::move(socket)), name_(std::move(name)) {
-  set_nonblocking(socket_.get(), name_);
+FrameSocketBus::FrameSocketBus(Fd socket, std::string name) : CanBus(std::move(name)), socket_(std::move(socket)) {
+  set_nonblocking(socket_.get(), this->name());  // the parameter `name` was moved into the base
 }
 
 void FrameSocketBus::send(const Frame& frame) {
@@ -25,11 +25,11 @@ void FrameSocketBus::send(const Frame& frame) {
   raw.can_id = frame.id | (frame.extended ? CAN_EFF_FLAG : 0U) | (frame.rtr ? CAN_RTR_FLAG : 0U);
   raw.can_dlc = frame.dlc;
   if (!frame.rtr) std::memcpy(raw.data, frame.data.data(), frame.dlc);
-  write_all(socket_.get(), &raw, sizeof raw, kSendTimeout, name_);
+  write_all(socket_.get(), &raw, sizeof raw, kSendTimeout, name());
 }
 
 void FrameSocketBus::write_raw(std::span<const std::uint8_t> bytes) {
-  write_all(socket_.get(), bytes.data(), bytes.size(), kSendTimeout, name_);
+  write_all(socket_.get(), bytes.data(), bytes.size(), kSendTimeout, name());
 }
 
 std::optional<Frame> FrameSocketBus::receive(std::chrono::milliseconds timeout) {
@@ -39,32 +39,29 @@ std::optional<Frame> FrameSocketBus::receive(std::chrono::milliseconds timeout) 
     if (!first && std::chrono::steady_clock::now() >= deadline) return std::nullopt;
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-    const Ready ready = wait_readable(socket_.get(), std::max(left, std::chrono::milliseconds(0)), name_);
+    const Ready ready = wait_readable(socket_.get(), std::max(left, std::chrono::milliseconds(0)), name());
     if (ready == Ready::timeout) return std::nullopt;
-    if (ready == Ready::hangup) throw BusError(name_ + ": the other end closed the bus");
+    if (ready == Ready::hangup) throw BusError(name() + ": the other end closed the bus");
     // One record per read; a longer one is truncated (MSG_TRUNC reports its real length).
     unsigned char buffer[sizeof(can_frame) + 16];
     const ssize_t n = ::recv(socket_.get(), buffer, sizeof buffer, MSG_TRUNC);
     if (n < 0) {
       if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) continue;
-      throw BusError(name_ + ": read failed: " + std::strerror(errno) + " (the line is gone)");
+      throw BusError(name() + ": read failed: " + std::strerror(errno) + " (the line is gone)");
     }
-    if (n == 0) throw BusError(name_ + ": the other end closed the bus");
+    if (n == 0) throw BusError(name() + ": the other end closed the bus");
     if (static_cast<std::size_t>(n) != sizeof(can_frame)) {
-      ++discarded_;
-      last_discard_ = fmt::format("a record of {} bytes, expected a can_frame of {}", n, sizeof(can_frame));
+      discard(fmt::format("a record of {} bytes, expected a can_frame of {}", n, sizeof(can_frame)));
       continue;
     }
     can_frame raw;
     std::memcpy(&raw, buffer, sizeof raw);
     if (raw.can_id & CAN_ERR_FLAG) {  // error frames are the controller's state, not traffic
-      ++discarded_;
-      last_discard_ = fmt::format("a controller error frame (class 0x{:X})", raw.can_id & CAN_ERR_MASK);
+      discard(fmt::format("a controller error frame (class 0x{:X})", raw.can_id & CAN_ERR_MASK));
       continue;
     }
     if (raw.can_dlc > 8) {
-      ++discarded_;
-      last_discard_ = fmt::format("a frame with data length {}, beyond 8", raw.can_dlc);
+      discard(fmt::format("a frame with data length {}, beyond 8", raw.can_dlc));
       continue;
     }
     Frame f;

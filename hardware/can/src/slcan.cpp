@@ -188,19 +188,19 @@ std::optional<LineReader::Token> LineReader::next() {
   return t;
 }
 
-SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("slcan:" + device), stop_(options.stop) {
+SlcanBus::SlcanBus(const std::string& device, const Options& options) : CanBus("slcan:" + device), stop_(options.stop) {
   const char code = bitrate_code(options.bitrate);
-  const speed_t speed = baud_constant(options.baud, name_);
+  const speed_t speed = baud_constant(options.baud, name());
   fd_.reset(::open(device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC));
-  if (!fd_) throw BusError(name_ + ": cannot open the serial line: " + std::strerror(errno));
+  if (!fd_) throw BusError(name() + ": cannot open the serial line: " + std::strerror(errno));
   if (!::isatty(fd_.get())) {
     struct stat st {};
     ::fstat(fd_.get(), &st);
-    throw BusError(name_ + ": not a serial line but " + what_it_is(st));
+    throw BusError(name() + ": not a serial line but " + what_it_is(st));
   }
   termios tio{};
   if (::tcgetattr(fd_.get(), &tio) != 0)
-    throw BusError(name_ + ": cannot read the line settings: " + std::strerror(errno));
+    throw BusError(name() + ": cannot read the line settings: " + std::strerror(errno));
   ::cfmakeraw(&tio);
   tio.c_cflag |= CLOCAL | CREAD;
   tio.c_cflag &= ~CRTSCTS;
@@ -209,7 +209,7 @@ SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("s
   ::cfsetispeed(&tio, speed);
   ::cfsetospeed(&tio, speed);
   if (::tcsetattr(fd_.get(), TCSANOW, &tio) != 0)
-    throw BusError(name_ + ": cannot set the line raw: " + std::strerror(errno));
+    throw BusError(name() + ": cannot set the line raw: " + std::strerror(errno));
   ::tcflush(fd_.get(), TCIOFLUSH);
 
   // A half-typed command from an earlier session ends with the first of these CRs. Each CR is
@@ -218,7 +218,7 @@ SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("s
   // answer after it by one, so that 'S' got 'C''s BEL (an adapter slower than a pause in the line,
   // as on a loaded machine). Frames of a channel left open are not answers. An adapter that does
   // not answer empty commands costs reply_timeout here, no more.
-  write_all(fd_.get(), "\r\r\r", 3, kWriteTimeout, name_);
+  write_all(fd_.get(), "\r\r\r", 3, kWriteTimeout, name());
   const auto drain_until = Clock::now() + options.reply_timeout;
   for (int answers = 0; answers < 3 && Clock::now() < drain_until;) {
     read_while_opening(drain_until);
@@ -230,10 +230,10 @@ SlcanBus::SlcanBus(const std::string& device, const Options& options) : name_("s
   reader_ = LineReader{};
   command("C", options.reply_timeout);  // closing a closed channel is an error on some adapters: either answer will do
   if (!command(std::string("S") + code, options.reply_timeout))
-    throw BusError(fmt::format("{}: the adapter refused the bitrate command 'S{}' ({} bit/s) with BEL", name_, code,
+    throw BusError(fmt::format("{}: the adapter refused the bitrate command 'S{}' ({} bit/s) with BEL", name(), code,
                                options.bitrate));
   if (!command("O", options.reply_timeout))
-    throw BusError(name_ + ": the adapter refused to open the channel ('O' answered with BEL)");
+    throw BusError(name() + ": the adapter refused to open the channel ('O' answered with BEL)");
 }
 
 SlcanBus::~SlcanBus() {
@@ -246,22 +246,17 @@ SlcanBus::~SlcanBus() {
 void SlcanBus::close() {
   if (!fd_) return;
   try {
-    write_all(fd_.get(), "C\r", 2, std::chrono::milliseconds(50), name_);
+    write_all(fd_.get(), "C\r", 2, std::chrono::milliseconds(50), name());
   } catch (const BusError&) {  // the line is gone: nothing to close on the adapter
   }
   fd_.reset();
 }
 
-void SlcanBus::discard(std::string reason) {
-  ++discarded_;
-  last_discard_ = std::move(reason);
-}
-
 bool SlcanBus::read_some(std::chrono::milliseconds timeout) {
-  const Ready ready = wait_readable(fd_.get(), timeout, name_);
+  const Ready ready = wait_readable(fd_.get(), timeout, name());
   if (ready == Ready::timeout) return false;
   if (ready == Ready::hangup)
-    throw BusError(name_ + ": the serial line hung up (the adapter was unplugged or the other end closed)");
+    throw BusError(name() + ": the serial line hung up (the adapter was unplugged or the other end closed)");
   char buffer[256];
   const ssize_t n = ::read(fd_.get(), buffer, sizeof buffer);
   if (n > 0) {
@@ -269,14 +264,14 @@ bool SlcanBus::read_some(std::chrono::milliseconds timeout) {
     return true;
   }
   if (n < 0 && (errno == EAGAIN || errno == EINTR)) return false;
-  if (n < 0) throw BusError(name_ + ": read failed: " + std::strerror(errno) + " (the adapter is gone)");
+  if (n < 0) throw BusError(name() + ": read failed: " + std::strerror(errno) + " (the adapter is gone)");
   // poll said readable, yet nothing came: the tty's other end is gone
-  throw BusError(name_ + ": the serial line returned end of file (the adapter was unplugged or the other end closed)");
+  throw BusError(name() + ": the serial line returned end of file (the adapter was unplugged or the other end closed)");
 }
 
 bool SlcanBus::command(const std::string& text, std::chrono::milliseconds timeout) {
   const std::string line = text + '\r';
-  write_all(fd_.get(), line.data(), line.size(), kWriteTimeout, name_);
+  write_all(fd_.get(), line.data(), line.size(), kWriteTimeout, name());
   const auto deadline = Clock::now() + timeout;
   for (;;) {
     while (auto token = reader_.next()) {
@@ -291,24 +286,24 @@ bool SlcanBus::command(const std::string& text, std::chrono::milliseconds timeou
     }
     if (Clock::now() >= deadline)
       throw BusError(
-          fmt::format("{}: no answer to '{}' within {} ms: is it an SLCAN adapter, and is the baud rate right?", name_,
+          fmt::format("{}: no answer to '{}' within {} ms: is it an SLCAN adapter, and is the baud rate right?", name(),
                       text, timeout.count()));
     read_while_opening(deadline);
   }
 }
 
 void SlcanBus::read_while_opening(Clock::time_point deadline) {
-  if (stop_.stop_requested()) throw BusError(name_ + ": opening the adapter stopped: the application is stopping");
+  if (stop_.stop_requested()) throw BusError(name() + ": opening the adapter stopped: the application is stopping");
   read_some(std::min(left_until(deadline), std::chrono::milliseconds(10)));
 }
 
 void SlcanBus::send(const Frame& frame) {
   const std::string line = encode(frame);
-  write_all(fd_.get(), line.data(), line.size(), kWriteTimeout, name_);
+  write_all(fd_.get(), line.data(), line.size(), kWriteTimeout, name());
 }
 
 std::optional<Frame> SlcanBus::receive(std::chrono::milliseconds timeout) {
-  if (!fd_) throw BusError(name_ + ": the line is closed");
+  if (!fd_) throw BusError(name() + ": the line is closed");
   const auto deadline = Clock::now() + timeout;
   bool first_read = true;
   for (;;) {

@@ -7,16 +7,16 @@
 
 namespace fba::can::slcan {
 
-SlcanAdapter::SlcanAdapter(Fd line, std::string name) : fd_(std::move(line)), name_(std::move(name)) {
-  set_nonblocking(fd_.get(), name_);
+SlcanAdapter::SlcanAdapter(Fd line, std::string name) : CanBus(std::move(name)), fd_(std::move(line)) {
+  set_nonblocking(fd_.get(), this->name());  // the parameter `name` was moved into the base
 }
 
 void SlcanAdapter::reply(std::string_view text) {
-  write_all(fd_.get(), text.data(), text.size(), kWriteTimeout, name_);
+  write_all(fd_.get(), text.data(), text.size(), kWriteTimeout, name());
 }
 
 void SlcanAdapter::write_raw(std::span<const std::uint8_t> bytes) {
-  write_all(fd_.get(), bytes.data(), bytes.size(), kWriteTimeout, name_);
+  write_all(fd_.get(), bytes.data(), bytes.size(), kWriteTimeout, name());
 }
 
 void SlcanAdapter::send(const Frame& frame) {
@@ -73,8 +73,7 @@ std::optional<Frame> SlcanAdapter::handle(const std::string& line) {
       auto frame = decode(line, &error);
       if (!open_ || !frame) {
         if (!frame) {
-          ++discarded_;
-          last_discard_ = "not a frame: " + error;
+          discard("not a frame: " + error);
         }
         reply(bell);
         return std::nullopt;
@@ -83,8 +82,7 @@ std::optional<Frame> SlcanAdapter::handle(const std::string& line) {
       return frame;
     }
     default:
-      ++discarded_;
-      last_discard_ = "an unknown command: '" + printable(line) + "'";
+      discard("an unknown command: '" + printable(line) + "'");
       reply(bell);
       return std::nullopt;
   }
@@ -98,8 +96,7 @@ std::optional<Frame> SlcanAdapter::receive(std::chrono::milliseconds timeout) {
       if (token->kind == LineReader::Token::line) {
         if (auto frame = handle(token->text)) return frame;
       } else if (token->kind == LineReader::Token::overflow) {
-        ++discarded_;
-        last_discard_ = "an overlong line of noise";
+        discard("an overlong line of noise");
         reply(std::string(1, kBell));
       }
     }
@@ -108,15 +105,15 @@ std::optional<Frame> SlcanAdapter::receive(std::chrono::milliseconds timeout) {
     first_read = false;
     const auto left =
         std::max(std::chrono::milliseconds(0), std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now));
-    const Ready ready = wait_readable(fd_.get(), left, name_);
+    const Ready ready = wait_readable(fd_.get(), left, name());
     if (ready == Ready::timeout) continue;
-    if (ready == Ready::hangup) throw BusError(name_ + ": the host closed the serial line");
+    if (ready == Ready::hangup) throw BusError(name() + ": the host closed the serial line");
     char buffer[256];
     const ssize_t n = ::read(fd_.get(), buffer, sizeof buffer);
     if (n > 0)
       reader_.feed({buffer, static_cast<std::size_t>(n)});
     else if (n == 0 || (errno != EAGAIN && errno != EINTR))
-      throw BusError(name_ + ": the serial line is gone" +
+      throw BusError(name() + ": the serial line is gone" +
                      (n < 0 ? std::string(": ") + std::strerror(errno) : std::string()));
   }
 }

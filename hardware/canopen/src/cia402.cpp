@@ -4,60 +4,49 @@
 
 namespace fba::canopen::cia402 {
 
+namespace {
+
+// Each state as CiA 402 shows it in the statusword (the bits under its mask) and by name; decode
+// tries them in this order.
+struct StateInfo {
+  State state;
+  std::uint16_t mask;
+  std::uint16_t bits;
+  const char* name;
+};
+constexpr StateInfo kStates[] = {
+    {State::not_ready_to_switch_on, 0x4F, 0x00, "not ready to switch on"},
+    {State::switch_on_disabled, 0x4F, 0x40, "switch on disabled"},
+    {State::ready_to_switch_on, 0x6F, 0x21, "ready to switch on"},
+    {State::switched_on, 0x6F, 0x23, "switched on"},
+    {State::operation_enabled, 0x6F, 0x27, "operation enabled"},
+    {State::quick_stop_active, 0x6F, 0x07, "quick stop active"},
+    {State::fault_reaction_active, 0x4F, 0x0F, "fault reaction active"},
+    {State::fault, 0x4F, 0x08, "fault"},
+};
+
+const StateInfo* info(State state) {
+  for (const auto& i : kStates)
+    if (i.state == state) return &i;
+  return nullptr;
+}
+
+}  // namespace
+
 State decode(std::uint16_t s) {
-  if ((s & 0x4F) == 0x00) return State::not_ready_to_switch_on;
-  if ((s & 0x4F) == 0x40) return State::switch_on_disabled;
-  if ((s & 0x6F) == 0x21) return State::ready_to_switch_on;
-  if ((s & 0x6F) == 0x23) return State::switched_on;
-  if ((s & 0x6F) == 0x27) return State::operation_enabled;
-  if ((s & 0x6F) == 0x07) return State::quick_stop_active;
-  if ((s & 0x4F) == 0x0F) return State::fault_reaction_active;
-  if ((s & 0x4F) == 0x08) return State::fault;
+  for (const auto& i : kStates)
+    if ((s & i.mask) == i.bits) return i.state;
   return State::not_ready_to_switch_on;  // no state of the standard matches: not ready
 }
 
 std::uint16_t state_bits(State state) {
-  switch (state) {
-    case State::not_ready_to_switch_on:
-      return 0x0000;
-    case State::switch_on_disabled:
-      return 0x0040;
-    case State::ready_to_switch_on:
-      return 0x0021;
-    case State::switched_on:
-      return 0x0023;
-    case State::operation_enabled:
-      return 0x0027;
-    case State::quick_stop_active:
-      return 0x0007;
-    case State::fault_reaction_active:
-      return 0x000F;
-    case State::fault:
-      return 0x0008;
-  }
-  return 0;
+  const StateInfo* i = info(state);
+  return i ? i->bits : 0;
 }
 
 std::string to_string(State state) {
-  switch (state) {
-    case State::not_ready_to_switch_on:
-      return "not ready to switch on";
-    case State::switch_on_disabled:
-      return "switch on disabled";
-    case State::ready_to_switch_on:
-      return "ready to switch on";
-    case State::switched_on:
-      return "switched on";
-    case State::operation_enabled:
-      return "operation enabled";
-    case State::quick_stop_active:
-      return "quick stop active";
-    case State::fault_reaction_active:
-      return "fault reaction active";
-    case State::fault:
-      return "fault";
-  }
-  return "unknown";
+  const StateInfo* i = info(state);
+  return i ? i->name : "unknown";
 }
 
 Drive::Drive(Master& master, int node, DriveOptions options) : master_(master), node_(node), options_(options) {}

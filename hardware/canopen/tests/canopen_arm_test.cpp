@@ -2,6 +2,8 @@
 // synchronised moves in joint units, limits checked before anything is sent, and every fault
 // ending in a quick stop of the joints that can still hear, with the joint and the reason named.
 #include <cmath>
+#include <functional>
+#include <initializer_list>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -44,6 +46,31 @@ class CanopenArmTest : public ::testing::TestWithParam<Transport> {
   }
   fba::emulators::CanopenArmEmulator& emulator() { return emulated_->emulator(); }
   bool quick_stopped(int node) { return (emulator().statusword(node) & 0x6F) == 0x07; }
+  // Every joint but the failed one's shows "quick stop active".
+  void expect_quick_stopped_but(int failed) {
+    for (int node = 1; node <= 6; ++node)
+      if (node != failed) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+  }
+  // What the arm stopped with while `action` ran: ArmStopped's node and message.
+  struct Stop {
+    int node = -1;
+    std::string why;
+  };
+  static Stop stop_of(const std::function<void()>& action) {
+    try {
+      action();
+    } catch (const ArmStopped& e) {
+      return {e.node, e.what()};
+    }
+    ADD_FAILURE() << "the arm did not stop";
+    return {};
+  }
+  // `action` stops the arm naming `node`, with each of `says` in the message.
+  static void expect_stop(const std::function<void()>& action, int node, std::initializer_list<std::string> says) {
+    const Stop stop = stop_of(action);
+    EXPECT_EQ(stop.node, node);
+    for (const auto& part : says) EXPECT_TRUE(contains(stop.why, part)) << stop.why;
+  }
 
   std::optional<fba::test::EmulatedArm> emulated_;
   std::optional<Master> master_;
@@ -104,42 +131,25 @@ TEST_P(CanopenArmTest, ACommandBeyondTheLimitsIsRefusedWithNothingSent) {
 TEST_P(CanopenArmTest, AnEmcyOnOneJointQuickStopsTheOthersAndNamesIt) {
   arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);  // 100 s: the fault comes first
   emulator().inject_fault(4, 0x7121);
-  try {
-    arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s);
-    FAIL() << "the move outlived the fault";
-  } catch (const ArmStopped& e) {
-    EXPECT_EQ(e.node, 4);
-    EXPECT_TRUE(contains(e.what(), "node 4")) << e.what();
-    EXPECT_TRUE(contains(e.what(), "every joint was sent quick stop")) << e.what();
-  }
-  for (int node : {1, 2, 3, 5, 6}) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+  expect_stop([&] { arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s); }, 4, {"node 4", "every joint was sent quick stop"});
+  expect_quick_stopped_but(4);
 }
 
 TEST_P(CanopenArmTest, AJointFallingSilentQuickStopsTheOthers) {
   arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);
   emulator().silence(2);
-  try {
+  const auto until_reached = [&] {
     while (!arm_->reached()) master_->spin_for(5ms);
-    FAIL() << "reached the target with a silent joint";
-  } catch (const ArmStopped& e) {
-    EXPECT_EQ(e.node, 2);
-    EXPECT_TRUE(contains(e.what(), "node 2")) << e.what();
-    EXPECT_TRUE(contains(e.what(), "quick stop failed on 1 of 6 joints: joint 'joint2' (node 2)")) << e.what();
-  }
-  for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+  };
+  expect_stop(until_reached, 2, {"node 2", "quick stop failed on 1 of 6 joints: joint 'joint2' (node 2)"});
+  expect_quick_stopped_but(2);
 }
 
 TEST_P(CanopenArmTest, TheLineVanishingStopsTheArmWithAClearError) {
   arm_->move_to({2, 2, 2, 2, 2, 2}, 0.001);
   emulator().disconnect();
-  try {
-    arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s);
-    FAIL();
-  } catch (const ArmStopped& e) {
-    EXPECT_EQ(e.node, 0);
-    EXPECT_TRUE(contains(e.what(), master_->bus().name())) << e.what();
-    EXPECT_TRUE(contains(e.what(), "quick stop failed on 6 of 6 joints")) << e.what();
-  }
+  expect_stop([&] { arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s); }, 0,
+              {master_->bus().name(), "quick stop failed on 6 of 6 joints"});
 }
 
 TEST_P(CanopenArmTest, AccelerationsAreScaledLikeVelocitiesSoTheJointsStayInStep) {
@@ -181,7 +191,7 @@ TEST_P(CanopenArmTest, AQuickStopReachesEveryDriveBeforeAnyAnswerIsAwaitedAndNam
   ASSERT_EQ(failures.size(), 1u);
   EXPECT_TRUE(contains(failures[0], "joint 'joint2' (node 2)")) << failures[0];
   EXPECT_TRUE(contains(failures[0], "no answer")) << failures[0];
-  for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+  expect_quick_stopped_but(2);
   // In the order the drives heard it: every quick stop came before the master gave up on node 2.
   fba::test::expect_quick_stops_before_giving_up(emulator(), 2);
 }
@@ -193,12 +203,8 @@ TEST_P(CanopenArmTest, AnInterruptFromAnotherThreadEndsAWaitAndTheJointsStillGet
     std::this_thread::sleep_for(20ms);
     master_->interrupt();
   });
-  try {
-    arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s);
-    FAIL() << "the wait outlived the interrupt";
-  } catch (const ArmStopped& e) {
-    EXPECT_TRUE(contains(e.what(), "interrupted")) << e.what();
-  }
+  const Stop stop = stop_of([&] { arm_->move_and_wait({2, 2, 2, 2, 2, 2}, 0.001, 60s); });
+  EXPECT_TRUE(contains(stop.why, "interrupted")) << stop.why;
   stopper.join();
   // The interrupted master sends nothing more, but the stop: the quick stops go out and are confirmed.
   EXPECT_THROW(arm_->move_to({1, 1, 1, 1, 1, 1}), ArmStopped);
@@ -379,19 +385,14 @@ TEST_P(CanopenArmTest, ADriveThatDoesNotFollowItsSetPointsStopsEveryJointOnThatS
   for (int n = 1; n <= 6; ++n) q[n - 1] = -0.1 * n;
   for (int k = 0; k < 3; ++k) arm_->cycle(q, 1s);
   emulator().ignore_set_points(4);
-  std::string why;
-  try {
+  const auto move_on = [&] {
     for (int k = 0; k < 1000; ++k) {  // the bound only catches a hang
       for (double& x : q) x += 0.001;
       arm_->cycle(q, 1s);
     }
-  } catch (const ArmStopped& e) {
-    why = e.what();
-    EXPECT_EQ(e.node, 4);
-  }
-  EXPECT_TRUE(contains(why, "joint 'joint4' (node 4): does not follow its set-point")) << why;
-  EXPECT_TRUE(contains(why, "every joint was sent quick stop")) << why;
-  for (int node : {1, 2, 3, 5, 6}) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+  };
+  expect_stop(move_on, 4, {"joint 'joint4' (node 4): does not follow its set-point", "every joint was sent quick stop"});
+  expect_quick_stopped_but(4);
   // After the last SYNC, only the quick stops went out: no set-point (RPDO), no further SYNC.
   const auto heard = emulator().heard();
   long last_sync = -1;
@@ -410,16 +411,9 @@ TEST_P(CanopenArmTest, ADriveThatDoesNotFollowItsSetPointsStopsEveryJointOnThatS
 TEST_P(CanopenArmTest, ASetPointNotAcknowledgedStopsEveryJointWithoutPollingTheDriveBySdo) {
   emulator().ignore_set_points(2);
   const auto before = emulator().heard().size();
-  std::string why;
-  try {
-    arm_->move_to({1, 1, 1, 1, 1, 1}, 0.01);
-  } catch (const ArmStopped& e) {
-    why = e.what();
-    EXPECT_EQ(e.node, 2);
-  }
-  EXPECT_TRUE(contains(why, "joint 'joint2' (node 2): did not acknowledge its set-point within 3000 ms")) << why;
-  EXPECT_TRUE(contains(why, "every joint was sent quick stop")) << why;
-  for (int node : {1, 3, 4, 5, 6}) EXPECT_TRUE(quick_stopped(node)) << "node " << node;
+  expect_stop([&] { arm_->move_to({1, 1, 1, 1, 1, 1}, 0.01); }, 2,
+              {"joint 'joint2' (node 2): did not acknowledge its set-point within 3000 ms", "every joint was sent quick stop"});
+  expect_quick_stopped_but(2);
   const auto heard = emulator().heard();
   ASSERT_LT(before, heard.size());
   long set_points = -1;  // the RPDO with bit 4 to node 2

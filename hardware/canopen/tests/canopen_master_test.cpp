@@ -49,6 +49,14 @@ class CanopenMaster : public ::testing::TestWithParam<Transport> {
     drive.set_profile(200'000, 2'000'000);
     return drive;
   }
+  // Waits for the master's first fault and checks its kind, its node and what it says.
+  void expect_first_fault(Fault::Kind kind, int node, const std::string& says) {
+    ASSERT_TRUE(master().spin_until([&] { return !master().faults().empty(); }, 5s));
+    const Fault fault = master().faults().front();
+    EXPECT_EQ(fault.kind, kind);
+    EXPECT_EQ(fault.node, node);
+    EXPECT_TRUE(contains(fault.message, says)) << fault.message;
+  }
 
   std::optional<fba::test::EmulatedArm> arm_;
   std::optional<Master> master_;  // declared after arm_: destroyed before the bus it uses
@@ -125,11 +133,7 @@ TEST_P(CanopenMaster, NmtCommandsShowInTheHeartbeats) {
 TEST_P(CanopenMaster, ANodeThatRebootsUnaskedIsAFaultNamingIt) {
   cia402::Drive drive = ready_drive(2);
   emulator().reboot(2);
-  ASSERT_TRUE(master().spin_until([&] { return !master().faults().empty(); }, 5s));
-  const Fault fault = master().faults().front();
-  EXPECT_EQ(fault.kind, Fault::Kind::rebooted);
-  EXPECT_EQ(fault.node, 2);
-  EXPECT_TRUE(contains(fault.message, "node 2: rebooted unasked")) << fault.message;
+  expect_first_fault(Fault::Kind::rebooted, 2, "node 2: rebooted unasked");
   EXPECT_EQ(master().state(2), NmtState::pre_operational);
   EXPECT_EQ(drive.state(), cia402::State::switch_on_disabled);  // the drive lost its enable with the reboot
 }
@@ -229,11 +233,7 @@ TEST_P(CanopenMaster, HeartbeatLossIsAFaultNamingTheNode) {
   master().spin_for(300ms);
   EXPECT_TRUE(master().faults().empty());
   emulator().silence(2);
-  ASSERT_TRUE(master().spin_until([&] { return !master().faults().empty(); }, 5s));
-  const Fault fault = master().faults().front();
-  EXPECT_EQ(fault.kind, Fault::Kind::heartbeat_lost);
-  EXPECT_EQ(fault.node, 2);
-  EXPECT_TRUE(contains(fault.message, "node 2: heartbeat lost")) << fault.message;
+  expect_first_fault(Fault::Kind::heartbeat_lost, 2, "node 2: heartbeat lost");
   master().spin_for(300ms);
   EXPECT_EQ(master().faults().size(), 1u);  // the others still beat
   EXPECT_THROW(master().throw_if_faulted(2), NodeFault);

@@ -39,34 +39,48 @@ constexpr const char* kUsage = R"(usage: fba-robotiq-3f-emulator [options]
 
 const fba::emulators::ProgramOptions kCli{"fba-robotiq-3f-emulator", kUsage};
 
+using fba::emulators::Robotiq3fEmulator;
+using fba::emulators::Robotiq3fOptions;
+
+// The options that set a number of Robotiq3fOptions, with its range.
+struct NumberOption {
+  const char* name;
+  double Robotiq3fOptions::*field;
+  double min, max;
+};
+constexpr NumberOption kNumbers[] = {
+    {"--activation-s", &Robotiq3fOptions::activation_s, 0, 120},
+    {"--object-width", &Robotiq3fOptions::object_width, 0.001, 1},
+    {"--object-length", &Robotiq3fOptions::object_length, 0.001, 1},
+    {"--object-offset", &Robotiq3fOptions::object_offset, -1, 1},
+    {"--max-aperture", &Robotiq3fOptions::max_aperture, 0.01, 1},
+    {"--stall-aperture", &Robotiq3fOptions::stall_aperture, 0.001, 1},
+    {"--max-spread", &Robotiq3fOptions::max_spread, 0.01, 1},
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  fba::emulators::Robotiq3fOptions options;
+  Robotiq3fOptions options;
   std::vector<fba::emulators::ScheduledFault> schedule;
-  fba::emulators::Robotiq3fEmulator* emulator = nullptr;  // the actions below run once it exists
+  Robotiq3fEmulator* emulator = nullptr;  // the actions below run once it exists
+  constexpr double kLong = 1e6;
+  // An option S: `act` S seconds in.
+  const auto after = [&](const std::string& a, const std::string& v, void (Robotiq3fEmulator::*act)()) {
+    schedule.push_back({kCli.number(v, a, 0, kLong), [&emulator, act] { (emulator->*act)(); }});
+  };
   const std::map<std::string, std::function<void()>> flags{{"--no-object", [&] { options.object = false; }},
                                                            {"--never-activate", [&] { options.activates = false; }}};
   const auto common = kCli.read(argc, argv, flags, [&](const std::string& a, const std::string& v) {
-    constexpr double kLong = 1e6;
+    for (const NumberOption& o : kNumbers)
+      if (a == o.name) {
+        options.*o.field = kCli.number(v, a, o.min, o.max);
+        return true;
+      }
     if (a == "--slave") {
       options.slave_id = kCli.integer(v, a, 1, 247);
-    } else if (a == "--activation-s") {
-      options.activation_s = kCli.number(v, a, 0, 120);
-    } else if (a == "--object-width") {
-      options.object_width = kCli.number(v, a, 0.001, 1);
-    } else if (a == "--object-length") {
-      options.object_length = kCli.number(v, a, 0.001, 1);
-    } else if (a == "--object-offset") {
-      options.object_offset = kCli.number(v, a, -1, 1);
-    } else if (a == "--max-aperture") {
-      options.max_aperture = kCli.number(v, a, 0.01, 1);
-    } else if (a == "--stall-aperture") {
-      options.stall_aperture = kCli.number(v, a, 0.001, 1);
-    } else if (a == "--max-spread") {
-      options.max_spread = kCli.number(v, a, 0.01, 1);
     } else if (a == "--silence-after") {
-      schedule.push_back({kCli.number(v, a, 0, kLong), [&emulator] { emulator->silence(); }});
+      after(a, v, &Robotiq3fEmulator::silence);
     } else if (a == "--bad-crc-after") {
       const auto f = kCli.fields(v, a, 2, "S:N");
       const std::string &s = f[0], &n = f[1];
@@ -81,9 +95,9 @@ int main(int argc, char** argv) {
       const int code = kCli.integer(c, a, 1, 0x0F, 16);
       schedule.push_back({kCli.number(s, a, 0, kLong), [&emulator, code] { emulator->inject_fault(code); }});
     } else if (a == "--drop-after") {
-      schedule.push_back({kCli.number(v, a, 0, kLong), [&emulator] { emulator->remove_object(); }});
+      after(a, v, &Robotiq3fEmulator::remove_object);
     } else if (a == "--disconnect-after") {
-      schedule.push_back({kCli.number(v, a, 0, kLong), [&emulator] { emulator->disconnect(); }});
+      after(a, v, &Robotiq3fEmulator::disconnect);
     } else {
       return false;
     }
@@ -93,7 +107,7 @@ int main(int argc, char** argv) {
   return fba::emulators::run_program(kCli, "Robotiq 3-Finger emulator", [&] {
     fba::can::Pty pty = fba::can::open_pty();
     fba::emulators::link_terminal(pty.slave_path, link);
-    fba::emulators::Robotiq3fEmulator emu(std::move(pty.master), "emulator:" + pty.slave_path, options);
+    Robotiq3fEmulator emu(std::move(pty.master), "emulator:" + pty.slave_path, options);
     emulator = &emu;
     std::cout << "Robotiq 3-Finger emulator: Modbus RTU slave " << options.slave_id << " on " << pty.slave_path
               << (link.empty() ? "" : " (link " + link + ")") << std::endl;

@@ -504,25 +504,30 @@ Eigen::AlignedBox3d mesh_bounds(const TriangleMesh& mesh) {
   return box;
 }
 
+namespace {
+
+// The sum of f(a, b, c) over the mesh's triangles, their corners a, b, c in double.
+template <class F>
+double sum_over_triangles(const TriangleMesh& mesh, F f) {
+  double sum = 0;
+  for (const auto& t : mesh.triangles)
+    sum += f(mesh.vertices[t[0]].cast<double>(), mesh.vertices[t[1]].cast<double>(), mesh.vertices[t[2]].cast<double>());
+  return sum;
+}
+
+}  // namespace
+
 double signed_volume(const TriangleMesh& mesh) {
-  double six_v = 0;
-  for (const auto& t : mesh.triangles) {
-    const Eigen::Vector3d a = mesh.vertices[t[0]].cast<double>();
-    const Eigen::Vector3d b = mesh.vertices[t[1]].cast<double>();
-    const Eigen::Vector3d c = mesh.vertices[t[2]].cast<double>();
-    six_v += a.dot(b.cross(c));
-  }
+  const double six_v = sum_over_triangles(mesh, [](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+    return a.dot(b.cross(c));
+  });
   return six_v / 6.0;
 }
 
 double surface_area(const TriangleMesh& mesh) {
-  double twice = 0;
-  for (const auto& t : mesh.triangles) {
-    const Eigen::Vector3d a = mesh.vertices[t[0]].cast<double>();
-    const Eigen::Vector3d b = mesh.vertices[t[1]].cast<double>();
-    const Eigen::Vector3d c = mesh.vertices[t[2]].cast<double>();
-    twice += (b - a).cross(c - a).norm();
-  }
+  const double twice = sum_over_triangles(mesh, [](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+    return (b - a).cross(c - a).norm();
+  });
   return twice / 2.0;
 }
 

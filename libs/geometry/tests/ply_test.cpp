@@ -12,12 +12,14 @@
 #include <gtest/gtest.h>
 
 #include "fba/geometry/mesh_io.hpp"
+#include "load_error.hpp"
 #include "support/child_process.hpp"
 #include "support/geometry_checks.hpp"
 
 namespace fba::geometry {
 namespace {
 
+using test::load_error;
 using test::TempDir;
 
 // A float near x whose lowest byte (the first byte written, little endian) is 0x0A.
@@ -72,16 +74,6 @@ void write_bytes(const std::filesystem::path& p, const std::string& bytes) {
   std::ofstream(p, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
-std::string load_error(const std::filesystem::path& p) {
-  try {
-    load_mesh(p);
-  } catch (const MeshLoadError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no error for " << p;
-  return {};
-}
-
 TEST(Ply, WrittenModelNeverStartsItsDataWithANewlineByte) {
   TempDir dir;
   const TriangleMesh box = box_with_newline_first_vertex();
@@ -133,16 +125,6 @@ TEST(Ply, TruncatedFileIsAnErrorGivingTheSizes) {
   EXPECT_NE(what.find("expected 12 'face' elements, found the end of the file"), std::string::npos) << what;
 }
 
-TEST(Ply, HeaderCountsBeyondTheFileSizeAreRefusedBeforeReading) {
-  TempDir dir;
-  const auto path = dir.path() / "liar.ply";
-  write_bytes(path, "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\n"
-                    "property float z\nend_header\n" + std::string(24, '\1'));
-  const std::string what = load_error(path);
-  EXPECT_NE(what.find("declares 4000000000 'vertex' elements of at least 12 bytes each, but the data after the header is 24 bytes"),
-            std::string::npos) << what;
-}
-
 TEST(Ply, TrailingBytesAfterTheElementsAreAnError) {
   TempDir dir;
   const auto path = dir.path() / "box.ply";
@@ -151,24 +133,38 @@ TEST(Ply, TrailingBytesAfterTheElementsAreAnError) {
   EXPECT_NE(load_error(path).find("found 3 more bytes"), std::string::npos);
 }
 
-TEST(Ply, FaceNamingAMissingVertexIsAnError) {
+// Files refused for what their bytes say, each with an error that names the fault (the counts
+// beyond the file's size before anything is read).
+TEST(Ply, MalformedFilesAreRefusedNamingTheFault) {
+  struct Case {
+    const char* name;
+    std::string bytes;
+    const char* error;
+  };
+  const Case cases[] = {
+      {"header counts beyond the file's size",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\n"
+       "property float z\nend_header\n" + std::string(24, '\1'),
+       "declares 4000000000 'vertex' elements of at least 12 bytes each, but the data after the header is 24 bytes"},
+      {"a face naming a missing vertex",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+       "face 0 names vertex 7, but there are 3 vertices"},
+      {"a header without its end", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n", "expected 'end_header'"},
+      {"an unknown scalar type", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float128 x\nend_header\n",
+       "line 4: expected a PLY scalar type"},
+      {"a word for a number",
+       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 zero 0\n",
+       "line 8: expected a number in 'vertex' element 0, found 'zero'"},
+  };
   TempDir dir;
   const auto path = dir.path() / "bad.ply";
-  write_bytes(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
-  EXPECT_NE(load_error(path).find("face 0 names vertex 7, but there are 3 vertices"), std::string::npos);
-}
-
-TEST(Ply, HeaderWithoutEndOrWithAnUnknownTypeIsAnError) {
-  TempDir dir;
-  const auto path = dir.path() / "bad.ply";
-  write_bytes(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n");
-  EXPECT_NE(load_error(path).find("expected 'end_header'"), std::string::npos);
-  write_bytes(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float128 x\nend_header\n");
-  EXPECT_NE(load_error(path).find("line 4: expected a PLY scalar type"), std::string::npos);
-  write_bytes(path, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
-                    "end_header\n0 zero 0\n");
-  EXPECT_NE(load_error(path).find("line 8: expected a number in 'vertex' element 0, found 'zero'"), std::string::npos);
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    write_bytes(path, c.bytes);
+    const std::string what = load_error(path);
+    EXPECT_NE(what.find(c.error), std::string::npos) << what;
+  }
 }
 
 // Other writers' PLY: big endian, double coordinates, extra properties and quads.

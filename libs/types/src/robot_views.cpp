@@ -47,6 +47,13 @@ json grasp_json(const Grasp& g, const std::optional<Eigen::Isometry3d>& palm = s
           {"views", g.views}};
 }
 
+// A sample's view: what it shows, with its kind and the sample's stamp.
+std::string stamped(json v, const char* kind, double stamp) {
+  v["kind"] = kind;
+  v["stamp"] = number(stamp, kUnit);
+  return dump(v);
+}
+
 // Every view is shown or not, never thrown from: the reader is a live view, not the task.
 template <class F>
 std::string guarded(F&& f) noexcept {
@@ -62,36 +69,30 @@ std::string guarded(F&& f) noexcept {
 std::string pose_view(const Packet& p) {
   return guarded([&] {
     const Pose& pose = p.get<Pose>();
-    json v = views::pose(pose.world_from_frame);
-    v["kind"] = "pose";
-    v["stamp"] = number(pose.stamp, kUnit);
-    return dump(v);
+    return stamped(views::pose(pose.world_from_frame), "pose", pose.stamp);
   });
 }
 
 std::string joint_state_view(const Packet& p) {
   return guarded([&] {
     const JointState& s = p.get<JointState>();
-    json v = {{"kind", "joints"}, {"names", s.names}, {"positions", numbers(s.positions, kUnit)}, {"stamp", number(s.stamp, kUnit)}};
+    json v = {{"names", s.names}, {"positions", numbers(s.positions, kUnit)}};
     if (!s.velocities.empty()) v["velocities"] = numbers(s.velocities, kUnit);
-    return dump(v);
+    return stamped(std::move(v), "joints", s.stamp);
   });
 }
 
 std::string trajectory_view(const Packet& p) {
   return guarded([&] {
     const JointTrajectory& t = p.get<JointTrajectory>();
-    json v = trajectory_json(t, kMaxTrajectoryPoints, kUnit);
-    v["kind"] = "trajectory";
-    v["stamp"] = number(t.stamp, kUnit);
-    return dump(v);
+    return stamped(trajectory_json(t, kMaxTrajectoryPoints, kUnit), "trajectory", t.stamp);
   });
 }
 
 std::string grasp_view(const Packet& p) {
   return guarded([&] {
     const Grasp& g = p.get<Grasp>();
-    return dump({{"kind", "grasps"}, {"candidates", json::array()}, {"selected", grasp_json(g)}, {"stamp", number(g.stamp, kUnit)}});
+    return stamped({{"candidates", json::array()}, {"selected", grasp_json(g)}}, "grasps", g.stamp);
   });
 }
 
@@ -105,12 +106,8 @@ std::string grasp_candidates_view(const Packet& p) {
       g["passed_over"] = c.passed_over;
       candidates.push_back(std::move(g));
     }
-    return dump({{"kind", "grasps"},
-                 {"candidates", std::move(candidates)},
-                 {"selected", nullptr},
-                 {"total", gc.total},
-                 {"views", gc.views},
-                 {"stamp", number(gc.stamp, kUnit)}});
+    return stamped({{"candidates", std::move(candidates)}, {"selected", nullptr}, {"total", gc.total}, {"views", gc.views}}, "grasps",
+                   gc.stamp);
   });
 }
 

@@ -36,8 +36,11 @@ fba::Octree box_model(int views) {
                                     views);
 }
 
-fba::RegionsOfInterest plus_x_face() {
-  return {{Eigen::AlignedBox3d(Eigen::Vector3d(0.3, -0.3, -0.3), Eigen::Vector3d(0.45, 0.3, 0.3))}};
+// A request for the box's +x face, about the model of `model_views` views (-1: unknown).
+fba::RegionsOfInterest plus_x_face(int model_views = -1) {
+  fba::RegionsOfInterest request{{Eigen::AlignedBox3d(Eigen::Vector3d(0.3, -0.3, -0.3), Eigen::Vector3d(0.45, 0.3, 0.3))}};
+  request.model_views = model_views;
+  return request;
 }
 
 // A ring of 8 views at distance 4 around the origin, in the horizontal plane: view i at azimuth i * 45 deg.
@@ -176,9 +179,8 @@ TEST(ExplorationPlanner, TheViewsAlreadyTakenCountAsGrazingLinesOfSight) {
   // A contact on the +y face: the initial view from 0 deg grazes it already, and the only other
   // grazing view of the ring, from 180 deg, is the same line of sight: no view of the ring pins it,
   // so the planner falls back to the uncertain nodes of the region.
-  auto request = plus_x_face();
+  auto request = plus_x_face(3);
   request.points.push_back({Eigen::Vector3d(0, 0.5, 0), Eigen::Vector3d::UnitY(), 0});
-  request.model_views = 3;
   h.push<fba::RegionsOfInterest>("regions", request);
   h.run();
   ASSERT_EQ(h.values<fba::Pose>("target").size(), 4u);
@@ -248,17 +250,13 @@ TEST(ExplorationPlanner, ARequestFromAModelWithoutTheLastViewIsDropped) {
   ASSERT_EQ(h.values<fba::Pose>("target").size(), 3u);
   // Synthesis answered a 2-view model late, after the model of 3 views had arrived: not a request
   // about the newest model, so no view is chosen on it, now or later.
-  auto stale = plus_x_face();
-  stale.model_views = 2;
-  h.push<fba::RegionsOfInterest>("regions", stale);
+  h.push<fba::RegionsOfInterest>("regions", plus_x_face(2));
   h.run();
   h.push<fba::Octree>("octree", box_model(3));
   h.run();
   EXPECT_EQ(h.values<fba::Pose>("target").size(), 3u);
   // Its answer about the 3-view model is one.
-  auto fresh = plus_x_face();
-  fresh.model_views = 3;
-  h.push<fba::RegionsOfInterest>("regions", fresh);
+  h.push<fba::RegionsOfInterest>("regions", plus_x_face(3));
   h.run();
   EXPECT_EQ(h.values<fba::Pose>("target").size(), 4u);
 }

@@ -328,12 +328,17 @@ TEST(ModelSurface, AnObjectTouchingTheTableAtAPointIsTheObjectAndWhatFloatsIsNot
   EXPECT_GT(s.unsupported_leaves, 0u);
 }
 
+// A model in kCube whose root is its only leaf.
+Octree root_only(NodeState state, int max_depth) {
+  Octree t;
+  t.bounds = kCube;
+  t.max_depth = max_depth;
+  t.root.set_state(state);
+  return t;
+}
+
 TEST(ModelSurface, AnEmptyModelHasNoSurface) {
-  Octree empty;
-  empty.bounds = kCube;
-  empty.max_depth = 6;
-  empty.root.set_state(NodeState::Empty);
-  const ModelSurface s = model_surface(empty);
+  const ModelSurface s = model_surface(root_only(NodeState::Empty, 6));
   EXPECT_TRUE(s.samples.empty());
   EXPECT_EQ(s.leaves, 0u);
   Octree none;  // no tree yet
@@ -342,11 +347,7 @@ TEST(ModelSurface, AnEmptyModelHasNoSurface) {
 }
 
 TEST(ModelSurface, AFullRootIsOneBlock) {
-  Octree full;
-  full.bounds = kCube;
-  full.max_depth = 0;
-  full.root.set_state(NodeState::Full);
-  const ModelSurface s = model_surface(full);
+  const ModelSurface s = model_surface(root_only(NodeState::Full, 0));
   ASSERT_EQ(s.samples.size(), 1u);
   EXPECT_NEAR(s.samples[0].normal.norm(), 1.0, 1e-12);
 }

@@ -75,10 +75,15 @@ SynthesisParams params_for(double spacing) {
   return p;
 }
 
+// The samples with their curvature estimated over the neighbourhood params_for(spacing) uses.
+std::vector<SurfaceSample> curved(std::vector<SurfaceSample> samples, double spacing) {
+  estimate_curvature(samples, params_for(spacing).neighbour_radius);
+  return samples;
+}
+
 TEST(GraspSynthesis, CylinderBestGraspHasThreeContactsAroundTheAxis) {
   const double h = 0.005;
-  auto samples = cylinder(0.035, 0.12, h);
-  estimate_curvature(samples, 2.2 * h);
+  auto samples = curved(cylinder(0.035, 0.12, h), h);
   const SynthesisResult r = synthesise(samples, params_for(h));
   ASSERT_FALSE(r.candidates.empty());
   const Grasp& g = r.candidates.front().grasp;
@@ -107,8 +112,7 @@ TEST(GraspSynthesis, CylinderBestGraspHasThreeContactsAroundTheAxis) {
 
 TEST(GraspSynthesis, BoxBestGraspOpposesAThumbOnOneFaceToTwoFingersOnTheOpposite) {
   const double h = 0.005;
-  auto samples = box({0.06, 0.10, 0.15}, h);
-  estimate_curvature(samples, 2.2 * h);
+  auto samples = curved(box({0.06, 0.10, 0.15}, h), h);
   const SynthesisResult r = synthesise(samples, params_for(h));
   EXPECT_EQ(r.regions.size(), 6u);  // one per face: the edges are sharp
   ASSERT_FALSE(r.candidates.empty());
@@ -128,13 +132,13 @@ TEST(GraspSynthesis, BoxBestGraspOpposesAThumbOnOneFaceToTwoFingersOnTheOpposite
 TEST(GraspSynthesis, WithATableNoCandidateReachesIntoIt) {
   const double h = 0.004;
   // A cylinder 3.7 cm across lying along x on the table (z = 0), as a banana lies.
-  std::vector<SurfaceSample> samples;
+  std::vector<SurfaceSample> lying;
   for (auto s : cylinder(0.0185, 0.12, h)) {
     s.position = Eigen::Vector3d(s.position.z() - 0.06, s.position.y(), s.position.x() + 0.0185);
     s.normal = Eigen::Vector3d(s.normal.z(), s.normal.y(), s.normal.x());
-    samples.push_back(s);
+    lying.push_back(s);
   }
-  estimate_curvature(samples, 2.2 * h);
+  const auto samples = curved(lying, h);
   SynthesisParams p = params_for(h);
   const SynthesisResult free = synthesise(samples, p);
   p.table_z = 0.0;
@@ -177,8 +181,7 @@ TEST(GraspSynthesis, EstimatingCurvatureRefusesASampleThatIsNotFinite) {
 
 TEST(GraspSynthesis, CurvatureScoreOrdersConcaveAboveFlatAboveSphere) {
   const double h = 0.005;
-  auto flat = box({0.06, 0.10, 0.15}, h);
-  estimate_curvature(flat, 2.2 * h);
+  auto flat = curved(box({0.06, 0.10, 0.15}, h), h);
   auto ball = sphere(0.04, 2000);
   estimate_curvature(ball, 0.012);
   auto concave = flat;  // the same box with its faces declared slightly hollow
@@ -198,8 +201,7 @@ TEST(GraspSynthesis, CurvatureScoreOrdersConcaveAboveFlatAboveSphere) {
 
 TEST(GraspSynthesis, UncertainSamplesNameTheirRegionAndFlagCandidates) {
   const double h = 0.005;
-  auto samples = box({0.06, 0.10, 0.15}, h);
-  estimate_curvature(samples, 2.2 * h);
+  auto samples = curved(box({0.06, 0.10, 0.15}, h), h);
   for (auto& s : samples)
     if (s.normal.x() > 0.5) s.uncertain = true;  // the +x face is not yet seen well
   const SynthesisParams p = params_for(h);
@@ -231,8 +233,7 @@ TEST(GraspSynthesis, UncertainSamplesNameTheirRegionAndFlagCandidates) {
 // a grasp selectable now is returned however many better ones wait for views.
 TEST(GraspSynthesis, CandidatesOnResolvedSurfaceAreNotCrowdedOutByUnresolvedOnes) {
   const double h = 0.005;
-  auto samples = box({0.06, 0.10, 0.15}, h);
-  estimate_curvature(samples, 2.2 * h);
+  auto samples = curved(box({0.06, 0.10, 0.15}, h), h);
   for (auto& s : samples)
     if (s.normal.x() > 0.5) s.uncertain = true;
   SynthesisParams p = params_for(h);
@@ -249,8 +250,7 @@ TEST(GraspSynthesis, CandidatesOnResolvedSurfaceAreNotCrowdedOutByUnresolvedOnes
 // (what grasp.synthesis settles for after its last view).
 TEST(GraspSynthesis, UnpinnedSurfaceBesideAContactFlagsTheCandidateButNotItsContacts) {
   const double h = 0.005;
-  auto samples = box({0.06, 0.10, 0.15}, h);
-  estimate_curvature(samples, 2.2 * h);
+  auto samples = curved(box({0.06, 0.10, 0.15}, h), h);
   const SynthesisResult all = synthesise(samples, params_for(h));
   ASSERT_FALSE(all.candidates.empty());
   const GraspCandidate& best = all.candidates.front();
@@ -285,8 +285,7 @@ TEST(GraspSynthesis, UnpinnedSurfaceBesideAContactFlagsTheCandidateButNotItsCont
 
 TEST(GraspSynthesis, AnObjectTooBigForTheHandGivesNoCandidate) {
   const double h = 0.01;
-  auto samples = box({0.4, 0.4, 0.4}, h);
-  estimate_curvature(samples, 2.2 * h);
+  auto samples = curved(box({0.4, 0.4, 0.4}, h), h);
   const SynthesisResult r = synthesise(samples, params_for(h));
   EXPECT_TRUE(r.candidates.empty());
   EXPECT_EQ(r.regions.size(), 6u);
@@ -297,8 +296,8 @@ TEST(GraspSynthesis, AnObjectTooBigForTheHandGivesNoCandidate) {
 // distance from it), with the epsilon it reports.
 TEST(GraspSynthesis, EveryCandidateIsForceClosureOnTheModel) {
   const double h = 0.005;
-  for (auto samples : {cylinder(0.035, 0.12, h), box({0.06, 0.10, 0.15}, h), sphere(0.04, 1500)}) {
-    estimate_curvature(samples, 2.2 * h);
+  for (const auto& shape : {cylinder(0.035, 0.12, h), box({0.06, 0.10, 0.15}, h), sphere(0.04, 1500)}) {
+    const auto samples = curved(shape, h);
     const SynthesisResult r = synthesise(samples, params_for(h));
     ASSERT_FALSE(r.candidates.empty());
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -318,8 +317,7 @@ TEST(GraspSynthesis, EveryCandidateIsForceClosureOnTheModel) {
 // check leaves every candidate out and says so.
 TEST(GraspSynthesis, FrictionlessThreeContactsAreNeverKept) {
   const double h = 0.005;
-  auto samples = cylinder(0.035, 0.12, h);
-  estimate_curvature(samples, 2.2 * h);
+  auto samples = curved(cylinder(0.035, 0.12, h), h);
   SynthesisParams p = params_for(h);
   p.friction = 0;
   const SynthesisResult r = synthesise(samples, p);
@@ -344,8 +342,8 @@ TEST(GraspSynthesis, ACandidateAllowingForNormalErrorStaysClosedWithItsNormalsTu
   const double h = 0.005, error_deg = 10;
   std::mt19937 rng(7);
   std::size_t plain_opened = 0;
-  for (auto samples : {cylinder(0.035, 0.12, h), box({0.06, 0.10, 0.15}, h)}) {
-    estimate_curvature(samples, 2.2 * h);
+  for (const auto& shape : {cylinder(0.035, 0.12, h), box({0.06, 0.10, 0.15}, h)}) {
+    const auto samples = curved(shape, h);
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (const auto& x : samples) centre += x.position / static_cast<double>(samples.size());
     double r_max = 0;
@@ -375,8 +373,7 @@ TEST(GraspSynthesis, ACandidateAllowingForNormalErrorStaysClosedWithItsNormalsTu
 // A higher bar on the model's epsilon keeps fewer candidates, each above it.
 TEST(GraspSynthesis, MinimumModelEpsilonLeavesOutTheLessStable) {
   const double h = 0.005;
-  auto samples = box({0.06, 0.10, 0.15}, h);
-  estimate_curvature(samples, 2.2 * h);
+  auto samples = curved(box({0.06, 0.10, 0.15}, h), h);
   SynthesisParams p = params_for(h);
   p.max_candidates = 1000;
   const SynthesisResult all = synthesise(samples, p);
@@ -394,8 +391,7 @@ TEST(GraspSynthesis, MinimumModelEpsilonLeavesOutTheLessStable) {
 // model first; the others follow by total.
 TEST(GraspSynthesis, ReliableCandidatesComeMostStableFirst) {
   const double h = 0.005;
-  auto samples = cylinder(0.035, 0.12, h);
-  estimate_curvature(samples, 2.2 * h);
+  auto samples = curved(cylinder(0.035, 0.12, h), h);
   SynthesisParams p = params_for(h);
   const SynthesisResult by_total = synthesise(samples, p);
   ASSERT_GT(by_total.candidates.size(), 2u);

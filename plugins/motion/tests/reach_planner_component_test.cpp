@@ -17,6 +17,7 @@
 
 #include "support/reach_scenes.hpp"
 #include "support/built_plugins.hpp"
+#include "support/events.hpp"
 
 using fba::testing::ComponentHarness;
 using namespace fba::motion::test;
@@ -32,6 +33,15 @@ fba::JointState named_joints(const Eigen::VectorXd& q) {
 }
 
 std::int64_t nanoseconds(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
+
+// The box's model, the arm at `joints`, and a grasp of the box from above with its contacts at
+// `height`, given to the planner at once.
+void plan_from_above(ComponentHarness& h, const fba::JointState& joints, double height) {
+  h.push("octree", box_model(kBox));
+  h.push("joint_state", joints);
+  h.push("grasp", box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), height));
+  h.run();
+}
 
 }  // namespace
 
@@ -102,16 +112,12 @@ TEST(ReachPlannerComponent, AGraspWaitsForTheArmToStandStill) {
 
 TEST(ReachPlannerComponent, AGraspItCannotTakeIsAnUnreachableEventWithTheRefusalAndTheReason) {
   ComponentHarness h(fba::test::built_plugins(), "motion.reach_planner");
-  h.push("octree", box_model(kBox));
-  h.push("joint_state", named_joints(home()));
-  h.push("grasp", box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.01));
-  h.run();
+  plan_from_above(h, named_joints(home()), 0.01);
   EXPECT_TRUE(h.packets("trajectory").empty());
   EXPECT_TRUE(h.packets("hand").empty());
-  const auto events = h.events();
-  const auto it = std::find_if(events.begin(), events.end(), [](const fba::Event& e) { return e.name == "unreachable"; });
-  ASSERT_NE(it, events.end());
-  EXPECT_EQ(nlohmann::json::parse(it->payload),
+  const auto unreachable = fba::test::find_event(h.events(), "unreachable");
+  ASSERT_TRUE(unreachable.has_value());
+  EXPECT_EQ(nlohmann::json::parse(unreachable->payload),
             (nlohmann::json{{"refusal", "table"}, {"reason", "the grasp puts the thumb into the table"}}));
   EXPECT_EQ(h.stage(), "idle");
 }
@@ -121,22 +127,15 @@ TEST(ReachPlannerComponent, AJointStateWithoutOneOfTheArmsJointsIsARefusalNaming
   fba::JointState partial = named_joints(home());
   partial.names.pop_back();
   partial.positions.pop_back();
-  h.push("octree", box_model(kBox));
-  h.push("joint_state", partial);
-  h.push("grasp", box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07));
-  h.run();
-  const auto events = h.events();
-  const auto it = std::find_if(events.begin(), events.end(), [](const fba::Event& e) { return e.name == "unreachable"; });
-  ASSERT_NE(it, events.end());
-  EXPECT_EQ(nlohmann::json::parse(it->payload)["reason"], "the joint state has no position for joint 'shoulder_pan_joint'");
+  plan_from_above(h, partial, 0.07);
+  const auto unreachable = fba::test::find_event(h.events(), "unreachable");
+  ASSERT_TRUE(unreachable.has_value());
+  EXPECT_EQ(nlohmann::json::parse(unreachable->payload)["reason"], "the joint state has no position for joint 'shoulder_pan_joint'");
 }
 
 TEST(ReachPlannerComponent, ANewGraspReplacesThePlanBeingFollowed) {
   ComponentHarness h(fba::test::built_plugins(), "motion.reach_planner");
-  h.push("octree", box_model(kBox));
-  h.push("joint_state", named_joints(home()));
-  h.push("grasp", box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07));
-  h.run();
+  plan_from_above(h, named_joints(home()), 0.07);
   const auto hand = h.values<fba::HandCommand>("hand");
   ASSERT_EQ(hand.size(), 3u) << h.failure();
   h.set_time(nanoseconds(hand[1].time + 0.01));
@@ -160,10 +159,7 @@ namespace {
 // the box's grasp from above, with the planner's parameters `params`.
 Eigen::Isometry3d flange_at_close(const fba::testing::Params& params) {
   ComponentHarness h(fba::test::built_plugins(), "motion.reach_planner", params);
-  h.push("octree", box_model(kBox));
-  h.push("joint_state", named_joints(home()));
-  h.push("grasp", box_grasp(kBox, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.07));
-  h.run();
+  plan_from_above(h, named_joints(home()), 0.07);
   const auto trajectory = h.values<fba::JointTrajectory>("trajectory");
   const auto hand = h.values<fba::HandCommand>("hand");
   if (trajectory.size() != 1 || hand.size() != 3) throw std::runtime_error("no plan: " + h.failure());

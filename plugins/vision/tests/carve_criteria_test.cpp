@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "carve_common.hpp"
+#include "fast_carve.hpp"
 #include "fba/geometry/viewpoints.hpp"
 #include "fba/vision/contour_extraction.hpp"
 #include "fba/vision/octree_carver.hpp"
@@ -16,6 +17,7 @@
 
 using namespace fba::vision;
 using namespace fba::vision::detail;
+using fba::vision::test::fast_carve;
 
 namespace {
 
@@ -54,6 +56,27 @@ std::vector<fba::Silhouette> disc_views() {
 
 // The root node of a 10 cm cube at the origin.
 const Lattice kCube{Eigen::Vector3d::Constant(-0.05), 0.1};
+
+// The root box the generic criterion's tests carve in: 12 cm around the origin.
+const Eigen::AlignedBox3d kRootBox(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
+
+// The generic criterion to `max_depth` at `occupancy_threshold`, every view in at once.
+CarverParams generic(int max_depth, double occupancy_threshold) {
+  CarverParams p;
+  p.max_depth = max_depth;
+  p.detail_after_views = 0;
+  p.occupancy_threshold = occupancy_threshold;
+  return p;
+}
+
+// The depth of the model's deepest leaf whose centre lies `within`.
+int deepest(const fba::Octree& t, const Eigen::AlignedBox3d& within = kRootBox) {
+  int d = 0;
+  t.for_each_leaf([&](const fba::OctreeCell& c) {
+    if (within.contains(c.centre)) d = std::max(d, c.depth);
+  });
+  return d;
+}
 
 }  // namespace
 
@@ -113,23 +136,11 @@ TEST(HullShare, OfAHalfCoveredNodeIsAboutOneHalf) {
 // is never split. Threshold 0 splits every node on the outline.
 TEST(GenericCriterion, ThresholdOneNeverSplitsAndZeroSplitsTheOutline) {
   const std::vector<fba::Silhouette> views = disc_views();
-  const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
-  CarverParams p;
-  p.max_depth = 5;
-  p.detail_after_views = 0;
-  p.occupancy_threshold = 1;
-  EXPECT_EQ(reference_carve(views, box, p).node_count, 1u);
-  OctreeCarver off(p);
-  off.set_bounds(box);
-  off.add_views(views);
-  EXPECT_EQ(off.snapshot()->node_count, 1u);
+  CarverParams p = generic(5, 1);
+  EXPECT_EQ(reference_carve(views, kRootBox, p).node_count, 1u);
+  EXPECT_EQ(fast_carve(views, kRootBox, p)->node_count, 1u);
   p.occupancy_threshold = 0;
-  OctreeCarver uniform(p);
-  uniform.set_bounds(box);
-  uniform.add_views(views);
-  int deepest = 0;
-  uniform.snapshot()->for_each_leaf([&](const fba::OctreeCell& c) { deepest = std::max(deepest, c.depth); });
-  EXPECT_EQ(deepest, 5);
+  EXPECT_EQ(deepest(*fast_carve(views, kRootBox, p)), 5);
 }
 
 // The paper's scheme: the generic criterion for the coarse levels, the grasp criteria for the
@@ -137,37 +148,18 @@ TEST(GenericCriterion, ThresholdOneNeverSplitsAndZeroSplitsTheOutline) {
 // reference agree on every leaf.
 TEST(GenericCriterion, BelowGenericDepthOnlyARegionOfInterestSplits) {
   const std::vector<fba::Silhouette> views = disc_views();
-  const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
-  CarverParams p;
-  p.max_depth = 6;
-  p.detail_after_views = 0;
-  p.occupancy_threshold = 0;
+  CarverParams p = generic(6, 0);
   p.generic_depth = 3;
-  const auto deepest = [](const fba::Octree& t, const Eigen::AlignedBox3d& within) {
-    int d = 0;
-    t.for_each_leaf([&](const fba::OctreeCell& c) {
-      if (within.contains(c.centre)) d = std::max(d, c.depth);
-    });
-    return d;
-  };
-  const Eigen::AlignedBox3d everywhere(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1));
-  OctreeCarver coarse(p);
-  coarse.set_bounds(box);
-  coarse.add_views(views);
-  EXPECT_EQ(deepest(*coarse.snapshot(), everywhere), 3);
+  EXPECT_EQ(deepest(*fast_carve(views, kRootBox, p)), 3);
 
   fba::RegionsOfInterest roi;
   const Eigen::AlignedBox3d region(Eigen::Vector3d(0.0, -0.06, -0.06), Eigen::Vector3d(0.06, 0.06, 0.06));  // x > 0 only
   roi.boxes.push_back(region);
-  OctreeCarver detailed(p);
-  detailed.set_bounds(box);
-  detailed.set_regions_of_interest(roi);
-  detailed.add_views(views);
-  const auto model = detailed.snapshot();
+  const auto model = fast_carve(views, kRootBox, p, roi);
   EXPECT_EQ(deepest(*model, region), 6);
   const Eigen::AlignedBox3d outside(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(-0.016, 1, 1));  // beyond the region's reach
   EXPECT_LE(deepest(*model, outside), 3);
-  const fba::Octree ref = reference_carve(views, box, p, roi);
+  const fba::Octree ref = reference_carve(views, kRootBox, p, roi);
   EXPECT_EQ(count_leaf_mismatches(*model, ref), 0u);
   EXPECT_EQ(count_leaf_mismatches(ref, *model), 0u);
 }
@@ -183,19 +175,13 @@ TEST(GenericCriterion, FastCarverAndReferenceAgreeAtAThresholdBetween) {
     cv::ellipse(s.mask, {320, 240}, {90, 50}, azimuth, 0, 360, cv::Scalar(255), cv::FILLED);
     views.push_back(s);
   }
-  const Eigen::AlignedBox3d box(Eigen::Vector3d::Constant(-0.06), Eigen::Vector3d::Constant(0.06));
   for (double t : {0.3, 0.5, 0.7}) {
-    CarverParams p;
-    p.max_depth = 6;
-    p.detail_after_views = 0;
-    p.occupancy_threshold = t;
-    OctreeCarver fast(p);
-    fast.set_bounds(box);
-    fast.add_views(views);
-    const fba::Octree ref = reference_carve(views, box, p);
-    EXPECT_EQ(count_leaf_mismatches(*fast.snapshot(), ref), 0u) << t;
-    EXPECT_EQ(count_leaf_mismatches(ref, *fast.snapshot()), 0u) << t;
-    if (t < 0.5) EXPECT_GT(fast.snapshot()->node_count, 1u) << t;  // the criterion split something
+    const CarverParams p = generic(6, t);
+    const auto fast = fast_carve(views, kRootBox, p);
+    const fba::Octree ref = reference_carve(views, kRootBox, p);
+    EXPECT_EQ(count_leaf_mismatches(*fast, ref), 0u) << t;
+    EXPECT_EQ(count_leaf_mismatches(ref, *fast), 0u) << t;
+    if (t < 0.5) EXPECT_GT(fast->node_count, 1u) << t;  // the criterion split something
   }
 }
 

@@ -20,8 +20,10 @@
 #include "support/temp_dir.hpp"
 #include "support/build_paths.hpp"
 #include "support/data_sets.hpp"
+#include "fast_carve.hpp"
 
 using namespace fba::vision;
+using fba::vision::test::fast_carve;
 
 namespace {
 
@@ -42,15 +44,6 @@ const std::vector<fba::Silhouette>& dino() {
     return out;
   }();
   return views;
-}
-
-std::shared_ptr<const fba::Octree> fast_carve(const std::vector<fba::Silhouette>& views, const Eigen::AlignedBox3d& box,
-                                              const CarverParams& p, const fba::RegionsOfInterest& roi = {}) {
-  OctreeCarver c(p);
-  c.set_regions_of_interest(roi);
-  c.set_bounds(box);
-  c.add_views(views);
-  return c.snapshot();
 }
 
 std::size_t mismatches_both_ways(const fba::Octree& a, const fba::Octree& b) {

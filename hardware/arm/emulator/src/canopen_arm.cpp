@@ -243,61 +243,58 @@ namespace {
 std::uint32_t write_object(CanopenArmEmulator::Node& n, std::uint16_t index, std::uint8_t sub, std::uint32_t value,
                            std::size_t size, const std::function<void(const can::Frame&)>& send);
 
+// The commands of the controlword's low bits (CiA 402); no word is two of them.
+enum class Command { none, shutdown, switch_on, enable_operation, disable_voltage, quick_stop };
+
+Command command_of(std::uint16_t cw) {
+  if ((cw & 0x02) == 0) return Command::disable_voltage;
+  if ((cw & 0x06) == 0x02) return Command::quick_stop;
+  if ((cw & 0x87) == 0x06) return Command::shutdown;
+  if ((cw & 0x8F) == 0x07) return Command::switch_on;
+  if ((cw & 0x8F) == 0x0F) return Command::enable_operation;
+  return Command::none;
+}
+
+// The state machine's transitions on a command, fault reset apart (it has side effects).
+struct Transition {
+  Drive from;
+  Command command;
+  Drive to;
+};
+constexpr Transition kTransitions[] = {
+    {Drive::switch_on_disabled, Command::shutdown, Drive::ready},
+    {Drive::ready, Command::switch_on, Drive::switched_on},
+    {Drive::ready, Command::enable_operation, Drive::enabled},  // transitions 3 and 4 at once, as most drives allow
+    {Drive::ready, Command::disable_voltage, Drive::switch_on_disabled},
+    {Drive::ready, Command::quick_stop, Drive::switch_on_disabled},
+    {Drive::switched_on, Command::enable_operation, Drive::enabled},
+    {Drive::switched_on, Command::shutdown, Drive::ready},
+    {Drive::switched_on, Command::disable_voltage, Drive::switch_on_disabled},
+    {Drive::switched_on, Command::quick_stop, Drive::switch_on_disabled},
+    {Drive::enabled, Command::switch_on, Drive::switched_on},
+    {Drive::enabled, Command::shutdown, Drive::ready},
+    {Drive::enabled, Command::disable_voltage, Drive::switch_on_disabled},
+    {Drive::enabled, Command::quick_stop, Drive::quick_stop},
+    {Drive::quick_stop, Command::disable_voltage, Drive::switch_on_disabled},
+    {Drive::quick_stop, Command::enable_operation, Drive::enabled},  // quick stop option codes 5-8: transition 16
+};
+
 void apply_controlword(CanopenArmEmulator::Node& n, std::uint16_t cw,
                        const std::function<void(const can::Frame&)>& send) {
   const std::uint16_t previous = n.controlword;
   n.controlword = cw;
-  const bool fault_reset_edge = (cw & 0x80) && !(previous & 0x80);
-  const bool disable_voltage = (cw & 0x02) == 0;
-  const bool quick_stop = (cw & 0x06) == 0x02;
-  const bool shutdown = (cw & 0x87) == 0x06;
-  const bool switch_on = (cw & 0x8F) == 0x07;
-  const bool enable = (cw & 0x8F) == 0x0F;
   Drive next = n.drive;
-  switch (n.drive) {
-    case Drive::fault:
-      if (fault_reset_edge) {
-        next = Drive::switch_on_disabled;
-        n.set(0x603F, 0, 0);
-        n.set(0x1001, 0, 0);
-        send(emcy_frame(n.id, 0x0000, 0));  // error reset
-      }
-      break;
-    case Drive::switch_on_disabled:
-      if (shutdown) next = Drive::ready;
-      break;
-    case Drive::ready:
-      if (switch_on)
-        next = Drive::switched_on;
-      else if (enable)
-        next = Drive::enabled;  // transitions 3 and 4 at once, as most drives allow
-      else if (disable_voltage || quick_stop)
-        next = Drive::switch_on_disabled;
-      break;
-    case Drive::switched_on:
-      if (enable)
-        next = Drive::enabled;
-      else if (shutdown)
-        next = Drive::ready;
-      else if (disable_voltage || quick_stop)
-        next = Drive::switch_on_disabled;
-      break;
-    case Drive::enabled:
-      if (switch_on)
-        next = Drive::switched_on;
-      else if (shutdown)
-        next = Drive::ready;
-      else if (disable_voltage)
-        next = Drive::switch_on_disabled;
-      else if (quick_stop)
-        next = Drive::quick_stop;
-      break;
-    case Drive::quick_stop:
-      if (disable_voltage)
-        next = Drive::switch_on_disabled;
-      else if (enable)
-        next = Drive::enabled;  // quick stop option codes 5-8: transition 16
-      break;
+  if (n.drive == Drive::fault) {
+    if ((cw & 0x80) && !(previous & 0x80)) {  // fault reset acts on the rising edge
+      next = Drive::switch_on_disabled;
+      n.set(0x603F, 0, 0);
+      n.set(0x1001, 0, 0);
+      send(emcy_frame(n.id, 0x0000, 0));  // error reset
+    }
+  } else {
+    const Command command = command_of(cw);
+    for (const Transition& t : kTransitions)
+      if (t.from == n.drive && t.command == command) next = t.to;
   }
   if (next != Drive::enabled) n.hold();  // every way out of "operation enabled" stops the motion
   n.drive = next;

@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "fba/can/frame.hpp"
 
@@ -35,10 +36,23 @@ class CanBus {
   virtual void close() = 0;
 
   // The device or interface, as used in messages: "can0", "slcan:/dev/ttyUSB0".
-  virtual const std::string& name() const = 0;
+  const std::string& name() const { return name_; }
   // Input skipped as not a frame, and the reason for the last one ("" if none).
-  virtual std::uint64_t discarded() const = 0;
-  virtual std::string last_discard_reason() const = 0;
+  std::uint64_t discarded() const { return discarded_; }
+  std::string last_discard_reason() const { return last_discard_; }
+
+ protected:
+  explicit CanBus(std::string name) : name_(std::move(name)) {}
+  // Input skipped as not a frame: counted, its reason kept for last_discard_reason().
+  void discard(std::string reason) {
+    ++discarded_;
+    last_discard_ = std::move(reason);
+  }
+
+ private:
+  std::string name_;
+  std::uint64_t discarded_ = 0;
+  std::string last_discard_;
 };
 
 }  // namespace fba::can

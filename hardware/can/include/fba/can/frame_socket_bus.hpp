@@ -19,9 +19,6 @@ class FrameSocketBus final : public CanBus {
   void send(const Frame& frame) override;
   std::optional<Frame> receive(std::chrono::milliseconds timeout) override;
   void close() override { socket_.reset(); }
-  const std::string& name() const override { return name_; }
-  std::uint64_t discarded() const override { return discarded_; }
-  std::string last_discard_reason() const override { return last_discard_; }
 
   // Sends bytes as one record, bypassing the frame encoding: how tests and the emulator put a
   // malformed record on the line.
@@ -29,9 +26,6 @@ class FrameSocketBus final : public CanBus {
 
  private:
   Fd socket_;
-  std::string name_;
-  std::uint64_t discarded_ = 0;
-  std::string last_discard_;
 };
 
 }  // namespace fba::can

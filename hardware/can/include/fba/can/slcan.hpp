@@ -78,9 +78,6 @@ class SlcanBus final : public CanBus {
   void send(const Frame& frame) override;
   std::optional<Frame> receive(std::chrono::milliseconds timeout) override;
   void close() override;
-  const std::string& name() const override { return name_; }
-  std::uint64_t discarded() const override { return discarded_; }
-  std::string last_discard_reason() const override { return last_discard_; }
 
  private:
   // Reads what is there (waiting at most `timeout`) into the line reader; throws when the line is gone.
@@ -89,15 +86,11 @@ class SlcanBus final : public CanBus {
   void read_while_opening(std::chrono::steady_clock::time_point deadline);
   // Sends a command and waits for its CR (true) or BEL (false); frames meanwhile are kept.
   bool command(const std::string& text, std::chrono::milliseconds timeout);
-  void discard(std::string reason);
 
-  std::string name_;
   std::stop_token stop_;
   Fd fd_;
   LineReader reader_;
   std::deque<Frame> pending_;  // frames that arrived while a command waited for its answer
-  std::uint64_t discarded_ = 0;
-  std::string last_discard_;
 };
 
 }  // namespace fba::can::slcan

@@ -20,9 +20,6 @@ class SlcanAdapter final : public CanBus {
   void send(const Frame& frame) override;
   std::optional<Frame> receive(std::chrono::milliseconds timeout) override;
   void close() override { fd_.reset(); }
-  const std::string& name() const override { return name_; }
-  std::uint64_t discarded() const override { return discarded_; }
-  std::string last_discard_reason() const override { return last_discard_; }
 
   bool is_open() const { return open_; }
   int bitrate() const { return bitrate_; }
@@ -34,13 +31,10 @@ class SlcanAdapter final : public CanBus {
   std::optional<Frame> handle(const std::string& line);
 
   Fd fd_;
-  std::string name_;
   LineReader reader_;
   // Atomic: tests read them from another thread while the adapter answers.
   std::atomic<bool> open_{false};
   std::atomic<int> bitrate_{0};
-  std::uint64_t discarded_ = 0;
-  std::string last_discard_;
 };
 
 }  // namespace fba::can::slcan
