@@ -2,6 +2,7 @@
 
 #include "urdf_text.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -52,6 +53,10 @@ double phalanx_stiffness(const std::string& joint) {
 constexpr double kSpreadStiffness = 20000;
 
 std::string num(double v) { return fmt::format("{:.17g}", v); }
+
+// The footprint's spheres (see robot_world_mjcf): small against a voxel, so that their tops stay
+// inside the object's lowest boxes. m.
+constexpr double kFootRadius = 0.0005;
 std::string vec(double x, double y, double z) { return num(x) + " " + num(y) + " " + num(z); }
 std::string pos_quat(const urdf::Pose& p) {
   return "pos=\"" + vec(p.position.x, p.position.y, p.position.z) + "\" quat=\"" + num(p.rotation.w) + " " + num(p.rotation.x) + " " +
@@ -203,6 +208,38 @@ struct Writer {
 };
 
 
+// The corners of the object's footprint on the table: the convex hull (counter-clockwise, x then
+// y) of the bottom corners of the boxes whose bottom is the object's (within a tenth of the
+// thinnest box), Andrew's monotone chain.
+std::vector<Eigen::Vector2d> footprint(const std::vector<Eigen::AlignedBox3d>& boxes, double bottom) {
+  double thinnest = INFINITY;
+  for (const auto& b : boxes) thinnest = std::min(thinnest, b.sizes().z());
+  std::vector<Eigen::Vector2d> p;
+  for (const auto& b : boxes)
+    if (b.min().z() <= bottom + 0.1 * thinnest)
+      for (double x : {b.min().x(), b.max().x()})
+        for (double y : {b.min().y(), b.max().y()}) p.emplace_back(x, y);
+  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  p.erase(std::unique(p.begin(), p.end()), p.end());
+  if (p.size() < 3) return p;
+  auto turn = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+  };
+  std::vector<Eigen::Vector2d> hull(2 * p.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {  // lower chain
+    while (k >= 2 && turn(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
+    while (k >= lower && turn(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  hull.resize(k - 1);  // the last point is the first
+  return hull;
+}
+
+
 }  // namespace
 
 std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& origin_name, const WorldObject& object) {
@@ -224,6 +261,11 @@ std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& ori
   // where it was put, as a real ball does, where the hull's lowest vertex would tip it and roll it
   // centimetres from where the camera saw it. Its mass properties are then MuJoCo's, from the hull
   // (the voxels' centroid lies up to half a voxel off a ball's centre).
+  // On a flat base MuJoCo 2.2 keeps the hull's deepest vertex and its neighbours on the hull, one to
+  // three contacts that move about the base's vertices: a superquadric rocked on them and walked
+  // 8 mm/s across the table before the hand came. A small sphere at each corner of the footprint
+  // ("object_foot_N", its bottom at the hull's) gives the table one steady contact there; the hull
+  // still takes the table when the object tips off its base.
   std::string object_xml, assets;
   if (!object.boxes.empty()) {
     const bool hull = !object.hull.empty();
@@ -266,6 +308,12 @@ std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& ori
     object_xml += fmt::format(R"(      <geom name="object_hull" type="mesh" mesh="object_hull" contype="4" conaffinity="1" condim="4" rgba="0 0 0 0"{}/>)",
                               hull ? R"( mass="0")" : "") +
                   "\n";
+    const std::vector<Eigen::Vector2d> foot = footprint(object.boxes, bounds.min().z());
+    for (std::size_t i = 0; i < foot.size(); ++i)
+      object_xml += fmt::format(R"(      <geom name="object_foot_{}" type="sphere" size="{}" pos="{}" contype="4" conaffinity="1" condim="4" )"
+                                R"(mass="0" rgba="0 0 0 0"/>)",
+                                i, num(kFootRadius), vec(foot[i].x() - c.x(), foot[i].y() - c.y(), bounds.min().z() + kFootRadius - c.z())) +
+                    "\n";
     object_xml += "    </body>\n";
   }
 

@@ -41,7 +41,9 @@ struct WorldObject {
 // The world's MJCF: the table (the plane z = 0, the world frame), the robot from `urdf_xml` (its
 // root link is the world), the object as a free body named "object" made of the boxes (geoms
 // "object_N") and, for the table, their convex hull ("object_hull": a plane touches a solid only
-// on its hull); given `hull`, the robot touches that hull ("object_shape") instead of the boxes.
+// on its hull) with a small sphere at each corner of the footprint ("object_foot_N": a steady
+// support on the base); given `hull`, the robot touches that hull ("object_shape") instead of the
+// boxes.
 // Contact classes: the robot's geoms touch the table and the object's boxes but not
 // each other (the arm's self-collision is reach planning's to avoid); the arm's base, welded to
 // the world, does not touch the table it is bolted to. Actuators: one per movable joint, named as it: a motor
