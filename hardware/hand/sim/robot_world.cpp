@@ -52,11 +52,11 @@ double phalanx_stiffness(const std::string& joint) {
 // The scissor's slides: stiff, as the Robotiq's scissor drive is not back-drivable. N/m.
 constexpr double kSpreadStiffness = 20000;
 
-std::string num(double v) { return fmt::format("{:.17g}", v); }
-
 // The footprint's spheres (see robot_world_mjcf): small against a voxel, so that their tops stay
 // inside the object's lowest boxes. m.
 constexpr double kFootRadius = 0.0005;
+
+std::string num(double v) { return fmt::format("{:.17g}", v); }
 std::string vec(double x, double y, double z) { return num(x) + " " + num(y) + " " + num(z); }
 std::string pos_quat(const urdf::Pose& p) {
   return "pos=\"" + vec(p.position.x, p.position.y, p.position.z) + "\" quat=\"" + num(p.rotation.w) + " " + num(p.rotation.x) + " " +
@@ -239,7 +239,6 @@ std::vector<Eigen::Vector2d> footprint(const std::vector<Eigen::AlignedBox3d>& b
   return hull;
 }
 
-
 }  // namespace
 
 std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& origin_name, const WorldObject& object) {
@@ -263,9 +262,9 @@ std::string robot_world_mjcf(const std::string& urdf_xml, const std::string& ori
   // (the voxels' centroid lies up to half a voxel off a ball's centre).
   // On a flat base MuJoCo 2.2 keeps the hull's deepest vertex and its neighbours on the hull, one to
   // three contacts that move about the base's vertices: a superquadric rocked on them and walked
-  // 8 mm/s across the table before the hand came. A small sphere at each corner of the footprint
-  // ("object_foot_N", its bottom at the hull's) gives the table one steady contact there; the hull
-  // still takes the table when the object tips off its base.
+  // across the table before the hand came (docs/results.md). A small sphere at each corner of the
+  // footprint ("object_foot_N", its bottom at the hull's) gives the table one steady contact
+  // there; the hull still takes the table when the object tips off its base.
   std::string object_xml, assets;
   if (!object.boxes.empty()) {
     const bool hull = !object.hull.empty();

@@ -79,11 +79,10 @@ bool separated_from_origin(const Eigen::Matrix<double, 6, Eigen::Dynamic>& w) {
 
 // Runs qhull on the columns of `points` and returns the smallest distance from the origin to a
 // facet's hyperplane, negative when the origin lies outside some facet. First without merging
-// (Q0): on these few dozen 6-D points about four times faster than the merged, triangulated hull
-// (0.48 against 1.9 ms a grasp), and where its round-off shows qhull says so (a precision error,
-// about one grasp in 40 with exact box faces or parallel normals) and the merged hull decides.
-// The two agreed on every force-closure decision of 7,920 grasps, epsilon within 2e-11 relative
-// (GraspQuality.TheUnmergedHullGivesTheMergedHullsEpsilon).
+// (Q0): on these few dozen 6-D points several times faster than the merged, triangulated hull
+// (fba_grasp_quality_benchmark), and where its round-off shows qhull says so (a precision error,
+// with exact box faces or parallel normals) and the merged hull decides; the two agree
+// (GraspQuality.TheUnmergedHullGivesTheMergedHullsEpsilon; figures in docs/results.md).
 double min_facet_distance(const Eigen::Matrix<double, 6, Eigen::Dynamic>& points) {
   constexpr int dim = 6;
   double min_distance = std::numeric_limits<double>::infinity();
