@@ -9,6 +9,8 @@
 #include <fmt/format.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include "fba/geometry/convex_hull.hpp"
+
 namespace fba::sim_hand {
 
 namespace {
@@ -208,35 +210,17 @@ struct Writer {
 };
 
 
-// The corners of the object's footprint on the table: the convex hull (counter-clockwise, x then
-// y) of the bottom corners of the boxes whose bottom is the object's (within a tenth of the
-// thinnest box), Andrew's monotone chain.
+// The corners of the object's footprint on the table: the convex hull of the bottom corners of the
+// boxes whose bottom is the object's (within a tenth of the thinnest box).
 std::vector<Eigen::Vector2d> footprint(const std::vector<Eigen::AlignedBox3d>& boxes, double bottom) {
   double thinnest = INFINITY;
   for (const auto& b : boxes) thinnest = std::min(thinnest, b.sizes().z());
-  std::vector<Eigen::Vector2d> p;
+  std::vector<Eigen::Vector2d> corners;
   for (const auto& b : boxes)
     if (b.min().z() <= bottom + 0.1 * thinnest)
       for (double x : {b.min().x(), b.max().x()})
-        for (double y : {b.min().y(), b.max().y()}) p.emplace_back(x, y);
-  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
-  p.erase(std::unique(p.begin(), p.end()), p.end());
-  if (p.size() < 3) return p;
-  auto turn = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
-  };
-  std::vector<Eigen::Vector2d> hull(2 * p.size());
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {  // lower chain
-    while (k >= 2 && turn(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
-    hull[k++] = p[i];
-  }
-  for (std::size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
-    while (k >= lower && turn(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
-    hull[k++] = p[i];
-  }
-  hull.resize(k - 1);  // the last point is the first
-  return hull;
+        for (double y : {b.min().y(), b.max().y()}) corners.emplace_back(x, y);
+  return geometry::convex_hull_2d(std::move(corners));
 }
 
 }  // namespace

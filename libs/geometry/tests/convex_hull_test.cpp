@@ -53,5 +53,23 @@ TEST(ConvexHull, PointsThatSpanNoVolumeAreRefused) {
   EXPECT_THROW(convex_hull(TriangleMesh{}), ConvexHullError);
 }
 
+// A square with points inside it, on its edges and repeated: its four corners, counter-clockwise
+// from the lowest x and y.
+TEST(ConvexHull2d, ASquaresCornersCounterClockwiseAndNothingElse) {
+  std::vector<Eigen::Vector2d> points{{1, 1}, {0, 0}, {0.5, 0.5}, {1, 0}, {0, 1}, {0.5, 0}, {0, 0.5}, {1, 1}, {0.2, 0.7}};
+  const std::vector<Eigen::Vector2d> hull = convex_hull_2d(points);
+  const std::vector<Eigen::Vector2d> expected{{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  ASSERT_EQ(hull.size(), expected.size());
+  for (std::size_t i = 0; i < hull.size(); ++i) EXPECT_EQ(hull[i], expected[i]) << "corner " << i;
+}
+
+TEST(ConvexHull2d, FewerThanThreeDistinctPointsComeBackSorted) {
+  EXPECT_TRUE(convex_hull_2d({}).empty());
+  const auto two = convex_hull_2d({{1, 0}, {0, 0}, {1, 0}});
+  ASSERT_EQ(two.size(), 2u);
+  EXPECT_EQ(two[0], Eigen::Vector2d(0, 0));
+  EXPECT_EQ(two[1], Eigen::Vector2d(1, 0));
+}
+
 }  // namespace
 }  // namespace fba::geometry

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "fba/geometry/convex_hull.hpp"
 #include "fba/geometry/object_families.hpp"
 #include "settle.hpp"
 
@@ -80,27 +81,6 @@ TEST(Settle, ALongCylinderLiesOnItsSideAndADiscOnAFaceOrItsRim) {
   EXPECT_GE(flat, 1);
 }
 
-// The convex hull of 2D points (Andrew's monotone chain), counter-clockwise.
-std::vector<Eigen::Vector2d> hull_2d(std::vector<Eigen::Vector2d> p) {
-  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
-  if (p.size() < 3) return p;
-  const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
-  };
-  std::vector<Eigen::Vector2d> h(2 * p.size());
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
-    h[k++] = p[i];
-  }
-  for (std::size_t i = p.size() - 1, t = k + 1; i-- > 0;) {
-    while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
-    h[k++] = p[i];
-  }
-  h.resize(k - 1);
-  return h;
-}
-
 // How far q lies outside the convex polygon (0 inside); a polygon of one or two points is a point
 // or a segment.
 double outside(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& q) {
@@ -141,7 +121,7 @@ TEST(Settle, EveryFamilyComesToAStablePose) {
           if (w.z() < r.lowest + 0.001) support.push_back(w.head<2>());
         }
         const Eigen::Vector3d com = rot * centroid + r.position;
-        EXPECT_LT(outside(hull_2d(support), com.head<2>()), 0.001) << support.size() << " points of support";
+        EXPECT_LT(outside(fba::geometry::convex_hull_2d(support), com.head<2>()), 0.001) << support.size() << " points of support";
         SettleParams again;
         again.drop_height = 0.001;
         const SettleResult second = settle(o.mesh, o.parts, r.settled, again);

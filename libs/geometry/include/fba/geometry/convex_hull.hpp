@@ -26,6 +26,11 @@ struct ConvexHull {
 // (fewer than four points, or all in a plane).
 ConvexHull convex_hull(const TriangleMesh& mesh);
 
+// The convex hull of points in a plane (Andrew's monotone chain): its corners counter-clockwise from
+// the lowest x (then y), collinear points left out; fewer than three distinct points come back as
+// they are, sorted.
+std::vector<Eigen::Vector2d> convex_hull_2d(std::vector<Eigen::Vector2d> points);
+
 // A closed mesh whose volume is at least this share of its hull's is taken as convex: a convex
 // mesh is exactly its hull, whatever its tessellation; the rest allows for rounding in the file.
 inline constexpr double kConvexVolumeShare = 0.99;
