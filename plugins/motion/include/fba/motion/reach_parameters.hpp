@@ -39,7 +39,7 @@ struct ReachParameters {
   static constexpr auto kMaxBackout = fba::Param<double>(
       "max_backout", reach_defaults::kMaxBackout,
       "metres: a start whose open hand is in the model (space the views have not carved yet) backs out along the flange's axis, "
-      "else straight up, at most this far until clear, else by joints alone (within 5% of each joint's range); 0: such a start "
+      "else straight up, at most this far until clear, else by joints alone (each moved a little about where it stands); 0: such a start "
       "is refused").range(0, 0.5);
   static constexpr auto kSeed =
       fba::Param<int>("seed", static_cast<int>(reach_defaults::kSeed), "seed of the path search and the IK's random starts: the same plan on every run").range(1, 2147483647);
