@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <stdexcept>
@@ -40,10 +41,12 @@ struct Ray {
   const OctreeNode* target;
   // For a surface point: its tangent plane (unit normal; zero for none).
   Eigen::Vector3d plane_point = Eigen::Vector3d::Zero(), plane_normal = Eigen::Vector3d::Zero();
+  // Leaves larger than this (a body's coarse inside) are never taken for the point's surface.
+  double surface_half_size = std::numeric_limits<double>::infinity();
 
   // Whether the leaf straddles the tangent plane: part of the surface the point lies on.
   bool on_plane(const OctreeCell& c) const {
-    if (plane_normal.isZero()) return false;
+    if (plane_normal.isZero() || c.half_size > surface_half_size) return false;
     const double extent = c.half_size * plane_normal.cwiseAbs().sum();
     return std::abs((c.centre - plane_point).dot(plane_normal)) < extent;
   }
@@ -77,8 +80,9 @@ struct PointNeed {
 };
 
 // The request's points that the views taken do not pin down yet (no two grazing lines of sight at
-// least the separation apart), with their grazing lines of sight so far.
-std::vector<PointNeed> points_to_pin(const RegionsOfInterest& regions, std::span<const Eigen::Vector3d> taken) {
+// least the separation apart), with their grazing lines of sight so far. A line of sight counts
+// only where the point can be on that view's rim: nothing of the model in front of it or behind it.
+std::vector<PointNeed> points_to_pin(const Octree& model, const RegionsOfInterest& regions, std::span<const Eigen::Vector3d> taken) {
   const double sin_rim = std::sin(regions.rim_deg * std::numbers::pi / 180);
   const double cos_separation = std::cos(regions.rim_separation_deg * std::numbers::pi / 180);
   std::vector<PointNeed> out;
@@ -86,7 +90,9 @@ std::vector<PointNeed> points_to_pin(const RegionsOfInterest& regions, std::span
     PointNeed need{sp.position, sp.normal.normalized(), sp.group, {}};
     for (const auto& eye : taken) {
       const Eigen::Vector3d d = (sp.position - eye).normalized();
-      if (std::abs(d.dot(need.normal)) <= sin_rim) need.grazing.push_back(d);
+      if (std::abs(d.dot(need.normal)) <= sin_rim && !occluded(model, eye, sp.position, need.normal) &&
+          !backed(model, eye, sp.position, need.normal))
+        need.grazing.push_back(d);
     }
     bool pinned = false;
     for (std::size_t i = 0; i < need.grazing.size() && !pinned; ++i)
@@ -215,6 +221,21 @@ bool occluded(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vect
   return ray.blocked(model.cell(0, 0, 0, 0, model.root));
 }
 
+bool backed(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
+  if (model.node_count == 0) return false;
+  const double edge = model.bounds.sizes().x() / double(1 << std::clamp(model.max_depth, 0, 30));
+  const Eigen::Vector3d n = normal.normalized();
+  Eigen::Vector3d along = point - eye;
+  along -= along.dot(n) * n;
+  if (!(along.norm() > 1e-12)) return false;  // looking straight at the surface: not a grazing line
+  // Far enough to leave the model's box from anywhere inside it.
+  const double far = model.bounds.sizes().norm() + (point - model.bounds.center()).norm();
+  const Eigen::Vector3d probe = point + n * edge;
+  Ray ray{model, probe, along.normalized() * far, far, 1, nullptr, point, n};
+  ray.surface_half_size = edge;
+  return ray.blocked(model.cell(0, 0, 0, 0, model.root));
+}
+
 bool occluded(const Octree& model, const Eigen::Vector3d& eye, const OctreeCell& target) {
   if (model.node_count == 0) return false;
   Ray ray{model, eye, target.centre - eye, (target.centre - eye).norm(), 0, target.node};
@@ -231,7 +252,7 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
   check_request(regions, candidates.size(), excluded, params);
 
   ViewChoice choice;
-  const std::vector<PointNeed> needs = points_to_pin(regions, taken);
+  const std::vector<PointNeed> needs = points_to_pin(model, regions, taken);
   choice.points = needs.size();
   std::map<int, std::size_t> group_size;
   for (const auto& p : needs) ++group_size[p.group];
@@ -261,7 +282,7 @@ ViewChoice choose_view(const Octree& model, const RegionsOfInterest& regions,
       bool pins = false;
       for (const auto& g : p.grazing) pins |= std::abs(d.dot(g)) <= cos_separation;
       if (!pins && !p.grazing.empty()) continue;  // a line of sight the views taken already give
-      if (occluded(model, eye, p.position, p.normal)) continue;
+      if (occluded(model, eye, p.position, p.normal) || backed(model, eye, p.position, p.normal)) continue;
       ++(pins ? s.pins : s.first);
       group_gain[p.group] += pins ? 1 : 0.5;
     }

@@ -81,6 +81,12 @@ bool occluded(const Octree& model, const Eigen::Vector3d& eye, const OctreeCell&
 // of the object) or behind it (the body, seen through from behind the rim) blocks.
 bool occluded(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vector3d& point, const Eigen::Vector3d& normal);
 
+// Whether the model stands behind the surface point seen from eye: the line of sight continued past
+// the point, along its tangent plane and one finest leaf edge out, meets an occupied leaf. The point
+// then projects inside the silhouette, not on its rim (a handle in front of the tool's head), and
+// that view cannot pin it. Fine leaves straddling the tangent plane are the point's own surface.
+bool backed(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vector3d& point, const Eigen::Vector3d& normal);
+
 // Scores every candidate (world_from_camera poses, camera z forward) and picks the best one that
 // is not excluded. current: where the camera is now (no movement cost without it). excluded: one
 // flag per candidate (may be empty). taken: the camera centres of the views the model already has
