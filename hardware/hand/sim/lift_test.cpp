@@ -191,6 +191,52 @@ struct LiftTest::Impl {
     if (m) mj_deleteModel(m);
   }
 
+  // Compiles mjcf into MuJoCo's model and data and looks up the indices run() drives by name.
+  void compile(const std::vector<std::string>& arm_joints) {
+    std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
+    mj_defaultVFS(vfs.get());
+    add_file(*vfs, "world.xml", mjcf);
+    char error[1024] = "";
+    m = mj_loadXML("world.xml", vfs.get(), error, sizeof error);
+    if (!m) throw LiftTestError(std::string("lift test: MuJoCo does not compile the robot's world: ") + error);
+    d = mj_makeData(m);
+    if (!d) throw LiftTestError("lift test: MuJoCo could not allocate the simulation data");
+
+    palm_body = id(mjOBJ_BODY, "palm");
+    object_body = id(mjOBJ_BODY, "object");
+    table_geom = id(mjOBJ_GEOM, "table");
+    robot_root = m->body_rootid[palm_body];
+    for (const std::string& joint : arm_joints) {
+      const int j = id(mjOBJ_JOINT, joint);
+      const int a = id(mjOBJ_ACTUATOR, joint);
+      arm_names.push_back(joint);
+      arm_qpos.push_back(m->jnt_qposadr[j]);
+      arm_dof.push_back(m->jnt_dofadr[j]);
+      arm_actuator.push_back(a);
+      arm_effort.push_back(m->actuator_ctrlrange[2 * a + 1]);
+    }
+    const char* names[3] = {"thumb", "finger_a", "finger_b"};
+    for (int f = 0; f < 3; ++f) {
+      auto& finger = fingers[static_cast<std::size_t>(f)];
+      finger.name = names[f];
+      finger.close_joint = id(mjOBJ_JOINT, finger.name + "_close");
+      finger.close_actuator = id(mjOBJ_ACTUATOR, finger.name + "_close");
+      finger.gear = f == 0 ? 2 : 1;
+      for (const char* k : {"_1", "_2", "_3"}) finger.phalanx_actuators.push_back(id(mjOBJ_ACTUATOR, finger.name + k));
+      if (f > 0) {
+        finger.spread_joint = id(mjOBJ_JOINT, finger.name + "_spread");
+        finger.spread_actuator = id(mjOBJ_ACTUATOR, finger.name + "_spread");
+      }
+    }
+    knuckle_x = -m->body_pos[3 * id(mjOBJ_BODY, "thumb_carriage")];
+    pad_radius = m->geom_size[3 * id(mjOBJ_GEOM, "thumb_3")];
+    travel = m->jnt_range[2 * fingers[0].close_joint + 1];
+    const int spread = fingers[1].spread_joint;
+    spread_min = 2 * m->jnt_range[2 * spread];
+    spread_max = 2 * m->jnt_range[2 * spread + 1];
+    spread_force = m->actuator_forcerange[2 * fingers[1].spread_actuator + 1];
+  }
+
   const motion::ReachPlanner& planner(double clearance) {
     auto& p = planners[std::lround(clearance * 1000)];
     if (!p) {
@@ -411,48 +457,7 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
   } catch (const RobotWorldError& e) {
     throw LiftTestError(std::string("lift test: ") + e.what());
   }
-  std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
-  mj_defaultVFS(vfs.get());
-  add_file(*vfs, "world.xml", s.mjcf);
-  char error[1024] = "";
-  s.m = mj_loadXML("world.xml", vfs.get(), error, sizeof error);
-  if (!s.m) throw LiftTestError(std::string("lift test: MuJoCo does not compile the robot's world: ") + error);
-  s.d = mj_makeData(s.m);
-  if (!s.d) throw LiftTestError("lift test: MuJoCo could not allocate the simulation data");
-
-  s.palm_body = s.id(mjOBJ_BODY, "palm");
-  s.object_body = s.id(mjOBJ_BODY, "object");
-  s.table_geom = s.id(mjOBJ_GEOM, "table");
-  s.robot_root = s.m->body_rootid[s.palm_body];
-  for (const std::string& joint : s.planner(params.clearance).arm().joint_names()) {
-    const int j = s.id(mjOBJ_JOINT, joint);
-    const int a = s.id(mjOBJ_ACTUATOR, joint);
-    s.arm_names.push_back(joint);
-    s.arm_qpos.push_back(s.m->jnt_qposadr[j]);
-    s.arm_dof.push_back(s.m->jnt_dofadr[j]);
-    s.arm_actuator.push_back(a);
-    s.arm_effort.push_back(s.m->actuator_ctrlrange[2 * a + 1]);
-  }
-  const char* names[3] = {"thumb", "finger_a", "finger_b"};
-  for (int f = 0; f < 3; ++f) {
-    auto& finger = s.fingers[static_cast<std::size_t>(f)];
-    finger.name = names[f];
-    finger.close_joint = s.id(mjOBJ_JOINT, finger.name + "_close");
-    finger.close_actuator = s.id(mjOBJ_ACTUATOR, finger.name + "_close");
-    finger.gear = f == 0 ? 2 : 1;
-    for (const char* k : {"_1", "_2", "_3"}) finger.phalanx_actuators.push_back(s.id(mjOBJ_ACTUATOR, finger.name + k));
-    if (f > 0) {
-      finger.spread_joint = s.id(mjOBJ_JOINT, finger.name + "_spread");
-      finger.spread_actuator = s.id(mjOBJ_ACTUATOR, finger.name + "_spread");
-    }
-  }
-  s.knuckle_x = -s.m->body_pos[3 * s.id(mjOBJ_BODY, "thumb_carriage")];
-  s.pad_radius = s.m->geom_size[3 * s.id(mjOBJ_GEOM, "thumb_3")];
-  s.travel = s.m->jnt_range[2 * s.fingers[0].close_joint + 1];
-  const int spread = s.fingers[1].spread_joint;
-  s.spread_min = 2 * s.m->jnt_range[2 * spread];
-  s.spread_max = 2 * s.m->jnt_range[2 * spread + 1];
-  s.spread_force = s.m->actuator_forcerange[2 * s.fingers[1].spread_actuator + 1];
+  s.compile(s.planner(params.clearance).arm().joint_names());
 }
 
 LiftTest::~LiftTest() = default;
