@@ -69,7 +69,7 @@ class GraspSynthesisFilter final : public fba::Component {
       "candidates", "after each analysis, its first candidates best first and the best one's palm at the pregrasp: for a live view"};
   static constexpr auto kFingerWidth = fba::Param<double>("finger_width", 0.02, "metres; two fingers closer than this collide").range(1e-4, 1);
   static constexpr auto kApertureMin =
-      fba::Param<double>("aperture_min", 0.005, "metres: least distance from the thumb's contact to the fingers' midpoint (the robot's hand closes until its pads meet)").range(0, 2);
+      fba::Param<double>("aperture_min", 0.02, "metres: least distance from the thumb's contact to the fingers' midpoint").range(0, 2);
   static constexpr auto kApertureMax =
       fba::Param<double>("aperture_max", 0.15, "metres: largest distance from the thumb's contact to the fingers' midpoint").range(0, 2);
   static constexpr auto kSpreadMin = fba::Param<double>("spread_min", 0.02, "metres: least distance between the two fingers' contacts").range(0, 2);

@@ -26,9 +26,8 @@ inline constexpr double kPalmCentreZ = -0.025;
 // when fully open, and this high along z.
 inline constexpr double kKnuckleX = 0.12;
 inline constexpr double kKnuckleZ = 0.03;
-// The closing slide's travel from fully open: until the pads meet at the palm's centre
-// (kKnuckleX - kPadRadius), as the Robotiq closes to no opening, so that a thin part is pinched.
-inline constexpr double kTravel = 0.11;
+// The closing slide's travel from fully open.
+inline constexpr double kTravel = 0.1;
 // Each finger: three straight phalanges, base first, lengths and radii (capsules).
 inline constexpr std::array<double, 3> kPhalanxLength{0.06, 0.045, 0.03};
 inline constexpr std::array<double, 3> kPhalanxRadius{0.011, 0.011, 0.01};
