@@ -66,6 +66,9 @@ struct Ray {
   }
 };
 
+// The edge of the model's finest leaves.
+double finest_edge(const Octree& model) { return model.bounds.sizes().x() / double(1 << std::clamp(model.max_depth, 0, 30)); }
+
 bool in_view(const Eigen::Isometry3d& world_from_camera, const Eigen::Vector3d& point, double cos_half_fov) {
   const Eigen::Vector3d p = world_from_camera.inverse() * point;
   const double n = p.norm();
@@ -214,7 +217,7 @@ std::vector<OctreeCell> uncertain_targets(const Octree& model, const RegionsOfIn
 
 bool occluded(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
   if (model.node_count == 0) return false;
-  const double edge = model.bounds.sizes().x() / double(1 << std::clamp(model.max_depth, 0, 30));
+  const double edge = finest_edge(model);
   const Eigen::Vector3d probe = point + normal.normalized() * edge;
   Ray ray{model, eye, probe - eye, (probe - eye).norm(), 1, nullptr, point, normal.normalized()};
   if (ray.length <= 0) return false;
@@ -223,7 +226,7 @@ bool occluded(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vect
 
 bool backed(const Octree& model, const Eigen::Vector3d& eye, const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
   if (model.node_count == 0) return false;
-  const double edge = model.bounds.sizes().x() / double(1 << std::clamp(model.max_depth, 0, 30));
+  const double edge = finest_edge(model);
   const Eigen::Vector3d n = normal.normalized();
   Eigen::Vector3d along = point - eye;
   along -= along.dot(n) * n;

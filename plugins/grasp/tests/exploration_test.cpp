@@ -245,21 +245,21 @@ TEST(ExplorationGrazing, AGrazingLineOfSightWithTheObjectBehindThePointDoesNotCo
   // A block standing out past the +x face, beyond the contact from the camera at +y: the line of
   // sight past the contact runs into it, so the contact projects inside the silhouette, not on its
   // rim (a handle seen against the tool's head).
-  const Octree backed = uniform_model([](int x, int y, int z) {
+  const Octree with_block = uniform_model([](int x, int y, int z) {
     if (x >= 6 && y <= 1 && (z == 3 || z == 4)) return NodeState::Full;
     return box_state(x, y, z);
   });
   const std::vector<Eigen::Isometry3d> views{camera_at({0, 4, 0})};
-  EXPECT_TRUE(fba::grasp::backed(backed, {0, 4, 0}, {0.5, 0, 0}, Eigen::Vector3d::UnitX()));
-  EXPECT_EQ(choose_view(backed, plus_x_contact(), views).scores[0].first, 0u);
+  EXPECT_TRUE(fba::grasp::backed(with_block, {0, 4, 0}, {0.5, 0, 0}, Eigen::Vector3d::UnitX()));
+  EXPECT_EQ(choose_view(with_block, plus_x_contact(), views).scores[0].first, 0u);
   // From -y the block stands in front of the contact (occluded), not behind it.
-  EXPECT_FALSE(fba::grasp::backed(backed, {0, -4, 0}, {0.5, 0, 0}, Eigen::Vector3d::UnitX()));
-  EXPECT_TRUE(fba::grasp::occluded(backed, {0, -4, 0}, {0.5, 0, 0}, Eigen::Vector3d::UnitX()));
+  EXPECT_FALSE(fba::grasp::backed(with_block, {0, -4, 0}, {0.5, 0, 0}, Eigen::Vector3d::UnitX()));
+  EXPECT_TRUE(fba::grasp::occluded(with_block, {0, -4, 0}, {0.5, 0, 0}, Eigen::Vector3d::UnitX()));
   EXPECT_FALSE(fba::grasp::backed(uniform_model(box_state), {0, 4, 0}, {0.5, 0, 0}, Eigen::Vector3d::UnitX()));
   // A view taken from +y gave the contact no rim: a view from above +y is its first, not its pair.
   const std::vector<Eigen::Vector3d> taken{{0, 4, 0}};
   const std::vector<Eigen::Isometry3d> above{camera_at({0, 4 / std::sqrt(2.0), 4 / std::sqrt(2.0)})};
-  const auto choice = choose_view(backed, plus_x_contact(), above, std::nullopt, {}, {}, taken);
+  const auto choice = choose_view(with_block, plus_x_contact(), above, std::nullopt, {}, {}, taken);
   EXPECT_EQ(choice.scores[0].pins, 0u);
   EXPECT_EQ(choice.scores[0].first, 1u);
   EXPECT_EQ(choose_view(uniform_model(box_state), plus_x_contact(), above, std::nullopt, {}, {}, taken).scores[0].pins, 1u);
