@@ -8,6 +8,7 @@
 #include <set>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
@@ -59,6 +60,7 @@ struct LiveServer::Impl {
   asio::io_context io{1};
   tcp::acceptor acceptor{io};
   std::set<std::shared_ptr<WsSession>> clients;  // io thread; emptied before io is destroyed
+  std::vector<std::weak_ptr<WsSession>> sessions;  // io thread: every WebSocket begun, for finish() to close what is left
   std::thread thread;
 
   void accept();
@@ -73,6 +75,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       : ws_(std::move(socket)), server_(server), queue_(server.options.queue_limit, kMaxQueued) {}
 
   void start(Request request) {
+    server_.sessions.push_back(weak_from_this());
     beast::get_lowest_layer(ws_).expires_never();
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& r) { r.set(http::field::server, kServerName); }));
@@ -85,6 +88,13 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (m.seq <= replayed_ || closing_) return;
     if (!queue_.push(m, writing_)) return close(websocket::close_code::policy_error);
     if (!writing_) write_next();
+  }
+
+  // With the io thread stopped: the connection ends here, whatever its close handshake had reached,
+  // so that no page is left waiting on an open socket.
+  void drop() {
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws_).socket().close(ignored);
   }
 
   // The run is over: what is queued is sent, then the WebSocket closes in order.
@@ -322,6 +332,8 @@ void LiveServer::finish(std::chrono::milliseconds grace) {
   }
   s.io.stop();
   s.thread.join();
+  for (const auto& session : s.sessions)
+    if (const auto c = session.lock()) c->drop();
 }
 
 }  // namespace fba::serve

@@ -97,11 +97,15 @@ class LiveSocket {
     }));
     ws_.handshake(url_.host + ":" + url_.port, "/ws?token=" + token, ec);
   }
-  // The next message's text; empty with `ec` set when the connection ended.
+  // The next message's text; empty with `ec` set when the connection ended, or timed out after
+  // kHangLimit (the stream's expiry bounds asynchronous operations only: a blocking read, the close
+  // handshake's teardown included, would wait for ever on a server that never closes).
   std::string read(beast::error_code& ec) {
     beast::get_lowest_layer(ws_).expires_after(kHangLimit);
     beast::flat_buffer buffer;
-    ws_.read(buffer, ec);
+    ws_.async_read(buffer, [&ec](beast::error_code e, std::size_t) { ec = e; });
+    io_.restart();
+    io_.run();
     return ec ? std::string() : beast::buffers_to_string(buffer.data());
   }
   void write(const std::string& text, beast::error_code& ec) {
