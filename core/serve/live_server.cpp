@@ -75,6 +75,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       : ws_(std::move(socket)), server_(server), queue_(server.options.queue_limit, kMaxQueued) {}
 
   void start(Request request) {
+    std::erase_if(server_.sessions, [](const std::weak_ptr<WsSession>& s) { return s.expired(); });  // pages that came and went
     server_.sessions.push_back(weak_from_this());
     beast::get_lowest_layer(ws_).expires_never();
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
