@@ -89,31 +89,21 @@ bool touch(const fcl::CollisionObjectd& a, const fcl::CollisionObjectd& b) {
   return result.isCollision();
 }
 
-// The broad phase's pairs of a body and a model box: stops at the first box it touches, passing
-// over the boxes a finger may touch.
-struct ModelQuery {
-  const Body* body = nullptr;
-  const ModelObstacles::Impl* model = nullptr;
-  const std::vector<bool>* allowed = nullptr;
-  const std::vector<bool>* freed = nullptr;
-  std::size_t hit = 0;  // the box's index + 1
-  std::vector<bool>* touched = nullptr;  // when set: every box touched is marked, none stops the query
-};
-
-bool model_pair(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data) {
-  auto& q = *static_cast<ModelQuery*>(data);
-  const auto box = reinterpret_cast<std::uintptr_t>(a->getUserData() ? a->getUserData() : b->getUserData());
-  if (box == 0) return false;
-  if ((*q.freed)[box - 1]) return false;
-  if (q.body->finger && (*q.allowed)[box - 1]) return false;
-  // The broad phase pairs boxes with a body's axis-aligned bounds, which for a long slanted link
-  // hold hundreds of leaves it passes far from.
-  const Eigen::AlignedBox3d& leaf = q.model->boxes[box - 1];
-  if (!q.body->may_touch(leaf.center(), leaf.sizes().norm() / 2)) return false;
-  if (!touch(*a, *b)) return false;
-  q.hit = box;
-  if (q.touched) (*q.touched)[box - 1] = true;
-  return !q.touched;
+// The model's boxes body b touches, passing over the freed ones and the ones a finger may touch:
+// the first one's index + 1 (0: none), or, with `touched`, every one marked there.
+std::size_t model_contact(const Body& b, const ModelObstacles::Impl& model, const std::vector<bool>& allowed,
+                          const std::vector<bool>& freed, std::vector<bool>* touched = nullptr) {
+  std::size_t hit = 0;
+  model.visit([&](const Eigen::Vector3d& centre, double radius) { return b.may_touch(centre, radius); },
+              [&](std::uint32_t i) {
+                if (freed[i] || (b.finger && allowed[i])) return false;
+                const Eigen::AlignedBox3d& leaf = model.boxes[i];
+                if (!b.may_touch(leaf.center(), leaf.sizes().norm() / 2) || !touch(*b.object, *model.objects[i])) return false;
+                hit = i + 1;
+                if (touched) (*touched)[i] = true;
+                return touched == nullptr;
+              });
+  return hit;
 }
 
 }  // namespace
@@ -140,11 +130,10 @@ struct RobotCollision::Impl {
   std::string world_contact(const Body& b) {
     if (b.object->getAABB().min_.z() < 0 && touch(*b.object, table)) return b.name + " touches the table";
     if (!model || !check_model || model->size() == 0) return {};
-    ModelQuery q{&b, model->impl_.get(), &allowed, &freed, 0};
-    model->impl_->tree.collide(b.object.get(), &q, model_pair);
-    if (q.hit == 0) return {};
+    const std::size_t hit = model_contact(b, *model->impl_, allowed, freed);
+    if (hit == 0) return {};
     model_hit = true;
-    return b.name + " touches the model at " + text::point(model->box(q.hit - 1).center());
+    return b.name + " touches the model at " + text::point(model->box(hit - 1).center());
   }
 };
 
@@ -231,8 +220,7 @@ void RobotCollision::free_model_at(const Eigen::VectorXd& joints) {
     if (b.hand || b.joints_before == 0) continue;  // the hand's opening is not known; the base stands on the table
     s.place(b, links[b.frame] * b.frame_from_shape);
     std::vector<bool> touched(s.freed.size(), false);
-    ModelQuery q{&b, s.model->impl_.get(), &s.allowed, &s.freed, 0, &touched};
-    s.model->impl_->tree.collide(b.object.get(), &q, model_pair);
+    model_contact(b, *s.model->impl_, s.allowed, s.freed, &touched);
     for (std::size_t i = 0; i < touched.size(); ++i)
       if (touched[i]) s.freed[i] = true;
   }
