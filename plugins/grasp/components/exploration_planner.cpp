@@ -4,6 +4,8 @@
 // or when none does by the uncertain model nodes inside the regions each one sees, less the cost
 // of moving there, and emits the best as the camera's target pose, or no_view with the reason when
 // none is worth the move. (The models are written by grasp.synthesis, which analyses every one.)
+// With the arm's joints it sends the joints to move to instead, once it has checked the move
+// there clear of the model: the arm carries its camera round an object it may not touch.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -23,6 +25,7 @@
 #include <fba/component.hpp>
 #include <fba/geometry/viewpoints.hpp>
 #include <fba/thread_pool.hpp>
+#include <fba/types/joint_state.hpp>
 #include <fba/types/octree.hpp>
 #include <fba/types/pose.hpp>
 #include <fba/types/pose_json.hpp>
@@ -32,6 +35,9 @@
 #include "fba/grasp/exploration.hpp"
 #if FBA_GRASP_REACH
 #include "arm_model.hpp"
+#include "fba/motion/joint_path.hpp"
+#include "fba/motion/model_obstacles.hpp"
+#include "fba/motion/reach_parameters.hpp"
 #include "fba/motion/robot_collision.hpp"
 #include "robot_parameters.hpp"
 #endif
@@ -80,6 +86,17 @@ class ExplorationPlanner final : public fba::Component {
       "ring and hemisphere: keep only the candidate views the arm reaches with the robot clear of itself and the table (inverse "
       "kinematics on the robot's arm to its camera, with the arms' collision check; the robot: urdf and its measured transforms), "
       "so that no view asked for is refused"};
+  static constexpr fba::OptionalIn<fba::JointState> kJointState{
+      "joint_state",
+      "the arm's joints (the newest is used). With them each view after the initial ones goes out on joint_target, as the joints "
+      "the arm's inverse kinematics gives nearest to where it stands, and only when the straight joint-space motion there keeps "
+      "the arm, its camera and its open hand clear of the model (occupied and not-yet-carved leaves, less what the robot stands "
+      "in), the table and the arm itself; a view whose motion is not clear is passed over for the next best"};
+  static constexpr fba::Out<fba::JointState> kJointTarget{
+      "joint_target", "with joint_state: the joints of the next view (wire it to the arm's joint_target)"};
+  static constexpr auto kMoveStep = fba::Param<double>(
+      "move_step", 0.02, "with joint_state: rad (Euclidean in joint space) between the poses checked along a move to a view")
+      .range(1e-4, 1);
 #endif
   static constexpr auto kMovementWeight = fba::Param<double>(
       "movement_weight", 0.1, "score = gain (the grazing gain of the request's points, else the share of its uncertain nodes seen) - movement_weight * (angle moved / 180 deg)").at_least(0);
@@ -118,8 +135,8 @@ class ExplorationPlanner final : public fba::Component {
           return std::string();
         });
 #if FBA_GRASP_REACH
-    spec.add(kReachableOnly);
-    fba::arm::RobotParameters::add(spec);  // the robot reachable_only checks the views on
+    spec.add(kReachableOnly, kJointState, kJointTarget, kMoveStep);
+    fba::arm::RobotParameters::add(spec);  // the robot reachable_only and the moves are checked on
 #endif
     return spec;
   }
@@ -145,6 +162,9 @@ class ExplorationPlanner final : public fba::Component {
       throw std::runtime_error("start is connected but the " + views +
                                " has no centre before a model exists: set centre [x, y, z] or use views: recorded");
     }
+#if FBA_GRASP_REACH
+    if (ctx(kJointState).connected()) arm_.emplace(ctx);
+#endif
   }
 
   void process() override {
@@ -162,6 +182,9 @@ class ExplorationPlanner final : public fba::Component {
       return;
     }
     if (model_->views < requested_) return;  // plan on a model that has the view too
+#if FBA_GRASP_REACH
+    if (arm_ && !arm_->at_last_view(ctx_(kJointState).latest(), last_target_)) return;  // a joint state comes
+#endif
     plan(*model_, *pending_);
     pending_.reset();
   }
@@ -183,22 +206,73 @@ class ExplorationPlanner final : public fba::Component {
   // joint limits, with the arm, the camera and the hand clear of the arm itself and the table (the
   // check sim.arm and hw.canopen_arm make before they move).
   void keep_reachable() {
-    const fba::arm::RobotDescription arm = fba::arm::RobotParameters::read(ctx_);
-    const auto to_camera = fba::arm::ArmModel::from_string(arm.urdf, arm.name, "world", "camera");
-    const auto to_flange = fba::arm::ArmModel::from_string(arm.urdf, arm.name, "world", "flange");
-    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(to_flange.size()));
-    fba::motion::RobotCollision robot(to_flange, fba::motion::urdf_flange_from_palm(arm.urdf, arm.name, "world"));
-    fba::arm::IkOptions ik;
-    ik.accept = [&robot](const Eigen::VectorXd& q) { return robot.collision(q); };
+    Arm arm(ctx_);
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(arm.to_flange.size()));
     std::vector<Eigen::Isometry3d> kept;
     for (const auto& view : candidates_)
-      if (to_camera.inverse(view, zero, ik).ok) kept.push_back(view);
+      if (arm.to_camera.inverse(view, zero, arm.ik).ok) kept.push_back(view);
     ctx_.log().info("{} of the {} candidate views are within the arm's reach ({})", kept.size(), candidates_.size(), arm.name);
     if (kept.empty())
       throw std::runtime_error("reachable_only: none of the " + std::to_string(candidates_.size()) + " candidate views is within the reach of " +
                                "the arm of " + arm.name + "; move the views (centre, distance, elevations) or the arm");
     candidates_ = std::move(kept);
   }
+
+  // The robot the views are checked on: the arm to its camera and to its flange, the hand open on
+  // it, IK solutions accepted clear of the arm itself, the table and (once set) the model.
+  struct Arm {
+    explicit Arm(const fba::Context& ctx)
+        : description(fba::arm::RobotParameters::read(ctx)),
+          name(description.name),
+          to_camera(fba::arm::ArmModel::from_string(description.urdf, name, "world", "camera")),
+          to_flange(fba::arm::ArmModel::from_string(description.urdf, name, "world", "flange")),
+          robot(to_flange, fba::motion::urdf_flange_from_palm(description.urdf, name, "world")),
+          step(ctx(kMoveStep)) {
+      ik.accept = [this](const Eigen::VectorXd& q) { return robot.collision(q); };
+    }
+    Arm(const Arm&) = delete;  // ik.accept holds `this`
+    Arm& operator=(const Arm&) = delete;
+
+    // Whether `state` is the arm standing still at the view last asked for (its camera within
+    // 5 mm and 1 degree of it): the move to the next view starts there.
+    bool at_last_view(const fba::JointState* state, const std::optional<Eigen::Isometry3d>& view) {
+      joints.reset();
+      if (!state || !view) return false;
+      for (double v : state->velocities)
+        if (std::abs(v) >= 1e-3) return false;
+      std::string why;
+      const auto q = fba::motion::arm_joints(to_camera, *state, why);
+      if (!q) return false;
+      const Eigen::Isometry3d at = to_camera.forward(*q);
+      if ((at.translation() - view->translation()).norm() > 0.005 ||
+          Eigen::AngleAxisd(at.linear().transpose() * view->linear()).angle() > kDeg)
+        return false;
+      joints = *q;
+      return true;
+    }
+
+    // The joints to move to for `view` from `joints`, with the straight joint-space motion there
+    // clear of `model`; "" when so, else why not.
+    std::string move(const Eigen::Isometry3d& view, const std::shared_ptr<const fba::motion::ModelObstacles>& model,
+                     Eigen::VectorXd& goal) {
+      robot.set_model(model);
+      robot.free_model_at(*joints, true);  // the robot stands there, its hand too: nothing of the object does
+      const auto solution = to_camera.inverse(view, *joints, ik);
+      if (!solution.ok) return "no IK solution clear of the model there: " + solution.why;
+      goal = solution.joints;
+      const std::string hit = fba::motion::motion_collision(
+          *joints, goal, step, [this](const Eigen::VectorXd& q) { return robot.collision(q); });
+      return hit.empty() ? hit : "the straight motion there: " + hit;
+    }
+
+    fba::arm::RobotDescription description;
+    std::string name;
+    fba::arm::ArmModel to_camera, to_flange;
+    fba::motion::RobotCollision robot;
+    fba::arm::IkOptions ik;
+    double step;
+    std::optional<Eigen::VectorXd> joints;  // where the arm stands, at the view last asked for
+  };
 #endif
 
   void start() {
@@ -231,12 +305,25 @@ class ExplorationPlanner final : public fba::Component {
     ctx_.log().info("start: {} initial views requested ({})", n, ctx_(kInitialLayout));
   }
 
-  void request(std::size_t view) {
+  // Asks for the view: its joints on joint_target when given (`joints`), else its camera pose on
+  // target.
+  void request(std::size_t view, const Eigen::VectorXd* joints = nullptr) {
     if (visited_.size() < candidates_.size()) visited_.resize(candidates_.size(), false);
     visited_[view] = true;
     taken_.push_back(candidates_[view].translation());
     ++requested_;
     last_target_ = candidates_[view];
+#if FBA_GRASP_REACH
+    if (joints) {
+      fba::JointState target;
+      target.names = arm_->to_camera.joint_names();
+      target.positions.assign(joints->data(), joints->data() + joints->size());
+      target.stamp = static_cast<double>(ctx_.now_ns()) * 1e-9;
+      ctx_(kJointTarget).emit(std::move(target));
+      return;
+    }
+#endif
+    (void)joints;
     fba::Pose target;
     target.world_from_frame = candidates_[view];
     target.stamp = static_cast<double>(ctx_.now_ns()) * 1e-9;
@@ -246,10 +333,37 @@ class ExplorationPlanner final : public fba::Component {
   void plan(const fba::Octree& model, const fba::RegionsOfInterest& regions) {
     if (candidates_.empty()) make_candidates(model.bounds.center());
     visited_.resize(candidates_.size(), false);
-    if (random_) return plan_at_random();
+    if (random_) return plan_at_random(model);
     const std::optional<Eigen::Isometry3d> current = current_ ? current_ : last_target_;
-    const auto choice = fba::grasp::choose_view(model, regions, candidates_, current,
-                                                exclude_visited_ ? visited_ : std::vector<bool>{}, params_, taken_);
+    std::vector<bool> excluded = exclude_visited_ ? visited_ : std::vector<bool>(candidates_.size(), false);
+    fba::grasp::ViewChoice choice;
+    Eigen::VectorXd goal;
+    const Eigen::VectorXd* joints = nullptr;
+    std::string blocked;  // the views passed over because the move there is not clear, and why
+    int passed = 0;
+#if FBA_GRASP_REACH
+    std::shared_ptr<const fba::motion::ModelObstacles> obstacles;
+#endif
+    for (;;) {
+      choice = fba::grasp::choose_view(model, regions, candidates_, current, excluded, params_, taken_);
+      if (!choice.best) break;
+#if FBA_GRASP_REACH
+      if (arm_) {
+        if (!obstacles) obstacles = std::make_shared<const fba::motion::ModelObstacles>(model);
+        const std::string why = arm_->move(candidates_[*choice.best], obstacles, goal);
+        if (!why.empty()) {
+          if (passed++ == 0) blocked = "view " + std::to_string(*choice.best) + ": " + why;
+          excluded[*choice.best] = true;
+          continue;
+        }
+        joints = &goal;
+      }
+#endif
+      break;
+    }
+    if (passed > 0)
+      choice.reason += "; passed over " + std::to_string(passed) + " better view" + (passed > 1 ? "s" : "") +
+                       " the arm cannot move to clear of the model (" + blocked + ")";
     if (!choice.best) {
       ctx_.log().info("no view: {}", choice.reason);
       ctx_.emit(kNoView, nlohmann::json{{"reason", choice.reason}, {"views_requested", requested_}}.dump());
@@ -269,25 +383,49 @@ class ExplorationPlanner final : public fba::Component {
                                           {"first", s.first},
                                           {"reason", choice.reason}}
                                .dump());
-    request(s.index);
+    request(s.index, joints);
   }
 
   // The baseline: any view not yet taken, whatever the model and the request say.
-  void plan_at_random() {
+  // The baseline: any view not yet taken, whatever the model and the request say (with the arm's
+  // joints, one the arm moves to clear of the model, as for the best).
+  void plan_at_random([[maybe_unused]] const fba::Octree& model) {
     std::vector<std::size_t> left;
     for (std::size_t i = 0; i < candidates_.size(); ++i)
       if (!visited_[i]) left.push_back(i);
-    if (left.empty()) {
-      const std::string reason = "every one of the " + std::to_string(candidates_.size()) + " candidate views is taken";
-      ctx_.log().info("no view: {}", reason);
-      ctx_.emit(kNoView, nlohmann::json{{"reason", reason}, {"views_requested", requested_}}.dump());
+    const std::size_t not_taken = left.size();
+    Eigen::VectorXd goal;
+    const Eigen::VectorXd* joints = nullptr;
+    int passed = 0;
+#if FBA_GRASP_REACH
+    std::shared_ptr<const fba::motion::ModelObstacles> obstacles;
+#endif
+    while (!left.empty()) {
+      const std::size_t k = std::uniform_int_distribution<std::size_t>(0, left.size() - 1)(draws_);
+      const std::size_t view = left[k];
+#if FBA_GRASP_REACH
+      if (arm_) {
+        if (!obstacles) obstacles = std::make_shared<const fba::motion::ModelObstacles>(model);
+        if (!arm_->move(candidates_[view], obstacles, goal).empty()) {
+          ++passed;
+          left.erase(left.begin() + static_cast<std::ptrdiff_t>(k));
+          continue;
+        }
+        joints = &goal;
+      }
+#endif
+      std::string reason = "view " + std::to_string(view) + " drawn at random of the " + std::to_string(not_taken) + " not taken";
+      if (passed > 0) reason += " (" + std::to_string(passed) + " drawn before it the arm cannot move to clear of the model)";
+      ctx_.log().info("{}", reason);
+      ctx_.emit(kViewChosen, nlohmann::json{{"view", view}, {"pose", fba::pose_json(candidates_[view])}, {"reason", reason}}.dump());
+      request(view, joints);
       return;
     }
-    const std::size_t view = left[std::uniform_int_distribution<std::size_t>(0, left.size() - 1)(draws_)];
-    const std::string reason = "view " + std::to_string(view) + " drawn at random of the " + std::to_string(left.size()) + " not taken";
-    ctx_.log().info("{}", reason);
-    ctx_.emit(kViewChosen, nlohmann::json{{"view", view}, {"pose", fba::pose_json(candidates_[view])}, {"reason", reason}}.dump());
-    request(view);
+    const std::string reason = passed == 0 ? "every one of the " + std::to_string(candidates_.size()) + " candidate views is taken"
+                                           : "the arm cannot move clear of the model to any of the " + std::to_string(not_taken) +
+                                                 " candidate views not taken";
+    ctx_.log().info("no view: {}", reason);
+    ctx_.emit(kNoView, nlohmann::json{{"reason", reason}, {"views_requested", requested_}}.dump());
   }
 
   fba::Context& ctx_;
@@ -304,6 +442,9 @@ class ExplorationPlanner final : public fba::Component {
   std::optional<Eigen::Isometry3d> current_, last_target_;
   int requested_ = 0;
   bool started_ = false;
+#if FBA_GRASP_REACH
+  std::optional<Arm> arm_;  // with joint_state: the moves to the views are checked on it
+#endif
 };
 
 }  // namespace

@@ -212,12 +212,12 @@ void RobotCollision::set_model(std::shared_ptr<const ModelObstacles> model, std:
 
 void RobotCollision::check_model(bool on) { impl_->check_model = on; }
 
-void RobotCollision::free_model_at(const Eigen::VectorXd& joints) {
+void RobotCollision::free_model_at(const Eigen::VectorXd& joints, bool with_hand) {
   auto& s = *impl_;
   if (!s.model || s.model->size() == 0) return;
   const std::vector<Eigen::Isometry3d> links = s.arm->link_poses(joints);
   for (Body& b : s.bodies) {
-    if (b.hand || b.joints_before == 0) continue;  // the hand's opening is not known; the base stands on the table
+    if ((b.hand && !with_hand) || b.joints_before == 0) continue;  // the base stands on the table
     s.place(b, links[b.frame] * b.frame_from_shape);
     std::vector<bool> touched(s.freed.size(), false);
     model_contact(b, *s.model->impl_, s.allowed, s.freed, &touched);

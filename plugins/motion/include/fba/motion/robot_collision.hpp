@@ -40,10 +40,11 @@ class RobotCollision {
                  double radius = 0);
   // Whether the model is checked: once the fingers have closed, the object moves with the hand.
   void check_model(bool on);
-  // The model's boxes the arm's links and camera touch at `joints` (the hand left out: its
-  // opening there is not known) are no obstacle from now on: the arm stands there, so nothing of
-  // the object does (a corner of the workspace no view carved, which the upper arm passes through).
-  void free_model_at(const Eigen::VectorXd& joints);
+  // The model's boxes the arm's links and camera touch at `joints` are no obstacle from now on:
+  // the arm stands there, so nothing of the object does (a corner of the workspace no view
+  // carved, which the upper arm passes through). The hand's too with `with_hand`, at the opening
+  // set_hand gave: left out by default, where its opening at `joints` is not the one to check.
+  void free_model_at(const Eigen::VectorXd& joints, bool with_hand = false);
 
   // "" when the robot at `joints` touches nothing; else the first contact found, as
   // "<part> touches <what>": "upper_arm_link touches the table", "thumb touches the model at
