@@ -91,7 +91,7 @@ ArmComponent::ArmComponent(fba::Context& ctx)
     : ctx_(ctx),
       robot_(Robot::read(ctx)),
       model_(ArmModel::from_string(robot_.urdf, robot_.name, ctx(kBaseLink), ctx(kCameraLink))),
-      publish_initial_(ctx(kPublishInitial)) {
+      initial_camera_pose_(ctx(kInitialCameraPose)) {
   ik_.position_tolerance = ctx(kPositionTolerance);
   ik_.orientation_tolerance = ctx(kOrientationTolerance);
   ik_.attempts = ctx(kAttempts);
@@ -167,14 +167,11 @@ void ArmComponent::publish_state(std::vector<double> positions, std::vector<doub
 }
 
 void ArmComponent::publish_initial(const Eigen::VectorXd& q, std::vector<double> velocities, std::int64_t stamp_ns) {
-  if (!robot_published_) {  // whatever publish_initial says: it is not a state
-    robot_published_ = true;
-    ctx_(kRobot).emit(robot_, stamp_ns);
-  }
-  if (!publish_initial_) return;
-  publish_initial_ = false;
+  if (initial_published_) return;
+  initial_published_ = true;
+  ctx_(kRobot).emit(robot_, stamp_ns);
   publish_state(values(q), std::move(velocities), stamp_ns);
-  ctx_(kCameraPose).emit(pose_at(q, stamp_ns), stamp_ns);
+  if (initial_camera_pose_) ctx_(kCameraPose).emit(pose_at(q, stamp_ns), stamp_ns);
 }
 
 void ArmComponent::arrive(const Eigen::VectorXd& q, std::int64_t stamp_ns) {

@@ -65,8 +65,10 @@ class ArmComponent : public fba::Component, public ArmPorts {
           .range(1e-9, 0.5);
   static constexpr auto kAttempts =
       fba::Param<int>("ik_attempts", 32, "IK starts: the current joints, then random seeds").range(1, 10000);
-  static constexpr auto kPublishInitial = fba::Param<bool>(
-      "publish_initial", true, "publish the joint state and camera pose where the arm starts, at the first tick");
+  static constexpr auto kInitialCameraPose = fba::Param<bool>(
+      "initial_camera_pose", true,
+      "publish the camera pose where the arm starts, at the first tick, so that a camera wired to camera_pose takes a picture "
+      "there (off where a planner asks for every view). The joint state there goes out whatever this says: a state, not a view");
   static constexpr fba::Param<bool> kCollisionCheck{
       "collision_check", true,
       "a target's IK solution must keep the arm, its camera and the hand on its flange (the URDF's collision shapes, the hand "
@@ -96,7 +98,7 @@ class ArmComponent : public fba::Component, public ArmPorts {
                       nlohmann::json& target) const;
 
   void publish_state(std::vector<double> positions, std::vector<double> velocities, std::int64_t stamp_ns);
-  // At the first tick: the robot, and (unless publish_initial is off) the joints and the camera pose.
+  // At the first tick: the robot, the joints, and (unless initial_camera_pose is off) the camera pose.
   void publish_initial(const Eigen::VectorXd& q, std::vector<double> velocities, std::int64_t stamp_ns);
   // Where a motion ended: the camera pose, and 'arrived' with it and the joints.
   void arrive(const Eigen::VectorXd& q, std::int64_t stamp_ns);
@@ -126,8 +128,8 @@ class ArmComponent : public fba::Component, public ArmPorts {
   fba::Pose pose_at(const Eigen::VectorXd& q, std::int64_t stamp_ns) const;
   std::string joint_goal(const fba::JointState& js, const Eigen::VectorXd& from, Eigen::VectorXd& goal) const;
 
-  bool publish_initial_;
-  bool robot_published_ = false;
+  bool initial_published_ = false;
+  const bool initial_camera_pose_;
 };
 
 // The vector's values as a std::vector, for JointState and JSON.

@@ -120,7 +120,7 @@ std::string reach_task(const std::string& arm, const std::string& hand) {
          "      device: " + arm + "\n"
          "      node_ids: [1, 2, 3, 4, 5, 6]\n"
          "      counts_per_rad: [100000, 100000, 100000, 100000, 100000, 100000]\n"
-         "      publish_initial: false\n      sdo_timeout_ms: 1000\n      heartbeat_timeout_ms: 1000\n"
+         "      initial_camera_pose: false\n      sdo_timeout_ms: 1000\n      heartbeat_timeout_ms: 1000\n"
          "  hand:\n    type: hw.robotiq_3f\n    params:\n"
          "      device: " + hand + "\n"
          "      response_timeout: 2.0\n      retries: 1\n      poll_period: 0.01\n      hold_time: 0.2\n"

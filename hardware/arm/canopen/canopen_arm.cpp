@@ -115,7 +115,7 @@ class CanopenArmComponent final : public fba::arm::ArmComponent {
              kCountsPerRad, kZeroCounts);
     Robot::add(spec)
         .add(kBaseLink, kCameraLink, kSpeed, kAcceleration, kRate, kPositionTolerance, kOrientationTolerance, kAttempts,
-             kPublishInitial, kCollisionCheck, kHeartbeatPeriod, kHeartbeatTimeout, kSdoTimeout, kEnableTimeout, kResetFaults,
+             kInitialCameraPose, kCollisionCheck, kHeartbeatPeriod, kHeartbeatTimeout, kSdoTimeout, kEnableTimeout, kResetFaults,
              kEmulator, kNoiseLimit, kHeartbeatPeriod < kHeartbeatTimeout)
         .check(kDevice, check_bus)
         .check(kEmulator, check_emulator)

@@ -44,7 +44,7 @@ class SimArm final : public fba::arm::ArmComponent {
                                          "targets within the joint limits, in task time (the twin of hw.canopen_arm).");
     spec.add(kTarget, kJointTarget, kTrajectory, kJointState, kCameraPose, kRobot, kArrived, kUnreachable);
     Robot::add(spec).add(kBaseLink, kCameraLink, kInitial, kSpeed, kAcceleration, kRate, kPositionTolerance, kOrientationTolerance,
-                         kAttempts, kPublishInitial, kCollisionCheck);
+                         kAttempts, kInitialCameraPose, kCollisionCheck);
     return spec;
   }
 
