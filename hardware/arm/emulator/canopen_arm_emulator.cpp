@@ -33,6 +33,7 @@ constexpr const char* kUsage = R"(usage: fba-canopen-arm-emulator [options]
   --disconnect-after S    close the line after S seconds (a pulled cable)
   --ignore-set-points-after S:NODE  after S seconds, NODE takes no more set-points (no acknowledge)
   --fault-at-start NODE:CODE  NODE is in fault from power-on, error code CODE (hex) in 0x603F
+  --positions LIST        where each drive's joint stands at power-on, drive units, in --nodes order (default all 0)
   --device-type NODE:HEX  NODE's device type (0x1000; default 00020192, a CiA 402 servo drive)
   --silent NODE           NODE never answers (as if it were not on the bus)
   --exit-with-parent      end when the program that started this one ends
@@ -50,6 +51,8 @@ int main(int argc, char** argv) {
   std::vector<fba::emulators::ScheduledFault> schedule;
   using fba::emulators::CanopenArmEmulator;
   CanopenArmEmulator* emulator = nullptr;  // the actions below run once it exists
+  std::vector<std::string> positions;       // --positions, read once --nodes is known
+  std::string positions_option;
   // An option S:NODE: `act` on the node S seconds in.
   const auto on_node_after = [&](const std::string& a, const std::string& v, void (CanopenArmEmulator::*act)(int)) {
     const auto p = kCli.fields(v, a, 2, "S:NODE");
@@ -86,6 +89,9 @@ int main(int argc, char** argv) {
     } else if (a == "--fault-at-start") {
       const auto p = kCli.fields(v, a, 2, "NODE:CODE");
       options.fault_at_start[kCli.integer(p[0], a, 1, 127)] = static_cast<std::uint16_t>(kCli.integer(p[1], a, 1, 0xFFFF, 16));
+    } else if (a == "--positions") {
+      positions = kCli.split(v, ',');
+      positions_option = a;
     } else if (a == "--device-type") {
       const auto p = kCli.fields(v, a, 2, "NODE:HEX");
       options.device_type[kCli.integer(p[0], a, 1, 127)] = static_cast<std::uint32_t>(kCli.integer(p[1], a, 0, 0x7FFFFFFF, 16));
@@ -96,6 +102,13 @@ int main(int argc, char** argv) {
     }
     return true;
   });
+  if (!positions.empty()) {
+    if (positions.size() != options.nodes.size())
+      kCli.fail(positions_option + " gives " + std::to_string(positions.size()) + " positions for " + std::to_string(options.nodes.size()) +
+                " nodes; give one a node, in --nodes order");
+    for (std::size_t i = 0; i < positions.size(); ++i)
+      options.position_at_start[options.nodes[i]] = static_cast<std::int32_t>(kCli.integer(positions[i], positions_option, -2'000'000'000, 2'000'000'000));
+  }
   const std::string& link = common.link;
   return fba::emulators::run_program(kCli, "CANopen arm emulator", [&] {
     std::unique_ptr<fba::can::CanBus> bus;

@@ -654,6 +654,25 @@ TEST_F(CanopenArmStartUp, ADriveInFaultIsRefusedAsADeviceErrorNamingItsErrorCode
   for (int node = 1; node <= 6; ++node) EXPECT_FALSE(emulator_->enabled(node)) << "node " << node;
 }
 
+// Drives that power on away from zero: the first joint state is where they stand, published
+// with the camera pose left out (initial_camera_pose off, as the grasp task's profiles have it).
+TEST(CanopenArmStartPosition, TheFirstJointStateIsWhereTheDrivesStandWithOrWithoutTheCameraPose) {
+  fba::emulators::CanopenArmOptions options;
+  const std::vector<double> stand{-0.4148, -2.1223, 2.2888, -2.2234, -1.3679, -0.3644};
+  for (int node = 1; node <= 6; ++node)
+    options.position_at_start[node] = static_cast<std::int32_t>(std::lround(stand[static_cast<std::size_t>(node - 1)] * kCounts));
+  Emulator emulator(options);
+  ComponentHarness h(built_plugins(), "hw.canopen_arm", arm_params(emulator.device(), {{"initial_camera_pose", false}}),
+                     std::vector<std::string>{"target", "joint_target", "trajectory"});
+  h.tick();
+  h.run();
+  ASSERT_TRUE(h.failure().empty()) << h.failure();
+  const auto states = h.values<fba::JointState>("joint_state");
+  ASSERT_EQ(states.size(), 1u);
+  for (std::size_t j = 0; j < 6; ++j) EXPECT_NEAR(states[0].positions[j], stand[j], 1.0 / kCounts) << "joint " << j;
+  EXPECT_TRUE(h.values<fba::Pose>("camera_pose").empty());
+}
+
 TEST_F(CanopenArmStartUp, ADriveInFaultIsResetWhenTheTaskAllowsIt) {
   fba::emulators::CanopenArmOptions options;
   options.fault_at_start = {{4, 0x7121}};

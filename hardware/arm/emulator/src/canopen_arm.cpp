@@ -100,6 +100,7 @@ CanopenArmEmulator::CanopenArmEmulator(can::CanBus& bus, CanopenArmOptions optio
     n.set(0x603F, 0, code);
     n.set(0x1001, 0, error_register_for(code));
   }
+  for (const auto& [id, position] : options_.position_at_start) node(id).position = position;
   for (const auto& [id, type] : options_.device_type) node(id);  // an unknown node is refused here
   for (int id : options_.silent) node(id).silent = true;
 }

@@ -39,6 +39,7 @@ struct CanopenArmOptions {
   std::int32_t max_position = 10'000'000;
   std::uint32_t profile_velocity = 100'000;  // 0x6081 after a reset, units/s
   std::map<int, std::uint16_t> fault_at_start;   // node -> error code: in fault from power-on (0x603F)
+  std::map<int, std::int32_t> position_at_start;  // node -> where its joint stands at power-on, drive units (else 0)
   std::map<int, std::uint32_t> device_type;      // node -> 0x1000 (default 0x00020192: a CiA 402 servo drive)
   std::vector<int> silent;                       // nodes that never answer (not on the bus)
 };
