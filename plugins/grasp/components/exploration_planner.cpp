@@ -88,10 +88,11 @@ class ExplorationPlanner final : public fba::Component {
       "so that no view asked for is refused"};
   static constexpr fba::OptionalIn<fba::JointState> kJointState{
       "joint_state",
-      "the arm's joints (the newest is used). With them each view after the initial ones goes out on joint_target, as the joints "
-      "the arm's inverse kinematics gives nearest to where it stands, and only when the straight joint-space motion there keeps "
-      "the arm, its camera and its open hand clear of the model (occupied and not-yet-carved leaves, less what the robot stands "
-      "in), the table and the arm itself; a view whose motion is not clear is passed over for the next best"};
+      "the arm's joints (the newest is used). With them every view goes out on joint_target instead of target, as the joints the "
+      "arm's inverse kinematics gives nearest to where the arm stands, and only when the straight joint-space motion there keeps "
+      "the arm, its camera and its open hand clear of the arm itself, the table and the model (occupied and not-yet-carved "
+      "leaves, less what the robot stands in); a view whose motion is not clear is passed over for the next best. The initial "
+      "views wait for the arm's first joint state and chain from it, each in place of the nearest candidate whose move is clear"};
   static constexpr fba::Out<fba::JointState> kJointTarget{
       "joint_target", "with joint_state: the joints of the next view (wire it to the arm's joint_target)"};
   static constexpr auto kMoveStep = fba::Param<double>(
@@ -171,7 +172,14 @@ class ExplorationPlanner final : public fba::Component {
     if (auto o = ctx_(kOctree); o.has()) model_ = o.share();
     if (auto c = ctx_(kCurrent); c.has()) current_ = c.get().world_from_frame;
     if (auto r = ctx_(kRegions); r.has()) pending_ = r.share();
-    if (ctx_(kStart).has() && !started_) start();
+    if (ctx_(kStart).has()) start_asked_ = true;
+    if (start_asked_ && !started_) {
+#if FBA_GRASP_REACH
+      // The moves to the initial views start where the arm stands: its first joint state.
+      if (arm_ && !arm_->at_rest(ctx_(kJointState).latest())) return;
+#endif
+      start();
+    }
     if (!pending_ || !model_ || model_->node_count == 0) return;
     // A request counts once it comes from a model with every view asked for: one from an older
     // model does not know the last view yet and is dropped (synthesis sends another per model).
@@ -233,30 +241,37 @@ class ExplorationPlanner final : public fba::Component {
     Arm(const Arm&) = delete;  // ik.accept holds `this`
     Arm& operator=(const Arm&) = delete;
 
-    // Whether `state` is the arm standing still at the view last asked for (its camera within
-    // 5 mm and 1 degree of it): the move to the next view starts there.
-    bool at_last_view(const fba::JointState* state, const std::optional<Eigen::Isometry3d>& view) {
+    // Whether `state` is the arm standing still (every velocity under 1e-3 rad/s), taking its
+    // joints as where the next move starts.
+    bool at_rest(const fba::JointState* state) {
       joints.reset();
-      if (!state || !view) return false;
+      if (!state) return false;
       for (double v : state->velocities)
         if (std::abs(v) >= 1e-3) return false;
       std::string why;
-      const auto q = fba::motion::arm_joints(to_camera, *state, why);
-      if (!q) return false;
-      const Eigen::Isometry3d at = to_camera.forward(*q);
-      if ((at.translation() - view->translation()).norm() > 0.005 ||
-          Eigen::AngleAxisd(at.linear().transpose() * view->linear()).angle() > kDeg)
+      joints = fba::motion::arm_joints(to_camera, *state, why);
+      return joints.has_value();
+    }
+
+    // Whether `state` is the arm standing still at the view last asked for (its camera within
+    // 5 mm and 1 degree of it): the move to the next view starts there.
+    bool at_last_view(const fba::JointState* state, const std::optional<Eigen::Isometry3d>& view) {
+      if (!at_rest(state) || !view) return false;
+      const Eigen::Vector3d moved = to_camera.forward(*joints).translation() - view->translation();
+      const Eigen::Isometry3d at = to_camera.forward(*joints);
+      if (moved.norm() > 0.005 || Eigen::AngleAxisd(at.linear().transpose() * view->linear()).angle() > kDeg) {
+        joints.reset();
         return false;
-      joints = *q;
+      }
       return true;
     }
 
     // The joints to move to for `view` from `joints`, with the straight joint-space motion there
-    // clear of `model`; "" when so, else why not.
+    // clear of the arm itself, the table and `model` (null: none yet); "" when so, else why not.
     std::string move(const Eigen::Isometry3d& view, const std::shared_ptr<const fba::motion::ModelObstacles>& model,
                      Eigen::VectorXd& goal) {
       robot.set_model(model);
-      robot.free_model_at(*joints, true);  // the robot stands there, its hand too: nothing of the object does
+      if (model) robot.free_model_at(*joints, true);  // the robot stands there, its hand too: nothing of the object does
       const auto solution = to_camera.inverse(view, *joints, ik);
       if (!solution.ok) return "no IK solution clear of the model there: " + solution.why;
       goal = solution.joints;
@@ -301,9 +316,53 @@ class ExplorationPlanner final : public fba::Component {
         chosen.push_back(far);
       }
     }
+#if FBA_GRASP_REACH
+    if (arm_) return start_moves(chosen);
+#endif
     for (std::size_t i : chosen) request(i);
     ctx_.log().info("start: {} initial views requested ({})", n, ctx_(kInitialLayout));
   }
+
+#if FBA_GRASP_REACH
+  // The initial views as joints, each move from where the one before ends, clear of the arm itself
+  // and the table (no model yet). A view whose move is not clear gives way to the candidate nearest
+  // it whose move is.
+  void start_moves(const std::vector<std::size_t>& chosen) {
+    const std::shared_ptr<const fba::motion::ModelObstacles> none;
+    std::string passed, last_why;
+    for (std::size_t view : chosen) {
+      std::vector<std::size_t> order;
+      for (std::size_t i = 0; i < candidates_.size(); ++i)
+        if (visited_.size() <= i || !visited_[i]) order.push_back(i);
+      const Eigen::Vector3d at = candidates_[view].translation();
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return (candidates_[a].translation() - at).norm() < (candidates_[b].translation() - at).norm();
+      });
+      Eigen::VectorXd goal;
+      std::string first_why;
+      for (std::size_t i : order) {
+        const std::string why = arm_->move(candidates_[i], none, goal);
+        if (why.empty()) {
+          if (i != view)
+            passed += (passed.empty() ? "" : "; ") + ("view " + std::to_string(i) + " for view " + std::to_string(view) + " (" + first_why + ")");
+          request(i, &goal);
+          arm_->joints = goal;  // the next move starts where this one ends
+          break;
+        }
+        if (first_why.empty()) first_why = why;
+        last_why = why;
+      }
+    }
+    if (requested_ == 0) {
+      const std::string reason = "no candidate view's straight move from where the arm stands is clear (the last: " + last_why + ")";
+      ctx_.log().info("no view: {}", reason);
+      ctx_.emit(kNoView, nlohmann::json{{"reason", reason}, {"views_requested", 0}}.dump());
+      return;
+    }
+    ctx_.log().info("start: {} initial views requested ({}){}", requested_, ctx_(kInitialLayout),
+                    passed.empty() ? "" : "; their straight moves not clear: " + passed);
+  }
+#endif
 
   // Asks for the view: its joints on joint_target when given (`joints`), else its camera pose on
   // target.
@@ -363,7 +422,7 @@ class ExplorationPlanner final : public fba::Component {
     }
     if (passed > 0)
       choice.reason += "; passed over " + std::to_string(passed) + " better view" + (passed > 1 ? "s" : "") +
-                       " the arm cannot move to clear of the model (" + blocked + ")";
+                       " whose straight move is not clear (" + blocked + ")";
     if (!choice.best) {
       ctx_.log().info("no view: {}", choice.reason);
       ctx_.emit(kNoView, nlohmann::json{{"reason", choice.reason}, {"views_requested", requested_}}.dump());
@@ -415,15 +474,15 @@ class ExplorationPlanner final : public fba::Component {
       }
 #endif
       std::string reason = "view " + std::to_string(view) + " drawn at random of the " + std::to_string(not_taken) + " not taken";
-      if (passed > 0) reason += " (" + std::to_string(passed) + " drawn before it the arm cannot move to clear of the model)";
+      if (passed > 0) reason += " (" + std::to_string(passed) + " drawn before it whose straight move is not clear)";
       ctx_.log().info("{}", reason);
       ctx_.emit(kViewChosen, nlohmann::json{{"view", view}, {"pose", fba::pose_json(candidates_[view])}, {"reason", reason}}.dump());
       request(view, joints);
       return;
     }
     const std::string reason = passed == 0 ? "every one of the " + std::to_string(candidates_.size()) + " candidate views is taken"
-                                           : "the arm cannot move clear of the model to any of the " + std::to_string(not_taken) +
-                                                 " candidate views not taken";
+                                           : "the straight move to each of the " + std::to_string(not_taken) +
+                                                 " candidate views not taken is not clear";
     ctx_.log().info("no view: {}", reason);
     ctx_.emit(kNoView, nlohmann::json{{"reason", reason}, {"views_requested", requested_}}.dump());
   }
@@ -441,7 +500,7 @@ class ExplorationPlanner final : public fba::Component {
   std::shared_ptr<const fba::RegionsOfInterest> pending_;
   std::optional<Eigen::Isometry3d> current_, last_target_;
   int requested_ = 0;
-  bool started_ = false;
+  bool start_asked_ = false, started_ = false;
 #if FBA_GRASP_REACH
   std::optional<Arm> arm_;  // with joint_state: the moves to the views are checked on it
 #endif

@@ -1,6 +1,6 @@
-// grasp.exploration_planner with the arm's joints: each view after the initial ones goes out as
-// the joints to move to, the straight joint-space motion there clear of the model, checked here
-// again on the project's arm; a view whose move crosses the model is passed over.
+// grasp.exploration_planner with the arm's joints: every view goes out as the joints to move to,
+// the straight joint-space motion there clear of the arm itself, the table and the model, checked
+// here again on the project's arm; a view whose move crosses the model is passed over.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -64,15 +64,6 @@ struct Robot {
   }();
   fba::motion::RobotCollision collision{to_flange, fba::motion::urdf_flange_from_palm(urdf, "wrist_camera_arm.urdf", "world")};
 
-  // Joints that put the camera at `view`, clear of the arm itself and the table.
-  Eigen::VectorXd at(const Eigen::Isometry3d& view) {
-    collision.set_model(nullptr);
-    fba::arm::IkOptions ik;
-    ik.accept = [this](const Eigen::VectorXd& q) { return collision.collision(q); };
-    const auto r = to_camera.inverse(view, mt::home(), ik);
-    EXPECT_TRUE(r.ok) << r.why;
-    return r.joints;
-  }
   // What the straight motion from a to b touches of `model` (less what the robot stands in at a).
   std::string motion(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const fba::Octree& model) {
     collision.set_model(std::make_shared<const fba::motion::ModelObstacles>(model));
@@ -89,47 +80,57 @@ fba::JointState state_of(const fba::arm::ArmModel& arm, const Eigen::VectorXd& q
   return s;
 }
 
-// The planner after the start's views, the arm standing at the last of them, asked for the
-// request on `model`: the joint targets it sends, and the view_chosen or no_view payload.
+Eigen::VectorXd joints_of(const fba::JointState& s) { return Eigen::Map<const Eigen::VectorXd>(s.positions.data(), static_cast<Eigen::Index>(s.positions.size())); }
+
+// The planner started with the arm at sim.arm's initial joints, then, the arm standing at the last
+// initial view, asked for the request on `model`: the initial views' joints, the joints it sends
+// next, and the view_chosen or no_view payload.
 struct Answer {
-  std::vector<fba::Pose> initial;
+  std::vector<Eigen::VectorXd> initial;
   Eigen::VectorXd start;
-  std::vector<fba::JointState> joints;
+  std::vector<Eigen::VectorXd> joints;
   nlohmann::json chosen, no_view;
 };
 Answer ask(Robot& robot, const fba::Octree& model) {
   ComponentHarness h(fba::test::built_plugins(), "grasp.exploration_planner", task_views(), {"start", "joint_state"});
   Answer a;
+  h.push<fba::JointState>("joint_state", state_of(robot.to_camera, mt::home()));
   h.push<std::int64_t>("start", 0);
   h.run();
-  a.initial = h.values<fba::Pose>("target");
+  for (const auto& j : h.values<fba::JointState>("joint_target")) a.initial.push_back(joints_of(j));
   if (a.initial.size() != 3u) {
     ADD_FAILURE() << a.initial.size() << " initial views";
     return a;
   }
-  a.start = robot.at(a.initial.back().world_from_frame);
+  a.start = a.initial.back();
   h.push<fba::JointState>("joint_state", state_of(robot.to_camera, a.start));
   h.push<fba::Octree>("octree", model);
   h.push<fba::RegionsOfInterest>("regions", plus_x_face());
   h.run();
-  EXPECT_EQ(h.values<fba::Pose>("target").size(), 3u) << "a view after the initial ones went out as a pose";
-  a.joints = h.values<fba::JointState>("joint_target");
+  EXPECT_EQ(h.values<fba::Pose>("target").size(), 0u) << "a view went out as a pose";
+  const auto sent = h.values<fba::JointState>("joint_target");
+  for (std::size_t i = a.initial.size(); i < sent.size(); ++i) a.joints.push_back(joints_of(sent[i]));
   if (const auto e = fba::test::find_event(h.events(), "view_chosen")) a.chosen = nlohmann::json::parse(e->payload);
   if (const auto e = fba::test::find_event(h.events(), "no_view")) a.no_view = nlohmann::json::parse(e->payload);
   return a;
 }
 
-Eigen::VectorXd joints_of(const fba::JointState& s) { return Eigen::Map<const Eigen::VectorXd>(s.positions.data(), static_cast<Eigen::Index>(s.positions.size())); }
-
 }  // namespace
 
-TEST(ExplorationPlannerMoves, AViewAfterTheInitialOnesGoesOutAsJointsWhoseMoveClearsTheModel) {
+TEST(ExplorationPlannerMoves, EveryViewGoesOutAsJointsWhoseMoveIsClear) {
   Robot robot;
   const fba::Octree model = model_of(kObject);
   const Answer a = ask(robot, model);
+  // The initial views, chained from where the arm starts, before any model: clear of the arm
+  // itself and the table.
+  ASSERT_EQ(a.initial.size(), 3u);
+  const fba::Octree nothing = model_of([](const Eigen::Vector3d&) { return 1.0; });
+  EXPECT_EQ(robot.motion(mt::home(), a.initial[0], nothing), "");
+  EXPECT_EQ(robot.motion(a.initial[0], a.initial[1], nothing), "");
+  EXPECT_EQ(robot.motion(a.initial[1], a.initial[2], nothing), "");
+  // The next: the joints put the camera at the view chosen, and the motion there touches nothing.
   ASSERT_EQ(a.joints.size(), 1u) << a.no_view.dump();
-  const Eigen::VectorXd goal = joints_of(a.joints[0]);
-  // The joints put the camera at the view chosen, and the motion there touches nothing.
+  const Eigen::VectorXd& goal = a.joints[0];
   const Eigen::Isometry3d camera = robot.to_camera.forward(goal);
   const auto& p = a.chosen.at("pose").at("position");
   EXPECT_LT((camera.translation() - Eigen::Vector3d(p[0], p[1], p[2])).norm(), 1e-3) << a.chosen.dump();
@@ -145,13 +146,13 @@ TEST(ExplorationPlannerMoves, AViewWhoseMoveCrossesTheModelIsPassedOverForOneTha
   const Answer free = ask(robot, model_of(kObject));
   ASSERT_EQ(free.joints.size(), 1u);
   const int best = free.chosen.at("view").get<int>();
-  const Eigen::VectorXd near_end = free.start + 0.5 * (joints_of(free.joints[0]) - free.start);
+  const Eigen::VectorXd near_end = free.start + 0.5 * (free.joints[0] - free.start);
   const Eigen::Vector3d block = robot.to_flange.forward(near_end).translation();
   const Sdf object_and_block = [b = box_sdf(block, Eigen::Vector3d::Constant(0.03))](const Eigen::Vector3d& x) {
     return std::min(kObject(x), b(x));
   };
   const fba::Octree model = model_of(object_and_block);
-  ASSERT_NE(robot.motion(free.start, joints_of(free.joints[0]), model), "") << "the block is not in the way at " << block.transpose();
+  ASSERT_NE(robot.motion(free.start, free.joints[0], model), "") << "the block is not in the way at " << block.transpose();
 
   const Answer a = ask(robot, model);
   const std::string reason = (a.joints.empty() ? a.no_view : a.chosen).at("reason").get<std::string>();
@@ -159,5 +160,5 @@ TEST(ExplorationPlannerMoves, AViewWhoseMoveCrossesTheModelIsPassedOverForOneTha
   EXPECT_NE(reason.find("view " + std::to_string(best) + ": the straight motion there: "), std::string::npos) << reason;
   ASSERT_EQ(a.joints.size(), 1u) << reason;
   EXPECT_NE(a.chosen.at("view").get<int>(), best);
-  EXPECT_EQ(robot.motion(a.start, joints_of(a.joints[0]), model), "");
+  EXPECT_EQ(robot.motion(a.start, a.joints[0], model), "");
 }
