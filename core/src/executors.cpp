@@ -21,6 +21,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The deterministic executor ends a run as stalled after this many stall warnings' worth of task
+// time (RunOptions::stall_warning_s; ten minutes by default) with only timers firing.
+constexpr double kDeterministicQuietWarnings = 60;
+
 struct Timer {
   std::int64_t deadline_ns;
   std::size_t order;  // ties break by node order, so the deterministic executor stays deterministic
@@ -359,6 +363,12 @@ class DeterministicExecutor final : public Executor {
     const auto wall_start = Clock::now();
     std::uint64_t steps = 0;
     const std::int64_t limit_ns = timeout_ns(g_);
+    // Nothing outside the run moves a virtual clock: when only timers have fired for this long of
+    // task time, no component producing anything, the run waits for what will not come (a port
+    // left unwired, a state never sent) and would spin through ticks for ever.
+    const double quiet_limit_s = kDeterministicQuietWarnings * std::max(0.001, g_.options.stall_warning_s);
+    std::uint64_t progress = g_.progress();
+    std::int64_t quiet_since_ns = 0;
     while (!g_.stopping()) {
       if (limit_ns != kNeverNs && (++steps & 255) == 0 && Clock::now() - wall_start > std::chrono::nanoseconds(limit_ns)) {
         g_.request_stop(Outcome::RuntimeError, "timed out after " + number_text(g_.timeout_s) + " s");
@@ -382,6 +392,18 @@ class DeterministicExecutor final : public Executor {
       timers.pop();
       virtual_ns_.store(std::max(virtual_ns_.load(std::memory_order_relaxed), t.deadline_ns),
                         std::memory_order_relaxed);
+      if (g_.progress() != progress) {
+        progress = g_.progress();
+        quiet_since_ns = t.deadline_ns;
+      } else if (static_cast<double>(t.deadline_ns - quiet_since_ns) * 1e-9 >= quiet_limit_s) {
+        std::string ticking;
+        for (const auto& n : g_.nodes)
+          if (n->periodic() && !n->finished.load()) ticking += (ticking.empty() ? "" : ", ") + n->config.name;
+        g_.request_stop(Outcome::RuntimeError, "stalled: for " + number_text(quiet_limit_s) +
+                                                   " s of task time no component produced anything, only the timers of " + ticking +
+                                                   " fired; on the deterministic executor's clock nothing else can come");
+        break;
+      }
       t.node->tick_pending.store(true);
       g_.notify(t.node);
       const std::int64_t next = add_ns(t.deadline_ns, period_ns(*t.node));

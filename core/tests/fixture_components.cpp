@@ -39,7 +39,9 @@ class Silent final : public fba::Component {
         .trigger({fba::TriggerPolicy::Any, 0});
   }
   explicit Silent(fba::Context& ctx) : ctx_(ctx) {}
-  void process() override { ctx_(kOut).emit(ctx_(kRequest).get()); }
+  void process() override {
+    if (ctx_(kRequest).has()) ctx_(kOut).emit(ctx_(kRequest).get());  // a periodic tick alone emits nothing
+  }
 
  private:
   fba::Context& ctx_;

@@ -376,6 +376,24 @@ connections:
   EXPECT_NE(r.reason.find("src: held back by the full lossless queue src.out -> pair.a"), std::string::npos) << r.reason;
 }
 
+// A periodic component waiting for what never comes: nothing outside the run moves the
+// deterministic executor's clock, so once ten minutes of task time have passed with only its timer
+// firing the run ends as stalled, naming it, instead of spinning through ticks for ever.
+TEST(Runtime, ADeterministicRunWithOnlyTimersFiringEndsAsStalled) {
+  fba::Task task(load(R"(
+components:
+  quiet: { type: test.silent, trigger: { policy: periodic, period: 0.02 } }
+  sink: { type: examples.sink }
+connections: [ quiet.out -> sink.in ]
+)"),
+                 with(ExecutorKind::Deterministic));
+  const auto r = task.run();
+  EXPECT_EQ(r.outcome, Outcome::RuntimeError);
+  EXPECT_NE(r.reason.find("stalled: for 600 s of task time no component produced anything, only the timers of quiet fired"),
+            std::string::npos)
+      << r.reason;
+}
+
 TEST_P(RuntimeBoth, TimeoutStopsALongRun) {
   fba::Task task(load(chain(100000000, 1)), with(GetParam(), 0.3));
   const auto r = task.run();

@@ -43,6 +43,8 @@ struct RunOptions {
   // each actuator's safe_state() gets. A call still running then is reported and left behind.
   double stop_grace_s = 5;
   // A warning names what the run waits for when no component has produced anything this long.
+  // The deterministic executor, whose clock nothing outside the run moves, instead ends the run as
+  // stalled once 60 times this of task time has passed with only timers firing.
   double stall_warning_s = 10;
   // A stop requested through this token (fba-run's signal watcher) stops the task in order, also
   // while its components are being constructed: the constructor running then sees it through
