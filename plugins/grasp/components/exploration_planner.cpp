@@ -5,7 +5,8 @@
 // of moving there, and emits the best as the camera's target pose, or no_view with the reason when
 // none is worth the move. (The models are written by grasp.synthesis, which analyses every one.)
 // With the arm's joints it sends the joints to move to instead, once it has checked the move
-// there clear of the model: the arm carries its camera round an object it may not touch.
+// there clear of the arm itself, the table and the model: the arm carries its camera round an
+// object it may not touch.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -257,9 +258,9 @@ class ExplorationPlanner final : public fba::Component {
     // 5 mm and 1 degree of it): the move to the next view starts there.
     bool at_last_view(const fba::JointState* state, const std::optional<Eigen::Isometry3d>& view) {
       if (!at_rest(state) || !view) return false;
-      const Eigen::Vector3d moved = to_camera.forward(*joints).translation() - view->translation();
       const Eigen::Isometry3d at = to_camera.forward(*joints);
-      if (moved.norm() > 0.005 || Eigen::AngleAxisd(at.linear().transpose() * view->linear()).angle() > kDeg) {
+      if ((at.translation() - view->translation()).norm() > 0.005 ||
+          Eigen::AngleAxisd(at.linear().transpose() * view->linear()).angle() > kDeg) {
         joints.reset();
         return false;
       }
@@ -273,7 +274,7 @@ class ExplorationPlanner final : public fba::Component {
       robot.set_model(model);
       if (model) robot.free_model_at(*joints, true);  // the robot stands there, its hand too: nothing of the object does
       const auto solution = to_camera.inverse(view, *joints, ik);
-      if (!solution.ok) return "no IK solution clear of the model there: " + solution.why;
+      if (!solution.ok) return "no IK solution there clear of the arm, the table and the model: " + solution.why;
       goal = solution.joints;
       const std::string hit = fba::motion::motion_collision(
           *joints, goal, step, [this](const Eigen::VectorXd& q) { return robot.collision(q); });
@@ -354,13 +355,13 @@ class ExplorationPlanner final : public fba::Component {
       }
     }
     if (requested_ == 0) {
-      const std::string reason = "no candidate view's straight move from where the arm stands is clear (the last: " + last_why + ")";
+      const std::string reason = "the arm cannot reach any candidate view by a clear straight move from where it stands (the last: " + last_why + ")";
       ctx_.log().info("no view: {}", reason);
       ctx_.emit(kNoView, nlohmann::json{{"reason", reason}, {"views_requested", 0}}.dump());
       return;
     }
     ctx_.log().info("start: {} initial views requested ({}){}", requested_, ctx_(kInitialLayout),
-                    passed.empty() ? "" : "; their straight moves not clear: " + passed);
+                    passed.empty() ? "" : "; in place of views the arm cannot reach by a clear straight move: " + passed);
   }
 #endif
 
@@ -422,7 +423,7 @@ class ExplorationPlanner final : public fba::Component {
     }
     if (passed > 0)
       choice.reason += "; passed over " + std::to_string(passed) + " better view" + (passed > 1 ? "s" : "") +
-                       " whose straight move is not clear (" + blocked + ")";
+                       " the arm cannot reach by a clear straight move (" + blocked + ")";
     if (!choice.best) {
       ctx_.log().info("no view: {}", choice.reason);
       ctx_.emit(kNoView, nlohmann::json{{"reason", choice.reason}, {"views_requested", requested_}}.dump());
@@ -445,7 +446,6 @@ class ExplorationPlanner final : public fba::Component {
     request(s.index, joints);
   }
 
-  // The baseline: any view not yet taken, whatever the model and the request say.
   // The baseline: any view not yet taken, whatever the model and the request say (with the arm's
   // joints, one the arm moves to clear of the model, as for the best).
   void plan_at_random([[maybe_unused]] const fba::Octree& model) {
@@ -474,15 +474,15 @@ class ExplorationPlanner final : public fba::Component {
       }
 #endif
       std::string reason = "view " + std::to_string(view) + " drawn at random of the " + std::to_string(not_taken) + " not taken";
-      if (passed > 0) reason += " (" + std::to_string(passed) + " drawn before it whose straight move is not clear)";
+      if (passed > 0) reason += " (" + std::to_string(passed) + " drawn before it the arm cannot reach by a clear straight move)";
       ctx_.log().info("{}", reason);
       ctx_.emit(kViewChosen, nlohmann::json{{"view", view}, {"pose", fba::pose_json(candidates_[view])}, {"reason", reason}}.dump());
       request(view, joints);
       return;
     }
     const std::string reason = passed == 0 ? "every one of the " + std::to_string(candidates_.size()) + " candidate views is taken"
-                                           : "the straight move to each of the " + std::to_string(not_taken) +
-                                                 " candidate views not taken is not clear";
+                                           : "the arm cannot reach any of the " + std::to_string(not_taken) +
+                                                 " candidate views not taken by a clear straight move";
     ctx_.log().info("no view: {}", reason);
     ctx_.emit(kNoView, nlohmann::json{{"reason", reason}, {"views_requested", requested_}}.dump());
   }
