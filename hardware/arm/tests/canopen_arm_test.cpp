@@ -656,7 +656,7 @@ TEST_F(CanopenArmStartUp, ADriveInFaultIsRefusedAsADeviceErrorNamingItsErrorCode
 
 // Drives that power on away from zero: the first joint state is where they stand, published
 // with the camera pose left out (initial_camera_pose off, as the grasp task's profiles have it).
-TEST(CanopenArmStartPosition, TheFirstJointStateIsWhereTheDrivesStandWithOrWithoutTheCameraPose) {
+TEST(CanopenArmStartPosition, TheFirstJointStateIsWhereTheDrivesStandAndNoCameraPoseWhenItIsOff) {
   fba::emulators::CanopenArmOptions options;
   const std::vector<double> stand{-0.4148, -2.1223, 2.2888, -2.2234, -1.3679, -0.3644};
   for (int node = 1; node <= 6; ++node)

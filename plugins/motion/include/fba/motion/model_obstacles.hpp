@@ -1,6 +1,7 @@
 // The carved model as obstacles: every leaf of the octree that is not carved away, occupied or
-// not yet carved alike, as a box in an FCL broad-phase tree. Built once per model and shared by
-// the checks made against it; immutable, so several checkers may read it at once.
+// not yet carved alike, as a box, in a tree of bounding balls (src/model_obstacles_impl.hpp) with
+// FCL's exact test at its leaves. Built once per model and shared by the checks made against it;
+// immutable, so several checkers may read it at once.
 #pragma once
 
 #include <cstddef>
