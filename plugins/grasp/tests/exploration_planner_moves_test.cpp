@@ -36,7 +36,7 @@ using fba::grasp::test::Sdf;
 
 // A band of candidate views like tasks/grasp.yaml's but nearer the object (0.32 m, where the arm
 // reaches 46 of them), on the simulated robot (the parameters' default).
-fba::testing::Params task_views() {
+fba::testing::Params band_of_views() {
   return {{"views", std::string("hemisphere")}, {"count", 48},         {"distance", 0.32},
           {"min_elevation_deg", 20.0},          {"max_elevation_deg", 70.0}, {"centre", std::vector<double>{0, 0, 0.09}},
           {"half_fov_deg", 25.0},               {"initial_layout", std::string("spread")}, {"reachable_only", true}};
@@ -93,7 +93,7 @@ struct Answer {
   nlohmann::json chosen, no_view;
 };
 Answer ask(Robot& robot, const fba::Octree& model) {
-  ComponentHarness h(fba::test::built_plugins(), "grasp.exploration_planner", task_views(), {"start", "joint_state"});
+  ComponentHarness h(fba::test::built_plugins(), "grasp.exploration_planner", band_of_views(), {"start", "joint_state"});
   Answer a;
   h.push<fba::JointState>("joint_state", state_of(robot.to_camera, mt::home()));
   h.push<std::int64_t>("start", 0);
@@ -147,8 +147,8 @@ TEST(ExplorationPlannerMoves, AViewWhoseMoveCrossesTheModelIsPassedOverForOneTha
   const Answer free = ask(robot, model_of(kObject));
   ASSERT_EQ(free.joints.size(), 1u);
   const int best = free.chosen.at("view").get<int>();
-  const Eigen::VectorXd near_end = free.start + 0.5 * (free.joints[0] - free.start);
-  const Eigen::Vector3d block = robot.to_flange.forward(near_end).translation();
+  const Eigen::VectorXd halfway = free.start + 0.5 * (free.joints[0] - free.start);
+  const Eigen::Vector3d block = robot.to_flange.forward(halfway).translation();
   const Sdf object_and_block = [b = box_sdf(block, Eigen::Vector3d::Constant(0.03))](const Eigen::Vector3d& x) {
     return std::min(kObject(x), b(x));
   };
