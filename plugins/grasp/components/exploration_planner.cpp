@@ -242,13 +242,11 @@ class ExplorationPlanner final : public fba::Component {
     Arm(const Arm&) = delete;  // ik.accept holds `this`
     Arm& operator=(const Arm&) = delete;
 
-    // Whether `state` is the arm standing still (every velocity under 1e-3 rad/s), taking its
-    // joints as where the next move starts.
+    // Whether `state` is the arm standing still (fba::motion::at_rest), taking its joints as where
+    // the next move starts.
     bool at_rest(const fba::JointState* state) {
       joints.reset();
-      if (!state) return false;
-      for (double v : state->velocities)
-        if (std::abs(v) >= 1e-3) return false;
+      if (!state || !fba::motion::at_rest(*state)) return false;
       std::string why;
       joints = fba::motion::arm_joints(to_camera, *state, why);
       return joints.has_value();

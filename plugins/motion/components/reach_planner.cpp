@@ -39,12 +39,6 @@ using fba::motion::ReachPlanner;
 
 nlohmann::json values(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
 
-// Whether the arm stands still in `s`: every velocity it gives below 1e-3 rad/s (none given: a
-// state from a source that does not measure them, taken as still).
-bool at_rest(const fba::JointState& s) {
-  return std::all_of(s.velocities.begin(), s.velocities.end(), [](double v) { return std::abs(v) < 1e-3; });
-}
-
 class ReachPlannerFilter final : public fba::Component {
  public:
   static constexpr fba::In<fba::Grasp> kGrasp{"grasp", "the grasp to take (world frame, the table at z = 0)"};
@@ -100,7 +94,7 @@ class ReachPlannerFilter final : public fba::Component {
     // An arm refuses a trajectory while it moves (it starts where the arm stands still), and a
     // plan from a moving arm's joints starts where it no longer is: a grasp selected while the
     // arm is on its way to a view waits for it to stop.
-    if (pending_ && model && joints && at_rest(*joints)) {
+    if (pending_ && model && joints && fba::motion::at_rest(*joints)) {
       const fba::Grasp grasp = *pending_;
       pending_.reset();
       plan(grasp, *model, *joints);

@@ -1,5 +1,8 @@
 #include "fba/motion/reach_parameters.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace fba::motion {
 
 std::optional<Eigen::VectorXd> arm_joints(const arm::ArmModel& arm, const fba::JointState& state, std::string& why) {
@@ -24,6 +27,10 @@ std::optional<Eigen::VectorXd> arm_joints(const arm::ArmModel& arm, const fba::J
     q(static_cast<Eigen::Index>(i)) = state.positions[k];
   }
   return q;
+}
+
+bool at_rest(const fba::JointState& state) {
+  return std::all_of(state.velocities.begin(), state.velocities.end(), [](double v) { return std::abs(v) < 1e-3; });
 }
 
 }  // namespace fba::motion

@@ -86,4 +86,9 @@ struct ReachParameters {
 // have as many positions as the arm has joints). nullopt with `why` when a joint is missing.
 std::optional<Eigen::VectorXd> arm_joints(const arm::ArmModel& arm, const fba::JointState& state, std::string& why);
 
+// Whether the arm stands still in `state`: every velocity it gives below 1e-3 rad/s (none given: a
+// state from a source that does not measure them, taken as still). A plan or a move starts only
+// from there: from a moving arm's joints it starts where the arm no longer is.
+bool at_rest(const fba::JointState& state);
+
 }  // namespace fba::motion
