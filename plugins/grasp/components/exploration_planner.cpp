@@ -151,6 +151,9 @@ class ExplorationPlanner final : public fba::Component {
     params_.min_gain = ctx(kMinGain);
     params_.max_rays = static_cast<std::size_t>(ctx(kMaxRays));
     params_.parallel_for = ctx.thread_pool().as_parallel_for();  // the views are scored at once
+#if FBA_GRASP_REACH
+    if (ctx(kJointState).connected()) arm_.emplace(ctx);  // before the candidates: reachable_only checks on it too
+#endif
     const std::string views = ctx(kViews);
     if (views == "recorded") {
       std::filesystem::path file = ctx(kPosesFrom);
@@ -164,9 +167,6 @@ class ExplorationPlanner final : public fba::Component {
       throw std::runtime_error("start is connected but the " + views +
                                " has no centre before a model exists: set centre [x, y, z] or use views: recorded");
     }
-#if FBA_GRASP_REACH
-    if (ctx(kJointState).connected()) arm_.emplace(ctx);
-#endif
   }
 
   void process() override {
@@ -215,7 +215,9 @@ class ExplorationPlanner final : public fba::Component {
   // joint limits, with the arm, the camera and the hand clear of the arm itself and the table (the
   // check sim.arm and hw.canopen_arm make before they move).
   void keep_reachable() {
-    Arm arm(ctx_);
+    std::optional<Arm> own;
+    Arm& arm = arm_ ? *arm_ : own.emplace(ctx_);
+    arm.robot.set_model(nullptr);  // the candidates are kept for the arm's reach, whatever is seen
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(arm.to_flange.size()));
     std::vector<Eigen::Isometry3d> kept;
     for (const auto& view : candidates_)
