@@ -150,9 +150,9 @@ Eigen::Vector3d looked_at(const Octree& model, const std::vector<OctreeCell>& ta
 }
 
 // The view chosen among the scored ones, and why (choice.best, choice.reason): the best score among
-// the unvisited views whose gain reaches min_gain; none when no uncertain node is left in the
-// `boxes` regions and no view grazes a point, when every view has been visited, or when none is
-// worth the move.
+// the views not excluded whose gain reaches min_gain; none when no uncertain node is left in the
+// `boxes` regions and no view grazes a point, when every view is excluded (visited, or left out by
+// the caller), or when none is worth the move.
 void pick_view(ViewChoice& choice, std::size_t boxes, std::size_t candidates, double min_gain) {
   const std::string where = fmt::format("{} region{}", boxes, boxes == 1 ? "" : "s");
   if (choice.targets == 0 && !choice.by_points) {
@@ -170,7 +170,7 @@ void pick_view(ViewChoice& choice, std::size_t boxes, std::size_t candidates, do
     if (s.gain >= min_gain && (!best || s.score > best->score)) best = &s;
   }
   if (!most) {
-    choice.reason = fmt::format("all {} candidate views have been visited; {} uncertain nodes remain in the {}",
+    choice.reason = fmt::format("none of the {} candidate views is left to take (each visited or excluded); {} uncertain nodes remain in the {}",
                                 candidates, choice.targets, where);
     return;
   }

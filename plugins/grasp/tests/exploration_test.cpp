@@ -122,7 +122,7 @@ TEST(Exploration, ExcludedViewsAreNeverChosen) {
   EXPECT_EQ(*choice.best, 1u);
   const auto none = choose_view(m, plus_x_face(), views, std::nullopt, {true, true});
   EXPECT_FALSE(none.best.has_value());
-  EXPECT_NE(none.reason.find("all 2 candidate views have been visited"), std::string::npos) << none.reason;
+  EXPECT_NE(none.reason.find("none of the 2 candidate views is left to take (each visited or excluded)"), std::string::npos) << none.reason;
 }
 
 TEST(Exploration, NothingUncertainLeftGivesNoViewWithTheReason) {

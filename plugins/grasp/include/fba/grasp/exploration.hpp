@@ -56,7 +56,7 @@ struct ViewScore {
   double move_angle = 0;    // radians from the current camera, around the targets' centre
   double cost = 0;          // movement_weight * move_angle / pi
   double score = 0;         // gain - cost
-  bool excluded = false;    // already visited: never chosen
+  bool excluded = false;    // visited, or left out by the caller: never chosen
 };
 
 struct ViewChoice {
