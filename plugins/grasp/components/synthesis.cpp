@@ -116,6 +116,11 @@ class GraspSynthesisFilter final : public fba::Component {
       "level_tilt_deg", 30.0,
       "degrees: the reliable candidates whose approach is within this angle of straight down rank before the steeper ones (most "
       "stable first within each), since a tilted hand lets objects slip in the lift; 0: no preference").range(0, 180);
+  static constexpr auto kLevelSqueezeDeg = fba::Param<double>(
+      "level_squeeze_deg", 10.0,
+      "degrees: a reliable candidate ranks with the level ones (level_tilt_deg) only if its squeeze axis (the thumb to the "
+      "fingers) is also within this angle of level: the fingers squeeze under force control, weight along the squeeze is met "
+      "by nothing but their drives, and the object slides in the hand; 0: no preference").range(0, 90);
   static constexpr auto kNormalErrorDeg = fba::Param<double>(
       "normal_error_deg", 0.0,
       "degrees the model's normals may be off the object's: a candidate must stay force closure with each normal turned this far "
@@ -174,7 +179,7 @@ class GraspSynthesisFilter final : public fba::Component {
 #endif
     );
     spec.add(kOctree, kSilhouette, kGrasp, kRegions, kCandidates, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kLevelTiltDeg, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kLevelTiltDeg, kLevelSqueezeDeg, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -201,6 +206,7 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);
     params_.level_tilt_deg = ctx(kLevelTiltDeg);
+    params_.level_squeeze_deg = ctx(kLevelSqueezeDeg);
     ply_leaves_ = fba::vision::PlyLeavesParameter::read(ctx);
     edge_margin_ = ctx(kEdgeMarginMm) / 1000;
     params_.rank_total = threshold_;  // of the reliable candidates, the most stable on the model first

@@ -80,6 +80,8 @@ void check_params(const SynthesisParams& p) {
           "min_model_epsilon must be finite and >= 0, found " + num(p.min_model_epsilon));
   require(!p.rank_total || std::isfinite(*p.rank_total), "rank_total is not finite");
   require(p.level_tilt_deg >= 0 && p.level_tilt_deg <= 180, "level_tilt_deg must be within [0, 180], found " + num(p.level_tilt_deg));
+  require(p.level_squeeze_deg >= 0 && p.level_squeeze_deg <= 90,
+          "level_squeeze_deg must be within [0, 90], found " + num(p.level_squeeze_deg));
   require(p.path_tolerance >= 0 && std::isfinite(p.path_tolerance), "path_tolerance must be finite and >= 0, found " + num(p.path_tolerance));
 }
 
@@ -687,13 +689,23 @@ void select_candidates(std::vector<GraspCandidate>& all, const std::vector<Surfa
   }
 }
 
-// The reliable candidates (total at least `reliable`) first, the most stable on the model first;
-// the rest in their order, by total.
-void rank_reliable_first(std::vector<GraspCandidate>& candidates, double reliable, const Eigen::Vector3d& preferred, double level_tilt_deg) {
-  const double level_cos = std::cos(level_tilt_deg * kDeg);
-  auto level = [&](const GraspCandidate& c) {
-    return level_tilt_deg <= 0 || c.grasp.approach.normalized().dot(preferred.normalized()) >= level_cos;
-  };
+// Whether a candidate's approach lies within level_tilt_deg of `preferred` and its squeeze axis
+// (the thumb to the fingers' midpoint, across the approach) within level_squeeze_deg of
+// perpendicular to it; a bound of 0 is no bound.
+bool is_level(const Grasp& g, const Eigen::Vector3d& preferred, double level_tilt_deg, double level_squeeze_deg) {
+  const Eigen::Vector3d down = preferred.normalized();
+  const Eigen::Vector3d a = g.approach.normalized();
+  if (level_tilt_deg > 0 && a.dot(down) < std::cos(level_tilt_deg * kDeg)) return false;
+  if (level_squeeze_deg <= 0) return true;
+  const Eigen::Vector3d across = (g.contacts[1].position + g.contacts[2].position) / 2 - g.contacts[0].position;
+  const Eigen::Vector3d squeeze = across - a * a.dot(across);
+  return squeeze.norm() < 1e-9 || std::abs(squeeze.normalized().dot(down)) <= std::sin(level_squeeze_deg * kDeg);
+}
+
+// The reliable candidates (total at least `reliable`) first, the level ones (is_level) before the
+// others and the most stable on the model first within each; the rest in their order, by total.
+void rank_reliable_first(std::vector<GraspCandidate>& candidates, double reliable, const SynthesisParams& p) {
+  auto level = [&](const GraspCandidate& c) { return is_level(c.grasp, p.preferred_approach, p.level_tilt_deg, p.level_squeeze_deg); };
   std::stable_sort(candidates.begin(), candidates.end(), [&](const auto& a, const auto& b) {
     const bool ra = a.grasp.scores.total >= reliable, rb = b.grasp.scores.total >= reliable;
     if (ra != rb) return ra;
@@ -725,7 +737,7 @@ SynthesisResult synthesise(std::span<const SurfaceSample> input, const Synthesis
   const CandidateSearch search(s, nb, region_of, result.boundary_distance, pool, result.centre, p);
   std::vector<GraspCandidate> all = search_candidates(search, thumbs, p.parallel_for, result);
   select_candidates(all, s, p, result);
-  if (p.rank_total) rank_reliable_first(result.candidates, *p.rank_total, p.preferred_approach, p.level_tilt_deg);
+  if (p.rank_total) rank_reliable_first(result.candidates, *p.rank_total, p);
   return result;
 }
 

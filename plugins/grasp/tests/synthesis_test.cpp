@@ -2,6 +2,7 @@
 // quality measure.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -437,6 +438,35 @@ TEST(GraspSynthesis, LevelApproachesRankBeforeSteepOnesAmongTheReliable) {
     level = here;
   }
   EXPECT_LE(tilt_deg(ranked.candidates.front()), 30);
+}
+
+// On a ball the most stable candidate squeezes on a slope: with level_squeeze_deg the reliable
+// ones whose squeeze axis lies within that angle of level come first, most stable first within each.
+TEST(GraspSynthesis, LevelSqueezesRankBeforeSlopingOnesAmongTheReliable) {
+  auto samples = sphere(0.04, 1500);
+  estimate_curvature(samples, 0.006);
+  SynthesisParams p = params_for(0.003);
+  p.rank_total = 0;  // every candidate reliable: the ranking alone is checked
+  auto slope_deg = [](const GraspCandidate& c) {
+    const Grasp& g = c.grasp;
+    const Eigen::Vector3d a = g.approach.normalized();
+    const Eigen::Vector3d across = (g.contacts[1].position + g.contacts[2].position) / 2 - g.contacts[0].position;
+    return std::asin(std::min(1.0, std::abs((across - a * a.dot(across)).normalized().z()))) * 180 / kPi;
+  };
+  const SynthesisResult any = synthesise(samples, p);
+  ASSERT_GT(any.candidates.size(), 2u);
+  ASSERT_GT(slope_deg(any.candidates.front()), 10) << "the most stable squeezes on a slope: the preference has something to change";
+  p.level_squeeze_deg = 10;
+  const SynthesisResult ranked = synthesise(samples, p);
+  ASSERT_EQ(ranked.candidates.size(), any.candidates.size());
+  bool level = true;
+  for (std::size_t i = 0; i < ranked.candidates.size(); ++i) {
+    const bool here = slope_deg(ranked.candidates[i]) <= 10;
+    EXPECT_FALSE(here && !level) << "a level squeeze after a sloping one at " << i;
+    if (i > 0 && here == level) EXPECT_LE(ranked.candidates[i].model_epsilon, ranked.candidates[i - 1].model_epsilon) << i;
+    level = here;
+  }
+  EXPECT_LE(slope_deg(ranked.candidates.front()), 10);
 }
 
 // The thumb at x = -0.03, the fingers at x = +0.03 (y = +-0.02), 5 cm above the table, from above.
