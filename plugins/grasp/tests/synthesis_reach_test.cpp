@@ -37,7 +37,7 @@ bool same_contacts(const fba::Grasp& a, const fba::Grasp& b) {
 // one and those like it, and selects a worse one the arm reaches.
 TEST(GraspSynthesisReach, TheBestCandidateWhosePalmWouldGoIntoTheTableIsPassedOverForAReachableOne) {
   const std::vector<double> box = reach::standing({0.06, 0.06, 0.06});
-  const std::string margin = "edge_margin_mm: 0, level_tilt_deg: 0";  // the scene's best candidate lies near an edge of the box, from the side
+  const std::string margin = "edge_margin_mm: 0, level_tilt_deg: 0, level_squeeze_deg: 0";  // the scene's best candidate lies near an edge of the box, from the side
   const reach::Outcome before = reach::synthesise(box, {}, margin);
   ASSERT_EQ(before.grasps.size(), 1u) << before.run.reason;
   const fba::motion::ReachPlan refused = reach_planner().reachable(before.grasps[0], reach::box_model_of(box), home());
@@ -68,7 +68,7 @@ TEST(GraspSynthesisReach, TheBestCandidateBehindTheObjectBeyondTheArmsReachIsPas
   const std::vector<double> box = reach::standing({0.06, 0.06, 0.14}, 0.08);
   // The box's lowest leaves reach down to the table. The scene's far-side grasp is one synthesis's
   // approximate hand keeps clear of the table (the robot's hand, with its clearance, refuses it).
-  const std::string table = "table_z: [0.001], edge_margin_mm: 0, robot_hand: false, level_tilt_deg: 0";
+  const std::string table = "table_z: [0.001], edge_margin_mm: 0, robot_hand: false, level_tilt_deg: 0, level_squeeze_deg: 0";
   const reach::Outcome before = reach::synthesise(box, {}, table);
   ASSERT_EQ(before.grasps.size(), 1u) << before.run.reason;
   EXPECT_LT(before.grasps[0].approach.x(), -0.9);  // from the far side, towards the arm
