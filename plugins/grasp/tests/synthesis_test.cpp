@@ -416,6 +416,21 @@ TEST(GraspSynthesis, ReliableCandidatesComeMostStableFirst) {
   EXPECT_EQ(ranked.candidates.front().model_epsilon, best_reliable_epsilon);
 }
 
+// The candidates `level` holds level before every other, the most stable first within each group,
+// and a level one first.
+template <class Level>
+void expect_level_first(const std::vector<GraspCandidate>& ranked, Level level) {
+  ASSERT_FALSE(ranked.empty());
+  bool before = true;
+  for (std::size_t i = 0; i < ranked.size(); ++i) {
+    const bool here = level(ranked[i]);
+    EXPECT_FALSE(here && !before) << "a level candidate after one that is not, at " << i;
+    if (i > 0 && here == before) EXPECT_LE(ranked[i].model_epsilon, ranked[i - 1].model_epsilon) << i;
+    before = here;
+  }
+  EXPECT_TRUE(level(ranked.front()));
+}
+
 // On a ball every tilt of the hand has candidates: with level_tilt_deg the reliable ones whose
 // approach is within that angle of straight down come first, most stable first within each.
 TEST(GraspSynthesis, LevelApproachesRankBeforeSteepOnesAmongTheReliable) {
@@ -430,14 +445,7 @@ TEST(GraspSynthesis, LevelApproachesRankBeforeSteepOnesAmongTheReliable) {
   p.level_tilt_deg = 30;
   const SynthesisResult ranked = synthesise(samples, p);
   ASSERT_EQ(ranked.candidates.size(), any.candidates.size());
-  bool level = true;
-  for (std::size_t i = 0; i < ranked.candidates.size(); ++i) {
-    const bool here = tilt_deg(ranked.candidates[i]) <= 30;
-    EXPECT_FALSE(here && !level) << "a level candidate after a steep one at " << i;
-    if (i > 0 && here == level) EXPECT_LE(ranked.candidates[i].model_epsilon, ranked.candidates[i - 1].model_epsilon) << i;
-    level = here;
-  }
-  EXPECT_LE(tilt_deg(ranked.candidates.front()), 30);
+  expect_level_first(ranked.candidates, [&](const GraspCandidate& c) { return tilt_deg(c) <= 30; });
 }
 
 // On a ball the most stable candidate squeezes on a slope: with level_squeeze_deg the reliable
@@ -459,14 +467,7 @@ TEST(GraspSynthesis, LevelSqueezesRankBeforeSlopingOnesAmongTheReliable) {
   p.level_squeeze_deg = 10;
   const SynthesisResult ranked = synthesise(samples, p);
   ASSERT_EQ(ranked.candidates.size(), any.candidates.size());
-  bool level = true;
-  for (std::size_t i = 0; i < ranked.candidates.size(); ++i) {
-    const bool here = slope_deg(ranked.candidates[i]) <= 10;
-    EXPECT_FALSE(here && !level) << "a level squeeze after a sloping one at " << i;
-    if (i > 0 && here == level) EXPECT_LE(ranked.candidates[i].model_epsilon, ranked.candidates[i - 1].model_epsilon) << i;
-    level = here;
-  }
-  EXPECT_LE(slope_deg(ranked.candidates.front()), 10);
+  expect_level_first(ranked.candidates, [&](const GraspCandidate& c) { return slope_deg(c) <= 10; });
 }
 
 // The thumb at x = -0.03, the fingers at x = +0.03 (y = +-0.02), 5 cm above the table, from above.
