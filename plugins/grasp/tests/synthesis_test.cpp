@@ -416,11 +416,21 @@ TEST(GraspSynthesis, ReliableCandidatesComeMostStableFirst) {
   EXPECT_EQ(ranked.candidates.front().model_epsilon, best_reliable_epsilon);
 }
 
-// The candidates `level` holds level before every other, the most stable first within each group,
-// and a level one first.
-template <class Level>
-void expect_level_first(const std::vector<GraspCandidate>& ranked, Level level) {
-  ASSERT_FALSE(ranked.empty());
+// On a ball, where every tilt of the hand has candidates and every one counts as reliable (the
+// ranking alone is checked): the most stable candidate is not `level`; with the preference that
+// `prefer` sets, the level ones come before every other, the most stable first within each group.
+template <class Level, class Prefer>
+void expect_level_first_on_a_ball(Level level, Prefer prefer) {
+  auto samples = sphere(0.04, 1500);
+  estimate_curvature(samples, 0.006);
+  SynthesisParams p = params_for(0.003);
+  p.rank_total = 0;
+  const SynthesisResult any = synthesise(samples, p);
+  ASSERT_GT(any.candidates.size(), 2u);
+  ASSERT_FALSE(level(any.candidates.front())) << "the most stable is level already: the preference has nothing to change";
+  prefer(p);
+  const std::vector<GraspCandidate> ranked = synthesise(samples, p).candidates;
+  ASSERT_EQ(ranked.size(), any.candidates.size());
   bool before = true;
   for (std::size_t i = 0; i < ranked.size(); ++i) {
     const bool here = level(ranked[i]);
@@ -431,43 +441,26 @@ void expect_level_first(const std::vector<GraspCandidate>& ranked, Level level) 
   EXPECT_TRUE(level(ranked.front()));
 }
 
-// On a ball every tilt of the hand has candidates: with level_tilt_deg the reliable ones whose
-// approach is within that angle of straight down come first, most stable first within each.
+// The most stable candidate on a ball comes in steep: with level_tilt_deg the reliable ones whose
+// approach is within that angle of straight down come first.
 TEST(GraspSynthesis, LevelApproachesRankBeforeSteepOnesAmongTheReliable) {
-  auto samples = sphere(0.04, 1500);
-  estimate_curvature(samples, 0.006);
-  SynthesisParams p = params_for(0.003);
-  p.rank_total = 0;  // every candidate reliable: the ranking alone is checked
-  auto tilt_deg = [](const GraspCandidate& c) { return std::acos(std::clamp(-c.grasp.approach.normalized().z(), -1.0, 1.0)) * 180 / kPi; };
-  const SynthesisResult any = synthesise(samples, p);
-  ASSERT_GT(any.candidates.size(), 2u);
-  ASSERT_GT(tilt_deg(any.candidates.front()), 30) << "the most stable is steep: the preference has something to change";
-  p.level_tilt_deg = 30;
-  const SynthesisResult ranked = synthesise(samples, p);
-  ASSERT_EQ(ranked.candidates.size(), any.candidates.size());
-  expect_level_first(ranked.candidates, [&](const GraspCandidate& c) { return tilt_deg(c) <= 30; });
+  expect_level_first_on_a_ball(
+      [](const GraspCandidate& c) { return std::acos(std::clamp(-c.grasp.approach.normalized().z(), -1.0, 1.0)) * 180 / kPi <= 30; },
+      [](SynthesisParams& p) { p.level_tilt_deg = 30; });
 }
 
-// On a ball the most stable candidate squeezes on a slope: with level_squeeze_deg the reliable
-// ones whose squeeze axis lies within that angle of level come first, most stable first within each.
+// The most stable candidate on a ball squeezes on a slope: with level_squeeze_deg the reliable ones
+// whose squeeze axis (the thumb to the fingers' midpoint, across the approach) lies within that
+// angle of level come first.
 TEST(GraspSynthesis, LevelSqueezesRankBeforeSlopingOnesAmongTheReliable) {
-  auto samples = sphere(0.04, 1500);
-  estimate_curvature(samples, 0.006);
-  SynthesisParams p = params_for(0.003);
-  p.rank_total = 0;  // every candidate reliable: the ranking alone is checked
-  auto slope_deg = [](const GraspCandidate& c) {
-    const Grasp& g = c.grasp;
-    const Eigen::Vector3d a = g.approach.normalized();
-    const Eigen::Vector3d across = (g.contacts[1].position + g.contacts[2].position) / 2 - g.contacts[0].position;
-    return std::asin(std::min(1.0, std::abs((across - a * a.dot(across)).normalized().z()))) * 180 / kPi;
-  };
-  const SynthesisResult any = synthesise(samples, p);
-  ASSERT_GT(any.candidates.size(), 2u);
-  ASSERT_GT(slope_deg(any.candidates.front()), 10) << "the most stable squeezes on a slope: the preference has something to change";
-  p.level_squeeze_deg = 10;
-  const SynthesisResult ranked = synthesise(samples, p);
-  ASSERT_EQ(ranked.candidates.size(), any.candidates.size());
-  expect_level_first(ranked.candidates, [&](const GraspCandidate& c) { return slope_deg(c) <= 10; });
+  expect_level_first_on_a_ball(
+      [](const GraspCandidate& c) {
+        const Grasp& g = c.grasp;
+        const Eigen::Vector3d a = g.approach.normalized();
+        const Eigen::Vector3d across = (g.contacts[1].position + g.contacts[2].position) / 2 - g.contacts[0].position;
+        return std::asin(std::min(1.0, std::abs((across - a * a.dot(across)).normalized().z()))) * 180 / kPi <= 10;
+      },
+      [](SynthesisParams& p) { p.level_squeeze_deg = 10; });
 }
 
 // The thumb at x = -0.03, the fingers at x = +0.03 (y = +-0.02), 5 cm above the table, from above.
