@@ -52,7 +52,6 @@ int main(int argc, char** argv) {
   using fba::emulators::CanopenArmEmulator;
   CanopenArmEmulator* emulator = nullptr;  // the actions below run once it exists
   std::vector<std::string> positions;       // --positions, read once --nodes is known
-  std::string positions_option;
   // An option S:NODE: `act` on the node S seconds in.
   const auto on_node_after = [&](const std::string& a, const std::string& v, void (CanopenArmEmulator::*act)(int)) {
     const auto p = kCli.fields(v, a, 2, "S:NODE");
@@ -91,7 +90,6 @@ int main(int argc, char** argv) {
       options.fault_at_start[kCli.integer(p[0], a, 1, 127)] = static_cast<std::uint16_t>(kCli.integer(p[1], a, 1, 0xFFFF, 16));
     } else if (a == "--positions") {
       positions = kCli.split(v, ',');
-      positions_option = a;
     } else if (a == "--device-type") {
       const auto p = kCli.fields(v, a, 2, "NODE:HEX");
       options.device_type[kCli.integer(p[0], a, 1, 127)] = static_cast<std::uint32_t>(kCli.integer(p[1], a, 0, 0x7FFFFFFF, 16));
@@ -104,10 +102,10 @@ int main(int argc, char** argv) {
   });
   if (!positions.empty()) {
     if (positions.size() != options.nodes.size())
-      kCli.fail(positions_option + " gives " + std::to_string(positions.size()) + " positions for " + std::to_string(options.nodes.size()) +
+      kCli.fail("--positions gives " + std::to_string(positions.size()) + " positions for " + std::to_string(options.nodes.size()) +
                 " nodes; give one a node, in --nodes order");
     for (std::size_t i = 0; i < positions.size(); ++i)
-      options.position_at_start[options.nodes[i]] = static_cast<std::int32_t>(kCli.integer(positions[i], positions_option, -2'000'000'000, 2'000'000'000));
+      options.position_at_start[options.nodes[i]] = static_cast<std::int32_t>(kCli.integer(positions[i], "--positions", -2'000'000'000, 2'000'000'000));
   }
   const std::string& link = common.link;
   return fba::emulators::run_program(kCli, "CANopen arm emulator", [&] {
