@@ -2,9 +2,8 @@
 // is still, its pose read. A stable pose, where the object lies as it would, rather than as its file
 // stands or laid on its side (issue 31).
 //
-// The world is the hand's (hardware/robots/three_finger_hand.xml): the table a plane at z = 0,
-// gravity, a 2 ms step, elliptic friction cones, friction 0.5 with the hand model's torsional and
-// rolling friction (without rolling friction a ball or a lying cylinder never stops). The object
+// The world: the table a plane at z = 0, gravity, a 2 ms step, elliptic friction cones, friction
+// 0.5 with torsional and rolling friction (without rolling friction a ball or a lying cylinder never stops). The object
 // collides as its convex parts (geometry::ConvexPart: MuJoCo's boxes, cylinders and ellipsoids, or
 // a mesh's convex hull, which is how MuJoCo collides a mesh): for a lone object on a plane a hull is
 // exact, its lowest points being on it. Its mass is the closed mesh's own (the lift test's 0.3 kg,

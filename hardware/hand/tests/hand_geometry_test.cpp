@@ -54,6 +54,10 @@ TEST(HandGeometry, EachDimensionIsTheUrdfs) {
     EXPECT_DOUBLE_EQ(c.size.x(), hand::kPhalanxRadius[static_cast<std::size_t>(k)]) << "thumb_" << k + 1;
     EXPECT_DOUBLE_EQ(c.size.y(), hand::kPhalanxLength[static_cast<std::size_t>(k)]) << "thumb_" << k + 1;
   }
+  // The fingertip ends flat: the distal phalanx is capped at its joint only.
+  for (const auto& s : thumb.collision_shapes())
+    if (s.link == "thumb_3" && s.kind == CollisionShape::Kind::Sphere)
+      EXPECT_NEAR(s.frame_from_shape.translation().norm(), 0.0, 1e-12) << "a cap away from the distal phalanx's joint";
   EXPECT_DOUBLE_EQ(thumb.limits()[0].upper, hand::kTravel);  // thumb_close
 
   // A finger: its knuckle, its closing slide's travel, the scissor's range (half a spread a side).

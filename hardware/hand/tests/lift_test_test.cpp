@@ -12,6 +12,7 @@
 
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/geometry/object_families.hpp"
+#include "fba/motion/hand_geometry.hpp"
 #include "lift_test.hpp"
 #include "ring_grasp.hpp"
 #include "scenes.hpp"
@@ -160,6 +161,20 @@ TEST(LiftTest, ASuperquadricOnItsFlatBaseStaysWhereItWasPutAndTheGraspPlannedOnI
   g.pinch_depth = 0.015;
   const auto r = test.run(g);
   EXPECT_TRUE(r.held) << r.reason;
+}
+
+// A plate 1.3 cm tall pinched 6.5 mm above the table, the contacts 3 mm short of the fingertips'
+// flat ends (each end 3.5 mm above the table): lifted and held. A fingertip rounded as the rest of
+// the finger (1 cm) would meet the plate's sides no lower than 13 mm above the table, on its edge.
+TEST(LiftTest, APlateLowerThanAFingertipsRadiusIsPinchedByTheFlatFingertipsAndHeld) {
+  namespace hand = fba::motion::hand;
+  const Eigen::Vector3d plate(0.07, 0.09, 0.013);
+  LiftTest test(box_mesh(plate), {});
+  fba::Grasp g = box_grasp(plate, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.0065);
+  g.pinch_depth = hand::kPhalanxLength[2] - hand::kPinchShortOfTip - hand::kPadAlongDistal;
+  const auto r = test.run(g);
+  EXPECT_TRUE(r.held) << r.reason;
+  EXPECT_EQ(r.contacts.size(), 3u);
 }
 
 // The same grasp 20 cm above the box: the fingers close on the air.

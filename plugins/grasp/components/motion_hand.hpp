@@ -17,10 +17,10 @@ namespace fba::grasp {
 // and its contact there (fba::motion::ReachParams' standoff and clearance).
 inline RobotHand motion_hand(double standoff, double clearance) {
   RobotHand hand;
-  // A pinch puts the contacts on the distal phalanx's straight part up to its end: beyond that the
-  // cap curves away and would push down on the object.
-  hand.pinch_depth = motion::hand::kPhalanxLength[2] - motion::hand::kPadAlongDistal;
-  hand.finger_radius = motion::hand::kPadRadius;  // the distal phalanx's, which touches
+  // A pinch puts the contacts on the distal phalanx up to a little short of its flat end.
+  namespace h = motion::hand;
+  hand.pinch_depth = h::kPhalanxLength[2] - h::kPinchShortOfTip - h::kPadAlongDistal;
+  hand.tip_beyond_contact = h::kPinchShortOfTip;
   hand.pose = [standoff, clearance](const Grasp& grasp) {
     PosedHand posed;
     const motion::HandPlacement place = motion::place_hand(grasp, clearance);
@@ -30,7 +30,7 @@ inline RobotHand motion_hand(double standoff, double clearance) {
     const Eigen::Isometry3d at_pregrasp = Eigen::Translation3d(-approach * standoff) * at_grasp;
     auto add = [&](const Eigen::Isometry3d& world_from_palm, double opening) {
       for (const motion::HandPart& part : motion::hand_parts(opening, place.spread))
-        posed.shapes.push_back({part.name, part.kind == motion::HandPart::Kind::Box ? HandShape::Kind::Box : HandShape::Kind::Capsule,
+        posed.shapes.push_back({part.name, part.kind == motion::HandPart::Kind::Box ? HandShape::Kind::Box : HandShape::Kind::Cylinder,
                                 part.size, world_from_palm * part.palm_from_part});
     };
     add(at_pregrasp, place.opening);  // open, where the straight approach begins

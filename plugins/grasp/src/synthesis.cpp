@@ -389,8 +389,8 @@ std::vector<std::size_t> contact_pool(const std::vector<SurfaceSample>& s, const
   for (std::size_t i = 0; i < s.size(); ++i) {
     if (region_of[i] == kNoRegion) continue;
     const bool near_edge = result.boundary_distance[i] < p.edge_margin;
-    const bool too_low = !near_edge && p.table_z && p.robot_hand.finger_radius > 0 &&
-                         s[i].position.z() - p.robot_hand.finger_radius * (1 - s[i].normal.z()) < *p.table_z + p.table_clearance;
+    const bool too_low = !near_edge && p.table_z && p.robot_hand.tip_beyond_contact &&
+                         s[i].position.z() - *p.robot_hand.tip_beyond_contact < *p.table_z + p.table_clearance;
     result.near_edge += near_edge;
     result.too_low += too_low;
     if (!near_edge && !too_low) pool.push_back(i);

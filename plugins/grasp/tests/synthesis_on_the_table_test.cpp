@@ -5,6 +5,7 @@
 // The hand is checked as reach planning poses it (fba::motion's place_hand() and hand_parts()).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -50,21 +51,23 @@ std::shared_ptr<const fba::Octree> carve(const fba::TriangleMesh& mesh, double m
 }
 
 // The lowest point of the robot's hand over its poses for `g` (open at the pregrasp 5 cm back,
-// open at the grasp, closed on the contacts), the palm placed as reach planning places it and
-// stood back by the grasp's pinch depth; each part's lowest point worked out here on its own.
+// open at the grasp, closed on the contacts), the palm placed as reach planning places it (stood
+// back by the grasp's pinch depth); each part's lowest point worked out here on its own.
 double lowest_hand_z(const fba::Grasp& g) {
   const fba::motion::HandPlacement place = fba::motion::place_hand(g, fba::motion::ReachParams{}.clearance);
   EXPECT_TRUE(place.why.empty()) << place.why;
   const Eigen::Vector3d a = place.world_from_palm.linear().col(2);
-  const Eigen::Isometry3d grasp_palm = Eigen::Translation3d(-a * g.pinch_depth) * place.world_from_palm;
+  const Eigen::Isometry3d& grasp_palm = place.world_from_palm;
   const Eigen::Isometry3d pregrasp_palm = Eigen::Translation3d(-a * fba::motion::ReachParams{}.standoff) * grasp_palm;
   double lowest = INFINITY;
   for (const auto& [palm, opening] : {std::pair{pregrasp_palm, place.opening}, std::pair{grasp_palm, place.opening}, std::pair{grasp_palm, place.width}})
     for (const auto& part : fba::motion::hand_parts(opening, place.spread)) {
       const Eigen::Isometry3d pose = palm * part.palm_from_part;
-      if (part.kind == fba::motion::HandPart::Kind::Capsule) {
+      if (part.kind == fba::motion::HandPart::Kind::Cylinder) {
+        // The lowest of its two rims: a circle of the radius across the axis at each end.
         const Eigen::Vector3d half = pose.linear().col(2) * part.size.y() / 2;
-        lowest = std::min({lowest, (pose.translation() + half).z() - part.size.x(), (pose.translation() - half).z() - part.size.x()});
+        const double drop = part.size.x() * std::hypot(pose.linear()(2, 0), pose.linear()(2, 1));
+        lowest = std::min({lowest, (pose.translation() + half).z() - drop, (pose.translation() - half).z() - drop});
         continue;
       }
       for (int corner = 0; corner < 8; ++corner) {
@@ -116,15 +119,13 @@ fba::grasp::SynthesisResult synthesise(const fba::Octree& model, double edge_mar
 
 }  // namespace table_scene
 
-
-
 // A plate 2 cm tall: on its pads the hand would put its fingers 2.5 cm below the contacts, into the
 // table, from any approach that opposes the plate's sides. It is taken from above as a pinch.
 TEST(GraspSynthesisOnTheTable, AFlatPlateIsTakenFromAboveWithTheHandClearOfTheTable) {
   const auto r = table_scene::synthesise(*table_scene::carve(table_scene::standing(fba::geometry::make_box_shape(0.09, 0.07, 0.02)), 20));
   ASSERT_FALSE(r.candidates.empty()) << table_scene::counts(r);
-  EXPECT_EQ(r.below_table, 0u);  // the samples no finger can touch are left out before the search
-  EXPECT_GT(r.too_low, 0u);
+  EXPECT_GT(r.too_low, 0u);       // samples no fingertip touches above the table, left out before the search
+  EXPECT_GT(r.below_table, 0u);   // candidates whose hand reaches into it even as a pinch, left out after
   for (const auto& c : r.candidates) {
     const fba::Grasp& g = c.grasp;
     EXPECT_LT(g.approach.z(), -0.9) << g.approach.transpose();  // from above
@@ -133,6 +134,24 @@ TEST(GraspSynthesisOnTheTable, AFlatPlateIsTakenFromAboveWithTheHandClearOfTheTa
     fba::Grasp on_pads = g;
     on_pads.pinch_depth = 0;
     EXPECT_LT(table_scene::lowest_hand_z(on_pads), 0.0);  // what the pinch is for
+  }
+}
+
+// A plate 1.3 cm tall: a fingertip rounded as the rest of the finger is (1 cm) would meet its sides
+// no lower than 13 mm above the table, on its top edge. The flat fingertip pinches it, touching
+// 3 mm short of its end, each contact on a side below that height.
+TEST(GraspSynthesisOnTheTable, APlateLowerThanAFingertipsRadiusIsPinchedByTheFlatFingertips) {
+  const auto r = table_scene::synthesise(*table_scene::carve(table_scene::standing(fba::geometry::make_box_shape(0.09, 0.07, 0.013)), 20));
+  ASSERT_FALSE(r.candidates.empty()) << table_scene::counts(r);
+  const double rounded_tip_lowest = fba::motion::hand::kPadRadius + fba::grasp::SynthesisParams{}.table_clearance;
+  for (const auto& c : r.candidates) {
+    const fba::Grasp& g = c.grasp;
+    EXPECT_GT(g.pinch_depth, 0.0);
+    EXPECT_GE(table_scene::lowest_hand_z(g), fba::grasp::SynthesisParams{}.table_clearance - 1e-9);
+    for (const auto& contact : g.contacts) {
+      EXPECT_LT(contact.position.z(), rounded_tip_lowest);
+      EXPECT_LT(std::abs(contact.normal.z()), 0.5) << "a contact on the plate's side, not its top";
+    }
   }
 }
 

@@ -268,13 +268,18 @@ TEST(GraspSynthesisReach, TheGraspSelectedIsOneThePlannerFindsAPathFor) {
   EXPECT_EQ(straight.regions.size(), 1u);
 }
 
-// A candidate the model blocks (the hand's way in runs into it: here a slab held over the box,
-// standing for space no view has carved yet) has the space the open hand sweeps asked for, with
-// the regions, so that the carver refines it and carves what its views already show empty.
+// A candidate the model blocks (the hand's way in runs into it: here a slab held over the box and
+// walls round it, standing for space no view has carved yet) has the space the open hand sweeps
+// asked for, with the regions, so that the carver refines it and carves what its views already
+// show empty.
 TEST(GraspSynthesisReach, TheHandsWayInForACandidateTheModelBlocksIsAskedFor) {
-  // A 5 cm box 10 cm tall under a 25 cm slab 1 cm over it: every candidate's hand is in the slab.
+  // A 5 cm box 10 cm tall under a 25 cm slab 1 cm over it, walled round 3 cm from its sides from
+  // 2 cm above the table up to the slab: every candidate's hand is in the slab or a wall (a pinch
+  // from the side, below the slab, in a wall; lower, its palm in the table).
   std::vector<double> scene = reach::standing({0.05, 0.05, 0.10});
   for (double v : {0.0, 0.0, 0.115, 0.25, 0.25, 0.01}) scene.push_back(v);
+  for (const double side : {-0.06, 0.06})
+    for (double v : {side, 0.0, 0.065, 0.01, 0.13, 0.09, 0.0, side, 0.065, 0.11, 0.01, 0.09}) scene.push_back(v);
   const std::string params = "table_z: [0.001], edge_margin_mm: 0, max_views: 100";
   const reach::Outcome o = reach::synthesise(scene, home(), params);
   EXPECT_TRUE(o.grasps.empty());

@@ -18,13 +18,14 @@ std::array<HandPart, 4> hand_parts(double opening, double spread) {
     t.translation() << x, y, z;
     return t;
   };
-  const double finger_z = kKnuckleZ + kFingerLength / 2;
-  const Eigen::Vector3d capsule(radius, kFingerLength, 0);
+  const double length = radius + kFingerLength;
+  const double finger_z = kKnuckleZ - radius + length / 2;
+  const Eigen::Vector3d cylinder(radius, length, 0);
   return {{
       {"palm", HandPart::Kind::Box, {kPalmHalfWidth, kPalmHalfDepth, kPalmHalfThickness}, at(0, 0, kPalmCentreZ)},
-      {"thumb", HandPart::Kind::Capsule, capsule, at(-kKnuckleX + travel, 0, finger_z)},
-      {"finger_a", HandPart::Kind::Capsule, capsule, at(kKnuckleX - travel, half_spread, finger_z)},
-      {"finger_b", HandPart::Kind::Capsule, capsule, at(kKnuckleX - travel, -half_spread, finger_z)},
+      {"thumb", HandPart::Kind::Cylinder, cylinder, at(-kKnuckleX + travel, 0, finger_z)},
+      {"finger_a", HandPart::Kind::Cylinder, cylinder, at(kKnuckleX - travel, half_spread, finger_z)},
+      {"finger_b", HandPart::Kind::Cylinder, cylinder, at(kKnuckleX - travel, -half_spread, finger_z)},
   }};
 }
 

@@ -7,7 +7,6 @@
 #include <vector>
 
 #include <fcl/geometry/shape/box.h>
-#include <fcl/geometry/shape/capsule.h>
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/halfspace.h>
 #include <fcl/geometry/shape/sphere.h>
@@ -33,7 +32,7 @@ struct Body {
   bool finger = false;
   Eigen::Isometry3d palm_from_part = Eigen::Isometry3d::Identity();
   // The shape again, for a quick bound before FCL's exact test: a box's half sizes, or a segment
-  // along z (half_length either side of the origin) swept by a radius (cylinder, capsule, sphere).
+  // along z (half_length either side of the origin) swept by a radius (cylinder, sphere).
   bool box = false;
   Eigen::Vector3d half = Eigen::Vector3d::Zero();
   double radius = 0, half_length = 0;
@@ -79,7 +78,7 @@ std::shared_ptr<fcl::CollisionGeometryd> geometry_of(const arm::CollisionShape& 
 
 std::shared_ptr<fcl::CollisionGeometryd> geometry_of(const HandPart& p) {
   if (p.kind == HandPart::Kind::Box) return std::make_shared<fcl::Boxd>(2 * p.size.x(), 2 * p.size.y(), 2 * p.size.z());
-  return std::make_shared<fcl::Capsuled>(p.size.x(), p.size.y());
+  return std::make_shared<fcl::Cylinderd>(p.size.x(), p.size.y());
 }
 
 bool touch(const fcl::CollisionObjectd& a, const fcl::CollisionObjectd& b) {

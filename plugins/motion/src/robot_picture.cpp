@@ -24,7 +24,7 @@ using C = RobotPictureColours;
 const cv::Scalar kContact[3] = {{40, 40, 230}, {40, 170, 40}, {230, 120, 30}};  // thumb, finger 1, finger 2
 constexpr double kTableZ = 0.0;        // the planner's table: the half-space below world z = 0
 constexpr double kTableTile = 0.1;     // m: the table's squares, for scale
-constexpr int kSegments = 32;          // around each cylinder, capsule and sphere
+constexpr int kSegments = 32;          // around each cylinder and sphere
 
 // The camera's fixed direction from what it frames: from the arm's side (-y), turned this far
 // towards the object's side of the arm (+x), and this far above the horizontal.
@@ -43,15 +43,6 @@ void append(TriangleMesh& into, const TriangleMesh& part, const Eigen::Isometry3
   const int base = static_cast<int>(into.vertices.size());
   for (const auto& v : part.vertices) into.vertices.push_back((pose * v.cast<double>()).cast<float>());
   for (const auto& t : part.triangles) into.triangles.push_back(t + Eigen::Vector3i::Constant(base));
-}
-
-// A capsule along z: its straight part `length` long, centred, with a hemisphere (a whole sphere
-// here) at each end.
-TriangleMesh capsule(double radius, double length) {
-  TriangleMesh m = geometry::make_cylinder_shape(radius, length, kSegments);
-  for (const double z : {-length / 2, length / 2})
-    append(m, geometry::make_uv_sphere(Eigen::Vector3d(0, 0, z), radius, kSegments, kSegments / 2), Eigen::Isometry3d::Identity());
-  return m;
 }
 
 // The robot's meshes at one pose, world coordinates: the arm's links, the wrist camera, the hand.
@@ -80,7 +71,7 @@ RobotMeshes robot_meshes(const ReachPlanner& planner, const Eigen::VectorXd& joi
   }
   const Eigen::Isometry3d palm = arm.forward(joints) * planner.params().flange_from_palm;
   for (const HandPart& p : hand_parts(opening, spread)) {
-    const TriangleMesh m = p.kind == HandPart::Kind::Box ? geometry::make_box(-p.size, p.size) : capsule(p.size.x(), p.size.y());
+    const TriangleMesh m = p.kind == HandPart::Kind::Box ? geometry::make_box(-p.size, p.size) : geometry::make_cylinder_shape(p.size.x(), p.size.y(), kSegments);
     append(out.hand, m, palm * p.palm_from_part);
   }
   return out;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,10 +17,10 @@
 
 namespace fba::grasp {
 
-// One collision shape in the world: a box (size: half sizes along its frame's axes) or a capsule
-// (along its frame's z, centred on its origin; size: radius, length of its straight part, 0).
+// One collision shape in the world: a box (size: half sizes along its frame's axes) or a cylinder
+// (along its frame's z, centred on its origin; size: radius, length, 0).
 struct HandShape {
-  enum class Kind { Box, Capsule };
+  enum class Kind { Box, Cylinder };
   std::string name;  // "palm", "thumb", ...: what a refusal names
   Kind kind = Kind::Box;
   Eigen::Vector3d size = Eigen::Vector3d::Zero();
@@ -39,10 +40,11 @@ struct RobotHand {
   // How far beyond the pads a fingertip's straight part reaches (metres): the deepest a contact may
   // lie towards the tips (Grasp::pinch_depth). 0: the hand takes no pinch.
   double pinch_depth = 0;
-  // The fingers' radius (metres): a finger touching a point p with outward normal n has its axis at
-  // p + radius n, so it reaches down to p.z - radius (1 - n.z) at least; a point lower than the
-  // table's clearance by that is no contact, whatever the grasp. 0: not used.
-  double finger_radius = 0;
+  // How far beyond its contact a fingertip reaches at the least (metres): a pinch's, its deepest
+  // contact's distance from the tip. From above, a finger touching a point reaches that far below
+  // it, so a point lower than the table's clearance by that is no contact, whatever the grasp
+  // (the table check of each candidate's hand settles the rest). Unset: not used.
+  std::optional<double> tip_beyond_contact;
   explicit operator bool() const { return static_cast<bool>(pose); }
 };
 

@@ -42,7 +42,8 @@ struct HandGeometry {
   // approach and reach at least tip_length beyond their contacts (a finger touches no nearer its
   // end than its radius); the palm is a box palm_half_width (thumb to fingers, knuckles included) x
   // palm_half_depth (across) x palm_thickness whose face is palm_distance behind the contacts.
-  // The defaults are the hand of hardware/robots/three_finger_hand.xml.
+  // The defaults are a hand of the robot's size with rounded fingertips; a task with the robot's
+  // hand gives it as robot_hand, and this one is not used against the table.
   double tip_length = 0.013;
   double palm_distance = 0.155;
   double palm_half_width = 0.13;

@@ -28,8 +28,11 @@ inline constexpr double kKnuckleX = 0.12;
 inline constexpr double kKnuckleZ = 0.03;
 // The closing slide's travel from fully open.
 inline constexpr double kTravel = 0.1;
-// Each finger: three straight phalanges, base first, lengths and radii (capsules).
-inline constexpr std::array<double, 3> kPhalanxLength{0.06, 0.045, 0.03};
+// Each finger: three straight phalanges, base first, lengths and radii. The proximal and middle
+// ones are capsules (capped by half spheres at their joints); the distal one, the fingertip, is a
+// cylinder capped only at its joint, its end flat: its side touches a wall down to the end, where a
+// rounded tip meets a wall no lower than its radius above the table, too high for a flat plate.
+inline constexpr std::array<double, 3> kPhalanxLength{0.06, 0.045, 0.04};
 inline constexpr std::array<double, 3> kPhalanxRadius{0.011, 0.011, 0.01};
 // The pad: this far along the distal phalanx from its base.
 inline constexpr double kPadAlongDistal = 0.015;
@@ -37,25 +40,29 @@ inline constexpr double kPadAlongDistal = 0.015;
 inline constexpr double kSpreadMin = 0.02;
 inline constexpr double kSpreadMax = 0.12;
 
+// The knuckle to the fingertip's flat end.
 inline constexpr double kFingerLength = kPhalanxLength[0] + kPhalanxLength[1] + kPhalanxLength[2];
 // The pads' distance from the palm frame along z.
 inline constexpr double kPadDistance = kKnuckleZ + kPhalanxLength[0] + kPhalanxLength[1] + kPadAlongDistal;
 // The pad's radius: the distal phalanx's.
 inline constexpr double kPadRadius = kPhalanxRadius[2];
+// The deepest contact a pinch takes lies this far short of the fingertip's end: on the pad, not on
+// the rim of its flat end.
+inline constexpr double kPinchShortOfTip = 0.003;
 }  // namespace hand
 
 // One collision shape of the hand, in the palm frame.
 struct HandPart {
-  enum class Kind { Box, Capsule };
+  enum class Kind { Box, Cylinder };
   std::string name;  // "palm", "thumb", "finger_a", "finger_b"
   Kind kind = Kind::Box;
-  // Box: the half sizes; capsule (along z): radius, length of its straight part, 0.
+  // Box: the half sizes; cylinder (along z, centred): radius, length, 0.
   Eigen::Vector3d size = Eigen::Vector3d::Zero();
   Eigen::Isometry3d palm_from_part = Eigen::Isometry3d::Identity();
 };
 
-// The palm and the three fingers, straight, each finger one capsule as thick as its thickest
-// phalanx. `opening`: the thumb's pad to the fingers' pads, inner surfaces, m (closed as far as
+// The palm and the three fingers, straight, each finger one cylinder as thick as its thickest
+// phalanx, from its proximal phalanx's cap at the knuckle to its flat tip. `opening`: the thumb's pad to the fingers' pads, inner surfaces, m (closed as far as
 // the slides go when smaller); `spread`: between the two fingers' axes, m (within the scissor's
 // range).
 std::array<HandPart, 4> hand_parts(double opening, double spread);

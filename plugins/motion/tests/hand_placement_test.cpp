@@ -1,63 +1,12 @@
-// The hand's dimensions against the MJCF they come from, and where the palm goes for a grasp.
+// Where the palm goes for a grasp (the hand's dimensions against the URDF's:
+// hardware/hand/tests/hand_geometry_test.cpp).
 #include <gtest/gtest.h>
-
-#include <fstream>
-#include <regex>
-#include <sstream>
 
 #include "fba/motion/hand_geometry.hpp"
 #include "fba/motion/hand_placement.hpp"
 #include "support/reach_scenes.hpp"
 
 using namespace fba::motion;
-
-namespace {
-
-std::string mjcf() {
-  std::ifstream in(fba::test::source_dir() + "/hardware/robots/three_finger_hand.xml");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-// The numbers of attribute `attribute` of the element whose name attribute is `name`.
-std::vector<double> numbers(const std::string& xml, const std::string& tag, const std::string& name, const std::string& attribute) {
-  std::smatch element;
-  const std::regex e("<" + tag + " name=\"" + name + "\"[^>]*>");
-  if (!std::regex_search(xml, element, e)) return {};
-  const std::string text = element.str();
-  std::smatch value;
-  if (!std::regex_search(text, value, std::regex(attribute + "=\"([^\"]*)\""))) return {};
-  std::istringstream in(value[1].str());
-  std::vector<double> out;
-  for (double v; in >> v;) out.push_back(v);
-  return out;
-}
-
-}  // namespace
-
-TEST(HandGeometry, EachDimensionIsTheMjcfHands) {
-  const std::string xml = mjcf();
-  ASSERT_FALSE(xml.empty());
-  EXPECT_EQ(numbers(xml, "geom", "palm", "size"), (std::vector<double>{hand::kPalmHalfWidth, hand::kPalmHalfDepth, hand::kPalmHalfThickness}));
-  EXPECT_EQ(numbers(xml, "geom", "palm", "pos"), (std::vector<double>{0, 0, hand::kPalmCentreZ}));
-  EXPECT_EQ(numbers(xml, "body", "thumb_base", "pos"), (std::vector<double>{-hand::kKnuckleX, 0, hand::kKnuckleZ}));
-  EXPECT_EQ(numbers(xml, "body", "finger_a_base", "pos"), (std::vector<double>{hand::kKnuckleX, 0, hand::kKnuckleZ}));
-  for (const std::string finger : {"thumb", "finger_a", "finger_b"})
-    for (int k = 0; k < 3; ++k) {
-      const std::string phalanx = finger + "_" + std::to_string(k + 1);
-      const auto i = static_cast<std::size_t>(k);
-      EXPECT_EQ(numbers(xml, "geom", phalanx, "fromto"), (std::vector<double>{0, 0, 0, 0, 0, hand::kPhalanxLength[i]})) << phalanx;
-      EXPECT_EQ(numbers(xml, "geom", phalanx, "size"), (std::vector<double>{hand::kPhalanxRadius[i]})) << phalanx;
-    }
-  EXPECT_EQ(numbers(xml, "site", "thumb_pad", "pos"), (std::vector<double>{0, 0, hand::kPadAlongDistal}));
-  EXPECT_EQ(numbers(xml, "joint", "finger_a_spread", "range"), (std::vector<double>{hand::kSpreadMin / 2, hand::kSpreadMax / 2}));
-  EXPECT_EQ(numbers(xml, "joint", "finger_b_spread", "range"), (std::vector<double>{-hand::kSpreadMax / 2, -hand::kSpreadMin / 2}));
-  // The closing slides' range is their class default.
-  std::smatch close;
-  ASSERT_TRUE(std::regex_search(xml, close, std::regex("<default class=\"close\">\\s*<joint[^>]*range=\"0 ([0-9.]+)\"")));
-  EXPECT_EQ(std::stod(close[1].str()), hand::kTravel);
-}
 
 // The lift test's convention: z along the approach, x from the thumb to the fingers, the pads at
 // the contacts' depth, each `clearance` out from its contact at the pregrasp's opening.
