@@ -13,6 +13,7 @@
 #include "fba/grasp/angles.hpp"
 #include "fba/grasp/grasp_quality.hpp"
 #include "fba/grasp/object_surface.hpp"
+#include "fba/grasp/robot_hand.hpp"
 #include "fba/grasp/synthesis.hpp"
 #include "support/data_sets.hpp"
 
@@ -171,6 +172,20 @@ TEST(GraspSynthesis, TheHandsLowestPointFollowsItsGeometry) {
   // (thumb to fingers, along x: level) and its depth (across, along z) about the contacts' height.
   g.approach = {0, 1, 0};
   EXPECT_NEAR(hand_lowest_z(g, hand), 0.05 - hand.palm_half_depth, 1e-12);
+}
+
+// The robot hand's shapes (robot_hand.hpp): a finger's cylinder reaches lowest on the rim of its
+// lower end, a box at its lowest corner.
+TEST(GraspSynthesis, AHandShapesLowestPointIsOnItsRimOrCorner) {
+  const double tilt = 30 * std::numbers::pi / 180;
+  fba::grasp::HandShape finger{"thumb", fba::grasp::HandShape::Kind::Cylinder, {0.01, 0.04, 0}, Eigen::Isometry3d::Identity()};
+  finger.world_from_shape = Eigen::Translation3d(0, 0, 0.1) * Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX());
+  EXPECT_NEAR(fba::grasp::lowest_z(finger), 0.1 - 0.02 * std::cos(tilt) - 0.01 * std::sin(tilt), 1e-12);
+  finger.world_from_shape = Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.1));  // upright: the flat end
+  EXPECT_NEAR(fba::grasp::lowest_z(finger), 0.08, 1e-12);
+  fba::grasp::HandShape palm{"palm", fba::grasp::HandShape::Kind::Box, {0.11, 0.065, 0.02}, finger.world_from_shape};
+  palm.world_from_shape.rotate(Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX()));
+  EXPECT_NEAR(fba::grasp::lowest_z(palm), 0.1 - 0.065 * std::sin(tilt) - 0.02 * std::cos(tilt), 1e-12);
 }
 
 TEST(GraspSynthesis, EstimatingCurvatureRefusesASampleThatIsNotFinite) {
