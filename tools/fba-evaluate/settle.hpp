@@ -3,12 +3,12 @@
 // stands or laid on its side (issue 31).
 //
 // The world: the table a plane at z = 0, gravity, a 2 ms step, elliptic friction cones, friction
-// 0.5 with torsional and rolling friction (without rolling friction a ball or a lying cylinder never stops). The object
-// collides as its convex parts (geometry::ConvexPart: MuJoCo's boxes, cylinders and ellipsoids, or
-// a mesh's convex hull, which is how MuJoCo collides a mesh): for a lone object on a plane a hull is
-// exact, its lowest points being on it. Its mass is the closed mesh's own (the lift test's 0.3 kg,
-// the solid's centre of mass and inertia), not what MuJoCo would spread over the parts, which fill
-// a ring's hole; the rest depends on it.
+// 0.5 with torsional and rolling friction (without rolling friction a ball or a lying cylinder
+// never stops). The object collides as its convex parts (geometry::ConvexPart: MuJoCo's boxes,
+// cylinders and ellipsoids, or a mesh's convex hull, which is how MuJoCo collides a mesh): for a
+// lone object on a plane a hull is exact, its lowest points being on it. Its mass is the closed
+// mesh's own (the lift test's 0.3 kg, the solid's centre of mass and inertia), not what MuJoCo
+// would spread over the parts, which fill a ring's hole; the rest depends on it.
 //
 // Its turning is damped, with a time constant of a second: the dissipation of a real contact, which
 // MuJoCo's soft contacts leave too small. Undamped, an ellipsoid close to a sphere rocked for a

@@ -71,7 +71,8 @@ RobotMeshes robot_meshes(const ReachPlanner& planner, const Eigen::VectorXd& joi
   }
   const Eigen::Isometry3d palm = arm.forward(joints) * planner.params().flange_from_palm;
   for (const HandPart& p : hand_parts(opening, spread)) {
-    const TriangleMesh m = p.kind == HandPart::Kind::Box ? geometry::make_box(-p.size, p.size) : geometry::make_cylinder_shape(p.size.x(), p.size.y(), kSegments);
+    const TriangleMesh m = p.kind == HandPart::Kind::Box ? geometry::make_box(-p.size, p.size)
+                                                         : geometry::make_cylinder_shape(p.size.x(), p.size.y(), kSegments);
     append(out.hand, m, palm * p.palm_from_part);
   }
   return out;

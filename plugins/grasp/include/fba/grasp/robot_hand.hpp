@@ -37,8 +37,8 @@ struct PosedHand {
 struct RobotHand {
   // The hand's shapes for a grasp (its contacts, approach, aperture, spread and pinch_depth).
   std::function<PosedHand(const Grasp&)> pose;
-  // How far beyond the pads a fingertip's straight part reaches (metres): the deepest a contact may
-  // lie towards the tips (Grasp::pinch_depth). 0: the hand takes no pinch.
+  // How far beyond the pads a contact may lie towards the fingertips (metres): the deepest pinch
+  // (Grasp::pinch_depth). 0: the hand takes no pinch.
   double pinch_depth = 0;
   // How far beyond its contact a fingertip reaches at the least (metres): a pinch's, its deepest
   // contact's distance from the tip. From above, a finger touching a point reaches that far below

@@ -62,9 +62,9 @@ struct HandPart {
 };
 
 // The palm and the three fingers, straight, each finger one cylinder as thick as its thickest
-// phalanx, from its proximal phalanx's cap at the knuckle to its flat tip. `opening`: the thumb's pad to the fingers' pads, inner surfaces, m (closed as far as
-// the slides go when smaller); `spread`: between the two fingers' axes, m (within the scissor's
-// range).
+// phalanx, from its proximal phalanx's cap at the knuckle to its flat tip. `opening`: the thumb's
+// pad to the fingers' pads, inner surfaces, m (closed as far as the slides go when smaller);
+// `spread`: between the two fingers' axes, m (within the scissor's range).
 std::array<HandPart, 4> hand_parts(double opening, double spread);
 
 // The slide travel that puts each pad's inner surface half_opening from the palm's centre along x,
