@@ -143,11 +143,12 @@ TEST(GraspSynthesisOnTheTable, AFlatPlateIsTakenFromAboveWithTheHandClearOfTheTa
 TEST(GraspSynthesisOnTheTable, APlateLowerThanAFingertipsRadiusIsPinchedByTheFlatFingertips) {
   const auto r = table_scene::synthesise(*table_scene::carve(table_scene::standing(fba::geometry::make_box_shape(0.09, 0.07, 0.013)), 20));
   ASSERT_FALSE(r.candidates.empty()) << table_scene::counts(r);
-  const double rounded_tip_lowest = fba::motion::hand::kPadRadius + fba::grasp::SynthesisParams{}.table_clearance;
+  const double clearance = fba::grasp::SynthesisParams{}.table_clearance;
+  const double rounded_tip_lowest = fba::motion::hand::kPadRadius + clearance;
   for (const auto& c : r.candidates) {
     const fba::Grasp& g = c.grasp;
     EXPECT_GT(g.pinch_depth, 0.0);
-    EXPECT_GE(table_scene::lowest_hand_z(g), fba::grasp::SynthesisParams{}.table_clearance - 1e-9);
+    EXPECT_GE(table_scene::lowest_hand_z(g), clearance - 1e-9);
     for (const auto& contact : g.contacts) {
       EXPECT_LT(contact.position.z(), rounded_tip_lowest);
       EXPECT_LT(std::abs(contact.normal.z()), 0.5) << "a contact on the plate's side, not its top";
