@@ -167,11 +167,10 @@ TEST(LiftTest, ASuperquadricOnItsFlatBaseStaysWhereItWasPutAndTheGraspPlannedOnI
 // flat ends (each end 3.5 mm above the table): lifted and held. A fingertip rounded as the rest of
 // the finger (1 cm) would meet the plate's sides no lower than 13 mm above the table, on its edge.
 TEST(LiftTest, APlateLowerThanAFingertipsRadiusIsPinchedByTheFlatFingertipsAndHeld) {
-  namespace hand = fba::motion::hand;
   const Eigen::Vector3d plate(0.07, 0.09, 0.013);
   LiftTest test(box_mesh(plate), {});
   fba::Grasp g = box_grasp(plate, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.0065);
-  g.pinch_depth = hand::kPhalanxLength[2] - hand::kPinchShortOfTip - hand::kPadAlongDistal;
+  g.pinch_depth = fba::motion::hand::kDeepestPinch;
   const auto r = test.run(g);
   EXPECT_TRUE(r.held) << r.reason;
   EXPECT_EQ(r.contacts.size(), 3u);

@@ -18,9 +18,8 @@ namespace fba::grasp {
 inline RobotHand motion_hand(double standoff, double clearance) {
   RobotHand hand;
   // A pinch puts the contacts on the distal phalanx up to a little short of its flat end.
-  namespace h = motion::hand;
-  hand.pinch_depth = h::kPhalanxLength[2] - h::kPinchShortOfTip - h::kPadAlongDistal;
-  hand.tip_beyond_contact = h::kPinchShortOfTip;
+  hand.pinch_depth = motion::hand::kDeepestPinch;
+  hand.tip_beyond_contact = motion::hand::kPinchShortOfTip;
   hand.pose = [standoff, clearance](const Grasp& grasp) {
     PosedHand posed;
     const motion::HandPlacement place = motion::place_hand(grasp, clearance);

@@ -49,6 +49,8 @@ inline constexpr double kPadRadius = kPhalanxRadius[2];
 // The deepest contact a pinch takes lies this far short of the fingertip's end: on the pad, not on
 // the rim of its flat end.
 inline constexpr double kPinchShortOfTip = 0.003;
+// How far beyond the pads that deepest contact lies: the deepest pinch (Grasp::pinch_depth).
+inline constexpr double kDeepestPinch = kPhalanxLength[2] - kPinchShortOfTip - kPadAlongDistal;
 }  // namespace hand
 
 // One collision shape of the hand, in the palm frame.
