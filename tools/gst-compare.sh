@@ -83,13 +83,13 @@ fba_pool_cpu=$(get "pooled CPU per extra hop (K=1..50)")
 fba_lat=$(get "dedicated latency K=10 median end to end (1 kHz)")
 fba_lat_p99=$(get "dedicated latency K=10 p99 end to end (1 kHz)")
 fba_pool_lat=$(get "pooled latency K=10 median end to end (1 kHz)")
-fba_build=$(get "build a task of 1000 components")
+fba_build=$(get "build a task of 1000 components (CPU)")
 printf '%-58s %10s ns wall %10s ns CPU\n' "fba per extra hop, deterministic (one thread):" "$fba_det" "$fba_det_cpu"
 printf '%-58s %10s ns wall %10s ns CPU\n' "fba per extra hop, thread: dedicated (a thread each):" "$fba_ded" "$fba_ded_cpu"
 printf '%-58s %10s ns wall %10s ns CPU\n' "fba per extra hop, pooled executor (no gst counterpart):" "$fba_pool" "$fba_pool_cpu"
 printf '%-58s %10s us median %7s us p99\n' "fba latency, 10 dedicated hops, 1 kHz, end to end:" "$fba_lat" "$fba_lat_p99"
 printf '%-58s %10s us median\n' "fba latency, 10 pooled hops, 1 kHz, end to end:" "$fba_pool_lat"
-printf '%-58s %10s ms\n' "fba build of a 1000-component task:" "$fba_build"
+printf '%-58s %10s ms\n' "fba build of a 1000-component task (CPU):" "$fba_build"
 
 echo "== ratios, fba / GStreamer (below 1: fba costs less)"
 printf '%-58s %10s wall %10s CPU\n' "one thread (deterministic / identity):" "$(ratio "$fba_det" "$gst_one")" "$(ratio "$fba_det_cpu" "$gst_one_cpu")"
