@@ -277,6 +277,20 @@ void check_mappings(const YAML::Node& n, const Source& src, std::vector<Diagnost
   }
 }
 
+// Whether nothing can follow the document `root` was loaded from. yaml-cpp's scanner closes a
+// block mapping at column 0 only at the end of the text or at a line that starts with '---', '...'
+// or '%', so without such a line after the root the text is one document, and a second parse to
+// count its documents (a third of a --check) is not needed.
+bool nothing_can_follow(const YAML::Node& root, const std::string& text) {
+  if (!root.IsMap() || root.Style() != YAML::EmitterStyle::Block || root.Mark().column != 0 || root.Mark().pos < 0)
+    return false;
+  for (std::size_t i = static_cast<std::size_t>(root.Mark().pos) + 1; i < text.size(); ++i) {
+    if (text[i - 1] != '\n' && text[i - 1] != '\r') continue;
+    if (text[i] == '%' || text.compare(i, 3, "---") == 0 || text.compare(i, 3, "...") == 0) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 // The text of a task or composite file; on failure `problem` says why, as in "'x' PROBLEM".
@@ -323,19 +337,21 @@ std::string read_text(const fs::path& path, std::string& problem) {
 std::optional<YAML::Node> parse_yaml(const std::string& text, const std::string& shown, std::vector<Diagnostic>& d) {
   if (!check_nesting(text, shown, d) || !check_root_comma(text, shown, d) || !check_property_comma(text, shown, d))
     return std::nullopt;
-  // Documents are counted with a parser that stops after the second: yaml-cpp 0.7's LoadAll never
-  // returns when a stray ',' makes its parser report a document without consuming anything (the
-  // guards above catch the known shapes; this bound catches the rest), and one document more than
-  // the first is all it takes to refuse the file.
+  // YAML::Load reads the first document. Where another could follow, documents are counted with a
+  // parser that stops after the second: yaml-cpp 0.7's LoadAll never returns when a stray ','
+  // makes its parser report a document without consuming anything (the guards above catch the
+  // known shapes; this bound catches the rest), and one document more than the first is all it
+  // takes to refuse the file.
   YAML::Node root;
   DocumentProbe first, second;
   bool more = false;
   try {
+    root = YAML::Load(text);
+    if (nothing_can_follow(root, text)) return root;
     std::istringstream in(text);
     YAML::Parser parser(in);
     if (!parser.HandleNextDocument(first)) return YAML::Node();
     more = parser.HandleNextDocument(second);
-    if (!more) root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
     if (auto k = long_key(text, shown, e.mark)) d.push_back(*k);
     else d.push_back(Diagnostic{Location{shown, e.mark.line + 1, e.mark.column + 1}, syntax_message(e)});
@@ -354,20 +370,25 @@ std::optional<YAML::Node> parse_yaml(const std::string& text, const std::string&
                              "a ',' where a node should start; outside [...] and {...} a comma separates nothing"});
       return std::nullopt;
     }
-    // The second document starts at its '---' line, at or before its first node.
+    // The second document starts at its '---' line, or after the '...' that ends the first, at or
+    // before its first node.
     int line = m.line >= 0 ? m.line : static_cast<int>(lines.size()) - 1;
-    bool marker = false;
-    for (int i = std::min(line, static_cast<int>(lines.size()) - 1); i >= 0; --i) {
+    std::string marker;
+    for (int i = std::min(line, static_cast<int>(lines.size()) - 1); i >= 0 && marker.empty(); --i) {
       const std::string& l = lines[static_cast<std::size_t>(i)];
-      if (l.rfind("---", 0) == 0 && (l.size() == 3 || l[3] == ' ' || l[3] == '\t' || l[3] == '\r')) {
-        line = i;
-        marker = true;
-        break;
-      }
+      for (const char* mk : {"---", "..."})
+        if (l.rfind(mk, 0) == 0 && (l.size() == 3 || l[3] == ' ' || l[3] == '\t' || l[3] == '\r')) {
+          line = i;
+          marker = mk;
+        }
     }
-    if (marker)
+    if (marker == "---")
       d.push_back(Diagnostic{Location{shown, std::max(line, 0) + 1, 1},
                              "a second YAML document ('---') in one file; a task or composite file is one document"});
+    else if (marker == "...")
+      d.push_back(Diagnostic{Location{shown, std::max(m.line, 0) + 1, std::max(m.column, 0) + 1},
+                             "a second YAML document, after the '...' on line " + std::to_string(line + 1) +
+                                 " that ends the first; a task or composite file is one document"});
     else
       d.push_back(Diagnostic{Location{shown, std::max(m.line, 0) + 1, std::max(m.column, 0) + 1},
                              "YAML syntax: the document ends before this point and nothing here continues it (a quote "
