@@ -5,12 +5,12 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <deque>
 #include <string>
 #include <vector>
 
 #include "fba/packet.hpp"
 #include "fba/task_config.hpp"
+#include "packet_ring.hpp"
 #include "pi_mutex.hpp"
 
 namespace fba::detail {
@@ -59,7 +59,7 @@ struct Buffer {
   std::string from, to;      // "component.port", for messages and statistics
 
   PiMutex mutex;
-  std::deque<Packet> queue;  // Lossless and DropOldest
+  PacketRing queue;          // Lossless and DropOldest
   Packet latest;             // Latest
   std::atomic<std::size_t> size{0};   // readable without the lock, for scheduling decisions
   std::size_t queued_bytes = 0;        // payload bytes queued, under the lock

@@ -216,7 +216,7 @@ bool Node::ready() const {
   return !is_sensor && !eos_delivered && inputs_closed();
 }
 
-bool Node::take_inputs() {
+bool Node::take_inputs(std::uint64_t& taken) {
   auto take = [this](std::size_t i) {
     Buffer* b = input_states[i]->buffer;
     bool was_full = false;
@@ -231,10 +231,10 @@ bool Node::take_inputs() {
   };
   for (auto& in : inputs) in.has_ = false;
 
+  taken = 0;
   if (trigger.policy != TriggerPolicy::All) {
-    bool any = false;
-    for (std::size_t i = 0; i < inputs.size(); ++i) any |= take(i);
-    return any;
+    for (std::size_t i = 0; i < inputs.size(); ++i) taken += take(i) ? 1 : 0;
+    return taken > 0;
   }
   // All: every connected input has a sample with the same stamp; older unmatched heads go.
   for (;;) {
@@ -255,7 +255,7 @@ bool Node::take_inputs() {
     }
     if (matched) break;
   }
-  for (std::size_t i = 0; i < inputs.size(); ++i) take(i);
+  for (std::size_t i = 0; i < inputs.size(); ++i) taken += take(i) ? 1 : 0;
   return true;
 }
 
@@ -273,7 +273,8 @@ void Node::invoke() {
     return;
   }
 
-  const bool took = take_inputs();
+  std::uint64_t taken = 0;
+  const bool took = take_inputs(taken);
   switch (trigger.policy) {
     case TriggerPolicy::Any:
     case TriggerPolicy::All:
@@ -287,8 +288,6 @@ void Node::invoke() {
       break;
   }
   ++invocations;
-  std::uint64_t taken = 0;
-  for (const auto& in : inputs) taken += in.has_ ? 1 : 0;
   const std::uint64_t emitted = samples_emitted();
   // `component` is only replaced on this thread (a restart), so it is read here without the lock.
   // Only a type with stages has its calls timed (for the summary's time per stage): the two clock

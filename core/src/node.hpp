@@ -130,7 +130,8 @@ class Node {
  private:
   bool outputs_have_room() const;
   bool inputs_closed() const;
-  bool take_inputs();  // false when an All trigger found no match
+  // False when an All trigger found no match; `taken` counts the samples taken, one per input at most.
+  bool take_inputs(std::uint64_t& taken);
   std::uint64_t samples_emitted() const;
   // `lost`: the input samples the failed call had taken, counted if the component restarts.
   void fail(std::string_view reason, std::uint64_t lost = 0);

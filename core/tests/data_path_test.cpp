@@ -179,6 +179,35 @@ TEST(DataPath, DisplacedAndPreviousPayloadsAreFreedOutsideTheBufferLock) {
   }
 }
 
+// --- order ---------------------------------------------------------------------------------------
+
+// The queue is a ring that grows by doubling: a growth while the ring has wrapped round (its head
+// past the start of its slots) must keep the samples in the order they came.
+TEST(DataPath, ALosslessQueueKeepsItsOrderThroughWrapsAndGrowth) {
+  fba::detail::Buffer b;
+  b.capacity = 1000;
+  std::int64_t next_in = 0, next_out = 0;
+  auto push = [&](int n) {
+    for (int i = 0; i < n; ++i) b.push(fba::Packet::make<std::int64_t>(std::make_shared<const std::int64_t>(next_in++), {}));
+  };
+  auto pop = [&](int n) {
+    for (int i = 0; i < n; ++i) {
+      fba::Packet p;
+      bool was_full = false;
+      ASSERT_TRUE(b.pop(p, was_full));
+      EXPECT_EQ(p.get<std::int64_t>(), next_out++);
+    }
+  };
+  // 5 in, 3 out, 6 in: the ring of 8 wraps; 4 more make it grow while wrapped; then past 16 and 32.
+  push(5), pop(3), push(6), push(4), pop(7), push(30), pop(25), push(40);
+  EXPECT_EQ(b.queued(), static_cast<std::size_t>(next_in - next_out));
+  pop(static_cast<int>(next_in - next_out));
+  fba::Packet none;
+  bool was_full = false;
+  EXPECT_FALSE(b.pop(none, was_full));
+  EXPECT_EQ(b.pushed, b.consumed);
+}
+
 // --- delivered events --------------------------------------------------------------------------
 
 TEST_P(DataPathBoth, DeliveredEventsCarryASequenceAndTheirProducer) {
