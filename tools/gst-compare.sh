@@ -2,7 +2,9 @@
 # Runs the same chains in GStreamer and in fba, in one run, like with like, and prints wall and CPU
 # time per extra element/hop, end-to-end latency at 1 kHz, and the ratios.
 #   tools/gst-compare.sh [BUILD_DIR]      (default build/release)
-# One thread:          GStreamer fakesrc ! identity x K ! fakesink      vs fba's deterministic executor.
+# One thread:          GStreamer fakesrc ! identity x K ! fakesink      vs fba's deterministic executor,
+#                      both as whole processes (gst-launch-1.0, fba-run) taken in turn, the least CPU
+#                      of 5 rounds each (the target's figure), and fba in process (the benchmark's).
 # A thread per element: GStreamer fakesrc ! (queue ! identity) x K ! fakesink
 #                                                    vs fba with every component `thread: dedicated`.
 # fba's pooled threaded executor (components share the workers) has no GStreamer counterpart and is
@@ -58,6 +60,49 @@ gst_latency() {
 
 ratio() { echo "$1 $2" | awk '{printf "%.3f", $1 / $2}'; }
 
+# cpu_ns COMMAND... -> user + system nanoseconds of the child
+cpu_ns() {
+  local times
+  times=$( { TIMEFORMAT='%U %S'; time "$@" >/dev/null 2>&1; } 2>&1)
+  echo "$times" | awk '{printf "%d", ($1 + $2) * 1e9}'
+}
+
+# in_turn ROUNDS N -> "gst_cpu_ns fba_cpu_ns" per extra element, one thread, whole processes: K=1 and
+# K=50 chains of each taken in turn ROUNDS times, the least CPU of each. A virtual machine's speed
+# swings by half between runs a second apart; runs in turn see the same swings.
+in_turn() {
+  local rounds=$1 n=$2 dir k r
+  dir=$(mktemp -d)
+  for k in 1 50; do
+    {
+      echo "executor: deterministic"
+      echo "components:"
+      echo "  src: { type: examples.counter, params: { count: $n } }"
+      for ((r = 0; r < k; r++)); do echo "  p$r: { type: examples.passthrough }"; done
+      echo "  sink: { type: examples.sink, params: { expected: $n } }"
+      echo "connections:"
+      echo "  - src.out -> p0.in"
+      for ((r = 1; r < k; r++)); do echo "  - p$((r - 1)).out -> p$r.in"; done
+      echo "  - p$((k - 1)).out -> sink.in"
+    } >"$dir/chain$k.yaml"
+  done
+  local -A least=()
+  for ((r = 0; r < rounds; r++)); do
+    for k in 1 50; do
+      local pipeline="fakesrc num-buffers=$n" i t
+      for ((i = 0; i < k; i++)); do pipeline+=" ! identity"; done
+      # shellcheck disable=SC2086
+      t=$(cpu_ns gst-launch-1.0 -q $pipeline ! fakesink)
+      [ -z "${least[gst$k]:-}" ] || [ "$t" -lt "${least[gst$k]}" ] && least[gst$k]=$t
+      t=$(cpu_ns "$build/bin/fba-run" "$dir/chain$k.yaml")
+      [ -z "${least[fba$k]:-}" ] || [ "$t" -lt "${least[fba$k]}" ] && least[fba$k]=$t
+    done
+  done
+  rm -rf "$dir"
+  echo "${least[gst1]} ${least[gst50]} ${least[fba1]} ${least[fba50]}" |
+    awk -v n="$n" '{printf "%.1f %.1f\n", ($2 - $1) / 49 / n, ($4 - $3) / 49 / n}'
+}
+
 echo "== GStreamer $(gst-launch-1.0 --version | head -1 | awk '{print $NF}')"
 read -r gst_one gst_one_cpu < <(per_hop identity 200000)
 read -r gst_queue gst_queue_cpu < <(per_hop "queue ! identity" 50000)
@@ -91,7 +136,13 @@ printf '%-58s %10s us median %7s us p99\n' "fba latency, 10 dedicated hops, 1 kH
 printf '%-58s %10s us median\n' "fba latency, 10 pooled hops, 1 kHz, end to end:" "$fba_pool_lat"
 printf '%-58s %10s ms\n' "fba build of a 1000-component task (CPU):" "$fba_build"
 
+echo "== one thread, whole processes in turn (gst-launch-1.0 and fba-run, least CPU of 5 rounds)"
+read -r turn_gst turn_fba < <(in_turn 5 200000)
+printf '%-58s %10s ns CPU\n' "gst per extra identity:" "$turn_gst"
+printf '%-58s %10s ns CPU\n' "fba per extra hop, deterministic:" "$turn_fba"
+
 echo "== ratios, fba / GStreamer (below 1: fba costs less)"
+printf '%-58s %10s CPU\n' "one thread, whole processes in turn (the target's figure):" "$(ratio "$turn_fba" "$turn_gst")"
 printf '%-58s %10s wall %10s CPU\n' "one thread (deterministic / identity):" "$(ratio "$fba_det" "$gst_one")" "$(ratio "$fba_det_cpu" "$gst_one_cpu")"
 printf '%-58s %10s wall %10s CPU\n' "a thread per element (dedicated / queue ! identity):" "$(ratio "$fba_ded" "$gst_queue")" "$(ratio "$fba_ded_cpu" "$gst_queue_cpu")"
 printf '%-58s %10s median\n' "latency, 10 threaded hops at 1 kHz (dedicated / queue):" "$(ratio "$fba_lat" "$gst_lat")"
