@@ -76,7 +76,7 @@ bool Buffer::take_head(Packet& out, bool& was_full) {
 }
 
 bool Buffer::pop(Packet& out, bool& was_full) {
-  if (one_thread) {  // no lock to keep the input's previous sample from being freed under: straight in
+  if (one_thread) {  // no lock: the input's previous sample may be freed here, so the sample goes straight in
     if (!take_head(out, was_full)) return false;
     ++consumed;
     return true;

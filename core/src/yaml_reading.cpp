@@ -280,7 +280,7 @@ void check_mappings(const YAML::Node& n, const Source& src, std::vector<Diagnost
 // Whether nothing can follow the document `root` was loaded from. yaml-cpp's scanner closes a
 // block mapping at column 0 only at the end of the text or at a line that starts with '---', '...'
 // or '%', so without such a line after the root the text is one document, and a second parse to
-// count its documents (a third of a --check) is not needed.
+// count its documents (a fifth of a --check of 1,000 components) is not needed.
 bool nothing_can_follow(const YAML::Node& root, const std::string& text) {
   if (!root.IsMap() || root.Style() != YAML::EmitterStyle::Block || root.Mark().column != 0 || root.Mark().pos < 0)
     return false;
