@@ -17,6 +17,14 @@ bench=$build/bin/fba-runtime-benchmark
 command -v gst-launch-1.0 >/dev/null || { echo "gst-launch-1.0 missing: apt-get install gstreamer1.0-tools" >&2; exit 2; }
 [ -x "$bench" ] || { echo "$bench missing: build first (tools/dev.sh test or cmake --build $build)" >&2; exit 2; }
 
+# times_ns COMMAND... -> "wall_ns cpu_ns" of the child (bash's time keyword: real, user and system
+# seconds, on stderr; CPU is user + system)
+times_ns() {
+  local times
+  times=$( { TIMEFORMAT='%R %U %S'; time "$@" >/dev/null 2>&1; } 2>&1)
+  echo "$times" | awk '{printf "%d %d\n", $1 * 1e9, ($2 + $3) * 1e9}'
+}
+
 # gst_run K N ELEMENT -> "wall_ns cpu_ns" of the best (by wall time) of 3 runs of
 # fakesrc num-buffers=N ! ELEMENT x K ! fakesink
 gst_run() {
@@ -25,12 +33,9 @@ gst_run() {
   for ((i = 0; i < k; i++)); do pipeline+=" ! $element"; done
   pipeline+=" ! fakesink"
   for _ in 1 2 3; do
-    local times wall cpu
-    # bash's time keyword: real, user and system seconds of the child, on stderr.
+    local wall cpu
     # shellcheck disable=SC2086
-    times=$( { TIMEFORMAT='%R %U %S'; time gst-launch-1.0 -q $pipeline >/dev/null 2>&1; } 2>&1)
-    wall=$(echo "$times" | awk '{printf "%d", $1 * 1e9}')
-    cpu=$(echo "$times" | awk '{printf "%d", ($2 + $3) * 1e9}')
+    read -r wall cpu < <(times_ns gst-launch-1.0 -q $pipeline)
     if [ -z "$best_wall" ] || [ "$wall" -lt "$best_wall" ]; then best_wall=$wall best_cpu=$cpu; fi
   done
   echo "$best_wall $best_cpu"
@@ -60,13 +65,6 @@ gst_latency() {
 
 ratio() { echo "$1 $2" | awk '{printf "%.3f", $1 / $2}'; }
 
-# cpu_ns COMMAND... -> user + system nanoseconds of the child
-cpu_ns() {
-  local times
-  times=$( { TIMEFORMAT='%U %S'; time "$@" >/dev/null 2>&1; } 2>&1)
-  echo "$times" | awk '{printf "%d", ($1 + $2) * 1e9}'
-}
-
 # in_turn ROUNDS N -> "gst_cpu_ns fba_cpu_ns" per extra element, one thread, whole processes: K=1 and
 # K=50 chains of each taken in turn ROUNDS times, the least CPU of each. A virtual machine's speed
 # swings by half between runs a second apart; runs in turn see the same swings.
@@ -92,9 +90,9 @@ in_turn() {
       local pipeline="fakesrc num-buffers=$n" i t
       for ((i = 0; i < k; i++)); do pipeline+=" ! identity"; done
       # shellcheck disable=SC2086
-      t=$(cpu_ns gst-launch-1.0 -q $pipeline ! fakesink)
+      read -r _ t < <(times_ns gst-launch-1.0 -q $pipeline ! fakesink)
       [ -z "${least[gst$k]:-}" ] || [ "$t" -lt "${least[gst$k]}" ] && least[gst$k]=$t
-      t=$(cpu_ns "$build/bin/fba-run" "$dir/chain$k.yaml")
+      read -r _ t < <(times_ns "$build/bin/fba-run" "$dir/chain$k.yaml")
       [ -z "${least[fba$k]:-}" ] || [ "$t" -lt "${least[fba$k]}" ] && least[fba$k]=$t
     done
   done
