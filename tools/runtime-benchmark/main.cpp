@@ -319,12 +319,12 @@ void measure_many_workers(Report& report, long n) {
   }
 }
 
-// Building a task of 1000 components: parse, check, construct. Timed in the thread's CPU time
-// (both happen on this thread), best of five even when quick: wall times taken at different
-// moments of a loaded machine made the ratio noise. False when yaml-cpp's parse misread the file.
+// Building a task of 1000 components (parse, check, construct) against yaml-cpp's parse of its
+// file alone, in the thread's CPU time (both happen on this thread). Builds and parses are taken
+// in turn, the least of at least nine each: a build beside the benchmark (CI's sanitizer build)
+// slows whichever runs while it compiles, and both see the same spells. False when yaml-cpp's
+// parse misread the file.
 bool measure_build(Report& report, int reps) {
-  // Builds and parses taken in turn, the least of each: a build beside the benchmark (CI's
-  // sanitizer build) slows whichever runs while it compiles, and both see the same spells.
   const std::string yaml = chain_yaml(998, 10, 0, "examples.sink", 16, Mode::Pooled);
   const int rounds = std::max(reps, 9);
   double best = 1e300, parse = 1e300;
