@@ -20,6 +20,7 @@ packages=(
   liburdfdom-dev libkdl-parser-dev liborocos-kdl-dev libmodbus-dev libompl-dev libfcl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gstreamer1.0-tools gstreamer1.0-plugins-base graphviz bc ccache
+  universal-ctags  # the size rules' check (tests/source_sizes)
   chromium  # the live view's browser tests (web/tests/, driven by playwright-core from npm)
 )
 # The live view's page (web/) is built with npm and vite: Debian's nodejs and npm, unless a Node.js
