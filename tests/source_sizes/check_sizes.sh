@@ -20,7 +20,7 @@ fi
 check() {
   local root=$1 found=0
   [ -d "$root" ] || { echo "check_sizes.sh: expected a folder, found '$root'" >&2; return 2; }
-  local folders=()
+  local folders=() f
   for f in core libs plugins hardware tools tests examples cmake web/src web/tests web/scripts; do
     [ -d "$root/$f" ] && folders+=("$root/$f")
   done
