@@ -12,7 +12,9 @@ namespace {
 class Source final : public fba::Component {
  public:
   static constexpr fba::Out<test_blob::Blob> kOut{"out", "blobs"};
-  static fba::Spec spec() { return fba::Spec::sensor("test." BLOB_PLUGIN, "Sends test.Blob, in one of its two sizes.").add(kOut); }
+  static fba::Spec spec() {
+    return fba::Spec::sensor("test." BLOB_PLUGIN, "Sends test.Blob, in one of its two sizes.").add(kOut);
+  }
   explicit Source(fba::Context&) {}
   void process() override {}
 };
