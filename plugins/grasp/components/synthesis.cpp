@@ -96,6 +96,10 @@ class GraspSynthesisFilter final : public fba::Component {
   static constexpr auto kWeightSymmetry = fba::Param<double>("weight_symmetry", 1.0, "weight of S1 in the total").at_least(0);
   static constexpr auto kWeightSafety = fba::Param<double>("weight_safety", 1.0, "weight of S3 in the total").at_least(0);
   static constexpr auto kWeightCurvature = fba::Param<double>("weight_curvature", 1.0, "weight of S4 in the total").at_least(0);
+  static constexpr auto kCurvatureScale = fba::Param<double>(
+      "curvature_scale", 25.0,
+      "1/m: S4 maps a contact's mean curvature -scale .. 0 .. +scale linearly to 1 .. 0.5 .. 0 (slightly concave best); a "
+      "convex cylinder of radius r has 1/(2r), so at 25 any cylinder under 2 cm in radius scores 0").range(1, 1000);
   static constexpr auto kNeighbourRadius = fba::Param<double>(
       "neighbour_radius", 0.0, "metres: the surface neighbourhood for normals, curvature and regions; 0: 3 edges of the finest leaf").at_least(0);
   static constexpr auto kRimDeg = fba::Param<double>(
@@ -179,7 +183,7 @@ class GraspSynthesisFilter final : public fba::Component {
 #endif
     );
     spec.add(kOctree, kSilhouette, kGrasp, kRegions, kCandidates, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kLevelTiltDeg, kLevelSqueezeDeg, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kCurvatureScale, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kLevelTiltDeg, kLevelSqueezeDeg, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -202,6 +206,7 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.weight_symmetry = ctx(kWeightSymmetry);
     params_.weight_safety = ctx(kWeightSafety);
     params_.weight_curvature = ctx(kWeightCurvature);
+    params_.curvature_scale = ctx(kCurvatureScale);
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);

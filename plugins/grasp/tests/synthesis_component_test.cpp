@@ -6,6 +6,7 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -75,6 +76,25 @@ TEST(GraspSynthesisComponent, SelectsAGraspOnACylinderWithContactsOnItsSide) {
   EXPECT_EQ(h.values<fba::Grasp>("grasp").size(), 1u);
   EXPECT_EQ(named(h.events(), "grasp_selected").size(), 1u);
   EXPECT_TRUE(h.failure().empty()) << h.failure();
+}
+
+// S4 on the cylinder's convex side follows curvature_scale: its mean curvature 1/(2r) = 14.3 1/m
+// scores 0.5 - 0.5 * 14.3 / scale, 0.21 at the default 25 and 0.36 at 50, under a flat face's 0.5
+// (the model's curvature, a little less than the cylinder's where the selected contacts are).
+TEST(GraspSynthesisComponent, TheCurvatureScoreFollowsCurvatureScale) {
+  std::vector<double> s4;
+  for (const double scale : {25.0, 50.0}) {
+    ComponentHarness h(built_plugins(), "grasp.synthesis", {{"curvature_scale", scale}});
+    h.push<fba::Octree>("octree", cylinder(8));
+    h.run();
+    const auto grasps = h.values<fba::Grasp>("grasp");
+    ASSERT_EQ(grasps.size(), 1u) << "curvature_scale " << scale;
+    s4.push_back(grasps[0].scores.curvature);
+    EXPECT_GT(s4.back(), 0.5 - 0.5 / (2 * kRadius) / scale - 0.02) << "curvature_scale " << scale;
+    EXPECT_LT(s4.back(), 0.5) << "curvature_scale " << scale;
+  }
+  EXPECT_GT(s4[1], s4[0] + 0.1);
+  EXPECT_THROW(ComponentHarness(built_plugins(), "grasp.synthesis", {{"curvature_scale", 0}}), fba::ConfigError);
 }
 
 TEST(GraspSynthesisComponent, AnEmptyModelFailsWithTheReason) {
