@@ -102,12 +102,15 @@ build() { cmake --build "build/$1" --parallel "$jobs" "${@:2}"; }
 # stage's tests run, at the lowest priority, so that it takes mostly what the tests leave idle (the
 # hardware tests wait on timeouts, the last binary runs alone). Its output goes to
 # <log>, which wait_behind prints. It runs in a session of its own, so that a failing stage stops
-# it and its children.
+# it and its children. A new session is a new scheduling group where the kernel groups by session
+# (sched_autogroup, on in Debian's kernels), and a nice value ranks a process only within its group:
+# so the group is niced too (/proc/self/autogroup), or the work behind takes half the cores from
+# the tests whatever its nice value (docs/results.md, "CI time").
 behind_pid=""
 behind() {
   local log=$1
   shift
-  setsid -w nice -n 19 "$@" >"$log" 2>&1 &
+  setsid -w bash -c 'echo 19 >/proc/self/autogroup 2>/dev/null || true; exec nice -n 19 "$@"' behind "$@" >"$log" 2>&1 &
   behind_pid=$!
 }
 trap '[ -z "$behind_pid" ] || kill -- "-$behind_pid" 2>/dev/null || true' EXIT
