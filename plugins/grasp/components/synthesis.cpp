@@ -100,6 +100,10 @@ class GraspSynthesisFilter final : public fba::Component {
       "curvature_scale", 25.0,
       "1/m: S4 maps a contact's mean curvature -scale .. 0 .. +scale linearly to 1 .. 0.5 .. 0 (slightly concave best); a "
       "convex cylinder of radius r has 1/(2r), so at 25 any cylinder under 2 cm in radius scores 0").range(1, 1000);
+  static constexpr auto kSafetyReference = fba::Param<double>(
+      "safety_reference", 0.0,
+      "metres: S3 scores a contact this far from its region's boundary (over the surface) 1, nearer linearly less; 0: "
+      "finger_width").range(0, 1);
   static constexpr auto kNeighbourRadius = fba::Param<double>(
       "neighbour_radius", 0.0, "metres: the surface neighbourhood for normals, curvature and regions; 0: 3 edges of the finest leaf").at_least(0);
   static constexpr auto kRimDeg = fba::Param<double>(
@@ -183,7 +187,7 @@ class GraspSynthesisFilter final : public fba::Component {
 #endif
     );
     spec.add(kOctree, kSilhouette, kGrasp, kRegions, kCandidates, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kCurvatureScale, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kLevelTiltDeg, kLevelSqueezeDeg, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kCurvatureScale, kSafetyReference, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kLevelTiltDeg, kLevelSqueezeDeg, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -207,6 +211,7 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.weight_safety = ctx(kWeightSafety);
     params_.weight_curvature = ctx(kWeightCurvature);
     params_.curvature_scale = ctx(kCurvatureScale);
+    params_.safety_reference = ctx(kSafetyReference);
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);

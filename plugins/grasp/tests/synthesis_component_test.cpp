@@ -97,6 +97,24 @@ TEST(GraspSynthesisComponent, TheCurvatureScoreFollowsCurvatureScale) {
   EXPECT_THROW(ComponentHarness(built_plugins(), "grasp.synthesis", {{"curvature_scale", 0}}), fba::ConfigError);
 }
 
+// S3 follows safety_reference: on the cylinder's side, 12 cm tall, the selected contacts lie
+// centimetres inside their region, past the default reference (the finger's width, 2 cm): S3 is 1;
+// against a reference of 20 cm, more than half the side's height, S3 is a fraction.
+TEST(GraspSynthesisComponent, TheSafetyScoreFollowsSafetyReference) {
+  std::vector<double> s3;
+  for (const double reference : {0.0, 0.2}) {
+    ComponentHarness h(built_plugins(), "grasp.synthesis", {{"safety_reference", reference}});
+    h.push<fba::Octree>("octree", cylinder(8));
+    h.run();
+    const auto grasps = h.values<fba::Grasp>("grasp");
+    ASSERT_EQ(grasps.size(), 1u) << "safety_reference " << reference;
+    s3.push_back(grasps[0].scores.safety_margin);
+  }
+  EXPECT_DOUBLE_EQ(s3[0], 1.0);
+  EXPECT_GT(s3[1], 0.0);
+  EXPECT_LT(s3[1], 0.5);
+}
+
 TEST(GraspSynthesisComponent, AnEmptyModelFailsWithTheReason) {
   ComponentHarness h(built_plugins(), "grasp.synthesis");
   fba::Octree empty;
