@@ -206,9 +206,8 @@ case "$cmd" in
     behind build/asan/fuzz.log bash tests/fuzz/run.sh build/asan 600 "${FBA_FUZZ_RUNS:-18000}"
     # In-process tests only: the command-line tests (Cli*, and the random signals' binary) run fba-run
     # as a process and check its crash and signal handling, which by design calls what TSan calls
-    # signal-unsafe (the best-effort crash report); they run in the plain and ASan stages. Nor the
-    # comparison of hw.robotiq_3f's ports with sim.hand's, which this build leaves out (hardware/hand/tests).
-    GTEST_FILTER='-Cli*:Robotiq3fSpec.*' TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+    # signal-unsafe (the best-effort crash report); they run in the plain and ASan stages.
+    GTEST_FILTER='-Cli*' TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
       run_tests tsan -R "^($(IFS='|'; echo "${tsan_tests[*]}"))\$"
 
     stage "fuzzing the task loader: a bounded exploration (the ASan build's fuzzer)"

@@ -115,7 +115,7 @@ TEST(Robotiq3fSpec, PortsAndEventsAreSimHands) {
   const auto real = built_plugins().find("hw.robotiq_3f");
   ASSERT_TRUE(real);
   const auto sim = built_plugins().find("sim.hand");
-  if (!sim) GTEST_SKIP() << "sim.hand is not built here (no MuJoCo): nothing to compare with";
+  if (!sim) GTEST_SKIP() << "sim.hand is not built here (no MuJoCo, or a ThreadSanitizer build): nothing to compare with";
   auto ports = [](const std::vector<fba::PortSpec>& list) {
     std::vector<std::tuple<std::string, std::string, bool>> out;
     for (const auto& p : list) out.emplace_back(p.name, p.type->name, p.required);
