@@ -104,6 +104,10 @@ class GraspSynthesisFilter final : public fba::Component {
       "safety_reference", 0.0,
       "metres: S3 scores a contact this far from its region's boundary (over the surface) 1, nearer linearly less; 0: "
       "finger_width").range(0, 1);
+  static constexpr auto kMinSymmetry = fba::Param<double>(
+      "min_symmetry", 0.0,
+      "S1 below this leaves a candidate out whatever its total: its contacts' centre so far off the object's, or their "
+      "angles so far from 120 degrees, that the object's weight turns in the hand in the lift; 0: off").range(0, 1);
   static constexpr auto kNeighbourRadius = fba::Param<double>(
       "neighbour_radius", 0.0, "metres: the surface neighbourhood for normals, curvature and regions; 0: 3 edges of the finest leaf").at_least(0);
   static constexpr auto kRimDeg = fba::Param<double>(
@@ -147,7 +151,7 @@ class GraspSynthesisFilter final : public fba::Component {
   static constexpr fba::EventOut kPlanningPerformed{
       "planning_performed",
       "no reliable grasp yet: regions were emitted for a new view; payload (JSON): views, samples, regions, candidates, "
-      "uncertain_regions, regions_requested, points_requested (contacts to graze), best_total, seconds (wall time of the analysis), best (the best candidate's S1, S3, S4 and whether it is uncertain)"};
+      "candidates left out (below_table, hand_blocked, asymmetric, not_force_closure), uncertain_regions, regions_requested, points_requested (contacts to graze), best_total, seconds (wall time of the analysis), best (the best candidate's S1, S3, S4 and whether it is uncertain)"};
   static constexpr fba::EventOut kGraspSelected{"grasp_selected", "a reliable grasp was selected; payload: the grasp as JSON, with its Ferrari-Canny epsilon on the model (model_epsilon)"};
   static constexpr fba::EventOut kFailed{"grasp_synthesis_failed", "the search gave up; payload: the reason"};
 #if FBA_GRASP_REACH
@@ -187,7 +191,7 @@ class GraspSynthesisFilter final : public fba::Component {
 #endif
     );
     spec.add(kOctree, kSilhouette, kGrasp, kRegions, kCandidates, kFingerWidth, kApertureMin, kApertureMax, kSpreadMin, kSpreadMax, kThreshold,
-             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kCurvatureScale, kSafetyReference, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kLevelTiltDeg, kLevelSqueezeDeg, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
+             kMaxViews, kContactsViews, kStabilityShare, kWeightSymmetry, kWeightSafety, kWeightCurvature, kCurvatureScale, kSafetyReference, kMinSymmetry, kNeighbourRadius, kRimDeg, kRimSeparationDeg, kPathTolerance, kLevelTiltDeg, kLevelSqueezeDeg, kNormalErrorDeg, kEdgeMarginMm, kTableZ, kPlyLeaves, kPlanningPerformed, kGraspSelected, kFailed)
         .add(kApertureMin < kApertureMax, kSpreadMin < kSpreadMax, kFingerWidth <= kSpreadMax)
         .check([](const fba::ParamValues& p) {
           if (p(kWeightSymmetry) + p(kWeightSafety) + p(kWeightCurvature) <= 0)
@@ -212,6 +216,7 @@ class GraspSynthesisFilter final : public fba::Component {
     params_.weight_curvature = ctx(kWeightCurvature);
     params_.curvature_scale = ctx(kCurvatureScale);
     params_.safety_reference = ctx(kSafetyReference);
+    params_.min_symmetry = ctx(kMinSymmetry);
     if (const auto table = ctx(kTableZ); !table.empty()) params_.table_z = table[0];
     params_.path_tolerance = ctx(kPathTolerance);
     params_.normal_error_deg = ctx(kNormalErrorDeg);
@@ -300,9 +305,9 @@ class GraspSynthesisFilter final : public fba::Component {
         });
     // What the search saw: why a model gives few or weak candidates.
     ctx_.log().debug("views {}: {} of {} occupied leaves joined to the table; {} surface samples in {} regions; {} candidates "
-                     "(best total {:.3f}); left out: {} into the table, {} blocked by the model, {} not force closure",
+                     "(best total {:.3f}); left out: {} into the table, {} blocked by the model, {} under min_symmetry, {} not force closure",
                      views, surface.leaves - surface.unsupported_leaves, surface.leaves, observed.samples.size(), r.regions.size(),
-                     r.candidates.size(), total_of(best), r.below_table, r.hand_blocked, r.not_force_closure);
+                     r.candidates.size(), total_of(best), r.below_table, r.hand_blocked, r.asymmetric, r.not_force_closure);
     // The arm's reach, checked as the selection comes to each candidate, best first: the best
     // reachable candidate is the one the others are weighed against, and the one selected must be
     // reachable. Those passed over are reported (with the result, whatever it is) and asked no
@@ -345,6 +350,7 @@ class GraspSynthesisFilter final : public fba::Component {
                      {"candidates", r.candidates.size()},
                      {"below_table", r.below_table},
                      {"hand_blocked", r.hand_blocked},
+                     {"asymmetric", r.asymmetric},
                      {"not_force_closure", r.not_force_closure},
                      {"uncertain_regions", r.uncertain_regions.size()},
                      {"regions_requested", requested},
@@ -582,9 +588,10 @@ class GraspSynthesisFilter final : public fba::Component {
         return reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
                " would put the hand into the table (as a pinch too), " + std::to_string(r.hand_unfit) + " wider than the hand takes; " +
                std::to_string(r.too_low) + " surface samples too low for a finger to touch above the table" + passed;
-      if (r.hand_blocked > 0 || r.not_force_closure > 0)
+      if (r.hand_blocked > 0 || r.asymmetric > 0 || r.not_force_closure > 0)
         return reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) + " blocked by the model in the hand's way, " +
-               std::to_string(r.not_force_closure) + " not force closure on the model" + passed;
+               std::to_string(r.asymmetric) + " with S1 under min_symmetry, " + std::to_string(r.not_force_closure) +
+               " not force closure on the model" + passed;
       return reason + "no candidate the hand can reach" + passed;
     }
     // The best on resolved surface: of the candidates whose contacts and surroundings are resolved,

@@ -50,6 +50,7 @@ void check_params(const SynthesisParams& p) {
           "max_normal_step_deg must be in (0, 180], found " + num(p.max_normal_step_deg));
   require(p.sharp_curvature >= 0, "sharp_curvature must be >= 0, found " + num(p.sharp_curvature));
   require(p.curvature_scale > 0, "curvature_scale must be > 0, found " + num(p.curvature_scale));
+  require(p.min_symmetry >= 0 && p.min_symmetry <= 1, "min_symmetry must be in [0, 1], found " + num(p.min_symmetry));
   require(p.safety_reference >= 0, "safety_reference must be >= 0, found " + num(p.safety_reference));
   require(p.edge_margin >= 0 && std::isfinite(p.edge_margin), "edge_margin must be finite and >= 0, found " + num(p.edge_margin));
   require(p.robot_hand.pinch_depth >= 0 && std::isfinite(p.robot_hand.pinch_depth),
@@ -616,7 +617,7 @@ QualityParams model_quality(const SynthesisParams& p) {
 }
 
 // The candidates kept, from `all` (best total first) into result.candidates: taken in order, each
-// kept unless it repeats one kept, the model stands in the hand's way, or it is not force closure
+// kept unless it repeats one kept, its S1 is under min_symmetry, the model stands in the hand's way, or it is not force closure
 // on the model about the object's centre (torques over the samples' farthest distance from it, as
 // the true measure scales them by r_max); at most max_candidates of each kind (see below), after
 // at most max_checks force-closure checks. The hulls (the costly part) are computed ahead, a few at once with a
@@ -634,6 +635,7 @@ void select_candidates(std::vector<GraspCandidate>& all, const std::vector<Surfa
     return std::any_of(result.candidates.begin(), result.candidates.end(),
                        [&](const auto& k) { return same_contacts(c, k, hand.finger_width); });
   };
+  auto asymmetric = [&](const GraspCandidate& c) { return c.grasp.scores.symmetry < p.min_symmetry; };
   std::vector<signed char> blocked(all.size(), -1);  // -1: not checked yet
   auto hand_blocked = [&](std::size_t i) {
     if (blocked[i] < 0) blocked[i] = p.path_tolerance > 0 && cells.hand_path_blocked(all[i].grasp, hand, p.path_tolerance);
@@ -650,7 +652,7 @@ void select_candidates(std::vector<GraspCandidate>& all, const std::vector<Surfa
     const std::size_t ahead = std::min<std::size_t>(p.parallel_for ? 8 : 1, budget);  // one thread: none ahead
     std::vector<std::size_t> next;
     for (std::size_t j = first; j < all.size() && next.size() < ahead; ++j)
-      if (!quality_of[j] && !full(all[j]) && !repeats(all[j]) && !hand_blocked(j)) next.push_back(j);
+      if (!quality_of[j] && !full(all[j]) && !asymmetric(all[j]) && !repeats(all[j]) && !hand_blocked(j)) next.push_back(j);
     auto compute = [&](std::size_t k) {
       GraspQuality q;
       try {
@@ -667,6 +669,10 @@ void select_candidates(std::vector<GraspCandidate>& all, const std::vector<Surfa
     GraspCandidate& c = all[i];
     if (std::all_of(kept.begin(), kept.end(), [&](std::size_t k) { return k >= p.max_candidates; })) break;
     if (full(c) || repeats(c)) continue;
+    if (asymmetric(c)) {
+      ++result.asymmetric;
+      continue;
+    }
     // The hand's way first, on every candidate in turn: a few microseconds each. Counting it in
     // max_checks let the blocked best candidates use up the search (the cracker box: 400 of 400
     // blocked from view 3 to view 8; the first free one at view 3 was the 444th).

@@ -109,6 +109,19 @@ TEST(GraspSynthesisComponent, TheSafetyScoreFollowsSafetyReference) {
   EXPECT_LT(s3_20cm, 0.5);
 }
 
+// A floor on S1 no contacts on the voxelised cylinder reach leaves every candidate out; the
+// reason at the last view counts them.
+TEST(GraspSynthesisComponent, AFloorOnSymmetryNoCandidateReachesIsTheReasonGiven) {
+  ComponentHarness h(built_plugins(), "grasp.synthesis", {{"min_symmetry", 0.999}, {"max_views", 8}});
+  h.push<fba::Octree>("octree", cylinder(8));
+  h.run();
+  EXPECT_TRUE(h.values<fba::Grasp>("grasp").empty());
+  const auto failed = named(h.events(), "grasp_synthesis_failed");
+  ASSERT_EQ(failed.size(), 1u);
+  EXPECT_NE(failed[0].payload.find("with S1 under min_symmetry"), std::string::npos) << failed[0].payload;
+  EXPECT_THROW(ComponentHarness(built_plugins(), "grasp.synthesis", {{"min_symmetry", 1.5}}), fba::ConfigError);
+}
+
 TEST(GraspSynthesisComponent, AnEmptyModelFailsWithTheReason) {
   ComponentHarness h(built_plugins(), "grasp.synthesis");
   fba::Octree empty;

@@ -386,21 +386,41 @@ TEST(GraspSynthesis, ACandidateAllowingForNormalErrorStaysClosedWithItsNormalsTu
   EXPECT_GT(plain_opened, 0u) << "on these shapes some candidates closed only with exact normals";
 }
 
-// A higher bar on the model's epsilon keeps fewer candidates, each above it.
-TEST(GraspSynthesis, MinimumModelEpsilonLeavesOutTheLessStable) {
+// A floor on one measure of the candidates (`measure`), set by `set_floor` at its median over the
+// candidates on a curved box without it: fewer are kept, none of them under it. The result with
+// the floor.
+template <class Measure, class SetFloor>
+SynthesisResult expect_a_floor_at_the_median_leaves_out_those_under_it(Measure measure, SetFloor set_floor) {
   const double h = 0.005;
   auto samples = curved(box({0.06, 0.10, 0.15}, h), h);
   SynthesisParams p = params_for(h);
   p.max_candidates = 1000;
   const SynthesisResult all = synthesise(samples, p);
-  std::vector<double> eps;
-  for (const auto& c : all.candidates) eps.push_back(c.model_epsilon);
-  ASSERT_GT(eps.size(), 4u);
-  p.min_model_epsilon = quantile(eps, 0.5);
-  const SynthesisResult stable = synthesise(samples, p);
-  EXPECT_LT(stable.candidates.size(), all.candidates.size());
-  EXPECT_FALSE(stable.candidates.empty());
-  for (const auto& c : stable.candidates) EXPECT_GE(c.model_epsilon, p.min_model_epsilon);
+  std::vector<double> values;
+  for (const auto& c : all.candidates) values.push_back(measure(c));
+  EXPECT_GT(values.size(), 4u);
+  const double floor = values.empty() ? 0.0 : quantile(values, 0.5);
+  set_floor(p, floor);
+  SynthesisResult floored = synthesise(samples, p);
+  EXPECT_LT(floored.candidates.size(), all.candidates.size());
+  EXPECT_FALSE(floored.candidates.empty());
+  for (const auto& c : floored.candidates) EXPECT_GE(measure(c), floor);
+  return floored;
+}
+
+TEST(GraspSynthesis, MinimumModelEpsilonLeavesOutTheLessStable) {
+  expect_a_floor_at_the_median_leaves_out_those_under_it([](const GraspCandidate& c) { return c.model_epsilon; },
+                                                         [](SynthesisParams& p, double floor) { p.min_model_epsilon = floor; });
+}
+
+// S1's floor counts the candidates it leaves out.
+TEST(GraspSynthesis, MinimumSymmetryLeavesOutTheLopsided) {
+  const SynthesisResult even = expect_a_floor_at_the_median_leaves_out_those_under_it(
+      [](const GraspCandidate& c) { return c.grasp.scores.symmetry; }, [](SynthesisParams& p, double floor) { p.min_symmetry = floor; });
+  EXPECT_GT(even.asymmetric, 0u);
+  SynthesisParams beyond;
+  beyond.min_symmetry = 1.5;
+  EXPECT_THROW(synthesise(curved(box({0.06, 0.10, 0.15}, 0.005), 0.005), beyond), std::invalid_argument);
 }
 
 // With a reliability threshold, the candidates reaching it come first, the most stable on the

@@ -87,6 +87,10 @@ struct SynthesisParams {
   double weight_symmetry = 1;
   double weight_safety = 1;
   double weight_curvature = 1;
+  // S1 below this leaves a candidate out, whatever its total: the contacts' centre so far off the
+  // object's, or their angles so far from 120 degrees, that the object's weight turns in the hand
+  // when it is lifted. 0: off.
+  double min_symmetry = 0;
   // The object's centre for S1 and force closure; default the mean of the samples.
   std::optional<Eigen::Vector3d> object_centre;
   // Of the two approach directions perpendicular to the contacts' plane, the one closer to this
@@ -180,6 +184,7 @@ struct SynthesisResult {
   std::size_t near_edge = 0;     // surface samples not taken as contacts: nearer a region's boundary than edge_margin
   std::size_t too_low = 0;       // surface samples not taken as contacts: a finger touching them would reach into the table
   std::size_t hand_blocked = 0;  // candidates left out because the model is in the hand's way
+  std::size_t asymmetric = 0;    // candidates left out for an S1 below min_symmetry
   std::size_t not_force_closure = 0;  // candidates left out as not force closure (or too little epsilon) on the model
 };
 
