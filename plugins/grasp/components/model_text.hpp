@@ -1,5 +1,5 @@
 // How grasp.synthesis words a model in its messages: numbers, the root box, the faces of it the
-// model reaches, and why a model gives no surface to grasp.
+// model reaches, why a model gives no surface to grasp, and why its candidates give no grasp.
 #pragma once
 
 #include <cstdio>
@@ -11,6 +11,7 @@
 #include <fba/types/octree.hpp>
 
 #include "fba/grasp/model_surface.hpp"
+#include "fba/grasp/synthesis.hpp"
 
 namespace fba::grasp {
 
@@ -64,6 +65,50 @@ inline std::string empty_surface_reason(const fba::Octree& model, const ModelSur
   return "the model is empty after " + std::to_string(views) +
          " views: no occupied leaf to grasp (no target in the silhouettes, or the object outside the workspace, the carver's "
          "root box " + box_text(model.bounds) + ")";
+}
+
+inline double total_of(const GraspCandidate* c) { return c ? c->grasp.scores.total : 0.0; }
+
+// Which criteria held a candidate back: what a user tunes (weights, hand geometry) or learns
+// about the object.
+inline std::string criteria(const GraspCandidate& c) {
+  return " (S1 symmetry " + fixed(c.grasp.scores.symmetry) + ", S3 safety margin " + fixed(c.grasp.scores.safety_margin) +
+         ", S4 curvature " + fixed(c.grasp.scores.curvature) + ")";
+}
+
+// Why the last view's candidates (`r`; `best`: the best total of all) give no reliable grasp at
+// `threshold`: what removed them, or what held back the best one on resolved surface. `rims`:
+// contacts are resolved when two views' rims pin them (rim_deg).
+inline std::string no_reliable_grasp_reason(const SynthesisResult& r, int views, const GraspCandidate* best, double threshold,
+                                            bool rims) {
+  std::string reason = "no reliable grasp after " + std::to_string(views) + " views: ";
+  if (r.candidates.empty()) {  // what removed them, not a best total of nothing
+    if (r.below_table > 0 || r.hand_unfit > 0 || r.too_low > 0)
+      return reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
+             " would put the hand into the table (as a pinch too), " + std::to_string(r.hand_unfit) + " wider than the hand takes; " +
+             std::to_string(r.too_low) + " surface samples too low for a finger to touch above the table";
+    if (r.hand_blocked > 0 || r.asymmetric > 0 || r.not_force_closure > 0)
+      return reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) + " blocked by the model in the hand's way, " +
+             std::to_string(r.asymmetric) + " with S1 under min_symmetry, " + std::to_string(r.not_force_closure) +
+             " not force closure on the model";
+    return reason + "no candidate the hand can reach";
+  }
+  // The best on resolved surface: of the candidates whose contacts and surroundings are resolved,
+  // all below the threshold here (a reliable one the arm could not reach is not weighed).
+  const GraspCandidate* best_resolved = nullptr;
+  for (const auto& c : r.candidates)
+    if (!c.uncertain && c.grasp.scores.total < threshold && c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
+  if (!best_resolved) {
+    // Nothing to weigh against the threshold: the model never resolved where the candidates are.
+    return reason + "none of the " + std::to_string(r.candidates.size()) +
+           " candidates has its contacts and the surface around them resolved" + (rims ? " (pinned by two views' rims)" : "") +
+           ", nor a reliable one its contacts; the best, of total " + fixed(total_of(best)) + criteria(*best) +
+           ", touches a part of the model not yet resolved (threshold " + fixed(threshold) + ")";
+  }
+  reason += "best total " + fixed(total_of(best_resolved)) + criteria(*best_resolved) + " < threshold " + fixed(threshold);
+  if (total_of(best) > total_of(best_resolved))
+    reason += " (a candidate of total " + fixed(total_of(best)) + " touches a part of the model not yet resolved)";
+  return reason;
 }
 
 }  // namespace fba::grasp

@@ -55,6 +55,7 @@
 namespace {
 
 using fba::grasp::fixed;
+using fba::grasp::total_of;
 
 class GraspSynthesisFilter final : public fba::Component {
  public:
@@ -510,15 +511,6 @@ class GraspSynthesisFilter final : public fba::Component {
 #endif
   }
 
-  static double total_of(const fba::grasp::GraspCandidate* c) { return c ? c->grasp.scores.total : 0.0; }
-
-  // Which criteria held a candidate back: what a user tunes (weights, hand geometry) or learns
-  // about the object.
-  static std::string criteria(const fba::grasp::GraspCandidate& c) {
-    return " (S1 symmetry " + fixed(c.grasp.scores.symmetry) + ", S3 safety margin " + fixed(c.grasp.scores.safety_margin) +
-           ", S4 curvature " + fixed(c.grasp.scores.curvature) + ")";
-  }
-
   // Selects the best reliable candidate the arm reaches whose contacts and the surface around them
   // are resolved, in the candidates' order (best first); before the last view, only when it is at
   // least stability_share as stable as the best reachable candidate (`best_epsilon`), resolved or
@@ -574,42 +566,8 @@ class GraspSynthesisFilter final : public fba::Component {
       return fail("no grasp the arm can reach after " + std::to_string(views) + " views: none of the " +
                   std::to_string(r.candidates.size()) + " candidates is reachable by the arm; passed over: " + reach.passed.text() +
                   reach.unchecked_text());
-    fail(no_reliable_grasp_reason(r, reach, views, best));
-  }
-
-  // Why the last view gave no reliable grasp: what removed the candidates, or what held back the
-  // best one on resolved surface (`best`: the best of all), and the candidates the arm cannot reach.
-  std::string no_reliable_grasp_reason(const fba::grasp::SynthesisResult& r, const fba::grasp::ReachCheck& reach, int views,
-                                       const fba::grasp::GraspCandidate* best) const {
     const std::string passed = reach.passed.total > 0 ? "; passed over as out of the arm's reach: " + reach.passed.text() : "";
-    std::string reason = "no reliable grasp after " + std::to_string(views) + " views: ";
-    if (r.candidates.empty()) {  // what removed them, not a best total of nothing
-      if (r.below_table > 0 || r.hand_unfit > 0 || r.too_low > 0)
-        return reason + "no candidate the hand can reach: " + std::to_string(r.below_table) +
-               " would put the hand into the table (as a pinch too), " + std::to_string(r.hand_unfit) + " wider than the hand takes; " +
-               std::to_string(r.too_low) + " surface samples too low for a finger to touch above the table" + passed;
-      if (r.hand_blocked > 0 || r.asymmetric > 0 || r.not_force_closure > 0)
-        return reason + "no candidate the hand can take: " + std::to_string(r.hand_blocked) + " blocked by the model in the hand's way, " +
-               std::to_string(r.asymmetric) + " with S1 under min_symmetry, " + std::to_string(r.not_force_closure) +
-               " not force closure on the model" + passed;
-      return reason + "no candidate the hand can reach" + passed;
-    }
-    // The best on resolved surface: of the candidates whose contacts and surroundings are resolved,
-    // all below the threshold here (a reliable one the arm could not reach is not weighed).
-    const fba::grasp::GraspCandidate* best_resolved = nullptr;
-    for (const auto& c : r.candidates)
-      if (!c.uncertain && c.grasp.scores.total < threshold_ && c.grasp.scores.total > total_of(best_resolved)) best_resolved = &c;
-    if (!best_resolved) {
-      // Nothing to weigh against the threshold: the model never resolved where the candidates are.
-      return reason + "none of the " + std::to_string(r.candidates.size()) +
-             " candidates has its contacts and the surface around them resolved" + (rim_deg_ > 0 ? " (pinned by two views' rims)" : "") +
-             ", nor a reliable one its contacts; the best, of total " + fixed(total_of(best)) + criteria(*best) +
-             ", touches a part of the model not yet resolved (threshold " + fixed(threshold_) + ")" + passed;
-    }
-    reason += "best total " + fixed(total_of(best_resolved)) + criteria(*best_resolved) + " < threshold " + fixed(threshold_);
-    if (total_of(best) > total_of(best_resolved))
-      reason += " (a candidate of total " + fixed(total_of(best)) + " touches a part of the model not yet resolved)";
-    return reason + passed;
+    fail(fba::grasp::no_reliable_grasp_reason(r, views, best, threshold_, rim_deg_ > 0) + passed);
   }
 
   // Where more information would help: the unresolved regions of the best candidates, else every
