@@ -26,9 +26,8 @@ class SimCamera final : public fba::Component {
  public:
   static constexpr fba::OptionalIn<fba::Pose> kPose{"pose", "render from this camera pose (world_from_camera), one frame per pose"};
   static constexpr fba::Out<fba::Frame> kFrame{"frame", "the rendered image with its intrinsics and pose"};
-  static constexpr fba::Param<std::filesystem::path> kMesh{
-      "mesh", fba::required, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up"};
-  // The object's placement, the same parameters as sim.hand's (object_placement_params.hpp).
+  // The object and its placement, the same parameters as sim.hand's (object_placement_params.hpp).
+  static constexpr auto kMesh = fba::sim_hand::kObjectMesh;
   static constexpr auto kObjectX = fba::sim_hand::kObjectX;
   static constexpr auto kObjectY = fba::sim_hand::kObjectY;
   static constexpr auto kObjectYaw = fba::sim_hand::kObjectYaw;

@@ -1,7 +1,8 @@
-// The object's placement as parameters, declared once for sim.camera and sim.hand: a task gives
-// both the same values, and the camera renders the object where the hand grasps it.
+// The object and its placement as parameters, declared once for sim.camera and sim.hand: a task
+// gives both the same values, and the camera renders the object where the hand grasps it.
 #pragma once
 
+#include <filesystem>
 #include <string>
 
 #include <fba/component.hpp>
@@ -10,6 +11,8 @@
 
 namespace fba::sim_hand {
 
+inline constexpr Param<std::filesystem::path> kObjectMesh{
+    "mesh", required, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up; it rests on the table at z = 0"};
 inline constexpr auto kObjectX = Param<double>("object_x", 0.0, "the object's position on the table, metres").range(-1, 1);
 inline constexpr auto kObjectY = Param<double>("object_y", 0.0, "the object's position on the table, metres").range(-1, 1);
 inline constexpr auto kObjectYaw = Param<double>("object_yaw", 0.0, "the object's turn about z, degrees").range(-360, 360);

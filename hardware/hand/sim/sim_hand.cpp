@@ -48,9 +48,8 @@ class SimHand final : public fba::Component {
   // the world follows the trajectory, the hand the commands at their times on it.
   static constexpr auto kCommands = fba::hand::kCommands;
   static constexpr auto kTrajectory = fba::hand::kTrajectory;
-  static constexpr fba::Param<std::filesystem::path> kMesh{
-      "mesh", fba::required, "the object: any mesh assimp reads (OBJ, PLY, STL...), metres, z up; it rests on the table at z = 0"};
-  // The object's placement, the same parameters as sim.camera's (object_placement_params.hpp).
+  // The object and its placement, the same parameters as sim.camera's (object_placement_params.hpp).
+  static constexpr auto kMesh = fba::sim_hand::kObjectMesh;
   static constexpr auto kObjectX = fba::sim_hand::kObjectX;
   static constexpr auto kObjectY = fba::sim_hand::kObjectY;
   static constexpr auto kObjectYaw = fba::sim_hand::kObjectYaw;
