@@ -8,7 +8,8 @@
 
 namespace fba::detail {
 
-void Buffer::publish_size() {
+// Inlined: they run twice on every hop.
+[[gnu::always_inline]] inline void Buffer::publish_size() {
   const std::size_t n = policy == BufferPolicy::Latest ? (latest ? 1 : 0) : queue.size();
   // Sequentially consistent for the wake-up protocol (Graph::run_strand) between threads; one
   // thread running every node has no such race, and the fence was a fifth of its hop.
@@ -19,11 +20,33 @@ void Buffer::publish_size() {
   else
     size.store(n, std::memory_order_seq_cst);
   if (max_bytes > 0) bytes.store(queued_bytes, std::memory_order_seq_cst);  // read by full() only
-  peak.raise_to(n);
+}
+
+[[gnu::always_inline]] inline void Buffer::publish_growth() {
+  publish_size();
+  peak.raise_to(size.load(std::memory_order_relaxed));  // only a push can raise the peaks
   peak_bytes.raise_to(queued_bytes);
 }
 
 void Buffer::push(Packet&& p) {
+  if (tap || policy == BufferPolicy::DropOldest) return push_displacing(std::move(p));
+  BufferLock lock(*this);
+  ++pushed;
+  const std::size_t b = p.bytes();
+  if (policy == BufferPolicy::Latest) {
+    // A sample superseded before anyone read it goes back in `p`, which the caller destroys
+    // after the lock: no vector allocated on the path of a watched output's every sample.
+    if (latest) ++dropped;
+    std::swap(latest, p);
+    queued_bytes = b;
+  } else {
+    queue.push_back(std::move(p));
+    queued_bytes += b;
+  }
+  publish_growth();
+}
+
+void Buffer::push_displacing(Packet&& p) {
   std::vector<Packet> displaced;  // declared before the lock: destroyed after it is released
   BufferLock lock(*this);
   ++pushed;
@@ -36,30 +59,18 @@ void Buffer::push(Packet&& p) {
     return;
   }
   const std::size_t b = p.bytes();
-  switch (policy) {
-    case BufferPolicy::Latest:
-      // A sample superseded before anyone read it goes back in `p`, which the caller destroys
-      // after the lock: no vector allocated on the path of a watched output's every sample.
-      if (latest) ++dropped;
-      std::swap(latest, p);
-      queued_bytes = b;
-      break;
-    case BufferPolicy::DropOldest:
-      while (!queue.empty() && (queue.size() >= capacity || (max_bytes > 0 && queued_bytes + b > max_bytes))) {
-        queued_bytes -= queue.front().bytes();
-        displaced.push_back(queue.take_front());
-        ++dropped;
-      }
-      [[fallthrough]];
-    case BufferPolicy::Lossless:
-      queue.push_back(std::move(p));
-      queued_bytes += b;
-      break;
+  while (!queue.empty() && (queue.size() >= capacity || (max_bytes > 0 && queued_bytes + b > max_bytes))) {
+    queued_bytes -= queue.front().bytes();
+    displaced.push_back(queue.take_front());
+    ++dropped;
   }
-  publish_size();
+  queue.push_back(std::move(p));
+  queued_bytes += b;
+  publish_growth();
 }
 
-bool Buffer::take_head(Packet& out, bool& was_full) {
+// Inlined into pop: a call less on every hop.
+[[gnu::always_inline]] inline bool Buffer::take_head(Packet& out, bool& was_full) {
   was_full = false;
   if (policy == BufferPolicy::Latest) {
     if (!latest) return false;
@@ -68,7 +79,7 @@ bool Buffer::take_head(Packet& out, bool& was_full) {
   } else {
     if (queue.empty()) return false;
     was_full = full();
-    out = queue.take_front();
+    queue.pop_front_into(out);
   }
   queued_bytes -= out.bytes();
   publish_size();

@@ -91,7 +91,10 @@ struct Buffer {
 
  private:
   bool take_head(Packet& out, bool& was_full);  // under the lock
-  void publish_size();                          // under the lock
+  // A tap's or a drop_oldest buffer's push: what it displaces is destroyed after the lock.
+  [[gnu::noinline]] void push_displacing(Packet&& p);
+  void publish_size();    // under the lock
+  void publish_growth();  // publish_size and the peaks, after a push; under the lock
 };
 
 // A buffer's lock, taken unless one thread does every push and pop (Buffer::one_thread).

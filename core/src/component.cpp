@@ -25,6 +25,7 @@ void check_type(const detail::OutputState& s, const Packet& p) {
                            (p.type() ? p.type()->name : std::string("nothing")) + "'");
 }
 void deliver(detail::OutputState& s, Packet&& p) {
+  s.node->emitted_in_call.store(true, std::memory_order_relaxed);
   const std::size_t n = s.consumers.size();
   for (std::size_t i = 0; i < n; ++i) {
     detail::Buffer* b = s.consumers[i];

@@ -54,6 +54,7 @@ Graph::Graph(const TaskConfig& cfg, RunOptions opts) : config(cfg), options(std:
         out->consumers.push_back(b.get());
         out->type = c.type;
       }
+    if (b->gating) from->gating_outputs.push_back(b.get());
     InputState* in = input_of(to, c.to_port);
     // A feedback input closes like any other: a node in a cycle never sees the end of its
     // stream while a sample may still come round, and the run ends when the graph is idle.

@@ -36,6 +36,7 @@ std::string bounded_payload(std::string_view text) {
 
 Node::Node(Graph& g, const ComponentConfig& c)
     : graph(g), config(c), spec(c.type->spec), trigger(c.trigger), is_sensor(spec.kind() == Kind::Sensor),
+      timed(!spec.stage_names().empty()),
       dedicated(c.dedicated_thread || spec.is_blocking()) {
   library = c.type->library;
   for (const auto& ps : spec.inputs()) {
@@ -83,13 +84,14 @@ class ActiveScope {
   const char* call_;
 };
 
-// Runs f, catching everything; returns what it threw, worded for "component 'x' (type) ...".
+// Runs f, catching everything; returns what it threw, worded for "component 'x' (type) ...", or
+// nothing (an optional, not an empty string: no string made and destroyed on every call).
 // The exception's text may echo a parameter from the task file: its control bytes are escaped.
 template <class F>
-std::string catch_all(const char* call, F&& f) {
+std::optional<std::string> catch_all(const char* call, F&& f) {
   try {
     f();
-    return {};
+    return std::nullopt;
   } catch (const std::exception& e) {
     const std::string what = escape_controls(e.what());
     if (std::string_view(call) == "process()") return what;  // the common case keeps its short form
@@ -107,13 +109,13 @@ std::string Node::describe(const std::string& reason) const {
 }
 
 template <class F>
-std::string Node::guarded(const char* what, F&& f) {
+std::optional<std::string> Node::guarded(const char* what, F&& f) {
   ActiveScope active(this, what);
   // Release, not sequentially consistent (an exchange: a third of a light hop): the stop reads it
   // to name calls still running and to interrupt those in a call, and a call it misses as it starts
   // is not waiting on anything yet; blocking components are interrupted in any case.
   call.store(what, std::memory_order_release);
-  std::string error = catch_all(what, std::forward<F>(f));
+  std::optional<std::string> error = catch_all(what, std::forward<F>(f));
   call.store(nullptr, std::memory_order_release);
   return error;
 }
@@ -142,10 +144,10 @@ void Node::interrupt() {
   auto c = current_component();
   if (!c) return;
   ActiveScope active(this, "interrupt()");
-  const std::string error = catch_all("interrupt()", [&] { c->interrupt(); });
-  if (error.empty()) return;
-  logger->error("{}", describe(error));
-  graph.record_event(Event{config.name, "error", error, graph.now_ns()});
+  const auto error = catch_all("interrupt()", [&] { c->interrupt(); });
+  if (!error) return;
+  logger->error("{}", describe(*error));
+  graph.record_event(Event{config.name, "error", *error, graph.now_ns()});
 }
 
 SafeStateResult Node::safe_state() {
@@ -157,7 +159,7 @@ SafeStateResult Node::safe_state() {
     return r;
   }
   ActiveScope active(this, "safe_state()");
-  r.message = catch_all("safe_state()", [&] { c->safe_state(); });
+  r.message = catch_all("safe_state()", [&] { c->safe_state(); }).value_or("");
   r.status = r.message.empty() ? "reached" : "failed";
   safe_state_progress.store(r.message.empty() ? 2 : 3);
   if (r.message.empty())
@@ -167,16 +169,9 @@ SafeStateResult Node::safe_state() {
   return r;
 }
 
-std::uint64_t Node::samples_emitted() const {
-  std::uint64_t n = 0;
-  for (const auto& out : output_states) n += out->next_seq;
-  return n;
-}
-
-bool Node::outputs_have_room() const {
-  for (const auto& out : output_states)
-    for (const Buffer* b : out->consumers)
-      if (b->full()) return false;
+[[gnu::always_inline]] inline bool Node::outputs_have_room() const {  // inlined: ready() asks before every call
+  for (const Buffer* b : gating_outputs)
+    if (b->full()) return false;
   return true;
 }
 
@@ -217,25 +212,23 @@ bool Node::ready() const {
 }
 
 bool Node::take_inputs(std::uint64_t& taken) {
-  auto take = [this](std::size_t i) {
+  auto take = [this](std::size_t i) {  // sets the input's has_, for this invocation
     Buffer* b = input_states[i]->buffer;
     bool was_full = false;
     Input& in = inputs[i];
-    if (b && b->pop(in.current_, was_full)) {
-      in.has_ = true;
-      ++input_states[i]->received;
-      if (was_full && b->producer) graph.notify(b->producer);
-      return true;
-    }
-    return false;
+    in.has_ = b && b->pop(in.current_, was_full);
+    if (!in.has_) return false;
+    ++input_states[i]->received;
+    if (was_full && b->producer) graph.notify(b->producer);
+    return true;
   };
-  for (auto& in : inputs) in.has_ = false;
-
   taken = 0;
+  const std::size_t n = inputs.size();  // read once: the compiler cannot tell that a pop leaves it alone
   if (trigger.policy != TriggerPolicy::All) {
-    for (std::size_t i = 0; i < inputs.size(); ++i) taken += take(i) ? 1 : 0;
+    for (std::size_t i = 0; i < n; ++i) taken += take(i) ? 1 : 0;
     return taken > 0;
   }
+  for (auto& in : inputs) in.has_ = false;
   // All: every connected input has a sample with the same stamp; older unmatched heads go.
   for (;;) {
     std::int64_t newest = INT64_MIN;
@@ -255,7 +248,7 @@ bool Node::take_inputs(std::uint64_t& taken) {
     }
     if (matched) break;
   }
-  for (std::size_t i = 0; i < inputs.size(); ++i) taken += take(i) ? 1 : 0;
+  for (std::size_t i = 0; i < n; ++i) taken += take(i) ? 1 : 0;
   return true;
 }
 
@@ -267,8 +260,8 @@ void Node::invoke() {
 
   if (!is_sensor && !has_input && !tick && !eos_delivered && inputs_closed()) {
     eos_delivered = true;
-    const std::string error = guarded("end_of_stream()", [&] { component->end_of_stream(); });
-    if (!error.empty()) fail(error);
+    const auto error = guarded("end_of_stream()", [&] { component->end_of_stream(); });
+    if (error) fail(*error);
     on_finish();
     return;
   }
@@ -288,24 +281,23 @@ void Node::invoke() {
       break;
   }
   ++invocations;
-  const std::uint64_t emitted = samples_emitted();
+  emitted_in_call.store(false, std::memory_order_relaxed);
   // `component` is only replaced on this thread (a restart), so it is read here without the lock.
   // Only a type with stages has its calls timed (for the summary's time per stage): the two clock
   // reads and locks would be a tenth of a light component's hop.
-  const bool timed = !spec.stage_names().empty();
   if (timed) {
     std::lock_guard lock(stage_mutex);
     busy_since = std::chrono::steady_clock::now();
   }
-  const std::string error = guarded("process()", [&] { component->process(); });
+  const auto error = guarded("process()", [&] { component->process(); });
   if (timed) {
     std::lock_guard lock(stage_mutex);
     count_stage_time();
     busy_since.reset();
   }
-  if (!error.empty())
-    fail(error, taken);
-  else if (samples_emitted() != emitted)
+  if (error)
+    fail(*error, taken);
+  else if (emitted_in_call.load(std::memory_order_relaxed))
     ++productive_calls;
   if (finish_requested && !finished.load()) on_finish();
 }
@@ -355,10 +347,10 @@ void Node::fail(std::string_view what, std::uint64_t lost) {
       old = std::move(component);
     }
     old.reset();  // the old instance releases its devices before the new one opens them
-    const std::string error = catch_all("its constructor", [&] { construct(); });
-    if (!error.empty())
+    const auto error = catch_all("its constructor", [&] { construct(); });
+    if (error)
       graph.request_stop(Outcome::RuntimeError,
-                         "component '" + config.name + "' (" + spec.type_name() + ") could not be restarted: " + error);
+                         "component '" + config.name + "' (" + spec.type_name() + ") could not be restarted: " + *error);
     return;
   }
   std::string why = describe(reason);

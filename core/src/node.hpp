@@ -63,10 +63,10 @@ class Node {
   void emit_event(std::string_view name, std::string payload);
   void on_finish();  // marks finished and tells the consumers
   // Calls one of the component's methods, catching everything: the message of what it threw
-  // ("component 'x' (type) threw ... from process()"), or empty when it returned normally.
+  // ("component 'x' (type) threw ... from process()"), or nothing when it returned normally.
   // `call` names the method while it runs (for stuck-call and crash reports).
   template <class F>
-  std::string guarded(const char* call, F&& f);
+  std::optional<std::string> guarded(const char* call, F&& f);
   // The component, for calls from other threads than the node's (interrupt, safe_state): a
   // restart may replace it meanwhile, so the pointer is read under a lock and the object kept
   // alive by the reference.
@@ -82,6 +82,7 @@ class Node {
   const Spec& spec;
   Trigger trigger;
   bool is_sensor;
+  bool timed;  // its type has stages: its calls are timed for the summary's time per stage
   bool dedicated;  // runs on a thread of its own (blocking components, or thread: dedicated)
   std::size_t executor_slot = 0;  // the executor's index for it (its dedicated thread), so enqueue does not search
   bool periodic() const { return trigger.policy == TriggerPolicy::Periodic; }
@@ -89,6 +90,9 @@ class Node {
   std::shared_ptr<const Library> library;  // destroyed after the component
   std::vector<std::unique_ptr<InputState>> input_states;
   std::vector<std::unique_ptr<OutputState>> output_states;
+  // The connections out of it that hold it back when full (lossless, not feedback), in one list:
+  // ready() asks before every invocation.
+  std::vector<const Buffer*> gating_outputs;
   std::vector<Input> inputs;    // sized once: components keep references
   std::vector<Output> outputs;
   std::shared_ptr<spdlog::logger> logger;
@@ -116,6 +120,9 @@ class Node {
 
   Counter invocations, errors, restarts, lost_to_restarts;
   Counter productive_calls;  // invocations that emitted something (Graph::progress)
+  // Set by its outputs' sends, for productive_calls. Relaxed atomic: a plain store's cost, and no
+  // data race if a component emits from a thread of its own.
+  std::atomic<bool> emitted_in_call{false};
   std::atomic<std::int64_t> last_tick_ns{-1};  // for the stall warning: when the next tick is due
   PiMutex stage_mutex;  // components set their stage and report results from process()
   std::string stage;
@@ -132,7 +139,6 @@ class Node {
   bool inputs_closed() const;
   // False when an All trigger found no match; `taken` counts the samples taken, one per input at most.
   bool take_inputs(std::uint64_t& taken);
-  std::uint64_t samples_emitted() const;
   // `lost`: the input samples the failed call had taken, counted if the component restarts.
   void fail(std::string_view reason, std::uint64_t lost = 0);
 };
