@@ -9,7 +9,7 @@
 namespace fba::detail {
 
 // Inlined: they run twice on every hop.
-[[gnu::always_inline]] inline void Buffer::publish_size() {
+[[gnu::always_inline]] inline std::size_t Buffer::publish_size() {
   const std::size_t n = policy == BufferPolicy::Latest ? (latest ? 1 : 0) : queue.size();
   // Sequentially consistent for the wake-up protocol (Graph::run_strand) between threads; one
   // thread running every node has no such race, and the fence was a fifth of its hop.
@@ -20,11 +20,11 @@ namespace fba::detail {
   else
     size.store(n, std::memory_order_seq_cst);
   if (max_bytes > 0) bytes.store(queued_bytes, std::memory_order_seq_cst);  // read by full() only
+  return n;
 }
 
 [[gnu::always_inline]] inline void Buffer::publish_growth() {
-  publish_size();
-  peak.raise_to(size.load(std::memory_order_relaxed));  // only a push can raise the peaks
+  peak.raise_to(publish_size());  // only a push can raise the peaks
   peak_bytes.raise_to(queued_bytes);
 }
 

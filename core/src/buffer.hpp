@@ -93,7 +93,7 @@ struct Buffer {
   bool take_head(Packet& out, bool& was_full);  // under the lock
   // A tap's or a drop_oldest buffer's push: what it displaces is destroyed after the lock.
   [[gnu::noinline]] void push_displacing(Packet&& p);
-  void publish_size();    // under the lock
+  std::size_t publish_size();  // under the lock; returns the size it published
   void publish_growth();  // publish_size and the peaks, after a push; under the lock
 };
 
