@@ -46,23 +46,29 @@ endfunction()
 # belongs to no single module (shared helpers, the task files' graph tests, the broken-task corpus,
 # the fuzzer, the install test). Test code is compiled as below wherever it lives.
 #
-# fba_test_code(<target>): marks a target as test code. What the tests check (the core, plugins and
-# programs) is built as users build it; the tests' own code is optimised less in an optimised build,
-# because it is half of what CI compiles and runs little: -O1 (tests/tasks/cli_test.cpp: 8.8 s of
-# CPU at -O2, 6.6 s at -O1). Under the sanitizers (tools/dev.sh) the tests compile at -O0 but for
-# those whose own checks compute (fba_compute_target, whose -O2 comes after this -O1 and wins), and
-# the slowest tests carve smaller problems (FBA_TEST_SANITIZED).
-# Not -O0 in a GCC build: under GCC's ASan, Eigen's aligned_malloc adds its own header (its Memory.h
-# trusts malloc's alignment only without __SANITIZE_ADDRESS__) while KDL, built without ASan, frees
-# with free(); at -O0 a test binary's out-of-line aligned_malloc was exported and interposed KDL's,
-# and every arm test aborted with an ASan bad-free in ChainIkSolverPos_LMA. clang's sanitizer builds
-# export no such symbol from a test (nm -D), and the arm tests would abort if one did.
+# fba_test_code(<target> [COMPUTE]): marks a target as test code. What the tests check (the core, plugins
+# and programs) is built as users build it; the tests' own code is optimised less, because it is half
+# of what CI compiles and runs little. In an optimised build: -O0, or -O1 for a test whose own checks
+# compute (COMPUTE: Eigen in its files, loops over meshes). Under the sanitizers (tools/dev.sh) the
+# tests compile at -O0 too but for those that compute (fba_compute_target: its -O2), and the slowest
+# tests carve smaller problems (FBA_TEST_SANITIZED). (docs/results.md, "CI time", has the figures.)
+# Not -O0 in a GCC sanitizer build: under GCC's ASan, Eigen's aligned_malloc adds its own header (its
+# Memory.h trusts malloc's alignment only without __SANITIZE_ADDRESS__) while KDL, built without ASan,
+# frees with free(); at -O0 a test binary's out-of-line aligned_malloc was exported and interposed
+# KDL's, and every arm test aborted with an ASan bad-free in ChainIkSolverPos_LMA. clang's sanitizer
+# builds export no such symbol from a test (nm -D), and the arm tests would abort if one did.
 # The target joins fba_tests (fba_add_test_folders), which a sanitizer build builds alone.
 function(fba_test_code target)
+  cmake_parse_arguments(ARG "COMPUTE" "" "" ${ARGN})
   if(FBA_SANITIZE)
     target_compile_definitions(${target} PRIVATE FBA_TEST_SANITIZED=1)
-  else()
+    if(ARG_COMPUTE)
+      fba_compute_target(${target})
+    endif()
+  elseif(ARG_COMPUTE)
     target_compile_options(${target} PRIVATE $<$<CONFIG:Release,RelWithDebInfo,MinSizeRel>:-O1>)
+  else()
+    target_compile_options(${target} PRIVATE $<$<CONFIG:Release,RelWithDebInfo,MinSizeRel>:-O0>)
   endif()
   set_property(GLOBAL APPEND PROPERTY FBA_TEST_TARGETS ${target})
 endfunction()
@@ -73,7 +79,7 @@ endfunction()
 # GoogleTest's main and the build's paths (tests/support/build_paths.hpp; tests/ is on its include
 # path, so `#include "support/..."`), built after DEPENDS (the programs and plugins it runs), and
 # registered with CTest (fba_add_gtest: LABELS, TIMEOUT, COST). COMPUTE: its own checks compute, so
-# it is optimised in the sanitizer builds too (fba_compute_target).
+# it is optimised more (fba_test_code).
 function(fba_add_test target)
   cmake_parse_arguments(ARG "COMPUTE" "TIMEOUT;COST" "SOURCES;LIBRARIES;DEPENDS;LABELS" ${ARGN})
   if(NOT ARG_SOURCES)
@@ -84,10 +90,11 @@ function(fba_add_test target)
   if(ARG_DEPENDS)
     add_dependencies(${target} ${ARG_DEPENDS})
   endif()
-  fba_test_code(${target})
+  set(compute "")
   if(ARG_COMPUTE)
-    fba_compute_target(${target})
+    set(compute COMPUTE)
   endif()
+  fba_test_code(${target} ${compute})
   set(options LABELS ${ARG_LABELS})
   if(ARG_TIMEOUT)
     list(APPEND options TIMEOUT ${ARG_TIMEOUT})
