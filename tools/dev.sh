@@ -99,13 +99,13 @@ plain=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -
 build() { cmake --build "build/$1" --parallel "$jobs" "${@:2}"; }
 
 # behind <log> <command...>: runs the next stage's work (a sanitizer build, the fuzzer) while this
-# stage's tests run, at the lowest priority, so that it takes mostly what the tests leave idle (the
-# hardware tests wait on timeouts, the last binary runs alone). Its output goes to
-# <log>, which wait_behind prints. It runs in a session of its own, so that a failing stage stops
-# it and its children. A new session is a new scheduling group where the kernel groups by session
-# (sched_autogroup, on in Debian's kernels), and a nice value ranks a process only within its group:
-# so the group is niced too (/proc/self/autogroup), or the work behind takes half the cores from
-# the tests whatever its nice value (docs/results.md, "CI time").
+# stage's build and tests run, at the lowest priority, so that it takes mostly what they leave idle
+# (a target waiting on the one it links, the hardware tests waiting on timeouts, the last binary
+# running alone). Its output goes to <log>, which wait_behind prints. It runs in a session of its
+# own, so that a failing stage stops it and its children. A new session is a new scheduling group
+# where the kernel groups by session (sched_autogroup, on in Debian's kernels), and a nice value
+# ranks a process only within its group: so the group is niced too (/proc/self/autogroup), or the
+# work behind takes half the cores from the tests whatever its nice value (docs/results.md, "CI time").
 behind_pid=""
 behind() {
   local log=$1
@@ -164,18 +164,18 @@ case "$cmd" in
   test)
     install_packages
     use_ccache
-    # Each sanitizer build starts behind the stage before's tests (build_behind), and the fuzzer
-    # behind the TSan tests, so a stage's time in the log holds the rest of its own work and its
-    # tests; the fuzzing stage is what its exploration outlasts them by.
+    # The ASan build starts behind the plain build (build_behind), the TSan build behind the ASan
+    # tests and the fuzzer behind the TSan tests, so a stage's time in the log holds the rest of its
+    # own work and its tests; the fuzzing stage is what its exploration outlasts them by.
     stage "plain build and tests"
     configure release "${plain[@]}"
-    build release
     # The sanitizer builds compile only what their tests run (fba_tests: every test target, cmake/FbaTests.cmake,
     # with fba-run, fba-evaluate and the plugins as dependencies). Their vision tests carve smaller
     # problems than the plain build's (FBA_TEST_SANITIZED), which keeps the full-size targets.
     # The task loader's fuzzer is built here too; its seeds replay among the tests (label fuzz).
     configure asan "${sanitized[@]}" -DFBA_SANITIZE=address,undefined -DFBA_BUILD_FUZZERS=ON -DFBA_BUILD_BENCHMARKS=OFF
     build_behind asan --target fba_tests
+    build release
     run_tests release
     # The runtime's hop and loader against plain code in the same run, and those ratios against the
     # committed ones: a change that makes them slower is named here, the day it lands (not failed:
