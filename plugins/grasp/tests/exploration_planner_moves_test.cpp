@@ -45,7 +45,7 @@ fba::testing::Params band_of_views() {
 // The object: a 6 x 6 x 10 cm block on the table; and a request for its +x face, about a model of
 // three views.
 const Sdf kObject = box_sdf({0, 0, 0.05}, {0.06, 0.06, 0.10});
-fba::RegionsOfInterest plus_x_face() {
+fba::RegionsOfInterest block_plus_x_face() {
   fba::RegionsOfInterest r{{Eigen::AlignedBox3d(Eigen::Vector3d(0.025, -0.02, 0.02), Eigen::Vector3d(0.035, 0.02, 0.08))}};
   r.model_views = 3;
   return r;
@@ -106,7 +106,7 @@ Answer ask(Robot& robot, const fba::Octree& model) {
   a.start = a.initial.back();
   h.push<fba::JointState>("joint_state", state_of(robot.to_camera, a.start));
   h.push<fba::Octree>("octree", model);
-  h.push<fba::RegionsOfInterest>("regions", plus_x_face());
+  h.push<fba::RegionsOfInterest>("regions", block_plus_x_face());
   h.run();
   EXPECT_EQ(h.values<fba::Pose>("target").size(), 0u) << "a view went out as a pose";
   const auto sent = h.values<fba::JointState>("joint_target");
