@@ -5,7 +5,7 @@ if(FBA_SANITIZE)
   add_link_options(${_fba_san_flags})
   # clang compiles in ASan's stack-use-after-return checks, which its runtime leaves off unless
   # ASAN_OPTIONS asks (detect_stack_use_after_return, false in clang 14's), and CI does not ask:
-  # unused code, a tenth of the compile time of the runtime's files.
+  # code that never runs, compiled for nothing (docs/results.md, "CI time").
   if(FBA_SANITIZE MATCHES "address" AND CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
     add_compile_options(-fsanitize-address-use-after-return=never)
   endif()
