@@ -64,6 +64,19 @@ constexpr double kArmKd = 2 * kArmBandwidth;
 // The closing slides hold the commanded opening with a proportional law (N/m; the joints' damping
 // damps it), within the finger force.
 constexpr double kHoldGain = 2000;
+// A closing finger stops where it meets the object, as the Robotiq's do (its manual, section 4: the
+// force request limits the motor's current, and a finger that reaches it stops and reports an
+// object): its slide has stopped once it moves slower than kStopped (m/s), from kStartup (s) after
+// the close on (a finger that meets nothing closes at 0.2 m/s by then). From then it keeps its
+// place as a stalled drive does, pressing with the force it stopped at and stiffly (kStopStiffness,
+// N/m) against a push, up to the hand's largest grip force (kStallForce, N at a finger's pad; the
+// thumb's twice). So an object's weight along the squeeze is met by the stopped fingers, not by
+// their drives' force alone, which would let the object and the fingers slide together across the
+// hand.
+constexpr double kStartup = 0.05;
+constexpr double kStopped = 0.002;
+constexpr double kStopStiffness = 20000;
+constexpr double kStallForce = 60;
 // The object settles on the table before the trajectory starts; the way in is then checked
 // against it where it rests.
 constexpr double kSettle_s = 0.2;
@@ -563,6 +576,9 @@ struct LiftTest::Impl::Run {
   std::vector<mjtNum> acc, torque;  // the arm's computed torque, per degree of freedom
   Eigen::Vector3d start;            // the object's centre, settled on the table
   bool lost = false;                // the object went out of the hand, or the simulation went wrong
+  double close_started = 0;  // the close's time on the simulation's clock
+  // Where each closing slide stopped on the object (NaN until it has).
+  std::array<double, 3> stopped_at{NAN, NAN, NAN};
   GraspExecution result;
 
   // Reads the plan: the close's time, the stretches after it, the verdict's end, and the hand's
@@ -631,6 +647,7 @@ struct LiftTest::Impl::Run {
         open_travel = s.travel_for(c.opening / 2);
         spread = s.spread_for(c);
       } else {
+        if (!closing) close_started = s.d->time;
         closing = true;
         force = c.force > 0 ? c.force : s.params.finger_force;
       }
@@ -655,8 +672,9 @@ struct LiftTest::Impl::Run {
     }
   }
 
-  // The hand in its state: the closing slides hold the opening or push with the force; in scissor
-  // mode the thumb stays open and the two fingers close on each other with it.
+  // The hand in its state: the closing slides hold the opening, or push with the force until they
+  // stop on the object and then keep their place there; in scissor mode the thumb stays open and
+  // the two fingers close on each other with it.
   void drive_hand() {
     mjModel* m = s.m;
     mjData* d = s.d;
@@ -665,8 +683,16 @@ struct LiftTest::Impl::Run {
       const auto& finger = s.fingers[f];
       const double limit = force * finger.gear;
       const bool pushes = closing && !scissor;
-      d->ctrl[finger.close_actuator] =
-          pushes ? limit : std::clamp(kHoldGain * (open_travel - d->qpos[m->jnt_qposadr[finger.close_joint]]), -limit, limit);
+      const double q = d->qpos[m->jnt_qposadr[finger.close_joint]];
+      const double v = d->qvel[m->jnt_dofadr[finger.close_joint]];
+      if (!pushes)
+        stopped_at[f] = NAN;
+      else if (std::isnan(stopped_at[f]) && d->time - close_started >= kStartup && v < kStopped)
+        stopped_at[f] = q;
+      const double stall = kStallForce * finger.gear;
+      d->ctrl[finger.close_actuator] = !pushes                     ? std::clamp(kHoldGain * (open_travel - q), -limit, limit)
+                                       : std::isnan(stopped_at[f]) ? limit
+                                                                   : std::clamp(limit + kStopStiffness * (stopped_at[f] - q), -stall, stall);
       if (finger.spread_actuator >= 0) {
         const double half = (closing && scissor ? 0.0 : std::clamp(spread, s.spread_min, s.spread_max) / 2);
         d->ctrl[finger.spread_actuator] = f == 1 ? half : -half;

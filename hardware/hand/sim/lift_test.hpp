@@ -7,7 +7,9 @@
 // The arm follows a timed joint trajectory (reach planning's, motion::ReachPlanner) with
 // position-controlled joints: a computed-torque law (the mass matrix times a PD of the error, plus
 // gravity and Coriolis) within the URDF's effort limits. The hand follows its commands at their
-// times on the trajectory: open to an opening and spread, or close under force control. The
+// times on the trajectory: open to an opening and spread, or close: each finger pushes with the
+// force until it stops on the object, then keeps its place there (as the Robotiq's fingers stop
+// at their current limit), so that it holds against a push as a stalled drive does. The
 // verdict: any contact of the arm, the camera or the hand with the table or the object before the
 // fingers close is a collision and the failure; after the close each finger must touch the object
 // near its planned contact; "held" means the object rose with the hand and moved no more than the

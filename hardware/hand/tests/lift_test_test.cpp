@@ -163,6 +163,28 @@ TEST(LiftTest, ASuperquadricOnItsFlatBaseStaysWhereItWasPutAndTheGraspPlannedOnI
   EXPECT_TRUE(r.held) << r.reason;
 }
 
+// A ball 11 cm across (seed 31's sphere-09 in its first rest) taken with the hand tilted 32 degrees
+// from straight down, as the loop selected it there: the weight has a share along the squeeze.
+// The fingers stop where they meet the ball and keep their place, as the Robotiq's do, so the ball
+// stays put in the hand; fingers that only pushed with their force would let the ball and the
+// three of them slide together across the hand, 3 cm within a second of the hold.
+TEST(LiftTest, ABallTakenWithTheSqueezeSlopingStaysPutBetweenTheStoppedFingers) {
+  fba::TriangleMesh mesh = fba::geometry::make_family_object(fba::geometry::ObjectFamily::sphere, 31, 9).mesh;
+  const Eigen::Matrix3f rest = Eigen::Quaternionf(0.613425f, -0.669501f, 0.4189f, 0.0f).normalized().toRotationMatrix();
+  for (auto& v : mesh.vertices) v = rest * v;
+  LiftTest test(mesh, {0.008, -0.009, 224 * kDegree});
+  fba::Grasp g;
+  g.contacts = {fba::GraspContact{{-0.041915, -0.026799, 0.038636}, {0.938034, 0.285448, 0.196500}},
+                fba::GraspContact{{0.040107, 0.035779, 0.059160}, {-0.550935, -0.832249, -0.061901}},
+                fba::GraspContact{{0.052304, -0.022238, 0.085326}, {-0.848236, 0.175879, -0.499562}}};
+  g.approach = Eigen::Vector3d(0.435952, -0.292226, -0.851205);
+  g.aperture = 0.120108;
+  g.spread = 0.064803;
+  const auto r = test.run(g);
+  EXPECT_TRUE(r.held) << r.reason;
+  EXPECT_LT(r.slip_m, 0.001);
+}
+
 // A plate 1.3 cm tall pinched 6.5 mm above the table, the contacts 3 mm short of the fingertips'
 // flat ends (each end 3.5 mm above the table): lifted and held. A fingertip rounded as the rest of
 // the finger (1 cm) would meet the plate's sides no lower than 13 mm above the table, on its edge.
