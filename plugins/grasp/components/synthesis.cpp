@@ -132,8 +132,8 @@ class GraspSynthesisFilter final : public fba::Component {
   static constexpr auto kLevelSqueezeDeg = fba::Param<double>(
       "level_squeeze_deg", 10.0,
       "degrees: a reliable candidate ranks with the level ones (level_tilt_deg) only if its squeeze axis (the thumb to the "
-      "fingers) is also within this angle of level: the fingers squeeze under force control, weight along the squeeze is met "
-      "by nothing but their drives, and the object slides in the hand; 0: no preference").range(0, 90);
+      "fingers) is also within this angle of level, so that little of the object's weight bears along the squeeze, on the "
+      "fingers' hold rather than across their pads; 0: no preference").range(0, 90);
   static constexpr auto kNormalErrorDeg = fba::Param<double>(
       "normal_error_deg", 0.0,
       "degrees the model's normals may be off the object's: a candidate must stay force closure with each normal turned this far "

@@ -138,9 +138,9 @@ struct SynthesisParams {
   double level_tilt_deg = 0;
   // With rank_total: a reliable candidate counts as level only when its squeeze axis (the thumb to
   // the fingers' midpoint, across the approach) also lies within this angle (degrees) of
-  // perpendicular to preferred_approach. The fingers squeeze under force control: weight along
-  // that axis is met by nothing but their drives, and the object slides in the hand
-  // (docs/grasp-loop.md, "The hand's tilt"). 0: no preference.
+  // perpendicular to preferred_approach, so that little of the weight bears along the squeeze, on
+  // the fingers' hold rather than across their pads (docs/grasp-loop.md, "The hand's tilt").
+  // 0: no preference.
   double level_squeeze_deg = 0;
   // Candidates checked for force closure on the model, best total first, among those the hand can
   // take (path_tolerance, checked on every candidate in turn): each check is a 6-D hull.
