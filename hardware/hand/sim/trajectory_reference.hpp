@@ -1,4 +1,5 @@
-// The lift test's reference for the arm's joints: a planned trajectory sampled at any time.
+// The lift test's reference for the arm's joints: a planned trajectory sampled at any time, and the
+// stretches of it after the fingers close.
 #pragma once
 
 #include <cstddef>
@@ -58,5 +59,26 @@ class Reference {
   std::vector<Eigen::VectorXd> q_, v_;
   std::size_t cursor_ = 0;
 };
+
+// The stretches of the plan after the fingers close: the hand's wait, the lift (the first motion),
+// the hold (the still stretch after it); each an end time on the trajectory.
+struct Phases {
+  double lift_start = 0, lift_end = 0, hold_end = 0;
+};
+
+inline Phases phases_after(const Reference& r, double close) {
+  auto moving = [&](std::size_t i) { return (r.position(i + 1) - r.position(i)).cwiseAbs().maxCoeff() > 1e-12; };
+  Phases p;
+  p.lift_start = p.lift_end = p.hold_end = r.end();
+  std::size_t i = 0;
+  while (i + 1 < r.size() && (r.time(i) < close - 1e-9 || !moving(i))) ++i;
+  if (i + 1 >= r.size()) return p;
+  p.lift_start = r.time(i);
+  while (i + 1 < r.size() && moving(i)) ++i;
+  p.lift_end = r.time(i);
+  while (i + 1 < r.size() && !moving(i)) ++i;
+  p.hold_end = r.time(i);
+  return p;
+}
 
 }  // namespace fba::sim_hand
