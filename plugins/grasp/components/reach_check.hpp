@@ -104,21 +104,41 @@ struct ReachCheck {
   }
   bool passed_over(std::size_t i) const { return active && state[i] == 0; }
   // The whole plan for a candidate about to be selected (the path search is too costly for every
-  // candidate): one whose path the planner does not find is passed over like the others. The
-  // start (the arm's hand in the model where it stands, and no way to back out) is the same for
-  // every candidate, so no other would do better: the candidate is selected all the same, and said.
-  bool plannable(std::size_t i) {
-    if (!active || !check_plan) return true;
+  // candidate): one whose path the planner does not find is passed over like the others. One the
+  // arm cannot start from where it stands (its hand, opened for the candidate's pregrasp, in the
+  // model with no way to back out, or in the table or the arm itself) is `start`: the opening is
+  // the candidate's, so the caller tries the ones after it, and takes the first such (first_start)
+  // all the same only when none of them starts either (start_anyway), saying so.
+  enum class Plan { ok, passed_over, start };
+  Plan plannable(std::size_t i) {
+    if (!active || !check_plan) return Plan::ok;
     const Verdict v = check_plan(i);
-    if (v.ok || v.start) {
-      start = v.ok ? nlohmann::json("clear") : nlohmann::json{{"refusal", v.refusal}, {"reason", v.why}};
-      if (!v.ok) log->warn("the arm cannot start the selected grasp's reach from where it stands ({}): {}", v.refusal, v.why);
-      return true;
+    if (v.ok) {
+      start = "clear";
+      return Plan::ok;
+    }
+    if (v.start) {
+      log->debug("candidate {}: the arm cannot start its reach from where it stands, {}: {}", i, v.refusal, v.why);
+      if (!first_start) first_start = FirstStart{i, {{"refusal", v.refusal}, {"reason", v.why}}};
+      return Plan::start;
     }
     log->debug("candidate {}: passed over at selection, {}: {}", i, v.refusal, v.why);
     state[i] = 0;
     passed.add(v.refusal, v.why);
-    return false;
+    return Plan::passed_over;
+  }
+  struct FirstStart {
+    std::size_t candidate;
+    nlohmann::json refusal;
+  };
+  std::optional<FirstStart> first_start;  // since the selection began
+  // The first candidate the arm could not start for, taken all the same: its refusal is the result's
+  // `start`.
+  std::size_t start_anyway() {
+    start = first_start->refusal;
+    log->warn("the arm cannot start the selected grasp's reach from where it stands ({}): {}", first_start->refusal["refusal"].get<std::string>(),
+              first_start->refusal["reason"].get<std::string>());
+    return first_start->candidate;
   }
   std::string unchecked_text() const {
     return unchecked == 0 ? "" : "; " + std::to_string(unchecked) + " not checked (reach_checks: " + std::to_string(budget) + ")";

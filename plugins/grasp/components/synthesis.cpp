@@ -516,16 +516,8 @@ class GraspSynthesisFilter final : public fba::Component {
   // least stability_share as stable as the best reachable candidate (`best_epsilon`), resolved or
   // not: views may still resolve that one. Returns whether it selected one.
   bool select_on_resolved_surface(const fba::grasp::SynthesisResult& r, fba::grasp::ReachCheck& reach, int views, double best_epsilon) {
-    for (std::size_t i = 0; i < r.candidates.size(); ++i) {  // best first
+    auto take = [&](std::size_t i) {
       const auto& c = r.candidates[i];
-      if (c.uncertain || c.grasp.scores.total < threshold_ || !reach.reachable(i)) continue;
-      if (views < max_views_ && c.model_epsilon < stability_share_ * best_epsilon) {
-        ctx_.log().info("not selected yet: the most stable reliable candidate on resolved surface has epsilon {:.4f} on the "
-                        "model, below {:.2f} of the best reliable candidate's {:.4f}, whose surface is not all resolved",
-                        c.model_epsilon, stability_share_, best_epsilon);
-        return false;  // the reliable ones after it are less stable still
-      }
-      if (!reach.plannable(i)) continue;
       ctx_.log().info("selected: total {:.3f} (S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model about its centre "
                       "({:.3f}, {:.3f}, {:.3f})",
                       c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
@@ -533,25 +525,42 @@ class GraspSynthesisFilter final : public fba::Component {
       reach.selected = i;
       select(c.grasp, c.model_epsilon, views, "surface");
       return true;
+    };
+    reach.first_start.reset();
+    for (std::size_t i = 0; i < r.candidates.size(); ++i) {  // best first
+      const auto& c = r.candidates[i];
+      if (c.uncertain || c.grasp.scores.total < threshold_ || !reach.reachable(i)) continue;
+      if (views < max_views_ && c.model_epsilon < stability_share_ * best_epsilon) {
+        if (reach.first_start) break;  // a more stable one the arm cannot start for: taken below
+        ctx_.log().info("not selected yet: the most stable reliable candidate on resolved surface has epsilon {:.4f} on the "
+                        "model, below {:.2f} of the best reliable candidate's {:.4f}, whose surface is not all resolved",
+                        c.model_epsilon, stability_share_, best_epsilon);
+        return false;  // the reliable ones after it are less stable still
+      }
+      if (reach.plannable(i) == fba::grasp::ReachCheck::Plan::ok) return take(i);
     }
-    return false;
+    return reach.first_start && take(reach.start_anyway());
   }
 
   // Selects the best reliable candidate the arm reaches whose contacts are resolved (pinned by two
   // views, with rim_deg), the surface around them not all resolved. Returns whether it selected one.
   bool select_on_resolved_contacts(const fba::grasp::SynthesisResult& r, fba::grasp::ReachCheck& reach, int views) {
+    auto take = [&](std::size_t i) {
+      const auto& c = r.candidates[i];
+      ctx_.log().info("selected after {} views, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
+                      "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
+                      views, c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
+                      c.model_epsilon);
+      reach.selected = i;
+      select(c.grasp, c.model_epsilon, views, "contacts");
+      return true;
+    };
+    reach.first_start.reset();
     for (std::size_t i = 0; i < r.candidates.size(); ++i)
-      if (const auto& c = r.candidates[i];
-          !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i) && reach.plannable(i)) {
-        ctx_.log().info("selected after {} views, on resolved contacts whose surroundings are not all resolved: total {:.3f} "
-                        "(S1 {:.3f}, S3 {:.3f}, S4 {:.3f}), epsilon {:.4f} on the model",
-                        views, c.grasp.scores.total, c.grasp.scores.symmetry, c.grasp.scores.safety_margin, c.grasp.scores.curvature,
-                        c.model_epsilon);
-        reach.selected = i;
-        select(c.grasp, c.model_epsilon, views, "contacts");
-        return true;
-      }
-    return false;
+      if (const auto& c = r.candidates[i]; !c.contacts_uncertain && c.grasp.scores.total >= threshold_ && reach.reachable(i) &&
+                                           reach.plannable(i) == fba::grasp::ReachCheck::Plan::ok)
+        return take(i);
+    return reach.first_start && take(reach.start_anyway());
   }
 
   // The last view, and no candidate selected on resolved surface: settle for a reliable candidate

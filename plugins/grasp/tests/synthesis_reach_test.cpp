@@ -159,6 +159,31 @@ TEST(GraspSynthesisReach, AStartInTheModelIsCheckedForTheGraspSelectedNotHeldAga
   EXPECT_NE(report["start"]["reason"].get<std::string>().find(" touches the model at ("), std::string::npos) << report;
 }
 
+// Where the arm stands the open hand's fingers reach into a box 20 cm tall, and it may not back
+// out (max_backout 0): the best candidate, across the box's 6 cm, opens the hand too little to
+// clear it, but one across its 9 cm opens it wider, around the box, and the arm starts for that
+// one. A refusal at the start is the candidate's, not every candidate's: synthesis
+// selects the one the arm starts for, and the planner plans it.
+TEST(GraspSynthesisReach, ACandidateTheArmCannotStartForIsPassedOverForOneWhoseOpenHandClears) {
+  const std::vector<double> box = reach::standing({0.06, 0.09, 0.20}, -0.03);
+  const reach::Outcome o = reach::synthesise(box, home(), "table_z: [0.001], max_backout: 0");
+  ASSERT_EQ(o.grasps.size(), 1u) << o.run.reason;
+  fba::motion::ReachParams stuck;
+  stuck.max_backout = 0;
+  const fba::motion::ReachPlanner planner(fba::motion::test::arm_urdf(), stuck);
+  const fba::Octree model = reach::box_model_of(box);
+  ASSERT_EQ(o.candidates.size(), 1u);
+  const auto& first = o.candidates[0].candidates.front();  // the best candidate, reliable and reachable but for the start
+  ASSERT_TRUE(first.reliable && !first.passed_over);
+  EXPECT_FALSE(same_contacts(first.grasp, o.grasps[0]));
+  const fba::motion::ReachPlan best = planner.plan(first.grasp, model, home());
+  ASSERT_EQ(best.refusal, fba::motion::Refusal::Start) << best.why;
+  const fba::motion::ReachPlan selected = planner.plan(o.grasps[0], model, home());
+  EXPECT_TRUE(selected.ok) << selected.why;
+  EXPECT_GT(selected.opening, best.opening);
+  EXPECT_EQ(nlohmann::json::parse(o.result("reach"))["start"], "clear");
+}
+
 // Without a joint state (the input not wired, or wired with none arrived yet) nothing changes: the
 // same grasp as before, and no reach result.
 TEST(GraspSynthesisReach, WithoutAJointStateTheSameGraspIsSelectedAsBefore) {
