@@ -161,8 +161,9 @@ class GraspSynthesisFilter final : public fba::Component {
       "the arm's joints (the newest is used): once one has arrived, a candidate the arm cannot reach is passed over (its pregrasp "
       "has no IK solution near these joints, or the arm there, the approach or the lift collides: motion.reach_planner's "
       "reachable(), with the reach parameters below, which the planner shares). Best candidates first, until one is reachable. "
-      "Whether the arm can start from where it stands (its hand clear of the model, or backed out of it) is checked for the one "
-      "selected and reported (result 'reach', 'start'), not held against the candidates: no grasp clears a start"};
+      "Whether the arm can start from where it stands (its hand, opened for the candidate's pregrasp, clear of the table, the arm "
+      "and the model, or backed out of the model) is checked for the one about to be selected: one it cannot start for gives way "
+      "to the next it can, and is selected only when none can, the result ('reach', 'start') saying so"};
   static constexpr fba::EventOut kUnreachable{
       "unreachable",
       "no candidate on the model is reachable by the arm; synthesis asks for views as when none is reliable. "

@@ -138,10 +138,10 @@ TEST(GraspSynthesisReach, WhenNoCandidateIsReachableItSaysSoAndAsksForViews) {
   EXPECT_EQ(last.events("unreachable").size(), 1u);
 }
 
-// At sim.arm's initial pose the open hand's fingers stand in a tall box. Where the arm starts is
-// not held against the candidates (no grasp clears it): it backs out of the box, or, when it may
-// not (max_backout 0), the grasp is selected all the same and the result says the start is refused.
-TEST(GraspSynthesisReach, AStartInTheModelIsCheckedForTheGraspSelectedNotHeldAgainstTheCandidates) {
+// At sim.arm's initial pose the open hand's fingers stand in a tall box: the arm backs out of the
+// box, or, when it may not (max_backout 0), no candidate the arm reaches opens its hand around the
+// box, and the best is selected all the same, the result saying the start is refused.
+TEST(GraspSynthesisReach, AStartInTheModelThatNoCandidateClearsIsReportedForTheGraspSelected) {
   const std::vector<double> tall = reach::standing({0.06, 0.12, 0.20});
   const std::string table = "table_z: [0.001]";
   const reach::Outcome backs_out = reach::synthesise(tall, home(), table);
