@@ -12,8 +12,8 @@ option(FBA_TEST_EACH_CASE "Register each GoogleTest case as its own CTest test (
 # GoogleTest binary with CTest, with its labels (ctest -L) and, per case, its timeout (a binary takes
 # ctest's --timeout). COST (roughly its seconds under ASan), for a binary that runs long (tens of
 # seconds or more) and is one CTest test (FBA_TEST_EACH_CASE=OFF, as in CI): ctest starts the
-# costliest first, so that the longest does not start last and run alone while the other cores idle. ctest orders by the times it
-# recorded itself, but a clean checkout (CI's) has none.
+# costliest first, so that the longest does not start last and run alone while the other cores
+# idle. ctest orders by the times it recorded itself, but a clean checkout (CI's) has none.
 function(fba_add_gtest target)
   cmake_parse_arguments(ARG "" "TIMEOUT;COST" "LABELS" ${ARGN})
   if(NOT ARG_LABELS)

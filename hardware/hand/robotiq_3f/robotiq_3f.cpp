@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "grip_force.hpp"
 #include "gripper.hpp"
 #include "hand_ports.hpp"
 #include "launcher.hpp"
@@ -63,10 +64,6 @@ struct Plan {
   int force = 150;           // 0..255
   std::vector<int> axes;     // the axes whose contact makes the grasp: A, B, C, or the scissor alone
 };
-
-// The force register (0..255) over the gripper's range, 15 N at 0 to 60 N at 255 (the manual's
-// minimum and maximum; the relation is taken as linear).
-constexpr double kMinForce = 15.0, kMaxForce = 60.0;
 
 const char* action_name(fba::HandCommand::Action a) { return a == fba::HandCommand::Action::Close ? "close" : "open"; }
 
@@ -269,10 +266,10 @@ class Robotiq3f final : public fba::Component {
     const bool close = c.action == fba::HandCommand::Action::Close;
     int force = ctx_(kForce);
     if (close) {
-      force = std::clamp(static_cast<int>(std::lround(255.0 * (c.force - kMinForce) / (kMaxForce - kMinForce))), 0, 255);
-      if (!(c.force >= kMinForce && c.force <= kMaxForce))
+      force = std::clamp(static_cast<int>(std::lround(255.0 * (c.force - rq::kMinForce) / (rq::kMaxForce - rq::kMinForce))), 0, 255);
+      if (!(c.force >= rq::kMinForce && c.force <= rq::kMaxForce))
         ctx_.log().warn("{}: a close with {} N: the gripper pushes with {} to {} N, so with {} N", gripper_->name(),
-                        c.force, kMinForce, kMaxForce, force == 0 ? kMinForce : kMaxForce);
+                        c.force, rq::kMinForce, rq::kMaxForce, force == 0 ? rq::kMinForce : rq::kMaxForce);
     }
     const Plan plan = plan_for(c.opening, c.spread, mode_of(c.mode), force, "hand command (" + what + ")");
     change_mode(plan);

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <mujoco/mujoco.h>
 
+#include "../robotiq_3f/grip_force.hpp"
 #include "arm_model.hpp"
 #include "fba/geometry/box_decomposition.hpp"
 #include "fba/geometry/convex_hull.hpp"
@@ -67,17 +68,16 @@ constexpr double kArmKd = 2 * kArmBandwidth;
 constexpr double kHoldGain = 2000;
 // A closing finger stops where it meets the object, as the Robotiq's do (its manual, section 4: the
 // force request limits the motor's current, and a finger that reaches it stops and reports an
-// object): its slide has stopped once it moves slower than kStopped (m/s), from kStartup (s) after
-// the close on (a finger that meets nothing closes at 0.2 m/s by then). From then it keeps its
-// place as a stalled drive does, pressing with the force it stopped at and stiffly (kStopStiffness,
-// N/m) against a push, up to the hand's largest grip force (kStallForce, N at a finger's pad; the
-// thumb's twice). So an object's weight along the squeeze is met by the stopped fingers, not by
-// their drives' force alone, which would let the object and the fingers slide together across the
-// hand.
+// object): its slide has stopped once it moves slower than kStoppedSpeed (m/s), from kStartup (s)
+// after the close on (a finger that meets nothing closes at 0.2 m/s by then). From then it keeps
+// its place as a stalled drive does, pressing with the force it stopped at and stiffly
+// (kStopStiffness, N/m) against a push, up to the hand's largest grip force (robotiq::kMaxForce at
+// a finger's pad; the thumb's twice). So an object's weight along the squeeze is met by the stopped
+// fingers, not by their drives' force alone, which would let the object and the fingers slide
+// together across the hand.
 constexpr double kStartup = 0.05;
-constexpr double kStopped = 0.002;
+constexpr double kStoppedSpeed = 0.002;
 constexpr double kStopStiffness = 20000;
-constexpr double kStallForce = 60;
 // The object settles on the table before the trajectory starts; the way in is then checked
 // against it where it rests.
 constexpr double kSettle_s = 0.2;
@@ -627,14 +627,15 @@ struct LiftTest::Impl::Run {
       const bool pushes = closing && !scissor;
       const double q = d->qpos[m->jnt_qposadr[finger.close_joint]];
       const double v = d->qvel[m->jnt_dofadr[finger.close_joint]];
-      if (!pushes)
+      double& ctrl = d->ctrl[finger.close_actuator];
+      if (!pushes) {
         stopped_at[f] = NAN;
-      else if (std::isnan(stopped_at[f]) && d->time - close_started >= kStartup && v < kStopped)
-        stopped_at[f] = q;
-      const double stall = kStallForce * finger.gear;
-      d->ctrl[finger.close_actuator] = !pushes                     ? std::clamp(kHoldGain * (open_travel - q), -limit, limit)
-                                       : std::isnan(stopped_at[f]) ? limit
-                                                                   : std::clamp(limit + kStopStiffness * (stopped_at[f] - q), -stall, stall);
+        ctrl = std::clamp(kHoldGain * (open_travel - q), -limit, limit);
+      } else {
+        if (std::isnan(stopped_at[f]) && d->time - close_started >= kStartup && v < kStoppedSpeed) stopped_at[f] = q;
+        const double stall = robotiq::kMaxForce * finger.gear;
+        ctrl = std::isnan(stopped_at[f]) ? limit : std::clamp(limit + kStopStiffness * (stopped_at[f] - q), -stall, stall);
+      }
       if (finger.spread_actuator >= 0) {
         const double half = (closing && scissor ? 0.0 : std::clamp(spread, s.spread_min, s.spread_max) / 2);
         d->ctrl[finger.spread_actuator] = f == 1 ? half : -half;

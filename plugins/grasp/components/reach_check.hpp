@@ -119,7 +119,7 @@ struct ReachCheck {
     }
     if (v.start) {
       log->debug("candidate {}: the arm cannot start its reach from where it stands, {}: {}", i, v.refusal, v.why);
-      if (!first_start) first_start = FirstStart{i, {{"refusal", v.refusal}, {"reason", v.why}}};
+      if (!first_start) first_start = FirstStart{i, v.refusal, v.why};
       return Plan::start;
     }
     log->debug("candidate {}: passed over at selection, {}: {}", i, v.refusal, v.why);
@@ -129,15 +129,14 @@ struct ReachCheck {
   }
   struct FirstStart {
     std::size_t candidate;
-    nlohmann::json refusal;
+    std::string refusal, why;
   };
   std::optional<FirstStart> first_start;  // since the selection began
   // The first candidate the arm could not start for, taken all the same: its refusal is the result's
   // `start`.
   std::size_t start_anyway() {
-    start = first_start->refusal;
-    log->warn("the arm cannot start the selected grasp's reach from where it stands ({}): {}", first_start->refusal["refusal"].get<std::string>(),
-              first_start->refusal["reason"].get<std::string>());
+    start = nlohmann::json{{"refusal", first_start->refusal}, {"reason", first_start->why}};
+    log->warn("the arm cannot start the selected grasp's reach from where it stands ({}): {}", first_start->refusal, first_start->why);
     return first_start->candidate;
   }
   std::string unchecked_text() const {
