@@ -333,10 +333,13 @@ LiftTest::LiftTest(const TriangleMesh& mesh, const ObjectPlacement& placement, c
     : impl_(std::make_unique<Impl>()) {
   install_mujoco_handlers();
   if (mesh.triangles.empty()) throw LiftTestError("lift test: the object mesh has no triangles");
-  if (!(params.mass > 0) || !(params.friction > 0) || !(params.lift_height > 0) || !(params.hold_s >= 0) || !(params.finger_force > 0) ||
+  if (!(params.mass > 0) || !(params.friction > 0) || !(params.lift_height > 0) || !(params.hold_s >= 0) ||
       !(params.drop_distance > 0) || !(params.clearance >= 0) || !(params.contact_tolerance > 0) || !(params.voxel_size > 0))
-    throw std::invalid_argument("lift test: mass, friction, lift height, finger force, drop distance, contact tolerance and voxel size "
+    throw std::invalid_argument("lift test: mass, friction, lift height, drop distance, contact tolerance and voxel size "
                                 "must be positive, hold time and clearance not negative");
+  if (!(params.finger_force >= robotiq::kMinForce && params.finger_force <= robotiq::kMaxForce))
+    throw std::invalid_argument(fmt::format("lift test: the finger force must be within the hand's {} to {} N; found {} N",
+                                            robotiq::kMinForce, robotiq::kMaxForce, params.finger_force));
   auto& s = *impl_;
   s.params = params;
   s.object = place_on_table(mesh, placement);
@@ -591,7 +594,7 @@ struct LiftTest::Impl::Run {
       } else {
         if (!closing) close_started = s.d->time;
         closing = true;
-        force = c.force > 0 ? c.force : s.params.finger_force;
+        force = robotiq::grip_force(c.force > 0 ? c.force : s.params.finger_force);  // as hw.robotiq_3f does
       }
     }
   }

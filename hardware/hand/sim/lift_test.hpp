@@ -48,7 +48,7 @@ struct LiftTestParams {
   double friction = 0.5;      // sliding friction of the object, the table and the robot
   double lift_height = 0.1;   // metres, straight up (the reach plan's, when run() plans)
   double hold_s = 2.0;        // seconds held after the lift (idem)
-  double finger_force = 10;   // newtons at each finger's pad; the thumb pushes twice as hard (idem)
+  double finger_force = 15;   // newtons at each finger's pad, in the hand's 15-60; the thumb pushes twice as hard (idem)
   double clearance = 0.01;    // metres between each pad and its contact at the pregrasp (idem)
   // The object is out of the hand once it moved this far relative to the palm since closing: the
   // slip bound through the lift and the hold.

@@ -24,6 +24,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "../robotiq_3f/grip_force.hpp"
 #include "fba/geometry/mesh_io.hpp"
 #include "fba/grasp/grasp_json.hpp"
 #include "fba/grasp/object_surface.hpp"
@@ -47,7 +48,7 @@ constexpr const char* kUsage =
     "                 lift-test the best K candidates (--candidates, 1 to 1000, default 1: the grasp synthesis would select)\n"
     "  --x, --y       the object's position on the table, metres in [-1, 1] (default 0)\n"
     "  --yaw          its turn about z, degrees in [-360, 360] (default 0)\n"
-    "  --mass         kg in [0.001, 10] (default 0.3); --force: newtons at each finger's pad in [0.1, 100] (default 10)\n"
+    "  --mass         kg in [0.001, 10] (default 0.3); --force: newtons at each finger's pad in [15, 60] (default 15)\n"
     "  --height       the ring grasp's height, a fraction of the object's in [0, 1] (default 0.5);\n"
     "  --thumb-angle  the ring grasp's thumb, degrees in [-360, 360] (default 180)\n"
     "  --repeat       run the same lift test N times, 1 to 10000, and report the mean wall time\n"
@@ -143,7 +144,7 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   std::map<std::string, std::string> opt{{"--x", "0"},    {"--y", "0"},      {"--yaw", "0"},         {"--mass", "0.3"},
-                                         {"--force", "10"}, {"--height", "0.5"}, {"--thumb-angle", "180"}, {"--repeat", "1"},
+                                         {"--force", "15"}, {"--height", "0.5"}, {"--thumb-angle", "180"}, {"--repeat", "1"},
                                          {"--grasp", ""}, {"--synthesise", "0"}, {"--candidates", "1"}, {"--rest", "upright"},
                                          {"--voxel", "3"}};
   try {
@@ -161,7 +162,7 @@ int main(int argc, char** argv) {
     // Every value checked before any work, as sim.hand checks its parameters (the same ranges).
     fba::sim_hand::LiftTestParams params;
     params.mass = number("--mass", opt["--mass"], 0.001, 10);
-    params.finger_force = number("--force", opt["--force"], 0.1, 100);
+    params.finger_force = number("--force", opt["--force"], fba::robotiq::kMinForce, fba::robotiq::kMaxForce);
     params.voxel_size = number("--voxel", opt["--voxel"], 0.5, 20) * 1e-3;
     const fba::sim_hand::ObjectPlacement placement{number("--x", opt["--x"], -1, 1), number("--y", opt["--y"], -1, 1),
                                                    number("--yaw", opt["--yaw"], -360, 360) * M_PI / 180, opt["--rest"]};

@@ -16,6 +16,7 @@
 #include <fba/types/hand_command.hpp>
 #include <fba/types/joint_trajectory.hpp>
 
+#include "../robotiq_3f/grip_force.hpp"
 #include "fba/geometry/mesh_io.hpp"
 #include "hand_ports.hpp"
 #include "lift_test.hpp"
@@ -65,7 +66,11 @@ class SimHand final : public fba::Component {
                               "raised); sim.camera has the same parameters, so that both see the same object")
           .choices({"table", "mesh"});
   static constexpr auto kFingerForce =
-      fba::Param<double>("finger_force", 10.0, "force at each finger's pad when closing, newtons; the thumb pushes twice as hard").range(0.1, 100);
+      fba::Param<double>("finger_force", fba::robotiq::kMinForce,
+                         "force at each finger's pad when closing, newtons, where a close names none (a grasp executed alone); the thumb "
+                         "pushes twice as hard. The Robotiq's range: a close asking for more or less closes with its nearest, as "
+                         "hw.robotiq_3f does")
+          .range(fba::robotiq::kMinForce, fba::robotiq::kMaxForce);
   // The robot (urdf, base_pose, flange_to_palm, flange_to_camera), as every component that reads
   // it takes it: the world's arm, camera and hand.
   using Robot = fba::arm::RobotParameters;
@@ -117,6 +122,9 @@ class SimHand final : public fba::Component {
       done_ = false;
       commands_.push_back(in.get());
       if (in.get().action != fba::HandCommand::Action::Close) return;
+      if (const double f = in.get().force; f > 0 && fba::robotiq::grip_force(f) != f)
+        ctx_.log().warn("a close with {} N: the hand pushes with {} to {} N, so with {} N", f, fba::robotiq::kMinForce,
+                        fba::robotiq::kMaxForce, fba::robotiq::grip_force(f));
       done_ = true;
       if (timed && !trajectory_) {
         fba::GraspExecution refused;

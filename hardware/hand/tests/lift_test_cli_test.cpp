@@ -33,7 +33,7 @@ TEST(LiftTestCli, EveryNumberIsCheckedAgainstItsRangeBeforeAnyWork) {
       {"--y 1x", "--y must be a number in [-1, 1]; found '1x'"},
       {"--yaw -inf", "--yaw must be a finite number in [-360, 360]; found '-inf'"},
       {"--mass 0", "--mass must be in [0.001, 10]; found 0"},
-      {"--force 1e999", "--force must be a finite number in [0.1, 100]; found '1e999'"},
+      {"--force 1e999", "--force must be a finite number in [15, 60]; found '1e999'"},
       {"--height 1.5", "--height must be in [0, 1]; found 1.5"},
       {"--thumb-angle 400", "--thumb-angle must be in [-360, 360]; found 400"},
       {"--synthesise 2", "--synthesise must be in [3, 1000000] (0: off); found 2"},

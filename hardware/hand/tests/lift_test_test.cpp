@@ -321,6 +321,21 @@ TEST(LiftTest, NonFiniteGraspIsRefused) {
   EXPECT_THROW(test.run(g), std::invalid_argument);
 }
 
+// The hand grips with 15 to 60 N (hw.robotiq_3f's range); a lift test asked to close otherwise would
+// judge a grasp on a hand that does not exist.
+TEST(LiftTest, AFingerForceTheHandCannotGiveIsAClearError) {
+  for (const double newtons : {10.0, 61.0, double(NAN)}) {
+    LiftTestParams p;
+    p.finger_force = newtons;
+    try {
+      LiftTest test(box_mesh(kBox), {}, p);
+      FAIL() << "no error at " << newtons << " N";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("within the hand's 15 to 60 N"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(LiftTest, EmptyMeshIsAClearError) {
   try {
     LiftTest test(fba::TriangleMesh{}, {});

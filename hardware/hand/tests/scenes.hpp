@@ -26,7 +26,7 @@ using fba::test::box_grasp;
 using fba::test::box_model;
 using fba::test::workspace;
 
-// The hand opened to a pregrasp (10 cm, the fingers 4 cm apart), then closed with 10 N at
+// The hand opened to a pregrasp (10 cm, the fingers 4 cm apart), then closed with 15 N at
 // `close_time` on the arm's trajectory.
 inline std::vector<HandCommand> open_then_close(double close_time = 0) {
   HandCommand open;
@@ -34,7 +34,7 @@ inline std::vector<HandCommand> open_then_close(double close_time = 0) {
   open.spread = 0.04;
   HandCommand close;
   close.action = HandCommand::Action::Close;
-  close.force = 10;
+  close.force = 15;
   close.time = close_time;
   return {open, close};
 }

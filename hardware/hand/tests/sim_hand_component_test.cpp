@@ -5,6 +5,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -166,6 +167,38 @@ TEST(SimHand, AReachPlansTrajectoryAndCommandsAreExecutedInTheWorld) {
   ASSERT_EQ(results.size(), 1u);  // at the close
   EXPECT_TRUE(results[0].held) << results[0].reason;
   EXPECT_TRUE(find_event(h.events(), "held"));
+}
+
+// As hw.robotiq_3f does, the twin closes with the Robotiq's least grip force, 15 N, when a close asks
+// for less: the same contact forces as a close with 15 N, and other ones than with 30 N.
+TEST(SimHand, ACloseWithLessThanTheHandsLeastForceClosesWithItsLeast) {
+  fba::test::TempDir dir;
+  const auto obj = dir.path() / "box.obj";
+  const Eigen::Vector3d size(0.06, 0.06, 0.10);
+  fba::test::write_obj(fba::sim_hand::test::box_mesh(size), obj);
+  const fba::Grasp g = fba::sim_hand::test::box_grasp(size, Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), 0.06);
+  const fba::sim_hand::LiftTest world(fba::sim_hand::test::box_mesh(size), {});
+  const auto plan = fba::sim_hand::test::planner().plan(g, fba::sim_hand::test::box_model(size), world.start_joints());
+  ASSERT_TRUE(plan.ok) << plan.why;
+  const auto contact_forces = [&](double newtons) {
+    ComponentHarness h(fba::test::built_plugins(), "sim.hand", {{"mesh", obj.string()}}, {"commands", "trajectory"});
+    h.push<fba::Grasp>("grasp", g);
+    h.push<fba::JointTrajectory>("trajectory", plan.trajectory);
+    for (auto c : plan.hand) {
+      if (c.action == fba::HandCommand::Action::Close) c.force = newtons;
+      h.push<fba::HandCommand>("commands", c);
+    }
+    h.run();
+    const auto results = h.values<fba::GraspExecution>("result");
+    std::vector<double> forces;
+    if (results.size() == 1)
+      for (const auto& c : results[0].contacts) forces.push_back(c.force);
+    return forces;
+  };
+  const std::vector<double> weak = contact_forces(5), least = contact_forces(15), firm = contact_forces(30);
+  ASSERT_GE(least.size(), 3u);
+  EXPECT_EQ(weak, least);
+  EXPECT_NE(firm, least);
 }
 
 // Commands without a trajectory connected: the arm stays where it starts, and the hand closes

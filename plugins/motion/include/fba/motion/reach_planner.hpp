@@ -55,7 +55,7 @@ struct ReachParams {
   double lift_height = reach_defaults::kLiftHeight;   // m, straight up
   double hold_s = 2.0;           // s the arm holds still at the top of the lift
   double hand_s = 1.0;           // s the arm stands still while the hand opens or closes
-  double finger_force = 10.0;    // N at each pad when closing
+  double finger_force = 15.0;    // N at each pad when closing (the Robotiq 3-Finger grips with 15 to 60)
   bool retreat = true;           // after the hold: put the object back, open, back out to the standoff
   // The fingers may touch the model within this distance of their contacts (the model is the
   // object's visual hull: near a contact the finger is about to touch the object).
