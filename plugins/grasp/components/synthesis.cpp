@@ -75,11 +75,9 @@ class GraspSynthesisFilter final : public fba::Component {
       fba::Param<double>("aperture_max", 0.15, "metres: largest distance from the thumb's contact to the fingers' midpoint").range(0, 2);
   static constexpr auto kSpreadMin = fba::Param<double>("spread_min", 0.02, "metres: least distance between the two fingers' contacts").range(0, 2);
   static constexpr auto kSpreadMax = fba::Param<double>("spread_max", 0.10, "metres: largest distance between the two fingers' contacts").range(0, 2);
-  static constexpr auto kThreshold = fba::Param<double>(
-      "threshold", 0.45,
-      "reliability: a candidate whose total score reaches this on a resolved part of the model is selected (the dino at depths 5-7 "
-      "reaches 0.46-0.58, carved YCB meshes 0.65-0.80)")
-                                         .range(0, 1);
+  static constexpr auto kThreshold =
+      fba::Param<double>("threshold", 0.45, "reliability: a candidate whose total score reaches this on a resolved part of the model is selected")
+          .range(0, 1);
   static constexpr auto kMaxViews = fba::Param<int>(
       "max_views", 12,
       "the last view: a model of this many views with no reliable candidate on resolved surface selects one whose contacts are "
