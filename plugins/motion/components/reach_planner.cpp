@@ -56,7 +56,8 @@ class ReachPlannerFilter final : public fba::Component {
   static constexpr auto kHoldTime = fba::Param<double>("hold_time", 2.0, "seconds the arm holds still at the top of the lift").range(0, 60);
   static constexpr auto kHandTime =
       fba::Param<double>("hand_time", 1.0, "seconds the arm stands still while the hand opens or closes").range(0, 60);
-  static constexpr auto kFingerForce = fba::Param<double>("finger_force", 15.0, "newtons at each pad when closing (the Robotiq 3-Finger grips with 15 to 60)").range(0.1, 1000);
+  static constexpr auto kFingerForce =
+      fba::Param<double>("finger_force", 15.0, "newtons at each pad when closing (the Robotiq 3-Finger grips with 15 to 60)").range(0.1, 1000);
   static constexpr fba::Param<bool> kRetreat{"retreat", true, "after the hold: put the object back, open the hand, back out to the standoff"};
   static constexpr auto kSpeed =
       fba::Param<double>("speed_scale", 0.5, "share of each joint's URDF velocity limit the trajectory uses").range(0.01, 1.0);
