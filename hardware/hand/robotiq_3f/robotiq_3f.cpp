@@ -266,10 +266,11 @@ class Robotiq3f final : public fba::Component {
     const bool close = c.action == fba::HandCommand::Action::Close;
     int force = ctx_(kForce);
     if (close) {
-      force = std::clamp(static_cast<int>(std::lround(255.0 * (c.force - rq::kMinForce) / (rq::kMaxForce - rq::kMinForce))), 0, 255);
-      if (!(c.force >= rq::kMinForce && c.force <= rq::kMaxForce))
+      const double grip = rq::grip_force(c.force);
+      force = std::clamp(static_cast<int>(std::lround(255.0 * (grip - rq::kMinForce) / (rq::kMaxForce - rq::kMinForce))), 0, 255);
+      if (grip != c.force)
         ctx_.log().warn("{}: a close with {} N: the gripper pushes with {} to {} N, so with {} N", gripper_->name(),
-                        c.force, rq::kMinForce, rq::kMaxForce, force == 0 ? rq::kMinForce : rq::kMaxForce);
+                        c.force, rq::kMinForce, rq::kMaxForce, grip);
     }
     const Plan plan = plan_for(c.opening, c.spread, mode_of(c.mode), force, "hand command (" + what + ")");
     change_mode(plan);
